@@ -1,0 +1,118 @@
+"""Reading YAML/JSON documents with the line of every value, so errors can say where."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+from causalplan.causal.diagnostics import Diagnostic, Location, error
+
+PathKey = tuple[str | int, ...]
+
+MAX_DOCUMENT_BYTES = 1_000_000
+
+
+@dataclass(frozen=True)
+class SourceMap:
+    """The file a document came from and the 1-based line of each value, by path."""
+
+    file: str | None = None
+    lines: dict[PathKey, int] = field(default_factory=dict)
+
+    def locate(self, *path: str | int, rule: int | None = None, part: str | None = None) -> Location:
+        """Return the location of ``path``, falling back to its nearest located parent."""
+        key: PathKey = tuple(path)
+        while key and key not in self.lines:
+            key = key[:-1]
+        return Location(file=self.file, line=self.lines.get(key), rule=rule, part=part)
+
+
+def _record_lines(node: yaml.Node, path: PathKey, lines: dict[PathKey, int]) -> None:
+    lines[path] = node.start_mark.line + 1
+    if isinstance(node, yaml.MappingNode):
+        for key_node, value_node in node.value:
+            if isinstance(key_node, yaml.ScalarNode):
+                child = (*path, key_node.value)
+                _record_lines(value_node, child, lines)
+                lines[child] = key_node.start_mark.line + 1
+    elif isinstance(node, yaml.SequenceNode):
+        for index, item in enumerate(node.value):
+            _record_lines(item, (*path, index), lines)
+
+
+def _line_map(text: str) -> dict[PathKey, int]:
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError:
+        return {}
+    lines: dict[PathKey, int] = {}
+    if root is not None:
+        _record_lines(root, (), lines)
+    return lines
+
+
+def _looks_like_json(text: str, file_name: str | None) -> bool:
+    if file_name and file_name.lower().endswith(".json"):
+        return True
+    return text.lstrip().startswith(("{", "["))
+
+
+def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceMap, list[Diagnostic]]:
+    """Parse YAML or JSON text; return the data, its line map and any syntax error."""
+    if _looks_like_json(text, file_name):
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            where = Location(file=file_name, line=exc.lineno)
+            return None, SourceMap(file_name), [
+                error("syntax_error", f"The JSON is malformed at line {exc.lineno}, column {exc.colno}: {exc.msg}.",
+                      where, "Check for a missing comma, quote or bracket just before that point.")
+            ]
+        return data, SourceMap(file_name, _line_map(text)), []
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        line = mark.line + 1 if mark is not None else None
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        where = Location(file=file_name, line=line)
+        return None, SourceMap(file_name), [
+            error("syntax_error", f"The YAML is malformed{f' at line {line}' if line else ''}: {problem}.", where,
+                  "Check the indentation, and put labels containing ':' or '#' in quotes.")
+        ]
+    return data, SourceMap(file_name, _line_map(text)), []
+
+
+def read_document(path: Path) -> tuple[object, SourceMap, list[Diagnostic]]:
+    """Read and parse a YAML/JSON file; problems come back as diagnostics, never raised."""
+    name = str(path)
+    try:
+        size = path.stat().st_size
+        if size > MAX_DOCUMENT_BYTES:
+            return None, SourceMap(name), [
+                error("file_too_large", f"{name} is {size} bytes; the limit is {MAX_DOCUMENT_BYTES} bytes.",
+                      Location(file=name))
+            ]
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return None, SourceMap(name), [error("file_not_found", f"There is no file {name}.", Location(file=name))]
+    except IsADirectoryError:
+        return None, SourceMap(name), [error("file_not_found", f"{name} is a folder, not a file.", Location(file=name))]
+    except UnicodeDecodeError as exc:
+        return None, SourceMap(name), [
+            error("syntax_error", f"{name} is not UTF-8 text (byte {exc.start}).", Location(file=name))
+        ]
+    except OSError as exc:
+        return None, SourceMap(name), [
+            error("file_not_readable", f"{name} cannot be read: {exc.strerror}.", Location(file=name))
+        ]
+    return parse_text(text, name)
+
+
+def describe_path(path: Sequence[str | int]) -> str:
+    """Return a document path in words, e.g. ``functions > shade > 2``."""
+    return " > ".join(str(piece) for piece in path) or "the document"

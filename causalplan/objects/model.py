@@ -1,0 +1,109 @@
+"""The catalog's objects: parts with connectors, the fits between them, the true mechanism."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+PRIMITIVE_TEXTS: dict[str, str] = {
+    "screw": "Screw the {moving} into the {fixed}.",
+    "insert": "Insert the {moving} into the {fixed}.",
+    "connect": "Connect the {moving} to the {fixed}.",
+    "place": "Place the {moving} on the {fixed}.",
+    "clip": "Clip the {moving} onto the {fixed}.",
+    "plug": "Plug the {moving} into the {fixed}.",
+    "ignite": "Light the {fixed} with the {moving}.",
+}
+"""The assembly primitives, each with the sentence that describes one step."""
+
+
+@dataclass(frozen=True)
+class Connector:
+    """A place on a part where another part attaches; parts fit when their specs match."""
+
+    id: str
+    kind: str
+    spec: str
+
+
+@dataclass(frozen=True)
+class Part:
+    """One part of an object."""
+
+    id: str
+    name: str
+    connectors: tuple[Connector, ...]
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A way to attach ``moving`` (not yet assembled) to ``fixed`` (already assembled).
+
+    Doing it uses both connectors, and also makes the ``blocks`` connectors unusable (a
+    part that closes or covers them), which is how the catalog states order constraints.
+    """
+
+    id: str
+    primitive: str
+    moving_part: str
+    moving_connector: str
+    fixed_part: str
+    fixed_connector: str
+    probability: float
+    blocks: tuple[tuple[str, str], ...] = ()
+    text: str | None = None
+
+    def connectors(self) -> tuple[tuple[str, str], tuple[str, str]]:
+        """Return the two (part, connector) pairs this fit joins."""
+        return (self.moving_part, self.moving_connector), (self.fixed_part, self.fixed_connector)
+
+
+@dataclass(frozen=True)
+class Requirement:
+    """One condition of the true mechanism: at least one of ``any_of`` fits has been made."""
+
+    any_of: tuple[str, ...]
+    says: str
+
+
+@dataclass(frozen=True)
+class AssemblyObject:
+    """An assemblable object: its parts, fits, base part, category and true mechanism."""
+
+    id: str
+    name: str
+    category: str
+    goal: str
+    description: str
+    base: str
+    parts: tuple[Part, ...]
+    fits: tuple[Fit, ...]
+    mechanism: tuple[Requirement, ...]
+    mechanism_explanation: str
+
+    @property
+    def part_ids(self) -> tuple[str, ...]:
+        return tuple(part.id for part in self.parts)
+
+    def part(self, part_id: str) -> Part:
+        """Return the part with this id (KeyError when there is none)."""
+        for part in self.parts:
+            if part.id == part_id:
+                return part
+        raise KeyError(part_id)
+
+    def fit(self, fit_id: str) -> Fit:
+        """Return the fit with this id (KeyError when there is none)."""
+        for fit in self.fits:
+            if fit.id == fit_id:
+                return fit
+        raise KeyError(fit_id)
+
+    def step_text(self, fit: Fit) -> str:
+        """Return the sentence describing the step that makes ``fit``."""
+        template = fit.text or PRIMITIVE_TEXTS[fit.primitive]
+        return template.format(moving=self.part(fit.moving_part).name, fixed=self.part(fit.fixed_part).name)
+
+    def excluded_fits(self, fit: Fit) -> tuple[str, ...]:
+        """Return the fits (itself included) that can no longer be made once ``fit`` is made."""
+        taken = set(fit.connectors()) | set(fit.blocks)
+        return tuple(other.id for other in self.fits if other.id == fit.id or taken & set(other.connectors()))

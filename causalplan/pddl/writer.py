@@ -1,0 +1,115 @@
+"""Writes a planning task as a PDDL 2.2 domain and problem (pure: values in, text out).
+
+Design: parts and fits are typed objects; the assembly grows from the object's base part.
+Each node of the causal graph is a 0-ary derived predicate. A function node is derived from
+each part that carries it (``(in-assembly part)``); each rule becomes one ``(:derived ...)``
+clause of its effect, the conjunction of its causes. Several clauses of one predicate are
+alternatives, exactly the semantics of the rule language. The goal is the goal node.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from causalplan import __version__
+from causalplan.pddl.identifiers import comment, node_identifiers
+from causalplan.pddl.task import PlanningTask
+
+REQUIREMENTS = ":strips :typing :negative-preconditions :conditional-effects :derived-predicates"
+
+
+@dataclass(frozen=True)
+class CompiledTask:
+    """PDDL texts of one task, and the predicate name of every node label."""
+
+    domain: str
+    problem: str
+    node_names: dict[str, str]
+
+
+def _fit_predicate(primitive: str) -> str:
+    return f"{primitive}-fit"
+
+
+def _action(primitive: str) -> str:
+    return f"""  (:action {primitive}
+    :parameters (?moving - part ?fixed - part ?fit - fit)
+    :precondition (and ({_fit_predicate(primitive)} ?fit) (moves ?fit ?moving) (attaches-to ?fit ?fixed)
+                       (available ?fit) (in-assembly ?fixed) (not (in-assembly ?moving)))
+    :effect (and (in-assembly ?moving)
+                 (forall (?other - fit) (when (excludes ?fit ?other) (not (available ?other))))))"""
+
+
+def _names(names: list[str], indent: str, per_line: int = 6) -> str:
+    rows = [" ".join(names[start:start + per_line]) for start in range(0, len(names), per_line)]
+    return ("\n" + indent).join(rows)
+
+
+def write_domain(task: PlanningTask, node_names: dict[str, str]) -> str:
+    """Return the domain: types, the parts as constants, node predicates, axioms, actions."""
+    labels = task.node_labels()
+    primitives = sorted({fit.primitive for fit in task.obj.fits})
+    node_declarations = "\n".join(f"    ({node_names[key]}) ; {comment(labels[key])}" for key in sorted(node_names))
+    lines = [
+        f";; causalplan {__version__}: the {comment(task.obj.name)} and a causal model of "
+        f"'{comment(task.goal)}'.",
+        f"(define (domain causalplan-{task.obj.id})",
+        f"  (:requirements {REQUIREMENTS})",
+        "  (:types part fit)",
+        f"  (:constants {_names(list(task.obj.part_ids), '              ')} - part)",
+        "  (:predicates",
+        "    (in-assembly ?p - part)",
+        "    (available ?f - fit)",
+        "    (moves ?f - fit ?p - part)",
+        "    (attaches-to ?f - fit ?p - part)",
+        "    (excludes ?f - fit ?g - fit)",
+        *(f"    ({_fit_predicate(primitive)} ?f - fit)" for primitive in primitives),
+        "    ;; nodes of the causal graph",
+        node_declarations,
+        "  )",
+        "",
+        "  ;; Function nodes: true when a part carrying the function is in the assembly.",
+    ]
+    for key, parts in task.carriers().items():
+        for part in parts:
+            lines.append(f"  (:derived ({node_names[key]}) (in-assembly {part})) ; {comment(labels[key])}")
+    lines += ["", "  ;; Rules: one clause per rule; rules with the same effect are alternatives."]
+    for rule in task.rules:
+        causes = " ".join(f"({node_names[cause]})" for cause in sorted(rule.cause_keys))
+        body = causes if len(rule.cause_keys) == 1 else f"(and {causes})"
+        lines.append(f"  ;; rule {rule.index}: {comment(rule.text)}")
+        lines.append(f"  (:derived ({node_names[rule.effect_key]}) {body})")
+    lines += ["", "  ;; Assembly primitives: attach a new part to the assembly through a free fit."]
+    lines += [_action(primitive) for primitive in primitives]
+    lines.append(")")
+    return "\n".join(lines) + "\n"
+
+
+def write_problem(task: PlanningTask, node_names: dict[str, str]) -> str:
+    """Return the problem: the fits as objects, the starting assembly, the goal node."""
+    obj = task.obj
+    init = [f"    (in-assembly {obj.base})"]
+    for fit in obj.fits:
+        init.append(f"    ;; {fit.id}: {comment(obj.step_text(fit))}")
+        facts = [f"(available {fit.id})", f"({_fit_predicate(fit.primitive)} {fit.id})",
+                 f"(moves {fit.id} {fit.moving_part})", f"(attaches-to {fit.id} {fit.fixed_part})"]
+        facts += [f"(excludes {fit.id} {other})" for other in obj.excluded_fits(fit)]
+        init.append("    " + " ".join(facts))
+    fits = [fit.id for fit in obj.fits]
+    objects = f"  (:objects {_names(fits, '            ')} - fit)" if fits else "  (:objects)"
+    return "\n".join([
+        f"(define (problem {obj.id}-{node_names[task.goal_key]})",
+        f"  (:domain causalplan-{obj.id})",
+        objects,
+        "  (:init",
+        *init,
+        "  )",
+        f"  (:goal ({node_names[task.goal_key]})) ; {comment(task.goal)}",
+        ")",
+    ]) + "\n"
+
+
+def compile_task(task: PlanningTask) -> CompiledTask:
+    """Return the PDDL domain and problem of ``task``."""
+    node_names = node_identifiers(task.node_labels())
+    return CompiledTask(write_domain(task, node_names), write_problem(task, node_names), node_names)

@@ -1,0 +1,268 @@
+"""Fast Downward, run directly on our PDDL: the only module that starts planner processes.
+
+Both stages run as child processes in a private temporary directory (so concurrent solves
+never share FD's ``output.sas``), with a memory limit; at the time limit they are killed.
+The translator runs in a forked copy of this process, which has already imported it: that
+saves a Python start-up (~100 ms here) per plan, and its global state dies with the child.
+The search binary runs in its own process group. Exit codes map to ``PlanStatus`` in one place.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import resource
+import select
+import shlex
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cache
+from importlib.util import find_spec
+from pathlib import Path
+
+from causalplan.errors import PlannerUnavailableError
+from causalplan.planners.result import PlanStatus, SearchOutcome
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_TIME_LIMIT = 30.0
+DEFAULT_MEMORY_LIMIT_MB = 2048
+
+LAMA_FIRST = (
+    "let(hlm, eval_modify_costs(landmark_sum(lm_factory=lm_reasonable_orders_hps(lm_rhw()),pref=false),"
+    "cost_type=one),let(hff, eval_modify_costs(ff(),cost_type=one),"
+    "lazy_greedy([hff,hlm],preferred=[hff,hlm],cost_type=one,reopen_closed=false)))"
+)
+OPTIMAL = "astar(hmax())"
+"""A* with h^max: admissible with derived predicates (ours never occur negated)."""
+
+
+@dataclass(frozen=True)
+class SearchConfig:
+    """One way of running FD's search: its ``--search`` string, and whether plans are shortest."""
+
+    name: str
+    search: str
+    optimal: bool
+    description: str
+
+
+CONFIGS: dict[str, SearchConfig] = {
+    "fd": SearchConfig("fd", LAMA_FIRST, False, "Fast Downward, LAMA's first iteration (fast, not shortest)"),
+    "fd-opt": SearchConfig("fd-opt", OPTIMAL, True, "Fast Downward, A* with h^max (shortest plans)"),
+}
+
+# Fast Downward's exit codes (driver/returncodes.py) and what they mean for us.
+_EXIT_STATUS: dict[int, PlanStatus] = {
+    0: PlanStatus.SOLVED,
+    1: PlanStatus.SOLVED,  # plan found, then out of memory
+    2: PlanStatus.SOLVED,  # plan found, then out of time
+    3: PlanStatus.SOLVED,
+    10: PlanStatus.UNSOLVABLE,  # translator proved it
+    11: PlanStatus.UNSOLVABLE,  # complete search proved it
+    12: PlanStatus.UNSOLVABLE,  # search space exhausted (see _confirm_unsolvable)
+    20: PlanStatus.OUT_OF_MEMORY,
+    21: PlanStatus.TIMEOUT,
+    22: PlanStatus.OUT_OF_MEMORY,
+    23: PlanStatus.TIMEOUT,
+    24: PlanStatus.OUT_OF_MEMORY,
+}
+INCOMPLETE_EXIT = 12
+
+
+def status_of_exit_code(code: int) -> PlanStatus:
+    """Return the status an FD exit code stands for (anything unknown is an error)."""
+    if code < 0:  # killed by a signal; SIGKILL comes from our own limits
+        return PlanStatus.OUT_OF_MEMORY if code == -signal.SIGSEGV else PlanStatus.ERROR
+    return _EXIT_STATUS.get(code, PlanStatus.ERROR)
+
+
+@cache
+def search_binary() -> Path:
+    """Return the path of FD's search binary (``CAUSALPLAN_FD_BINARY`` overrides the wheel's)."""
+    override = os.environ.get("CAUSALPLAN_FD_BINARY")
+    if override:
+        path = Path(override)
+    else:
+        spec = find_spec("up_fast_downward")
+        if spec is None or not spec.submodule_search_locations:
+            raise PlannerUnavailableError("Fast Downward is not installed: pip install up-fast-downward")
+        path = Path(next(iter(spec.submodule_search_locations))) / "downward/builds/release/bin/downward"
+    if not os.access(path, os.X_OK):
+        raise PlannerUnavailableError(f"Fast Downward's search binary is missing or not executable: {path}")
+    return path
+
+
+def translator_available() -> bool:
+    """Return whether FD's translator (the ``fast-downward.translate`` package) is importable."""
+    return find_spec("fast_downward.translate") is not None
+
+
+def _limits(memory_mb: int) -> Callable[[], None]:
+    def apply() -> None:
+        limit = memory_mb * 1024 * 1024
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+    return apply
+
+
+@dataclass(frozen=True)
+class _Run:
+    returncode: int | None  # None: killed at the time limit
+    seconds: float
+    output: str
+
+
+def _run(command: list[str], cwd: Path, deadline: float, memory_mb: int, stdin_path: Path | None = None) -> _Run:
+    """Run one FD component in its own process group; kill the group at ``deadline``."""
+    logger.debug("running (cwd %s): %s", cwd, shlex.join(command))
+    started = time.perf_counter()
+    stdin = stdin_path.open("rb") if stdin_path else subprocess.DEVNULL
+    try:
+        process = subprocess.Popen(command, cwd=cwd, stdin=stdin, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                   start_new_session=True, preexec_fn=_limits(memory_mb))
+        try:
+            output, _ = process.communicate(timeout=max(0.0, deadline - time.monotonic()))
+            returncode: int | None = process.returncode
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+            output, _ = process.communicate()
+            returncode = None
+    finally:
+        if stdin_path and not isinstance(stdin, int):
+            stdin.close()
+    return _Run(returncode, time.perf_counter() - started, output.decode("utf-8", "replace"))
+
+
+TRANSLATE_OUT_OF_MEMORY = 20
+TRANSLATE_CRITICAL_ERROR = 30
+TRANSLATE_INPUT_ERROR = 31
+
+
+def _translate_in_child(work: Path, memory_mb: int) -> int:
+    """Run FD's translator in this (forked) process; return its exit code. Never returns normally."""
+    log = os.open(work / "translate.log", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    os.dup2(log, 1)
+    os.dup2(log, 2)
+    code = TRANSLATE_CRITICAL_ERROR
+    try:
+        _limits(memory_mb)()
+        os.chdir(work)
+        from fast_downward.translate import main, options, pddl_parser
+
+        options.set_options(["domain.pddl", "problem.pddl", "--sas-file", "task.sas"])
+        try:
+            main.main()
+            code = 0
+        except MemoryError:
+            code = TRANSLATE_OUT_OF_MEMORY
+        except pddl_parser.ParseError as exc:
+            print(exc)
+            code = TRANSLATE_INPUT_ERROR
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else TRANSLATE_CRITICAL_ERROR
+    except BaseException:  # noqa: BLE001 - anything else is the translator's critical error
+        import traceback
+
+        traceback.print_exc()
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+
+
+def _wait(pid: int, deadline: float) -> int | None:
+    """Wait for child ``pid`` until ``deadline``; return its exit code, or None after killing it."""
+    pidfd = os.pidfd_open(pid)
+    try:
+        ready, _, _ = select.select([pidfd], [], [], max(0.0, deadline - time.monotonic()))
+    finally:
+        os.close(pidfd)
+    if not ready:
+        os.kill(pid, signal.SIGKILL)
+    _, status = os.waitpid(pid, 0)
+    return os.waitstatus_to_exitcode(status) if ready else None
+
+
+def _translate(work: Path, deadline: float, memory_mb: int) -> _Run:
+    """Run the translator on ``work``'s domain.pddl and problem.pddl, writing task.sas."""
+    import fast_downward.translate.main  # noqa: F401 - imported once here, so the fork has it
+
+    started = time.perf_counter()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:
+        _translate_in_child(work, memory_mb)
+    returncode = _wait(pid, deadline)
+    log = work / "translate.log"
+    output = log.read_text(encoding="utf-8", errors="replace") if log.exists() else ""
+    return _Run(returncode, time.perf_counter() - started, output)
+
+
+_PLAN_LINE = re.compile(r"^\(([^()\s]+)((?:\s+[^()\s]+)*)\)\s*$")
+
+
+def parse_plan(text: str) -> tuple[tuple[str, tuple[str, ...]], ...]:
+    """Return the actions of an FD plan file, skipping its ``; cost`` comment."""
+    actions = []
+    for line in text.splitlines():
+        line = line.strip()
+        if not line or line.startswith(";"):
+            continue
+        match = _PLAN_LINE.match(line)
+        if match is None:
+            raise ValueError(f"unexpected line in Fast Downward's plan: {line!r}")
+        actions.append((match.group(1), tuple(match.group(2).split())))
+    return tuple(actions)
+
+
+def _tail(output: str, lines: int = 8) -> str:
+    return "\n".join(output.strip().splitlines()[-lines:])
+
+
+def solve(domain: str, problem: str, config: SearchConfig, time_limit: float = DEFAULT_TIME_LIMIT,
+          memory_limit_mb: int = DEFAULT_MEMORY_LIMIT_MB) -> SearchOutcome:
+    """Translate and search one PDDL task with FD; never raises for planner failures."""
+    try:
+        binary = search_binary()
+    except PlannerUnavailableError as exc:
+        return SearchOutcome(PlanStatus.ERROR, message=exc.message)
+    deadline = time.monotonic() + time_limit
+    timing: dict[str, float] = {}
+    with tempfile.TemporaryDirectory(prefix="causalplan-fd-") as folder:
+        work = Path(folder)
+        (work / "domain.pddl").write_text(domain, encoding="utf-8")
+        (work / "problem.pddl").write_text(problem, encoding="utf-8")
+        translate = _translate(work, deadline, memory_limit_mb)
+        timing["translate"] = translate.seconds
+        if translate.returncode is None:
+            return SearchOutcome(PlanStatus.TIMEOUT, timing=timing,
+                                 message=f"The translator did not finish within {time_limit:g} s.")
+        if translate.returncode != 0:
+            status = status_of_exit_code(translate.returncode)
+            return SearchOutcome(status, timing=timing, message=f"Translator exit code {translate.returncode}: "
+                                 f"{_tail(translate.output)}" if status is PlanStatus.ERROR else "")
+        search = _run([str(binary), "--search", config.search, "--internal-plan-file", "plan"], work, deadline,
+                      memory_limit_mb, stdin_path=work / "task.sas")
+        timing["search"] = search.seconds
+        if search.returncode is None:
+            return SearchOutcome(PlanStatus.TIMEOUT, timing=timing,
+                                 message=f"The search did not finish within {time_limit:g} s.")
+        status = status_of_exit_code(search.returncode)
+        if status is not PlanStatus.SOLVED:
+            message = f"Search exit code {search.returncode}: {_tail(search.output)}" \
+                if status is PlanStatus.ERROR else ""
+            if search.returncode == INCOMPLETE_EXIT and not config.optimal:
+                message = "The search space was exhausted without a plan."
+            return SearchOutcome(status, timing=timing, message=message)
+        plan_file = work / "plan"
+        if not plan_file.exists():
+            return SearchOutcome(PlanStatus.ERROR, timing=timing, message="FD reported success but wrote no plan.")
+        return SearchOutcome(PlanStatus.SOLVED, parse_plan(plan_file.read_text(encoding="utf-8")), timing)

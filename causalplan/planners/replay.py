@@ -1,0 +1,83 @@
+"""Replays a plan on the object, step by step: every plan is checked before it is returned.
+
+Replay is independent of the planner: it applies the catalog's own fit semantics, then
+evaluates the goal twice, under the person's model (eq. 1) and under the object's true
+mechanism (the catalog's requirements).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from causalplan.causal.graph import goal_holds
+from causalplan.objects.model import AssemblyObject, Fit
+from causalplan.pddl.task import PlanningTask
+
+
+@dataclass
+class AssemblyState:
+    """Which parts are in the assembly, which fits are made and which can no longer be made."""
+
+    in_assembly: set[str]
+    made: list[str] = field(default_factory=list)
+    unavailable: set[str] = field(default_factory=set)
+
+    @classmethod
+    def start(cls, obj: AssemblyObject) -> AssemblyState:
+        """Return the starting state: only the base part is in the assembly."""
+        return cls(in_assembly={obj.base})
+
+    def problem_with(self, obj: AssemblyObject, fit: Fit) -> str | None:
+        """Return why ``fit`` cannot be made now, or None when it can."""
+        if fit.fixed_part not in self.in_assembly:
+            return f"the {obj.part(fit.fixed_part).name} is not in the assembly yet"
+        if fit.moving_part in self.in_assembly:
+            return f"the {obj.part(fit.moving_part).name} is already in the assembly"
+        if fit.id in self.unavailable:
+            return "a connector it needs is already taken or covered"
+        return None
+
+    def make(self, obj: AssemblyObject, fit: Fit) -> None:
+        """Make ``fit`` (the caller has checked ``problem_with``)."""
+        self.in_assembly.add(fit.moving_part)
+        self.made.append(fit.id)
+        self.unavailable.update(obj.excluded_fits(fit))
+
+
+def unmet_requirements(obj: AssemblyObject, made: list[str] | set[str]) -> tuple[str, ...]:
+    """Return the true mechanism's requirements (in words) that the made fits do not meet."""
+    done = set(made)
+    return tuple(req.says for req in obj.mechanism if not done & set(req.any_of))
+
+
+@dataclass(frozen=True)
+class Replay:
+    """The outcome of replaying a plan."""
+
+    executable: bool
+    failure: str | None
+    valid_under_model: bool
+    valid_under_true_mechanism: bool
+    unmet_requirements: tuple[str, ...]
+
+
+def replay(task: PlanningTask, actions: tuple[tuple[str, tuple[str, ...]], ...]) -> Replay:
+    """Apply ``actions`` (primitive, (moving, fixed, fit)) to the object and check the goals."""
+    obj = task.obj
+    state = AssemblyState.start(obj)
+    fits = {fit.id: fit for fit in obj.fits}
+    for number, (primitive, args) in enumerate(actions, start=1):
+        fit = fits.get(args[2]) if len(args) == 3 else None
+        failure: str | None
+        if fit is None or (fit.primitive, fit.moving_part, fit.fixed_part) != (primitive, args[0], args[1]):
+            failure = f"step {number} ({primitive} {' '.join(args)}) is not an assembly step of the {obj.name}"
+        else:
+            reason = state.problem_with(obj, fit)
+            failure = f"step {number} ({obj.step_text(fit)}) cannot be done: {reason}" if reason else None
+        if failure is not None:
+            return Replay(False, failure, False, False, unmet_requirements(obj, state.made))
+        assert fit is not None
+        state.make(obj, fit)
+    functions = task.functions_of(frozenset(state.in_assembly))
+    unmet = unmet_requirements(obj, state.made)
+    return Replay(True, None, goal_holds(functions, task.rules, task.goal_key), not unmet, unmet)

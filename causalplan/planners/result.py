@@ -1,0 +1,82 @@
+"""What a planner returns: a closed status, the steps, the checks made on them, and timings."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+
+class PlanStatus(str, Enum):
+    """The closed set of planner outcomes; fallbacks and exit codes key on these, never on text."""
+
+    SOLVED = "solved"
+    UNSOLVABLE = "unsolvable"
+    TIMEOUT = "timeout"
+    OUT_OF_MEMORY = "out_of_memory"
+    ERROR = "error"
+
+    def is_final(self) -> bool:
+        """Return whether the outcome is a definite answer (a plan, or proof that none exists)."""
+        return self in (PlanStatus.SOLVED, PlanStatus.UNSOLVABLE)
+
+
+@dataclass(frozen=True)
+class PlanStep:
+    """One assembly step: the primitive, its part arguments (moving, fixed), the fit, a sentence."""
+
+    action: str
+    args: tuple[str, ...]
+    fit: str
+    text: str
+
+    def as_dict(self) -> dict[str, object]:
+        """Return the step as a JSON-ready dict."""
+        return {"action": self.action, "args": list(self.args), "fit": self.fit, "text": self.text}
+
+
+@dataclass(frozen=True)
+class SearchOutcome:
+    """The raw outcome of one planner run: status, plan as (action, args) tuples, stage times."""
+
+    status: PlanStatus
+    actions: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    timing: dict[str, float] = field(default_factory=dict)
+    message: str = ""
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """A plan checked by replay, ready to show: what ``causalplan plan`` prints."""
+
+    status: PlanStatus
+    planner_used: str
+    object_id: str
+    steps: tuple[PlanStep, ...] = ()
+    valid_under_model: bool = False
+    valid_under_true_mechanism: bool = False
+    unmet_requirements: tuple[str, ...] = ()
+    timing: dict[str, float] = field(default_factory=dict)
+    message: str = ""
+    pddl: dict[str, str] | None = None
+
+    @property
+    def has_plan(self) -> bool:
+        return self.status is PlanStatus.SOLVED
+
+    def as_dict(self) -> dict[str, object]:
+        """Return the result as a JSON-ready dict (the ``--json`` output)."""
+        result: dict[str, object] = {
+            "status": self.status.value,
+            "planner_used": self.planner_used,
+            "object": self.object_id,
+            "plan": [step.as_dict() for step in self.steps] if self.has_plan else None,
+            "plan_length": len(self.steps) if self.has_plan else None,
+            "valid_under_model": self.valid_under_model,
+            "valid_under_true_mechanism": self.valid_under_true_mechanism,
+            "unmet_requirements": list(self.unmet_requirements),
+            "timing": {stage: round(seconds, 6) for stage, seconds in self.timing.items()},
+            "message": self.message,
+        }
+        if self.pddl is not None:
+            result["pddl"] = self.pddl
+        return result
