@@ -41,6 +41,8 @@ LAMA_FIRST = (
 )
 OPTIMAL = "astar(hmax())"
 """A* with h^max: admissible with derived predicates (ours never occur negated)."""
+COMPLETE = "astar(blind())"
+"""Blind A*: complete, so exhausting it proves that no plan exists."""
 
 
 @dataclass(frozen=True)
@@ -66,7 +68,6 @@ _EXIT_STATUS: dict[int, PlanStatus] = {
     3: PlanStatus.SOLVED,
     10: PlanStatus.UNSOLVABLE,  # translator proved it
     11: PlanStatus.UNSOLVABLE,  # complete search proved it
-    12: PlanStatus.UNSOLVABLE,  # search space exhausted (see _confirm_unsolvable)
     20: PlanStatus.OUT_OF_MEMORY,
     21: PlanStatus.TIMEOUT,
     22: PlanStatus.OUT_OF_MEMORY,
@@ -255,12 +256,18 @@ def solve(domain: str, problem: str, config: SearchConfig, time_limit: float = D
         if search.returncode is None:
             return SearchOutcome(PlanStatus.TIMEOUT, timing=timing,
                                  message=f"The search did not finish within {time_limit:g} s.")
+        if search.returncode == INCOMPLETE_EXIT:
+            # The search gave up without proof (its heuristics may prune); a blind A* proves it.
+            search = _run([str(binary), "--search", COMPLETE, "--internal-plan-file", "plan"], work, deadline,
+                          memory_limit_mb, stdin_path=work / "task.sas")
+            timing["confirm"] = search.seconds
+            if search.returncode is None:
+                return SearchOutcome(PlanStatus.TIMEOUT, timing=timing,
+                                     message=f"Proving that no plan exists took longer than {time_limit:g} s.")
         status = status_of_exit_code(search.returncode)
         if status is not PlanStatus.SOLVED:
             message = f"Search exit code {search.returncode}: {_tail(search.output)}" \
                 if status is PlanStatus.ERROR else ""
-            if search.returncode == INCOMPLETE_EXIT and not config.optimal:
-                message = "The search space was exhausted without a plan."
             return SearchOutcome(status, timing=timing, message=message)
         plan_file = work / "plan"
         if not plan_file.exists():

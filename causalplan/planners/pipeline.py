@@ -69,7 +69,7 @@ def plan_task(task: PlanningTask, planner: str = "fd", time_limit: float = fast_
     fits = {fit.id: fit for fit in obj.fits}
     steps = tuple(PlanStep(action, args[:2], args[2], obj.step_text(fits[args[2]])) for action, args in outcome.actions)
     message = "" if checked.valid_under_true_mechanism else (
-        f"The plan satisfies the model, but the real {obj.name} would not produce {obj.goal}: "
-        + "; ".join(f"{req} is missing" for req in checked.unmet_requirements) + ".")
+        f"The plan satisfies the model, but the real {obj.name} would not produce {obj.goal}; it also needs: "
+        + "; ".join(checked.unmet_requirements) + ".")
     return PlanResult(PlanStatus.SOLVED, config.name, obj.id, steps, True, checked.valid_under_true_mechanism,
                       checked.unmet_requirements, timing, message, pddl)

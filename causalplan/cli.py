@@ -1,0 +1,355 @@
+"""The ``causalplan`` command line: check, plan, transfer, compile, objects.
+
+Each command imports what it needs when it runs, so ``causalplan --help`` and quick
+commands start fast. Exit codes: 0 success, 1 no plan / no transfer, 2 invalid input,
+3 the planner could not decide.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, NoReturn
+
+import typer
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from causalplan.causal.diagnostics import Report
+    from causalplan.objects.catalog import Catalog
+    from causalplan.planners.result import PlanResult
+    from causalplan.transfer.verdict import TransferVerdict
+
+EXIT_OK, EXIT_NO_PLAN, EXIT_INVALID, EXIT_UNDECIDED = 0, 1, 2, 3
+
+app = typer.Typer(
+    name="causalplan",
+    help=(
+        "Teach a robot why an object works, then plan with that knowledge.\n\n"
+        "A model file says which parts of an object carry which functions (step 1) and keyword rules "
+        "such as 'provide electricity AND turn electricity into light CAUSES light' (step 2). "
+        "A mapping file gives another object's parts the model's functions (step 3).\n\n"
+        "Start with: causalplan plan examples/paper/desk_lamp.yaml"
+    ),
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+
+CatalogOption = Annotated[
+    list[Path] | None,
+    typer.Option("--catalog", help="A folder of your own object files (YAML/JSON) to add to the built-in catalog. "
+                 "Repeatable.", show_default=False),
+]
+JsonOption = Annotated[bool, typer.Option("--json", help="Print machine-readable JSON instead of sentences.")]
+PlannerOption = Annotated[
+    str, typer.Option("--planner", "-p", help="fd: Fast Downward, LAMA first iteration (fast). "
+                      "fd-opt: Fast Downward, A* (shortest plan).")
+]
+TimeLimitOption = Annotated[float, typer.Option("--time-limit", min=0.1, max=3600,
+                                                help="Seconds the planner may run before it is stopped.")]
+
+
+def _console(stderr: bool = False) -> Console:
+    from rich.console import Console
+
+    return Console(stderr=stderr, highlight=False, soft_wrap=True)
+
+
+def _fail(code: str, message: str) -> NoReturn:
+    from rich.markup import escape
+
+    _console(stderr=True).print(f"[bold red]error[/]\\[{code}]: {escape(message)}")
+    raise typer.Exit(EXIT_INVALID)
+
+
+def _catalog(folders: list[Path] | None) -> Catalog:
+    from causalplan.errors import CausalPlanError
+    from causalplan.objects.catalog import load_catalog
+
+    try:
+        return load_catalog(folders or ())
+    except CausalPlanError as exc:
+        _fail(exc.code, exc.message)
+
+
+def _print_json(data: object) -> None:
+    sys.stdout.write(json.dumps(data, indent=2, ensure_ascii=False) + "\n")
+
+
+def _print_report(report: Report, console: Console) -> None:
+    from rich.markup import escape
+
+    for diagnostic in report.diagnostics:
+        color = "red" if diagnostic.severity.value == "error" else "yellow"
+        where = diagnostic.location.describe()
+        console.print(f"[bold {color}]{diagnostic.severity.value}[/]\\[{diagnostic.code}]"
+                      f"{' ' + escape(where) if where else ''}: {escape(diagnostic.message)}")
+        if diagnostic.hint:
+            console.print(f"  [dim]hint:[/] {escape(diagnostic.hint)}")
+
+
+def _is_mapping_file(path: Path) -> bool:
+    """Return whether a file looks like a step-3 mapping (no 'rules' field) rather than a model."""
+    from causalplan.causal.documents import read_document
+
+    data, _, problems = read_document(path)
+    return not problems and isinstance(data, dict) and "rules" not in data and "goal" not in data
+
+
+@app.command()
+def check(
+    model: Annotated[Path, typer.Argument(help="A model file (or a step-3 mapping file) in YAML or JSON.")],
+    as_json: JsonOption = False,
+    catalog: CatalogOption = None,
+) -> None:
+    """Validate a model (or mapping): errors with a code, where, and how to fix them.
+
+    Exit 0 when valid (warnings allowed), 2 when invalid.
+    """
+    from causalplan.inputs import load_mapping, load_model
+
+    objects = _catalog(catalog)
+    kind = "mapping" if _is_mapping_file(model) else "model"
+    report = load_mapping(model, objects).report if kind == "mapping" else load_model(model, objects).report
+    if as_json:
+        _print_json({"file": str(model), "kind": kind, **report.as_dict()})
+    else:
+        console = _console()
+        _print_report(report, console)
+        verdict = "[green]valid[/]" if report.is_valid else "[red]invalid[/]"
+        counts = f"{len(report.errors)} error(s), {len(report.warnings)} warning(s)"
+        from rich.markup import escape
+
+        console.print(f"{escape(str(model))}: {kind} is {verdict} ({counts})")
+    raise typer.Exit(EXIT_OK if report.is_valid else EXIT_INVALID)
+
+
+def _load_valid_model(path: Path, objects: Catalog, as_json: bool):  # type: ignore[no-untyped-def]
+    from causalplan.inputs import load_model
+
+    loaded = load_model(path, objects)
+    if not loaded.is_valid:
+        if as_json:
+            _print_json({"status": "invalid", "file": str(path), **loaded.report.as_dict()})
+        else:
+            console = _console(stderr=True)
+            _print_report(loaded.report, console)
+            console.print(f"{path}: the model is invalid, so there is nothing to plan. "
+                          f"Run `causalplan check {path}` after fixing it.")
+        raise typer.Exit(EXIT_INVALID)
+    assert loaded.model is not None
+    return loaded.model
+
+
+def _load_valid_mapping(path: Path, objects: Catalog, as_json: bool):  # type: ignore[no-untyped-def]
+    from causalplan.inputs import load_mapping
+
+    loaded = load_mapping(path, objects)
+    if not loaded.is_valid:
+        if as_json:
+            _print_json({"status": "invalid", "file": str(path), **loaded.report.as_dict()})
+        else:
+            _print_report(loaded.report, _console(stderr=True))
+        raise typer.Exit(EXIT_INVALID)
+    assert loaded.mapping is not None
+    return loaded.mapping
+
+
+def _write_pddl(folder: Path, domain: str, problem: str) -> None:
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "domain.pddl").write_text(domain, encoding="utf-8")
+        (folder / "problem.pddl").write_text(problem, encoding="utf-8")
+    except OSError as exc:
+        _fail("output_not_writable", f"Cannot write the PDDL to {folder}: {exc.strerror}.")
+
+
+def _print_plan(result: PlanResult, console: Console) -> None:
+    from rich.markup import escape
+
+    if not result.has_plan:
+        console.print(f"[bold red]No plan[/] ({result.status.value}): {escape(result.message)}")
+        return
+    if not result.steps:
+        console.print("The goal already holds: no step is needed.")
+    for number, step in enumerate(result.steps, start=1):
+        console.print(f"{number}. {escape(step.text)}")
+    mark = "[green]yes[/]" if result.valid_under_true_mechanism else "[red]no[/]"
+    console.print(f"[dim]{len(result.steps)} step(s) by {result.planner_used}, replayed: goal holds under the "
+                  f"model;[/] the real object works: {mark}")
+    if result.message:
+        console.print(f"[yellow]{escape(result.message)}[/]")
+
+
+@app.command()
+def plan(
+    model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
+    mapping: Annotated[Path | None, typer.Option("--mapping", "-m", help="A step-3 mapping: plan for that object "
+                                                 "instead, with its parts carrying the model's functions.")] = None,
+    planner: PlannerOption = "fd",
+    time_limit: TimeLimitOption = 30.0,
+    pddl_out: Annotated[Path | None, typer.Option("--pddl-out", help="Also write domain.pddl and problem.pddl "
+                                                  "to this folder.")] = None,
+    as_json: JsonOption = False,
+    catalog: CatalogOption = None,
+) -> None:
+    """Plan how to assemble the object so the model's goal holds, and print the steps.
+
+    Every plan is replayed on the object before it is shown: against the model, and against
+    the object's true mechanism. Exit 0 with a plan, 1 without one, 2 for invalid input.
+    """
+    from causalplan.errors import CausalPlanError
+    from causalplan.pddl.task import build_task
+    from causalplan.planners.pipeline import plan_task
+
+    objects = _catalog(catalog)
+    causal_model = _load_valid_model(model, objects, as_json)
+    labelling = _load_valid_mapping(mapping, objects, as_json) if mapping else None
+    target = objects.get((labelling or causal_model.labelling).object_id)
+    try:
+        result = plan_task(build_task(causal_model, target, labelling), planner, time_limit,
+                           include_pddl=pddl_out is not None)
+    except CausalPlanError as exc:
+        _fail(exc.code, exc.message)
+    if pddl_out is not None and result.pddl is not None:
+        _write_pddl(pddl_out, result.pddl["domain"], result.pddl["problem"])
+    if as_json:
+        data = result.as_dict()
+        data.pop("pddl", None)
+        _print_json(data)
+    else:
+        _print_plan(result, _console())
+    raise typer.Exit(EXIT_OK if result.has_plan else EXIT_NO_PLAN)
+
+
+def _print_verdict(verdict: TransferVerdict, console: Console) -> None:
+    from rich.markup import escape
+
+    colors = {"transfers": "green", "fails": "red", "invalid": "red", "undecided": "yellow"}
+    kind = f" ({verdict.generalization}-generalization)" if verdict.generalization in ("near", "far") else ""
+    console.print(f"[bold {colors[verdict.verdict.value]}]{verdict.verdict.value}[/]: "
+                  f"{verdict.training_object} → {verdict.test_object}{kind}, decided by {verdict.decided_by}")
+    for reason in verdict.reasons:
+        color = "red" if reason.severity.value == "error" else "yellow"
+        console.print(f"  [{color}]{reason.severity.value}[/]\\[{reason.code}]: {escape(reason.message)}")
+    if verdict.plan is not None and verdict.plan.has_plan:
+        console.print("Plan:")
+        for number, step in enumerate(verdict.plan.steps, start=1):
+            console.print(f"  {number}. {escape(step.text)}")
+
+
+@app.command()
+def transfer(
+    model: Annotated[Path, typer.Argument(help="The causal model of the training object (steps 1-2).")],
+    mapping: Annotated[Path, typer.Argument(help="The step-3 mapping of a new object's parts to functions.")],
+    planner: PlannerOption = "fd",
+    time_limit: TimeLimitOption = 30.0,
+    as_json: JsonOption = False,
+    catalog: CatalogOption = None,
+) -> None:
+    """Test whether a model transfers to a new object (step 3), and say why or why not.
+
+    Exit 0 when it transfers, 1 when it fails, 2 when the model or mapping is invalid,
+    3 when the planner could not decide (e.g. it timed out).
+    """
+    from causalplan.inputs import load_mapping, load_model
+    from causalplan.transfer.verdict import evaluate_transfer, invalid_verdict
+
+    objects = _catalog(catalog)
+    loaded_model, loaded_mapping = load_model(model, objects), load_mapping(mapping, objects)
+    if loaded_model.is_valid and loaded_mapping.is_valid:
+        assert loaded_model.model is not None and loaded_mapping.mapping is not None
+        verdict = evaluate_transfer(loaded_model.model, loaded_mapping.mapping, objects, planner, time_limit)
+    else:
+        verdict = invalid_verdict(loaded_model.report, loaded_mapping.report,
+                                  loaded_model.model.object_id if loaded_model.model else None,
+                                  loaded_mapping.mapping.object_id if loaded_mapping.mapping else None)
+    if as_json:
+        _print_json(verdict.as_dict())
+    else:
+        _print_verdict(verdict, _console())
+    raise typer.Exit(verdict.verdict.exit_code)
+
+
+@app.command(name="compile")
+def compile_command(
+    model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Folder to write domain.pddl and problem.pddl to.")],
+    mapping: Annotated[Path | None, typer.Option("--mapping", "-m", help="Compile for a step-3 mapping's object.")]
+    = None,
+    catalog: CatalogOption = None,
+) -> None:
+    """Compile a model to a PDDL 2.2 domain and problem with derived predicates, without planning."""
+    from causalplan.pddl.task import build_task
+    from causalplan.pddl.writer import compile_task
+
+    objects = _catalog(catalog)
+    causal_model = _load_valid_model(model, objects, False)
+    labelling = _load_valid_mapping(mapping, objects, False) if mapping else None
+    target = objects.get((labelling or causal_model.labelling).object_id)
+    compiled = compile_task(build_task(causal_model, target, labelling))
+    _write_pddl(out, compiled.domain, compiled.problem)
+    _console().print(f"Wrote {out / 'domain.pddl'} and {out / 'problem.pddl'}")
+
+
+@app.command()
+def objects(
+    object_id: Annotated[str | None, typer.Argument(help="Show one object in detail.")] = None,
+    as_json: JsonOption = False,
+    catalog: CatalogOption = None,
+) -> None:
+    """List the catalog's objects, or show one: parts, connectors, fits, true mechanism."""
+    from dataclasses import asdict
+
+    from rich.markup import escape
+    from rich.table import Table
+
+    from causalplan.errors import CausalPlanError
+
+    known = _catalog(catalog)
+    console = _console()
+    if object_id is not None:
+        try:
+            obj = known.get(object_id)
+        except CausalPlanError as exc:
+            _fail(exc.code, exc.message)
+        if as_json:
+            _print_json(asdict(obj))
+            return
+        console.print(f"[bold]{escape(obj.name)}[/] ({obj.id}, {obj.category}, goal: {escape(obj.goal)})")
+        console.print(escape(obj.description))
+        parts = Table("part", "name", "connectors (kind, spec)", title="Parts", title_justify="left")
+        for part in obj.parts:
+            base = " (base)" if part.id == obj.base else ""
+            parts.add_row(part.id + base, part.name, "; ".join(f"{c.id}: {c.kind}, {c.spec}" for c in part.connectors))
+        console.print(parts)
+        fits = Table("fit", "step", "p", "blocks", title="Fits", title_justify="left")
+        for fit in obj.fits:
+            fits.add_row(fit.id, obj.step_text(fit), f"{fit.probability:g}", ", ".join(".".join(b) for b in fit.blocks))
+        console.print(fits)
+        console.print("[bold]True mechanism:[/] " + escape(obj.mechanism_explanation))
+        for requirement in obj.mechanism:
+            console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)})")
+        return
+    if as_json:
+        _print_json([{"id": obj.id, "name": obj.name, "category": obj.category, "goal": obj.goal,
+                      "parts": [{"id": part.id, "name": part.name} for part in obj.parts]}
+                     for obj in known.objects.values()])
+        return
+    table = Table("id", "name", "category", "goal", "parts")
+    for obj in known.objects.values():
+        table.add_row(obj.id, obj.name, obj.category, obj.goal, ", ".join(obj.part_ids))
+    console.print(table)
+
+
+def main() -> None:
+    """Run the command line."""
+    app()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1 @@
+"""Step 3: does a person's causal model transfer to a new object?"""

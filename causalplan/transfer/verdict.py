@@ -1,0 +1,162 @@
+"""Transfer verdicts: plan a model on a new object through a person's step-3 mapping, and say why.
+
+A model transfers when, using only the mapping of the new object's parts to the model's
+functions, the planner finds a plan *and* that plan makes the real object work (its true
+mechanism). Every failure names its reasons, as the paper's authors did by hand. What can be
+decided without the planner (an invalid model, a function the goal needs that no part
+carries) is decided without it, and the verdict says so in ``decided_by``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+from causalplan.causal.diagnostics import Report, Severity
+from causalplan.causal.graph import goal_holds
+from causalplan.causal.model import CausalModel, Labelling
+from causalplan.objects.catalog import Catalog
+from causalplan.objects.model import AssemblyObject
+from causalplan.pddl.task import build_task
+from causalplan.planners.fast_downward import DEFAULT_TIME_LIMIT
+from causalplan.planners.pipeline import plan_task
+from causalplan.planners.result import PlanResult, PlanStatus
+
+
+class Verdict(str, Enum):
+    """The outcome of a transfer trial."""
+
+    TRANSFERS = "transfers"
+    FAILS = "fails"
+    INVALID = "invalid"
+    UNDECIDED = "undecided"  # the planner timed out or failed: neither success nor failure is shown
+
+    @property
+    def exit_code(self) -> int:
+        return {"transfers": 0, "fails": 1, "invalid": 2, "undecided": 3}[self.value]
+
+
+@dataclass(frozen=True)
+class Reason:
+    """One reason for a verdict: a stable code, a severity, plain words, the labels involved."""
+
+    code: str
+    severity: Severity
+    message: str
+    labels: tuple[str, ...] = ()
+
+    def as_dict(self) -> dict[str, object]:
+        """Return the reason as a JSON-ready dict."""
+        return {"code": self.code, "severity": self.severity.value, "message": self.message,
+                "labels": list(self.labels)}
+
+
+@dataclass(frozen=True)
+class TransferVerdict:
+    """What ``causalplan transfer`` reports."""
+
+    verdict: Verdict
+    training_object: str | None
+    test_object: str | None
+    generalization: str | None
+    decided_by: str
+    reasons: tuple[Reason, ...] = ()
+    plan: PlanResult | None = None
+    diagnostics: dict[str, object] = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, object]:
+        """Return the verdict as a JSON-ready dict (the ``--json`` output)."""
+        plan = self.plan
+        return {
+            "verdict": self.verdict.value,
+            "training_object": self.training_object,
+            "test_object": self.test_object,
+            "generalization": self.generalization,
+            "decided_by": self.decided_by,
+            "reasons": [reason.as_dict() for reason in self.reasons],
+            "plan": [step.as_dict() for step in plan.steps] if plan and plan.has_plan else None,
+            "planning": plan.as_dict() if plan else None,
+            "diagnostics": self.diagnostics,
+        }
+
+
+def generalization(training: AssemblyObject, test: AssemblyObject) -> str:
+    """Return ``near`` (same category), ``far`` (other category) or ``same_object``."""
+    if training.id == test.id:
+        return "same_object"
+    return "near" if training.category == test.category else "far"
+
+
+def invalid_verdict(model_report: Report, mapping_report: Report, training: str | None,
+                    test: str | None) -> TransferVerdict:
+    """Return the verdict for a model or mapping that did not validate."""
+    reasons = [Reason("invalid_model", Severity.ERROR, _located(d.message, d.location.describe()))
+               for d in model_report.errors]
+    reasons += [Reason("invalid_mapping", Severity.ERROR, _located(d.message, d.location.describe()))
+                for d in mapping_report.errors]
+    return TransferVerdict(Verdict.INVALID, training, test, None, "validation", tuple(reasons),
+                           diagnostics={"model": model_report.as_dict(), "mapping": mapping_report.as_dict()})
+
+
+def _located(message: str, where: str) -> str:
+    return f"{message} ({where})" if where else message
+
+
+def needed_functions(model: CausalModel) -> dict[str, str]:
+    """Return the model's function nodes: causes that no rule produces, with their labels."""
+    effects = {rule.effect_key for rule in model.rules}
+    labels = model.node_labels()
+    return {key: labels[key] for rule in model.rules for key in sorted(rule.cause_keys) if key not in effects}
+
+
+def _mapping_reasons(model: CausalModel, mapping: Labelling, test: AssemblyObject) -> tuple[list[Reason], bool]:
+    """Return the reasons visible from the mapping alone, and whether the goal is still reachable."""
+    carriers = mapping.carriers()
+    reachable = goal_holds(carriers, model.rules, model.goal_key)
+    reasons: list[Reason] = []
+    for key, label in needed_functions(model).items():
+        if key in carriers:
+            continue
+        if reachable:
+            reasons.append(Reason("missing_function", Severity.WARNING,
+                                  f"No part of the {test.name} carries '{label}'; the model can still produce "
+                                  f"{model.goal} through another rule.", (label,)))
+        else:
+            reasons.append(Reason("missing_function", Severity.ERROR,
+                                  f"No part of the {test.name} carries '{label}', which the model needs for "
+                                  f"{model.goal}.", (label,)))
+    used = model.used_labels()
+    mapped_labels = mapping.labels()
+    for key, parts in carriers.items():
+        if key not in used:
+            reasons.append(Reason("unmodelled_function", Severity.WARNING,
+                                  f"'{mapped_labels[key]}' (given to {', '.join(parts)}) is not in the model: no rule "
+                                  f"uses it, so it cannot help produce {model.goal}.", (mapped_labels[key],)))
+    return reasons, reachable
+
+
+def evaluate_transfer(model: CausalModel, mapping: Labelling, catalog: Catalog, planner: str = "fd",
+                      time_limit: float = DEFAULT_TIME_LIMIT) -> TransferVerdict:
+    """Return the verdict of trying a valid ``model`` on the object of a valid ``mapping``."""
+    training, test = catalog.get(model.object_id), catalog.get(mapping.object_id)
+    kind = generalization(training, test)
+    reasons, reachable = _mapping_reasons(model, mapping, test)
+    if not reachable:
+        return TransferVerdict(Verdict.FAILS, training.id, test.id, kind, "precheck", tuple(reasons))
+    result = plan_task(build_task(model, test, mapping), planner, time_limit)
+    if result.status is PlanStatus.SOLVED and result.valid_under_true_mechanism:
+        return TransferVerdict(Verdict.TRANSFERS, training.id, test.id, kind, "planner", tuple(reasons), result)
+    if result.status is PlanStatus.SOLVED:
+        unmet = "; ".join(result.unmet_requirements)
+        reasons.append(Reason("violates_true_mechanism", Severity.ERROR,
+                              f"The plan satisfies the model, but the real {test.name} would not produce {test.goal}; "
+                              f"it also needs: {unmet}.", result.unmet_requirements))
+        return TransferVerdict(Verdict.FAILS, training.id, test.id, kind, "planner", tuple(reasons), result)
+    if result.status is PlanStatus.UNSOLVABLE:
+        reasons.append(Reason("no_assembly_sequence", Severity.ERROR,
+                              f"Every function the model needs is carried by some part, but no order of connecting "
+                              f"the {test.name}'s parts brings them together.", ()))
+        return TransferVerdict(Verdict.FAILS, training.id, test.id, kind, "planner", tuple(reasons), result)
+    reasons.append(Reason("planner_error", Severity.ERROR,
+                          f"The planner could not decide ({result.status.value}): {result.message}", ()))
+    return TransferVerdict(Verdict.UNDECIDED, training.id, test.id, kind, "planner", tuple(reasons), result)
