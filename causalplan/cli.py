@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from rich.console import Console
 
     from causalplan.causal.diagnostics import Report
+    from causalplan.causal.model import CausalModel, Labelling
     from causalplan.objects.catalog import Catalog
     from causalplan.planners.result import PlanResult
     from causalplan.transfer.verdict import TransferVerdict
@@ -128,7 +129,7 @@ def check(
     raise typer.Exit(EXIT_OK if report.is_valid else EXIT_INVALID)
 
 
-def _load_valid_model(path: Path, objects: Catalog, as_json: bool):  # type: ignore[no-untyped-def]
+def _load_valid_model(path: Path, objects: Catalog, as_json: bool) -> CausalModel:
     from causalplan.inputs import load_model
 
     loaded = load_model(path, objects)
@@ -145,7 +146,7 @@ def _load_valid_model(path: Path, objects: Catalog, as_json: bool):  # type: ign
     return loaded.model
 
 
-def _load_valid_mapping(path: Path, objects: Catalog, as_json: bool):  # type: ignore[no-untyped-def]
+def _load_valid_mapping(path: Path, objects: Catalog, as_json: bool) -> Labelling:
     from causalplan.inputs import load_mapping
 
     loaded = load_mapping(path, objects)

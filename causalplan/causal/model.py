@@ -125,7 +125,8 @@ def _check_fields(data: Mapping[object, object], allowed: tuple[str, ...], requi
 
 _FIELD_HINTS = {
     "object": "Add the catalog id of the object, e.g. 'object: desk_lamp' (see `causalplan objects`).",
-    "functions": "Add which parts carry which functions, e.g. 'functions: {light_bulb: [turn electricity into light]}'.",
+    "functions": "Add which parts carry which functions, "
+    "e.g. 'functions: {light_bulb: [turn electricity into light]}'.",
     "rules": "Add rules such as 'provide electricity AND turn electricity into light CAUSES light'.",
 }
 

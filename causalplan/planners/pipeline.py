@@ -6,11 +6,11 @@ import time
 
 from causalplan.causal.graph import goal_holds
 from causalplan.errors import CausalPlanError
+from causalplan.pddl.task import PlanningTask
+from causalplan.pddl.writer import compile_task
 from causalplan.planners import fast_downward
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanResult, PlanStatus, PlanStep
-from causalplan.pddl.task import PlanningTask
-from causalplan.pddl.writer import compile_task
 
 PLANNERS = tuple(fast_downward.CONFIGS)
 """The planner names ``plan`` accepts."""

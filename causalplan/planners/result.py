@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import Enum
+from enum import StrEnum
 
 
-class PlanStatus(str, Enum):
+class PlanStatus(StrEnum):
     """The closed set of planner outcomes; fallbacks and exit codes key on these, never on text."""
 
     SOLVED = "solved"

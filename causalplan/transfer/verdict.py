@@ -10,7 +10,7 @@ carries) is decided without it, and the verdict says so in ``decided_by``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import Enum
+from enum import StrEnum
 
 from causalplan.causal.diagnostics import Report, Severity
 from causalplan.causal.graph import goal_holds
@@ -23,7 +23,7 @@ from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult, PlanStatus
 
 
-class Verdict(str, Enum):
+class Verdict(StrEnum):
     """The outcome of a transfer trial."""
 
     TRANSFERS = "transfers"

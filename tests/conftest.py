@@ -1,0 +1,40 @@
+"""Shared fixtures: the catalog, the examples folder, and loaders for example files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from causalplan.causal.model import CausalModel, Labelling
+from causalplan.inputs import load_mapping, load_model
+from causalplan.objects.catalog import Catalog, load_catalog
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLES = ROOT / "examples"
+
+
+@pytest.fixture(scope="session")
+def catalog() -> Catalog:
+    return load_catalog()
+
+
+@pytest.fixture(scope="session")
+def user_catalog() -> Catalog:
+    return load_catalog([EXAMPLES / "catalog"])
+
+
+def example_model(relative: str, catalog: Catalog) -> CausalModel:
+    """Return a valid example model (asserting it is valid)."""
+    loaded = load_model(EXAMPLES / relative, catalog)
+    assert loaded.is_valid, loaded.report.as_dict()
+    assert loaded.model is not None
+    return loaded.model
+
+
+def example_mapping(relative: str, catalog: Catalog) -> Labelling:
+    """Return a valid example mapping (asserting it is valid)."""
+    loaded = load_mapping(EXAMPLES / relative, catalog)
+    assert loaded.is_valid, loaded.report.as_dict()
+    assert loaded.mapping is not None
+    return loaded.mapping

@@ -1,0 +1,135 @@
+"""Fast Downward run directly: statuses, limits that really stop it, isolation of concurrent solves."""
+
+from __future__ import annotations
+
+import os
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+from causalplan.causal.documents import SourceMap
+from causalplan.causal.model import read_model
+from causalplan.objects.catalog import Catalog, build_object
+from causalplan.objects.schema import ObjectSchema
+from causalplan.pddl.task import PlanningTask, build_task
+from causalplan.pddl.writer import compile_task
+from causalplan.planners import fast_downward
+from causalplan.planners.fast_downward import CONFIGS, parse_plan, solve, status_of_exit_code
+from causalplan.planners.result import PlanStatus
+from tests.conftest import example_model
+
+
+def star_task(n_parts: int) -> PlanningTask:
+    """A hub with ``n_parts`` satellites, every one needed: 2^n states for a blind search."""
+    parts = [{"id": "hub", "name": "hub", "connectors": [{"id": f"s{i}", "kind": "slot", "spec": f"k{i}"}
+                                                         for i in range(n_parts)]}]
+    parts += [{"id": f"p{i}", "name": f"part {i}", "connectors": [{"id": "c", "kind": "tab", "spec": f"k{i}"}]}
+              for i in range(n_parts)]
+    fits = [{"id": f"f{i}", "primitive": "insert", "moving": f"p{i}.c", "fixed": f"hub.s{i}"} for i in range(n_parts)]
+    obj = build_object(ObjectSchema.model_validate({
+        "id": "star", "name": "star", "category": "synthetic", "goal": "light", "base": "hub", "parts": parts,
+        "fits": fits, "mechanism": {"explanation": "all parts", "requires": [{"any": ["f0"], "says": "part 0 in"}]},
+    }))
+    rule = " AND ".join(f"g{i}" for i in range(n_parts)) + " CAUSES light"
+    model, _ = read_model({"object": "star", "functions": {f"p{i}": [f"g{i}"] for i in range(n_parts)},
+                           "rules": [rule]}, SourceMap())
+    assert model is not None
+    return build_task(model, obj)
+
+
+@pytest.mark.parametrize(
+    ("code", "status"),
+    [(0, PlanStatus.SOLVED), (2, PlanStatus.SOLVED), (10, PlanStatus.UNSOLVABLE), (11, PlanStatus.UNSOLVABLE),
+     (20, PlanStatus.OUT_OF_MEMORY), (22, PlanStatus.OUT_OF_MEMORY), (21, PlanStatus.TIMEOUT),
+     (23, PlanStatus.TIMEOUT), (30, PlanStatus.ERROR), (31, PlanStatus.ERROR), (35, PlanStatus.ERROR),
+     (99, PlanStatus.ERROR), (-9, PlanStatus.ERROR)],
+)
+def test_exit_codes_map_to_one_closed_status(code: int, status: PlanStatus) -> None:
+    assert status_of_exit_code(code) is status
+
+
+def test_parse_plan_reads_actions_and_skips_the_cost_comment() -> None:
+    text = "(screw light_bulb base_with_cables bulb_into_socket)\n; cost = 1 (unit cost)\n"
+    assert parse_plan(text) == (("screw", ("light_bulb", "base_with_cables", "bulb_into_socket")),)
+    with pytest.raises(ValueError, match="unexpected line"):
+        parse_plan("screw light_bulb\n")
+
+
+def test_search_binary_is_found_in_the_wheel() -> None:
+    assert fast_downward.search_binary().name == "downward"
+    assert fast_downward.translator_available()
+
+
+def test_a_paper_task_solves_with_both_configurations(catalog: Catalog) -> None:
+    compiled = compile_task(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
+    for config in CONFIGS.values():
+        outcome = solve(compiled.domain, compiled.problem, config)
+        assert outcome.status is PlanStatus.SOLVED
+        assert outcome.actions == (("screw", ("light_bulb", "base_with_cables", "bulb_into_socket")),)
+        assert set(outcome.timing) == {"translate", "search"}
+
+
+def test_the_time_limit_stops_the_search_and_leaves_no_process() -> None:
+    compiled = compile_task(star_task(24))
+    started = time.monotonic()
+    outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd-opt"], time_limit=1.0)
+    assert outcome.status is PlanStatus.TIMEOUT
+    assert time.monotonic() - started < 10
+    children = Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children").read_text().split()
+    assert children == []
+
+
+def test_the_memory_limit_is_reported_as_out_of_memory() -> None:
+    compiled = compile_task(star_task(20))  # A* needs far more than 15 MB here
+    outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd-opt"], time_limit=60, memory_limit_mb=15)
+    assert outcome.status is PlanStatus.OUT_OF_MEMORY
+
+
+def test_malformed_pddl_is_an_error_with_the_translators_words() -> None:
+    outcome = solve("(define (domain broken)", "(define (problem p))", CONFIGS["fd"])
+    assert outcome.status is PlanStatus.ERROR
+    assert "exit code" in outcome.message
+
+
+def test_concurrent_solves_do_not_interfere(catalog: Catalog) -> None:
+    tasks = {
+        "desk_lamp": (example_model("paper/desk_lamp.yaml", catalog), "desk_lamp"),
+        "candle": (example_model("near/candle.yaml", catalog), "candle"),
+        "abstract": (example_model("far/abstract_desk_lamp.yaml", catalog), "desk_lamp"),
+    }
+    expected_first_fit = {"desk_lamp": "bulb_into_socket", "candle": "wick_into_wax", "abstract": "bulb_into_socket"}
+    jobs = [name for name in tasks for _ in range(4)]
+
+    def run(name: str) -> tuple[str, PlanStatus, str]:
+        model, object_id = tasks[name]
+        compiled = compile_task(build_task(model, catalog.get(object_id)))
+        outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd"])
+        return name, outcome.status, outcome.actions[0][1][2]
+
+    with ThreadPoolExecutor(max_workers=6) as pool:
+        results = list(pool.map(run, jobs))
+    assert all(status is PlanStatus.SOLVED for _, status, _ in results)
+    assert all(fit == expected_first_fit[name] for name, _, fit in results)
+
+
+def test_no_output_sas_is_left_in_the_working_directory(catalog: Catalog, tmp_path: Path,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    compiled = compile_task(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
+    assert solve(compiled.domain, compiled.problem, CONFIGS["fd"]).status is PlanStatus.SOLVED
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_missing_binary_is_an_error_not_a_crash(monkeypatch: pytest.MonkeyPatch, catalog: Catalog) -> None:
+    monkeypatch.setenv("CAUSALPLAN_FD_BINARY", "/nonexistent/downward")
+    fast_downward.search_binary.cache_clear()
+    try:
+        compiled = compile_task(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
+        outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd"])
+    finally:
+        monkeypatch.delenv("CAUSALPLAN_FD_BINARY")
+        fast_downward.search_binary.cache_clear()
+    assert outcome.status is PlanStatus.ERROR
+    assert "/nonexistent/downward" in outcome.message
