@@ -1,4 +1,4 @@
-"""The ``causalplan`` command line: check, plan, transfer, compile, objects.
+"""The ``causalplan`` command line: check, plan, transfer, compile, graph, objects.
 
 Each command imports what it needs when it runs, so ``causalplan --help`` and quick
 commands start fast. Exit codes: 0 success, 1 no plan / no transfer, 2 invalid input,
@@ -295,6 +295,46 @@ def compile_command(
     compiled = compile_task(build_task(causal_model, target, labelling))
     _write_pddl(out, compiled.domain, compiled.problem)
     _console().print(f"Wrote {out / 'domain.pddl'} and {out / 'problem.pddl'}")
+
+
+@app.command()
+def graph(
+    model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Write a picture (.png, .svg, .pdf) or "
+                                             "Graphviz text (.dot); without it, DOT goes to the screen.")] = None,
+    as_json: JsonOption = False,
+    catalog: CatalogOption = None,
+) -> None:
+    """Draw the model's causal graph, left to right from the parts' functions to the goal.
+
+    Invalid models are drawn too (causes nothing produces are red), to help see what is wrong.
+    """
+    from causalplan.causal.render import PICTURE_SUFFIXES, draw, to_dot, to_json
+    from causalplan.inputs import load_model
+
+    loaded = load_model(model, _catalog(catalog))
+    if loaded.model is None:
+        _print_report(loaded.report, _console(stderr=True))
+        raise typer.Exit(EXIT_INVALID)
+    if as_json:
+        _print_json(to_json(loaded.model))
+    elif out is None:
+        sys.stdout.write(to_dot(loaded.model))
+    elif out.suffix.lower() == ".dot":
+        try:
+            out.write_text(to_dot(loaded.model), encoding="utf-8")
+        except OSError as exc:
+            _fail("output_not_writable", f"Cannot write {out}: {exc.strerror}.")
+    elif out.suffix.lower() in PICTURE_SUFFIXES:
+        try:
+            draw(loaded.model, out)
+        except OSError as exc:
+            _fail("output_not_writable", f"Cannot write {out}: {exc.strerror}.")
+    else:
+        _fail("unknown_format", f"Cannot tell the format of {out}: use .png, .svg, .pdf or .dot.")
+    if out is not None:
+        _console(stderr=True).print(f"Wrote {out}")
+    raise typer.Exit(EXIT_OK if loaded.report.is_valid else EXIT_INVALID)
 
 
 @app.command()
