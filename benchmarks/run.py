@@ -14,21 +14,24 @@ from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import platform
 import statistics
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any
 
 from rich.console import Console
 from rich.table import Table
 
 from causalplan.inputs import load_model
 from causalplan.objects.catalog import load_catalog
-from causalplan.objects.synthetic import synthetic_task
+from causalplan.objects.synthetic import MAX_PARTS, MIN_PARTS, synthetic_task
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.replay import replay
@@ -46,6 +49,7 @@ DEFAULT_SIZES = (10, 40, 80, 160)
 TARGET_PARTS = 80
 TARGET_SECONDS = 2.0
 OUR_TIME_LIMIT = 60.0
+WIDTH = 120
 
 
 @dataclass
@@ -183,64 +187,82 @@ def paper_tasks() -> list[tuple[str, PlanningTask]]:
     return tasks
 
 
+def run_route(route: str, sizes: list[int], repeat: int, up_time_limit: float) -> dict[str, list[dict[str, Any]]]:
+    """Measure one route on every case, in a worker process of its own (see ``measure_in_worker``)."""
+    console = Console(width=WIDTH)
+    cases: list[tuple[str, PlanningTask]] = [(name, task) for name, task in paper_tasks()]
+    cases += [(f"synthetic/{size}", synthetic_task(size)) for size in sizes]
+    results: dict[str, list[dict[str, Any]]] = {}
+    for name, task in cases:
+        console.print(f"  {route}: {name} ...", style="dim", highlight=False)
+        run = ours(task) if route == "ours" else through_up(task, up_time_limit)
+        results.setdefault("paper" if name.startswith("examples/") else "synthetic", []).append(
+            asdict(measure(run, repeat))
+        )
+    return results
+
+
+def measure_in_worker(route: str, sizes: list[int], repeat: int, up_time_limit: float) -> dict[str, list[RouteResult]]:
+    """Run ``run_route`` in a fresh (spawned) process, so the routes cannot slow each other down.
+
+    In one process, having unified-planning loaded makes every fork of our translator worker
+    slower (the child's garbage collector touches the inherited heap: copy-on-write), which
+    would charge UP's memory to our route.
+    """
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=1, mp_context=context) as pool:
+        raw = pool.submit(run_route, route, sizes, repeat, up_time_limit).result()
+    return {group: [RouteResult(**item) for item in items] for group, items in raw.items()}
+
+
 def parse_args(argv: list[str]) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=5, help="timed runs per case, after one warm-up (default 5)")
-    parser.add_argument(
-        "--sizes",
-        default=",".join(map(str, DEFAULT_SIZES)),
-        help="synthetic object sizes in parts (default 10,40,80,160)",
-    )
-    parser.add_argument("--up-time-limit", type=float, default=20.0, help="seconds per UP run (default 20)")
-    parser.add_argument("--quick", action="store_true", help="smoke run: 1 repeat, sizes 10,40,80, UP limit 10 s")
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--repeat", type=int, help="timed runs per case, after one warm-up (default 5; --quick: 1)")
+    parser.add_argument("--sizes", help="synthetic object sizes in parts (default 10,40,80,160; --quick: 10,40,80)")
+    parser.add_argument("--up-time-limit", type=float, help="seconds per UP run (default 20; --quick: 10)")
+    parser.add_argument("--quick", action="store_true", help="smoke run with the --quick defaults above")
     parser.add_argument("--output", type=Path, default=RESULTS, help="where to write the JSON results")
     args = parser.parse_args(argv)
-    if args.quick:
-        args.repeat, args.sizes, args.up_time_limit = 1, "10,40,80", min(args.up_time_limit, 10.0)
+    defaults = (1, "10,40,80", 10.0) if args.quick else (5, ",".join(map(str, DEFAULT_SIZES)), 20.0)
+    args.repeat = defaults[0] if args.repeat is None else args.repeat
+    args.sizes = defaults[1] if args.sizes is None else args.sizes
+    args.up_time_limit = defaults[2] if args.up_time_limit is None else args.up_time_limit
     if args.repeat < 1:
         parser.error("--repeat must be at least 1")
     try:
         args.size_list = [int(size) for size in args.sizes.split(",") if size.strip()]
     except ValueError:
         parser.error(f"--sizes must be numbers separated by commas, not {args.sizes!r}")
+    if not args.size_list or not all(MIN_PARTS <= size <= MAX_PARTS for size in args.size_list):
+        parser.error(f"--sizes must be between {MIN_PARTS} and {MAX_PARTS} parts")
     return args
 
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(sys.argv[1:] if argv is None else argv)
-    console = Console()
+    console = Console(width=WIDTH)
     console.print(
         f"[bold]causalplan benchmark[/bold]: median wall time of {args.repeat} run(s) after a warm-up; "
         f"UP limit {args.up_time_limit:g} s; Python {platform.python_version()} on {platform.machine()}"
     )
 
-    paper_rows = []
-    for name, task in paper_tasks():
-        console.print(f"  {name} ...", style="dim")
-        paper_rows.append(
-            (name, measure(ours(task), args.repeat), measure(through_up(task, args.up_time_limit), args.repeat))
-        )
+    sizes = list(args.size_list)
+    extra_target = TARGET_PARTS not in sizes
+    mine = measure_in_worker("ours", [*sizes, TARGET_PARTS] if extra_target else sizes, args.repeat, 0.0)
+    theirs = measure_in_worker("up", sizes, args.repeat, args.up_time_limit)
+    target_route = mine["synthetic"].pop() if extra_target else mine["synthetic"][sizes.index(TARGET_PARTS)]
+    paper_rows = [
+        (name.removeprefix("examples/").removesuffix(".yaml"), a, b)
+        for name, a, b in zip(PAPER_MODELS, mine["paper"], theirs["paper"], strict=True)
+    ]
+    fits = {size: len(synthetic_task(size).obj.fits) for size in sizes}
+    synthetic_rows = [
+        (f"{size} parts, {fits[size]} fits", a, b)
+        for size, a, b in zip(sizes, mine.get("synthetic", []), theirs.get("synthetic", []), strict=True)
+    ]
     console.print(table("(a) The paper's models: one plan from a PlanningTask", "model", paper_rows))
-
-    synthetic_rows = []
-    for size in args.size_list:
-        console.print(f"  synthetic, {size} parts ...", style="dim")
-        task = synthetic_task(size)
-        synthetic_rows.append(
-            (
-                f"{size} parts ({len(task.obj.fits)} fits)",
-                measure(ours(task), args.repeat),
-                measure(through_up(task, args.up_time_limit), args.repeat),
-            )
-        )
     console.print(table("(b) Synthetic objects (seed 0)", "object", synthetic_rows))
 
-    target_route = next(
-        (mine for size, (_, mine, _) in zip(args.size_list, synthetic_rows, strict=True) if size == TARGET_PARTS), None
-    )
-    if target_route is None:
-        console.print(f"  synthetic, {TARGET_PARTS} parts (for the target line) ...", style="dim")
-        target_route = measure(ours(synthetic_task(TARGET_PARTS)), args.repeat)
     target_met = target_route.median is not None and target_route.median < TARGET_SECONDS and bool(target_route.valid)
     verdict = "[green]yes[/green]" if target_met else "[red]NO[/red]"
     console.print(
@@ -255,18 +277,18 @@ def main(argv: list[str] | None = None) -> int:
         "repeat": args.repeat,
         "up_time_limit_s": args.up_time_limit,
         "paper": [
-            {"model": name, "ours": mine.as_dict(), "up": theirs.as_dict(), "up_over_ours": ratio(mine, theirs)}
-            for name, mine, theirs in paper_rows
+            {"model": name, "ours": a.as_dict(), "up": b.as_dict(), "up_over_ours": ratio(a, b)}
+            for name, (_, a, b) in zip(PAPER_MODELS, paper_rows, strict=True)
         ],
         "synthetic": [
             {
                 "parts": size,
                 "seed": 0,
-                "ours": mine.as_dict(),
-                "up": theirs.as_dict(),
-                "up_over_ours": ratio(mine, theirs),
+                "ours": a.as_dict(),
+                "up": b.as_dict(),
+                "up_over_ours": ratio(a, b),
             }
-            for size, (_, mine, theirs) in zip(args.size_list, synthetic_rows, strict=True)
+            for size, (_, a, b) in zip(sizes, synthetic_rows, strict=True)
         ],
         "target": {
             "parts": TARGET_PARTS,

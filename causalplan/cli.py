@@ -42,16 +42,24 @@ app = typer.Typer(
 
 CatalogOption = Annotated[
     list[Path] | None,
-    typer.Option("--catalog", help="A folder of your own object files (YAML/JSON) to add to the built-in catalog. "
-                 "Repeatable.", show_default=False),
+    typer.Option(
+        "--catalog",
+        help="A folder of your own object files (YAML/JSON) to add to the built-in catalog. Repeatable.",
+        show_default=False,
+    ),
 ]
 JsonOption = Annotated[bool, typer.Option("--json", help="Print machine-readable JSON instead of sentences.")]
 PlannerOption = Annotated[
-    str, typer.Option("--planner", "-p", help="fd: Fast Downward, LAMA first iteration (fast). "
-                      "fd-opt: Fast Downward, A* (shortest plan).")
+    str,
+    typer.Option(
+        "--planner",
+        "-p",
+        help="fd: Fast Downward, LAMA first iteration (fast). fd-opt: Fast Downward, A* (shortest plan).",
+    ),
 ]
-TimeLimitOption = Annotated[float, typer.Option("--time-limit", min=0.1, max=3600,
-                                                help="Seconds the planner may run before it is stopped.")]
+TimeLimitOption = Annotated[
+    float, typer.Option("--time-limit", min=0.1, max=3600, help="Seconds the planner may run before it is stopped.")
+]
 
 
 def _console(stderr: bool = False) -> Console:
@@ -87,10 +95,19 @@ def _print_report(report: Report, console: Console) -> None:
     for diagnostic in report.diagnostics:
         color = "red" if diagnostic.severity.value == "error" else "yellow"
         where = diagnostic.location.describe()
-        console.print(f"[bold {color}]{diagnostic.severity.value}[/]\\[{diagnostic.code}]"
-                      f"{' ' + escape(where) if where else ''}: {escape(diagnostic.message)}")
+        console.print(
+            f"[bold {color}]{diagnostic.severity.value}[/]\\[{diagnostic.code}]"
+            f"{' ' + escape(where) if where else ''}: {escape(diagnostic.message)}"
+        )
         if diagnostic.hint:
             console.print(f"  [dim]hint:[/] {escape(diagnostic.hint)}")
+
+
+def _check_planner(planner: str) -> None:
+    from causalplan.planners.pipeline import PLANNERS
+
+    if planner not in PLANNERS:
+        _fail("unknown_planner", f"Unknown planner '{planner}'; choose one of: {', '.join(PLANNERS)}.")
 
 
 def _is_mapping_file(path: Path) -> bool:
@@ -98,7 +115,7 @@ def _is_mapping_file(path: Path) -> bool:
     from causalplan.causal.documents import read_document
 
     data, _, problems = read_document(path)
-    return not problems and isinstance(data, dict) and "rules" not in data and "goal" not in data
+    return not problems and isinstance(data, dict) and "rules" not in data
 
 
 @app.command()
@@ -139,8 +156,10 @@ def _load_valid_model(path: Path, objects: Catalog, as_json: bool) -> CausalMode
         else:
             console = _console(stderr=True)
             _print_report(loaded.report, console)
-            console.print(f"{path}: the model is invalid, so there is nothing to plan. "
-                          f"Run `causalplan check {path}` after fixing it.")
+            console.print(
+                f"{path}: the model is invalid, so there is nothing to plan. "
+                f"Run `causalplan check {path}` after fixing it."
+            )
         raise typer.Exit(EXIT_INVALID)
     assert loaded.model is not None
     return loaded.model
@@ -180,8 +199,10 @@ def _print_plan(result: PlanResult, console: Console) -> None:
     for number, step in enumerate(result.steps, start=1):
         console.print(f"{number}. {escape(step.text)}")
     mark = "[green]yes[/]" if result.valid_under_true_mechanism else "[red]no[/]"
-    console.print(f"[dim]{len(result.steps)} step(s) by {result.planner_used}, replayed: goal holds under the "
-                  f"model;[/] the real object works: {mark}")
+    console.print(
+        f"[dim]{len(result.steps)} step(s) by {result.planner_used}, replayed: goal holds under the "
+        f"model;[/] the real object works: {mark}"
+    )
     if result.message:
         console.print(f"[yellow]{escape(result.message)}[/]")
 
@@ -189,12 +210,19 @@ def _print_plan(result: PlanResult, console: Console) -> None:
 @app.command()
 def plan(
     model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
-    mapping: Annotated[Path | None, typer.Option("--mapping", "-m", help="A step-3 mapping: plan for that object "
-                                                 "instead, with its parts carrying the model's functions.")] = None,
+    mapping: Annotated[
+        Path | None,
+        typer.Option(
+            "--mapping",
+            "-m",
+            help="A step-3 mapping: plan for that object instead, with its parts carrying the model's functions.",
+        ),
+    ] = None,
     planner: PlannerOption = "fd",
     time_limit: TimeLimitOption = 30.0,
-    pddl_out: Annotated[Path | None, typer.Option("--pddl-out", help="Also write domain.pddl and problem.pddl "
-                                                  "to this folder.")] = None,
+    pddl_out: Annotated[
+        Path | None, typer.Option("--pddl-out", help="Also write domain.pddl and problem.pddl to this folder.")
+    ] = None,
     as_json: JsonOption = False,
     catalog: CatalogOption = None,
 ) -> None:
@@ -207,13 +235,15 @@ def plan(
     from causalplan.pddl.task import build_task
     from causalplan.planners.pipeline import plan_task
 
+    _check_planner(planner)
     objects = _catalog(catalog)
     causal_model = _load_valid_model(model, objects, as_json)
     labelling = _load_valid_mapping(mapping, objects, as_json) if mapping else None
     target = objects.get((labelling or causal_model.labelling).object_id)
     try:
-        result = plan_task(build_task(causal_model, target, labelling), planner, time_limit,
-                           include_pddl=pddl_out is not None)
+        result = plan_task(
+            build_task(causal_model, target, labelling), planner, time_limit, include_pddl=pddl_out is not None
+        )
     except CausalPlanError as exc:
         _fail(exc.code, exc.message)
     if pddl_out is not None and result.pddl is not None:
@@ -232,8 +262,10 @@ def _print_verdict(verdict: TransferVerdict, console: Console) -> None:
 
     colors = {"transfers": "green", "fails": "red", "invalid": "red", "undecided": "yellow"}
     kind = f" ({verdict.generalization}-generalization)" if verdict.generalization in ("near", "far") else ""
-    console.print(f"[bold {colors[verdict.verdict.value]}]{verdict.verdict.value}[/]: "
-                  f"{verdict.training_object} → {verdict.test_object}{kind}, decided by {verdict.decided_by}")
+    console.print(
+        f"[bold {colors[verdict.verdict.value]}]{verdict.verdict.value}[/]: "
+        f"{verdict.training_object} → {verdict.test_object}{kind}, decided by {verdict.decided_by}"
+    )
     for reason in verdict.reasons:
         color = "red" if reason.severity.value == "error" else "yellow"
         console.print(f"  [{color}]{reason.severity.value}[/]\\[{reason.code}]: {escape(reason.message)}")
@@ -257,18 +289,26 @@ def transfer(
     Exit 0 when it transfers, 1 when it fails, 2 when the model or mapping is invalid,
     3 when the planner could not decide (e.g. it timed out).
     """
+    from causalplan.errors import CausalPlanError
     from causalplan.inputs import load_mapping, load_model
     from causalplan.transfer.verdict import evaluate_transfer, invalid_verdict
 
+    _check_planner(planner)
     objects = _catalog(catalog)
     loaded_model, loaded_mapping = load_model(model, objects), load_mapping(mapping, objects)
     if loaded_model.is_valid and loaded_mapping.is_valid:
         assert loaded_model.model is not None and loaded_mapping.mapping is not None
-        verdict = evaluate_transfer(loaded_model.model, loaded_mapping.mapping, objects, planner, time_limit)
+        try:
+            verdict = evaluate_transfer(loaded_model.model, loaded_mapping.mapping, objects, planner, time_limit)
+        except CausalPlanError as exc:
+            _fail(exc.code, exc.message)
     else:
-        verdict = invalid_verdict(loaded_model.report, loaded_mapping.report,
-                                  loaded_model.model.object_id if loaded_model.model else None,
-                                  loaded_mapping.mapping.object_id if loaded_mapping.mapping else None)
+        verdict = invalid_verdict(
+            loaded_model.report,
+            loaded_mapping.report,
+            loaded_model.model.object_id if loaded_model.model else None,
+            loaded_mapping.mapping.object_id if loaded_mapping.mapping else None,
+        )
     if as_json:
         _print_json(verdict.as_dict())
     else:
@@ -280,8 +320,9 @@ def transfer(
 def compile_command(
     model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Folder to write domain.pddl and problem.pddl to.")],
-    mapping: Annotated[Path | None, typer.Option("--mapping", "-m", help="Compile for a step-3 mapping's object.")]
-    = None,
+    mapping: Annotated[
+        Path | None, typer.Option("--mapping", "-m", help="Compile for a step-3 mapping's object.")
+    ] = None,
     catalog: CatalogOption = None,
 ) -> None:
     """Compile a model to a PDDL 2.2 domain and problem with derived predicates, without planning."""
@@ -300,8 +341,14 @@ def compile_command(
 @app.command()
 def graph(
     model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Write a picture (.png, .svg, .pdf) or "
-                                             "Graphviz text (.dot); without it, DOT goes to the screen.")] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--out",
+            "-o",
+            help="Write a picture (.png, .svg, .pdf) or Graphviz text (.dot); without it, DOT goes to the screen.",
+        ),
+    ] = None,
     as_json: JsonOption = False,
     catalog: CatalogOption = None,
 ) -> None:
@@ -377,9 +424,18 @@ def objects(
             console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)})")
         return
     if as_json:
-        _print_json([{"id": obj.id, "name": obj.name, "category": obj.category, "goal": obj.goal,
-                      "parts": [{"id": part.id, "name": part.name} for part in obj.parts]}
-                     for obj in known.objects.values()])
+        _print_json(
+            [
+                {
+                    "id": obj.id,
+                    "name": obj.name,
+                    "category": obj.category,
+                    "goal": obj.goal,
+                    "parts": [{"id": part.id, "name": part.name} for part in obj.parts],
+                }
+                for obj in known.objects.values()
+            ]
+        )
         return
     table = Table("id", "name", "category", "goal", "parts")
     for obj in known.objects.values():

@@ -60,14 +60,36 @@ def test_a_user_folder_adds_objects(tmp_path: Path) -> None:
         ({"id": "Bad Id"}, "id"),
         ({"base": "nothing"}, "base 'nothing' is not one of the parts"),
         ({"category": None}, "category"),
-        ({"fits": [{"id": "f", "primitive": "weld", "moving": "warm_bulb.thread", "fixed": "lamp_body.socket"}]},
-         "unknown primitive 'weld'"),
-        ({"fits": [{"id": "f", "primitive": "screw", "moving": "warm_bulb.nope", "fixed": "lamp_body.socket"}]},
-         "is not a 'part.connector'"),
-        ({"fits": [{"id": "f", "primitive": "screw", "moving": "warm_bulb.thread", "fixed": "lamp_body.socket",
-                    "probability": 0}]}, "greater than 0"),
-        ({"fits": [{"id": "lamp_body", "primitive": "screw", "moving": "warm_bulb.thread",
-                    "fixed": "lamp_body.socket"}]}, "clash"),
+        (
+            {"fits": [{"id": "f", "primitive": "weld", "moving": "warm_bulb.thread", "fixed": "lamp_body.socket"}]},
+            "unknown primitive 'weld'",
+        ),
+        (
+            {"fits": [{"id": "f", "primitive": "screw", "moving": "warm_bulb.nope", "fixed": "lamp_body.socket"}]},
+            "is not a 'part.connector'",
+        ),
+        (
+            {
+                "fits": [
+                    {
+                        "id": "f",
+                        "primitive": "screw",
+                        "moving": "warm_bulb.thread",
+                        "fixed": "lamp_body.socket",
+                        "probability": 0,
+                    }
+                ]
+            },
+            "greater than 0",
+        ),
+        (
+            {
+                "fits": [
+                    {"id": "lamp_body", "primitive": "screw", "moving": "warm_bulb.thread", "fixed": "lamp_body.socket"}
+                ]
+            },
+            "clash",
+        ),
         ({"mechanism": {"explanation": "x", "requires": [{"any": ["nope"], "says": "y"}]}}, "unknown fit"),
         ({"parts": [{"id": "and", "name": "x", "connectors": []}], "base": "and", "fits": []}, "PDDL keyword"),
         ({"colour": "red"}, "Extra inputs"),

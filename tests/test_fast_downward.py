@@ -23,28 +23,57 @@ from tests.conftest import example_model
 
 def star_task(n_parts: int) -> PlanningTask:
     """A hub with ``n_parts`` satellites, every one needed: 2^n states for a blind search."""
-    parts = [{"id": "hub", "name": "hub", "connectors": [{"id": f"s{i}", "kind": "slot", "spec": f"k{i}"}
-                                                         for i in range(n_parts)]}]
-    parts += [{"id": f"p{i}", "name": f"part {i}", "connectors": [{"id": "c", "kind": "tab", "spec": f"k{i}"}]}
-              for i in range(n_parts)]
+    parts = [
+        {
+            "id": "hub",
+            "name": "hub",
+            "connectors": [{"id": f"s{i}", "kind": "slot", "spec": f"k{i}"} for i in range(n_parts)],
+        }
+    ]
+    parts += [
+        {"id": f"p{i}", "name": f"part {i}", "connectors": [{"id": "c", "kind": "tab", "spec": f"k{i}"}]}
+        for i in range(n_parts)
+    ]
     fits = [{"id": f"f{i}", "primitive": "insert", "moving": f"p{i}.c", "fixed": f"hub.s{i}"} for i in range(n_parts)]
-    obj = build_object(ObjectSchema.model_validate({
-        "id": "star", "name": "star", "category": "synthetic", "goal": "light", "base": "hub", "parts": parts,
-        "fits": fits, "mechanism": {"explanation": "all parts", "requires": [{"any": ["f0"], "says": "part 0 in"}]},
-    }))
+    obj = build_object(
+        ObjectSchema.model_validate(
+            {
+                "id": "star",
+                "name": "star",
+                "category": "synthetic",
+                "goal": "light",
+                "base": "hub",
+                "parts": parts,
+                "fits": fits,
+                "mechanism": {"explanation": "all parts", "requires": [{"any": ["f0"], "says": "part 0 in"}]},
+            }
+        )
+    )
     rule = " AND ".join(f"g{i}" for i in range(n_parts)) + " CAUSES light"
-    model, _ = read_model({"object": "star", "functions": {f"p{i}": [f"g{i}"] for i in range(n_parts)},
-                           "rules": [rule]}, SourceMap())
+    model, _ = read_model(
+        {"object": "star", "functions": {f"p{i}": [f"g{i}"] for i in range(n_parts)}, "rules": [rule]}, SourceMap()
+    )
     assert model is not None
     return build_task(model, obj)
 
 
 @pytest.mark.parametrize(
     ("code", "status"),
-    [(0, PlanStatus.SOLVED), (2, PlanStatus.SOLVED), (10, PlanStatus.UNSOLVABLE), (11, PlanStatus.UNSOLVABLE),
-     (20, PlanStatus.OUT_OF_MEMORY), (22, PlanStatus.OUT_OF_MEMORY), (21, PlanStatus.TIMEOUT),
-     (23, PlanStatus.TIMEOUT), (30, PlanStatus.ERROR), (31, PlanStatus.ERROR), (35, PlanStatus.ERROR),
-     (99, PlanStatus.ERROR), (-9, PlanStatus.ERROR)],
+    [
+        (0, PlanStatus.SOLVED),
+        (2, PlanStatus.SOLVED),
+        (10, PlanStatus.UNSOLVABLE),
+        (11, PlanStatus.UNSOLVABLE),
+        (20, PlanStatus.OUT_OF_MEMORY),
+        (22, PlanStatus.OUT_OF_MEMORY),
+        (21, PlanStatus.TIMEOUT),
+        (23, PlanStatus.TIMEOUT),
+        (30, PlanStatus.ERROR),
+        (31, PlanStatus.ERROR),
+        (35, PlanStatus.ERROR),
+        (99, PlanStatus.ERROR),
+        (-9, PlanStatus.ERROR),
+    ],
 )
 def test_exit_codes_map_to_one_closed_status(code: int, status: PlanStatus) -> None:
     assert status_of_exit_code(code) is status
@@ -114,8 +143,9 @@ def test_concurrent_solves_do_not_interfere(catalog: Catalog) -> None:
     assert all(fit == expected_first_fit[name] for name, _, fit in results)
 
 
-def test_no_output_sas_is_left_in_the_working_directory(catalog: Catalog, tmp_path: Path,
-                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+def test_no_output_sas_is_left_in_the_working_directory(
+    catalog: Catalog, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.chdir(tmp_path)
     compiled = compile_task(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
     assert solve(compiled.domain, compiled.problem, CONFIGS["fd"]).status is PlanStatus.SOLVED

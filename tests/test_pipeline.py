@@ -12,21 +12,28 @@ from tests.conftest import example_mapping, example_model
 
 PAPER_PLANS = {
     ("paper/desk_lamp.yaml", None): ["Screw the light bulb into the base with cables."],
-    ("paper/failed_desk_lamp.yaml", None): ["Screw the light bulb into the base with cables.",
-                                            "Clip the shade onto the base with cables."],
+    ("paper/failed_desk_lamp.yaml", None): [
+        "Screw the light bulb into the base with cables.",
+        "Clip the shade onto the base with cables.",
+    ],
     ("near/candle.yaml", None): ["Insert the wick into the wax.", "Light the wick with the match."],
-    ("paper/desk_lamp.yaml", "paper/flashlight_mapping.yaml"): ["Insert the batteries into the case.",
-                                                                "Screw the head onto the case."],
+    ("paper/desk_lamp.yaml", "paper/flashlight_mapping.yaml"): [
+        "Insert the batteries into the case.",
+        "Screw the head onto the case.",
+    ],
     ("near/candle.yaml", "near/kerosene_lamp_mapping.yaml"): [
-        "Screw the burner onto the fuel tank with kerosene.", "Thread the wick through the burner into the fuel.",
-        "Light the wick with the lighter."],
+        "Screw the burner onto the fuel tank with kerosene.",
+        "Thread the wick through the burner into the fuel.",
+        "Light the wick with the lighter.",
+    ],
 }
 
 
 @pytest.mark.parametrize("planner", ["fd", "fd-opt"])
 @pytest.mark.parametrize(("model_file", "mapping_file"), sorted(PAPER_PLANS, key=str))
-def test_paper_tasks_give_the_expected_plans(model_file: str, mapping_file: str | None, planner: str,
-                                             catalog: Catalog) -> None:
+def test_paper_tasks_give_the_expected_plans(
+    model_file: str, mapping_file: str | None, planner: str, catalog: Catalog
+) -> None:
     model = example_model(model_file, catalog)
     mapping = example_mapping(mapping_file, catalog) if mapping_file else None
     task = build_task(model, catalog.get(mapping.object_id if mapping else model.object_id), mapping)

@@ -237,3 +237,10 @@ def test_or_in_the_effect_warns_in_any_case() -> None:
 def test_each_label_with_or_warns_once() -> None:
     _, codes = parse("a or b AND c or d CAUSES e")
     assert codes == ["or_in_label", "or_in_label"]
+
+
+def test_and_after_causes_is_an_error_with_one_rule_per_effect_as_the_fix() -> None:
+    rule, problems = parse_rule("heat CAUSES light AND warmth", 3, Location(rule=3))
+    assert rule is None
+    assert [problem.code for problem in problems] == ["multiple_effects"]
+    assert problems[0].hint is not None and "one rule per effect" in problems[0].hint

@@ -20,8 +20,10 @@ def test_the_papers_successful_desk_lamp_model_transfers_to_the_flashlight(catal
     assert verdict.generalization == "near"
     assert verdict.reasons == ()
     assert verdict.plan is not None
-    assert [step.text for step in verdict.plan.steps] == ["Insert the batteries into the case.",
-                                                          "Screw the head onto the case."]
+    assert [step.text for step in verdict.plan.steps] == [
+        "Insert the batteries into the case.",
+        "Screw the head onto the case.",
+    ]
 
 
 def test_the_papers_failed_model_fails_for_the_papers_two_reasons(catalog: Catalog) -> None:
@@ -40,13 +42,19 @@ def test_the_papers_failed_model_fails_for_the_papers_two_reasons(catalog: Catal
     [
         ("near/candle.yaml", "near/kerosene_lamp_mapping.yaml", Verdict.TRANSFERS, "near", []),
         ("far/abstract_desk_lamp.yaml", "far/candle_mapping.yaml", Verdict.TRANSFERS, "far", []),
-        ("paper/desk_lamp.yaml", "far/candle_mapping_for_paper_desk_lamp.yaml", Verdict.FAILS, "far",
-         ["violates_true_mechanism"]),
+        (
+            "paper/desk_lamp.yaml",
+            "far/candle_mapping_for_paper_desk_lamp.yaml",
+            Verdict.FAILS,
+            "far",
+            ["violates_true_mechanism"],
+        ),
         ("near/candle.yaml", "far/flashlight_mapping_for_candle.yaml", Verdict.FAILS, "far", ["missing_function"]),
     ],
 )
-def test_near_and_far_examples(model: str, mapping: str, verdict: Verdict, kind: str, codes: list[str],
-                               catalog: Catalog) -> None:
+def test_near_and_far_examples(
+    model: str, mapping: str, verdict: Verdict, kind: str, codes: list[str], catalog: Catalog
+) -> None:
     result = _verdict(model, mapping, catalog)
     assert result.verdict is verdict
     assert result.generalization == kind
@@ -71,12 +79,17 @@ def test_a_missing_function_is_only_a_warning_when_another_rule_still_works(cata
     from causalplan.causal.documents import SourceMap
     from causalplan.causal.model import read_labelling, read_model
 
-    model, _ = read_model({"object": "desk_lamp", "functions": {"base_with_cables": ["mains"],
-                                                                "light_bulb": ["glow"]},
-                           "rules": ["mains AND glow CAUSES light", "battery AND glow CAUSES light",
-                                     "mains CAUSES battery"]}, SourceMap())
-    mapping, _ = read_labelling({"object": "flashlight", "functions": {"batteries": ["battery"],
-                                                                       "head": ["glow"]}}, SourceMap())
+    model, _ = read_model(
+        {
+            "object": "desk_lamp",
+            "functions": {"base_with_cables": ["mains"], "light_bulb": ["glow"]},
+            "rules": ["mains AND glow CAUSES light", "battery AND glow CAUSES light", "mains CAUSES battery"],
+        },
+        SourceMap(),
+    )
+    mapping, _ = read_labelling(
+        {"object": "flashlight", "functions": {"batteries": ["battery"], "head": ["glow"]}}, SourceMap()
+    )
     assert model is not None and mapping is not None
     verdict = evaluate_transfer(model, mapping, catalog)
     assert verdict.verdict is Verdict.TRANSFERS
@@ -92,8 +105,7 @@ def test_generalization_kinds(catalog: Catalog) -> None:
 
 def test_needed_functions_are_the_causes_no_rule_produces(catalog: Catalog) -> None:
     model = example_model("paper/desk_lamp.yaml", catalog)
-    assert set(needed_functions(model)) == {"provide electricity", "close the circuit",
-                                            "turn electricity into light"}
+    assert set(needed_functions(model)) == {"provide electricity", "close the circuit", "turn electricity into light"}
 
 
 def test_verdict_json_has_the_documented_keys(catalog: Catalog) -> None:

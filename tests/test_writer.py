@@ -18,8 +18,9 @@ EVIL = "x) (:action evil :parameters () :precondition () :effect (n-light)) (:de
 
 
 def _model(functions: dict[str, list[str]], rules: list[str], catalog: Catalog, goal: str = "light"):  # type: ignore[no-untyped-def]
-    model, problems = read_model({"object": "desk_lamp", "goal": goal, "functions": functions, "rules": rules},
-                                 SourceMap())
+    model, problems = read_model(
+        {"object": "desk_lamp", "goal": goal, "functions": functions, "rules": rules}, SourceMap()
+    )
     assert model is not None and not [p for p in problems if p.severity.value == "error"]
     return model
 
@@ -31,8 +32,11 @@ def _parse(tmp_path: Path, domain: str, problem: str):  # type: ignore[no-untype
 
 
 def test_a_hostile_label_cannot_add_actions_or_axioms(catalog: Catalog, tmp_path: Path) -> None:
-    model = _model({"base_with_cables": [EVIL], "light_bulb": ["turn electricity into light"]},
-                   [f"{EVIL} AND turn electricity into light CAUSES light"], catalog)
+    model = _model(
+        {"base_with_cables": [EVIL], "light_bulb": ["turn electricity into light"]},
+        [f"{EVIL} AND turn electricity into light CAUSES light"],
+        catalog,
+    )
     compiled = compile_task(build_task(model, catalog.get("desk_lamp")))
     domain, _problem = _parse(tmp_path, compiled.domain, compiled.problem)
     assert sorted(action.name for action in domain.actions) == ["clip", "screw"]
@@ -43,8 +47,9 @@ def test_a_hostile_label_cannot_add_actions_or_axioms(catalog: Catalog, tmp_path
 
 
 def test_a_hostile_goal_label_stays_one_predicate(catalog: Catalog, tmp_path: Path) -> None:
-    model = _model({"base_with_cables": ["power"], "light_bulb": ["glow"]}, [f"power AND glow CAUSES {EVIL}"],
-                   catalog, goal=EVIL)
+    model = _model(
+        {"base_with_cables": ["power"], "light_bulb": ["glow"]}, [f"power AND glow CAUSES {EVIL}"], catalog, goal=EVIL
+    )
     compiled = compile_task(build_task(model, catalog.get("desk_lamp")))
     _domain, problem = _parse(tmp_path, compiled.domain, compiled.problem)
     assert str(problem.goal) == f"({compiled.node_names[model.goal_key]})"
@@ -52,8 +57,11 @@ def test_a_hostile_goal_label_stays_one_predicate(catalog: Catalog, tmp_path: Pa
 
 def test_labels_colliding_after_sanitising_stay_distinct_nodes(catalog: Catalog) -> None:
     # 'power!' and 'power?' both sanitise to 'power'; only one of them is carried by the bulb.
-    model = _model({"base_with_cables": ["power!"], "light_bulb": ["power?"], "shade": ["glow"]},
-                   ["power! AND glow CAUSES light"], catalog)
+    model = _model(
+        {"base_with_cables": ["power!"], "light_bulb": ["power?"], "shade": ["glow"]},
+        ["power! AND glow CAUSES light"],
+        catalog,
+    )
     compiled = compile_task(build_task(model, catalog.get("desk_lamp")))
     assert compiled.node_names["power!"] != compiled.node_names["power?"]
     result = plan_task(build_task(model, catalog.get("desk_lamp")), "fd-opt")
@@ -70,8 +78,11 @@ def test_compilation_is_pure_and_deterministic(catalog: Catalog) -> None:
 
 
 def test_alternative_rules_become_alternative_clauses(catalog: Catalog) -> None:
-    model = _model({"base_with_cables": ["mains"], "light_bulb": ["glow"], "shade": ["reflect"]},
-                   ["mains AND glow CAUSES light", "reflect CAUSES light"], catalog)
+    model = _model(
+        {"base_with_cables": ["mains"], "light_bulb": ["glow"], "shade": ["reflect"]},
+        ["mains AND glow CAUSES light", "reflect CAUSES light"],
+        catalog,
+    )
     domain = compile_task(build_task(model, catalog.get("desk_lamp"))).domain
     assert domain.count("(:derived (n-light)") == 2
     result = plan_task(build_task(model, catalog.get("desk_lamp")), "fd-opt")

@@ -31,59 +31,96 @@ class SourceMap:
         return Location(file=self.file, line=self.lines.get(key), rule=rule, part=part)
 
 
-def _record_lines(node: yaml.Node, path: PathKey, lines: dict[PathKey, int]) -> None:
+def _record_lines(node: yaml.Node, path: PathKey, lines: dict[PathKey, int], seen: set[int]) -> None:
     lines[path] = node.start_mark.line + 1
+    if id(node) in seen:  # an alias: its target's lines are recorded once, where it is defined
+        return
+    seen.add(id(node))
     if isinstance(node, yaml.MappingNode):
         for key_node, value_node in node.value:
             if isinstance(key_node, yaml.ScalarNode):
                 child = (*path, key_node.value)
-                _record_lines(value_node, child, lines)
+                _record_lines(value_node, child, lines, seen)
                 lines[child] = key_node.start_mark.line + 1
     elif isinstance(node, yaml.SequenceNode):
         for index, item in enumerate(node.value):
-            _record_lines(item, (*path, index), lines)
+            _record_lines(item, (*path, index), lines, seen)
 
 
 def _line_map(text: str) -> dict[PathKey, int]:
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
+    except (yaml.YAMLError, RecursionError):
         return {}
     lines: dict[PathKey, int] = {}
     if root is not None:
-        _record_lines(root, (), lines)
+        _record_lines(root, (), lines, set())
     return lines
 
 
 def _looks_like_json(text: str, file_name: str | None) -> bool:
-    if file_name and file_name.lower().endswith(".json"):
-        return True
-    return text.lstrip().startswith(("{", "["))
+    suffix = file_name.lower().rsplit(".", 1)[-1] if file_name and "." in file_name else ""
+    if suffix in ("yaml", "yml"):
+        return False
+    return suffix == "json" or text.lstrip().startswith(("{", "["))
+
+
+def _too_deep(file_name: str | None) -> list[Diagnostic]:
+    return [
+        error(
+            "syntax_error",
+            "The document is nested too deeply to read.",
+            Location(file=file_name),
+            "A model or mapping needs only a few levels: object, functions, rules.",
+        )
+    ]
 
 
 def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceMap, list[Diagnostic]]:
     """Parse YAML or JSON text; return the data, its line map and any syntax error."""
+    text = text.removeprefix("\ufeff")
     if _looks_like_json(text, file_name):
         try:
             data = json.loads(text)
+        except RecursionError:
+            return None, SourceMap(file_name), _too_deep(file_name)
         except json.JSONDecodeError as exc:
             where = Location(file=file_name, line=exc.lineno)
-            return None, SourceMap(file_name), [
-                error("syntax_error", f"The JSON is malformed at line {exc.lineno}, column {exc.colno}: {exc.msg}.",
-                      where, "Check for a missing comma, quote or bracket just before that point.")
-            ]
-        return data, SourceMap(file_name, _line_map(text)), []
+            return (
+                None,
+                SourceMap(file_name),
+                [
+                    error(
+                        "syntax_error",
+                        f"The JSON is malformed at line {exc.lineno}, column {exc.colno}: {exc.msg}.",
+                        where,
+                        "Check for a missing comma, quote or bracket just before that point.",
+                    )
+                ],
+            )
+        # JSON allows tabs between tokens (never inside strings); YAML does not.
+        return data, SourceMap(file_name, _line_map(text.replace("\t", " "))), []
     try:
         data = yaml.safe_load(text)
+    except RecursionError:
+        return None, SourceMap(file_name), _too_deep(file_name)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         line = mark.line + 1 if mark is not None else None
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         where = Location(file=file_name, line=line)
-        return None, SourceMap(file_name), [
-            error("syntax_error", f"The YAML is malformed{f' at line {line}' if line else ''}: {problem}.", where,
-                  "Check the indentation, and put labels containing ':' or '#' in quotes.")
-        ]
+        return (
+            None,
+            SourceMap(file_name),
+            [
+                error(
+                    "syntax_error",
+                    f"The YAML is malformed{f' at line {line}' if line else ''}: {problem}.",
+                    where,
+                    "Check the indentation, and put labels containing ':' or '#' in quotes.",
+                )
+            ],
+        )
     return data, SourceMap(file_name, _line_map(text)), []
 
 
@@ -93,23 +130,34 @@ def read_document(path: Path) -> tuple[object, SourceMap, list[Diagnostic]]:
     try:
         size = path.stat().st_size
         if size > MAX_DOCUMENT_BYTES:
-            return None, SourceMap(name), [
-                error("file_too_large", f"{name} is {size} bytes; the limit is {MAX_DOCUMENT_BYTES} bytes.",
-                      Location(file=name))
-            ]
+            return (
+                None,
+                SourceMap(name),
+                [
+                    error(
+                        "file_too_large",
+                        f"{name} is {size} bytes; the limit is {MAX_DOCUMENT_BYTES} bytes.",
+                        Location(file=name),
+                    )
+                ],
+            )
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         return None, SourceMap(name), [error("file_not_found", f"There is no file {name}.", Location(file=name))]
     except IsADirectoryError:
         return None, SourceMap(name), [error("file_not_found", f"{name} is a folder, not a file.", Location(file=name))]
     except UnicodeDecodeError as exc:
-        return None, SourceMap(name), [
-            error("syntax_error", f"{name} is not UTF-8 text (byte {exc.start}).", Location(file=name))
-        ]
+        return (
+            None,
+            SourceMap(name),
+            [error("syntax_error", f"{name} is not UTF-8 text (byte {exc.start}).", Location(file=name))],
+        )
     except OSError as exc:
-        return None, SourceMap(name), [
-            error("file_not_readable", f"{name} cannot be read: {exc.strerror}.", Location(file=name))
-        ]
+        return (
+            None,
+            SourceMap(name),
+            [error("file_not_readable", f"{name} cannot be read: {exc.strerror}.", Location(file=name))],
+        )
     return parse_text(text, name)
 
 

@@ -37,7 +37,7 @@ def goal_holds(functions: Iterable[str], rules: Sequence[Rule], goal_key: str) -
 
 
 def causal_graph(model: CausalModel) -> nx.DiGraph:
-    """Return the model as a DiGraph: node attributes ``label`` and ``kind``, edges with ``rule``."""
+    """Return the model as a DiGraph: node attributes ``label`` and ``kind``, edges with ``rules``."""
     import networkx as nx
 
     graph = nx.DiGraph()
@@ -56,5 +56,8 @@ def causal_graph(model: CausalModel) -> nx.DiGraph:
         graph.add_node(key, label=label, kind=kind)
     for rule in model.rules:
         for cause in rule.cause_keys:
-            graph.add_edge(cause, rule.effect_key, rule=rule.index)
+            if graph.has_edge(cause, rule.effect_key):
+                graph.edges[cause, rule.effect_key]["rules"].append(rule.index)
+            else:
+                graph.add_edge(cause, rule.effect_key, rules=[rule.index])
     return graph

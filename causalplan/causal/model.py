@@ -105,8 +105,9 @@ def node_labels(labelling: Labelling, rules: tuple[Rule, ...], goal: str) -> dic
     return labels
 
 
-def _check_fields(data: Mapping[object, object], allowed: tuple[str, ...], required: tuple[str, ...],
-                  source: SourceMap, what: str) -> list[Diagnostic]:
+def _check_fields(
+    data: Mapping[object, object], allowed: tuple[str, ...], required: tuple[str, ...], source: SourceMap, what: str
+) -> list[Diagnostic]:
     problems: list[Diagnostic] = []
     for key in data:
         if key not in allowed:
@@ -114,12 +115,14 @@ def _check_fields(data: Mapping[object, object], allowed: tuple[str, ...], requi
             hint = f"Did you mean '{guess}'?" if guess else f"A {what} has the fields: {', '.join(allowed)}."
             if what == "mapping" and key == "rules":
                 hint = "A step-3 mapping cannot change the rules: the training model stays as it was."
-            problems.append(error("unknown_field", f"The {what} has an unknown field '{key}'.",
-                                  source.locate(str(key)), hint))
+            problems.append(
+                error("unknown_field", f"The {what} has an unknown field '{key}'.", source.locate(str(key)), hint)
+            )
     for name in required:
         if name not in data:
-            problems.append(error("missing_field", f"The {what} has no '{name}' field.", source.locate(),
-                                  _FIELD_HINTS[name]))
+            problems.append(
+                error("missing_field", f"The {what} has no '{name}' field.", source.locate(), _FIELD_HINTS[name])
+            )
     return problems
 
 
@@ -131,32 +134,64 @@ _FIELD_HINTS = {
 }
 
 
-def _read_label(value: object, path: tuple[str | int, ...], source: SourceMap, part: str,
-                problems: list[Diagnostic]) -> str | None:
+def _read_label(
+    value: object, path: tuple[str | int, ...], source: SourceMap, part: str, problems: list[Diagnostic]
+) -> str | None:
     where = source.locate(*path, part=part)
     if not isinstance(value, str):
-        problems.append(error("invalid_type", f"A function label of part '{part}' is {type(value).__name__}, not text.",
-                              where, "Write labels as text, e.g. 'provide electricity'."))
+        problems.append(
+            error(
+                "invalid_type",
+                f"A function label of part '{part}' is {type(value).__name__}, not text.",
+                where,
+                "Write labels as text, e.g. 'provide electricity'; put words such as yes, "
+                "no, on, off or numbers in quotes.",
+            )
+        )
         return None
     if not value.strip():
-        problems.append(error("empty_label", f"Part '{part}' has an empty function label.", where,
-                              "Write what the part does, e.g. 'provide electricity', or remove the entry."))
+        problems.append(
+            error(
+                "empty_label",
+                f"Part '{part}' has an empty function label.",
+                where,
+                "Write what the part does, e.g. 'provide electricity', or remove the entry.",
+            )
+        )
         return None
     if has_control_characters(value):
-        problems.append(error("invalid_character", f"The label {value!r} of part '{part}' contains control characters.",
-                              where, "Retype the label using ordinary letters, digits and punctuation."))
+        problems.append(
+            error(
+                "invalid_character",
+                f"The label {value!r} of part '{part}' contains control characters.",
+                where,
+                "Retype the label using ordinary letters, digits and punctuation.",
+            )
+        )
         return None
     if len(value) > MAX_LABEL_LENGTH:
-        problems.append(error("label_too_long", f"A label of part '{part}' is {len(value)} characters long; "
-                              f"the limit is {MAX_LABEL_LENGTH}.", where, "Say it in fewer words."))
+        problems.append(
+            error(
+                "label_too_long",
+                f"A label of part '{part}' is {len(value)} characters long; the limit is {MAX_LABEL_LENGTH}.",
+                where,
+                "Say it in fewer words.",
+            )
+        )
         return None
     return display_label(value)
 
 
 def _read_functions(value: object, source: SourceMap, problems: list[Diagnostic]) -> dict[str, tuple[str, ...]]:
     if not isinstance(value, Mapping):
-        problems.append(error("invalid_type", "'functions' must map part ids to lists of function labels.",
-                              source.locate("functions"), _FIELD_HINTS["functions"]))
+        problems.append(
+            error(
+                "invalid_type",
+                "'functions' must map part ids to lists of function labels.",
+                source.locate("functions"),
+                _FIELD_HINTS["functions"],
+            )
+        )
         return {}
     functions: dict[str, tuple[str, ...]] = {}
     for raw_part, raw_labels in value.items():
@@ -169,8 +204,14 @@ def _read_functions(value: object, source: SourceMap, problems: list[Diagnostic]
         elif raw_labels is None:
             items = []
         else:
-            problems.append(error("invalid_type", f"The functions of part '{part}' must be a list of labels.",
-                                  source.locate("functions", part, part=part), "e.g. '[provide electricity]'."))
+            problems.append(
+                error(
+                    "invalid_type",
+                    f"The functions of part '{part}' must be a list of labels.",
+                    source.locate("functions", part, part=part),
+                    "e.g. '[provide electricity]'.",
+                )
+            )
             continue
         labels: list[str] = []
         seen: set[str] = set()
@@ -179,8 +220,14 @@ def _read_functions(value: object, source: SourceMap, problems: list[Diagnostic]
             if label is None:
                 continue
             if normalize_label(label) in seen:
-                problems.append(warning("duplicate_function", f"Part '{part}' has the function '{label}' twice.",
-                                        source.locate("functions", part, index, part=part), "Once is enough."))
+                problems.append(
+                    warning(
+                        "duplicate_function",
+                        f"Part '{part}' has the function '{label}' twice.",
+                        source.locate("functions", part, index, part=part),
+                        "Once is enough.",
+                    )
+                )
                 continue
             seen.add(normalize_label(label))
             labels.append(label)
@@ -193,8 +240,14 @@ def _read_object_id(data: Mapping[object, object], source: SourceMap, problems: 
     if value is None:
         return ""
     if not isinstance(value, str) or not value.strip():
-        problems.append(error("invalid_type", "'object' must be the catalog id of an object, as text.",
-                              source.locate("object"), _FIELD_HINTS["object"]))
+        problems.append(
+            error(
+                "invalid_type",
+                "'object' must be the catalog id of an object, as text.",
+                source.locate("object"),
+                _FIELD_HINTS["object"],
+            )
+        )
         return ""
     return value.strip()
 
@@ -202,8 +255,14 @@ def _read_object_id(data: Mapping[object, object], source: SourceMap, problems: 
 def read_labelling(data: object, source: SourceMap, what: str = "mapping") -> tuple[Labelling | None, list[Diagnostic]]:
     """Build a step-3 mapping from parsed data; return it (None if unusable) and the problems found."""
     if not isinstance(data, Mapping):
-        return None, [error("invalid_type", f"The {what} must be a mapping with the fields: object, functions.",
-                            source.locate(), _FIELD_HINTS["object"])]
+        return None, [
+            error(
+                "invalid_type",
+                f"The {what} must be a mapping with the fields: object, functions.",
+                source.locate(),
+                _FIELD_HINTS["object"],
+            )
+        ]
     problems = _check_fields(data, MAPPING_FIELDS, MAPPING_FIELDS, source, what)
     object_id = _read_object_id(data, source, problems)
     functions = _read_functions(data.get("functions", {}), source, problems)
@@ -217,18 +276,49 @@ def read_model(data: object, source: SourceMap) -> tuple[CausalModel | None, lis
     the model's meaning against the catalog.
     """
     if not isinstance(data, Mapping):
-        return None, [error("invalid_type", "A model must be a mapping with the fields: " + ", ".join(MODEL_FIELDS),
-                            source.locate(), _FIELD_HINTS["object"])]
+        return None, [
+            error(
+                "invalid_type",
+                "A model must be a mapping with the fields: " + ", ".join(MODEL_FIELDS),
+                source.locate(),
+                _FIELD_HINTS["object"],
+            )
+        ]
     problems = _check_fields(data, MODEL_FIELDS, ("object", "functions", "rules"), source, "model")
     object_id = _read_object_id(data, source, problems)
     functions = _read_functions(data.get("functions", {}), source, problems)
     goal_value = data.get("goal", DEFAULT_GOAL)
     goal = DEFAULT_GOAL
-    if not isinstance(goal_value, str) or not goal_value.strip():
-        problems.append(error("empty_label", "'goal' must be a non-empty label, e.g. 'light'.", source.locate("goal")))
-    elif has_control_characters(goal_value) or len(goal_value) > MAX_LABEL_LENGTH:
-        problems.append(error("invalid_character", "'goal' must be a short label of ordinary characters.",
-                              source.locate("goal")))
+    where = source.locate("goal")
+    if not isinstance(goal_value, str):
+        problems.append(
+            error(
+                "invalid_type",
+                f"'goal' is {type(goal_value).__name__}, not text.",
+                where,
+                "Write the goal as a label, e.g. 'goal: light' (in quotes if it is a number).",
+            )
+        )
+    elif not goal_value.strip():
+        problems.append(error("empty_label", "'goal' must be a non-empty label, e.g. 'light'.", where))
+    elif has_control_characters(goal_value):
+        problems.append(
+            error(
+                "invalid_character",
+                "'goal' contains control characters.",
+                where,
+                "Retype it using ordinary letters, digits and punctuation.",
+            )
+        )
+    elif len(goal_value) > MAX_LABEL_LENGTH:
+        problems.append(
+            error(
+                "label_too_long",
+                f"'goal' is {len(goal_value)} characters long; the limit is {MAX_LABEL_LENGTH}.",
+                where,
+                "Say it in fewer words.",
+            )
+        )
     else:
         goal = display_label(goal_value)
     raw_rules = data.get("rules", [])
@@ -236,19 +326,37 @@ def read_model(data: object, source: SourceMap) -> tuple[CausalModel | None, lis
     if isinstance(raw_rules, str):
         raw_rules = [line for line in raw_rules.splitlines() if line.strip()]
     if not isinstance(raw_rules, list):
-        problems.append(error("invalid_type", "'rules' must be a list of rules, one per entry.",
-                              source.locate("rules"), _FIELD_HINTS["rules"]))
+        problems.append(
+            error(
+                "invalid_type",
+                "'rules' must be a list of rules, one per entry.",
+                source.locate("rules"),
+                _FIELD_HINTS["rules"],
+            )
+        )
         raw_rules = []
     for position, raw in enumerate(raw_rules):
         index = position + 1
         where = source.locate("rules", position, rule=index)
         if not isinstance(raw, str):
-            problems.append(error("invalid_type", f"Rule {index} is {type(raw).__name__}, not text.", where,
-                                  "Write each rule as one line of text."))
+            problems.append(
+                error(
+                    "invalid_type",
+                    f"Rule {index} is {type(raw).__name__}, not text.",
+                    where,
+                    "Write each rule as one line of text.",
+                )
+            )
             continue
         if len(raw) > 4 * MAX_LABEL_LENGTH:
-            problems.append(error("label_too_long", f"Rule {index} is {len(raw)} characters long.", where,
-                                  "Split it into shorter rules with intermediate effects."))
+            problems.append(
+                error(
+                    "label_too_long",
+                    f"Rule {index} is {len(raw)} characters long.",
+                    where,
+                    "Split it into shorter rules with intermediate effects.",
+                )
+            )
             continue
         rule, rule_problems = parse_rule(raw, index, where)
         problems.extend(rule_problems)

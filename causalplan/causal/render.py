@@ -63,8 +63,10 @@ def to_dot(model: CausalModel) -> str:
     lines = ["digraph causal_model {", "  rankdir=LR;", '  node [fontname="Helvetica", style=filled];']
     for node, data in sorted(graph.nodes(data=True)):
         shape = "point" if data["kind"] == "rule" else ("doubleoctagon" if data["kind"] == "goal" else "box")
-        lines.append(f"  {_quote(node)} [label={_quote(data['label'])}, shape={shape}, "
-                     f"fillcolor={_quote(COLORS[data['kind']])}];")
+        lines.append(
+            f"  {_quote(node)} [label={_quote(data['label'])}, shape={shape}, "
+            f"fillcolor={_quote(COLORS[data['kind']])}];"
+        )
     for source, target in sorted(graph.edges):
         lines.append(f"  {_quote(source)} -> {_quote(target)};")
     lines.append("}")
@@ -76,8 +78,10 @@ def to_json(model: CausalModel) -> dict[str, object]:
     graph = drawing_graph(model)
     column = layers(graph)
     return {
-        "nodes": [{"id": node, "label": data["label"], "kind": data["kind"], "column": column[node]}
-                  for node, data in sorted(graph.nodes(data=True))],
+        "nodes": [
+            {"id": node, "label": data["label"], "kind": data["kind"], "column": column[node]}
+            for node, data in sorted(graph.nodes(data=True))
+        ],
         "edges": [{"source": source, "target": target} for source, target in sorted(graph.edges)],
     }
 
@@ -105,29 +109,57 @@ def draw(model: CausalModel, path: Path) -> None:
     axes = figure.add_subplot()
     axes.set_axis_off()
     for source, target in graph.edges:
-        axes.add_patch(FancyArrowPatch(position[source], position[target], arrowstyle="-|>", mutation_scale=14,
-                                       shrinkA=42 if graph.nodes[source]["kind"] != "rule" else 5,
-                                       shrinkB=42 if graph.nodes[target]["kind"] != "rule" else 5,
-                                       color="#444444", linewidth=1.2))
+        axes.add_patch(
+            FancyArrowPatch(
+                position[source],
+                position[target],
+                arrowstyle="-|>",
+                mutation_scale=14,
+                shrinkA=42 if graph.nodes[source]["kind"] != "rule" else 5,
+                shrinkB=42 if graph.nodes[target]["kind"] != "rule" else 5,
+                color="#444444",
+                linewidth=1.2,
+            )
+        )
     for node, data in graph.nodes(data=True):
         x, y = position[node]
         if data["kind"] == "rule":
-            axes.text(x, y, "AND", ha="center", va="center", fontsize=7, color="white",
-                      bbox={"boxstyle": "circle,pad=0.3", "facecolor": COLORS["rule"], "edgecolor": "none"})
+            axes.text(
+                x,
+                y,
+                "AND",
+                ha="center",
+                va="center",
+                fontsize=7,
+                color="white",
+                bbox={"boxstyle": "circle,pad=0.3", "facecolor": COLORS["rule"], "edgecolor": "none"},
+            )
             continue
         text = textwrap.fill(data["label"], 18)
         if node[2:] in carriers:
             text += "\n(" + textwrap.fill(", ".join(p.replace("_", " ") for p in carriers[node[2:]]), 22) + ")"
-        axes.text(x, y, text, ha="center", va="center", fontsize=9,
-                  fontweight="bold" if data["kind"] == "goal" else "normal",
-                  bbox={"boxstyle": "round,pad=0.5", "facecolor": COLORS[data["kind"]], "edgecolor": "#666666"})
+        axes.text(
+            x,
+            y,
+            text,
+            ha="center",
+            va="center",
+            fontsize=9,
+            fontweight="bold" if data["kind"] == "goal" else "normal",
+            bbox={"boxstyle": "round,pad=0.5", "facecolor": COLORS[data["kind"]], "edgecolor": "#666666"},
+        )
     xs = [x for x, _ in position.values()] or [0.0]
     ys = [y for _, y in position.values()] or [0.0]
     axes.set_xlim(min(xs) - 1.6, max(xs) + 1.6)
     axes.set_ylim(min(ys) - 0.9, max(ys) + 0.9)
     axes.set_title(f"How the {model.object_id.replace('_', ' ')} produces {model.goal}", fontsize=10)
-    figure.text(0.01, 0.01, "blue: a part's function (part in brackets)   orange: intermediate effect   "
-                "green: goal   red: nothing produces it   AND: all causes needed; arrows meeting at a box are "
-                "alternatives",
-                fontsize=7, color="#555555")
+    figure.text(
+        0.01,
+        0.01,
+        "blue: a part's function (part in brackets)   orange: intermediate effect   "
+        "green: goal   red: nothing produces it   AND: all causes needed; arrows meeting at a box are "
+        "alternatives",
+        fontsize=7,
+        color="#555555",
+    )
     figure.savefig(path, bbox_inches="tight", dpi=120)

@@ -34,8 +34,10 @@ def _build_fit(schema: FitSchema, specs: dict[tuple[str, str], str]) -> Fit:
     if moving[0] == fixed[0]:
         raise ValueError(f"fit '{schema.id}' attaches part '{moving[0]}' to itself")
     if specs[moving] != specs[fixed]:
-        raise ValueError(f"fit '{schema.id}': {schema.moving} ({specs[moving]}) does not fit "
-                         f"{schema.fixed} ({specs[fixed]}); connectors that fit share a spec")
+        raise ValueError(
+            f"fit '{schema.id}': {schema.moving} ({specs[moving]}) does not fit "
+            f"{schema.fixed} ({specs[fixed]}); connectors that fit share a spec"
+        )
     blocks = tuple(_split_endpoint(item, "blocks", schema.id, endpoints) for item in schema.blocks)
     if schema.text is not None:
         try:
@@ -70,10 +72,15 @@ def build_object(schema: ObjectSchema) -> AssemblyObject:
         if unknown:
             raise ValueError(f"mechanism requirement '{requirement.says}' names unknown fit(s): {', '.join(unknown)}")
     return AssemblyObject(
-        id=schema.id, name=schema.name, category=schema.category, goal=schema.goal,
-        description=schema.description, base=schema.base,
-        parts=tuple(Part(p.id, p.name, tuple(Connector(c.id, c.kind, c.spec) for c in p.connectors))
-                    for p in schema.parts),
+        id=schema.id,
+        name=schema.name,
+        category=schema.category,
+        goal=schema.goal,
+        description=schema.description,
+        base=schema.base,
+        parts=tuple(
+            Part(p.id, p.name, tuple(Connector(c.id, c.kind, c.spec) for c in p.connectors)) for p in schema.parts
+        ),
         fits=fits,
         mechanism=tuple(Requirement(tuple(r.any), r.says) for r in schema.mechanism.requires),
         mechanism_explanation=schema.mechanism.explanation,
@@ -92,14 +99,17 @@ def parse_object(text: str, file_name: str) -> AssemblyObject:
     """Parse one object file's text; CatalogError says what is wrong and where."""
     data, source, problems = parse_text(text, file_name)
     if problems:
-        raise CatalogError(problems[0].message, details={"file": file_name, **problems[0].location.as_dict()})
+        raise CatalogError(
+            f"{file_name}: {problems[0].message}", details={"file": file_name, **problems[0].location.as_dict()}
+        )
     try:
         schema = ObjectSchema.model_validate(data)
     except ValidationError as exc:
         first_loc = exc.errors()[0]["loc"]
         location: Location = source.locate(*first_loc)
-        raise CatalogError(f"{file_name}: {_describe_validation_error(exc)}",
-                           details={"file": file_name, **location.as_dict()}) from None
+        raise CatalogError(
+            f"{file_name}: {_describe_validation_error(exc)}", details={"file": file_name, **location.as_dict()}
+        ) from None
     try:
         return build_object(schema)
     except ValueError as exc:
@@ -115,8 +125,9 @@ def _builtin_files() -> Iterator[tuple[str, str]]:
 
 def _user_files(folder: Path) -> Iterator[tuple[str, str]]:
     if not folder.is_dir():
-        raise CatalogError(f"The catalog folder {folder} does not exist or is not a folder.",
-                           details={"file": str(folder)})
+        raise CatalogError(
+            f"The catalog folder {folder} does not exist or is not a folder.", details={"file": str(folder)}
+        )
     for path in sorted(folder.iterdir()):
         if path.suffix.lower() in OBJECT_FILE_SUFFIXES:
             try:
@@ -139,12 +150,13 @@ class Catalog:
         except KeyError:
             guess = closest(object_id, sorted(self.objects))
             hint = f" Did you mean '{guess}'?" if guess else ""
-            raise UnknownObjectError(f"There is no object '{object_id}' in the catalog.{hint}",
-                                     details={"object": object_id}) from None
+            raise UnknownObjectError(
+                f"There is no object '{object_id}' in the catalog.{hint}", details={"object": object_id}
+            ) from None
 
     def summaries(self) -> dict[str, ObjectSummary]:
         """Return what model validation needs to know of each object."""
-        return {obj.id: ObjectSummary(obj.id, obj.part_ids, obj.goal) for obj in self.objects.values()}
+        return {obj.id: ObjectSummary(obj.id, obj.part_ids, obj.goal, obj.name) for obj in self.objects.values()}
 
 
 def load_catalog(extra_folders: Iterable[Path] = ()) -> Catalog:
@@ -156,8 +168,9 @@ def load_catalog(extra_folders: Iterable[Path] = ()) -> Catalog:
         for name, text in files:
             obj = parse_object(text, name)
             if obj.id in objects:
-                raise CatalogError(f"{name}: object id '{obj.id}' is already defined by {origins[obj.id]}.",
-                                   details={"file": name})
+                raise CatalogError(
+                    f"{name}: object id '{obj.id}' is already defined by {origins[obj.id]}.", details={"file": name}
+                )
             objects[obj.id] = obj
             origins[obj.id] = name
     return Catalog(objects)

@@ -7,10 +7,31 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 from causalplan.objects.model import PRIMITIVE_TEXTS
 
 IDENTIFIER_PATTERN = r"^[a-z][a-z0-9_]{0,63}$"
-RESERVED_WORDS = frozenset({
-    "and", "or", "not", "imply", "exists", "forall", "when", "either", "object", "define", "domain",
-    "problem", "at", "over", "start", "end", "all", "preference", "minimize", "maximize", "total_time",
-})
+RESERVED_WORDS = frozenset(
+    {
+        "and",
+        "or",
+        "not",
+        "imply",
+        "exists",
+        "forall",
+        "when",
+        "either",
+        "object",
+        "define",
+        "domain",
+        "problem",
+        "at",
+        "over",
+        "start",
+        "end",
+        "all",
+        "preference",
+        "minimize",
+        "maximize",
+        "total_time",
+    }
+)
 
 
 class _Strict(BaseModel):

@@ -41,7 +41,7 @@ def _action(primitive: str) -> str:
 
 
 def _names(names: list[str], indent: str, per_line: int = 6) -> str:
-    rows = [" ".join(names[start:start + per_line]) for start in range(0, len(names), per_line)]
+    rows = [" ".join(names[start : start + per_line]) for start in range(0, len(names), per_line)]
     return ("\n" + indent).join(rows)
 
 
@@ -51,8 +51,7 @@ def write_domain(task: PlanningTask, node_names: dict[str, str]) -> str:
     primitives = sorted({fit.primitive for fit in task.obj.fits})
     node_declarations = "\n".join(f"    ({node_names[key]}) ; {comment(labels[key])}" for key in sorted(node_names))
     lines = [
-        f";; causalplan {__version__}: the {comment(task.obj.name)} and a causal model of "
-        f"'{comment(task.goal)}'.",
+        f";; causalplan {__version__}: the {comment(task.obj.name)} and a causal model of '{comment(task.goal)}'.",
         f"(define (domain causalplan-{task.obj.id})",
         f"  (:requirements {REQUIREMENTS})",
         "  (:types part fit)",
@@ -91,22 +90,31 @@ def write_problem(task: PlanningTask, node_names: dict[str, str]) -> str:
     init = [f"    (in-assembly {obj.base})"]
     for fit in obj.fits:
         init.append(f"    ;; {fit.id}: {comment(obj.step_text(fit))}")
-        facts = [f"(available {fit.id})", f"({_fit_predicate(fit.primitive)} {fit.id})",
-                 f"(moves {fit.id} {fit.moving_part})", f"(attaches-to {fit.id} {fit.fixed_part})"]
+        facts = [
+            f"(available {fit.id})",
+            f"({_fit_predicate(fit.primitive)} {fit.id})",
+            f"(moves {fit.id} {fit.moving_part})",
+            f"(attaches-to {fit.id} {fit.fixed_part})",
+        ]
         facts += [f"(excludes {fit.id} {other})" for other in obj.excluded_fits(fit)]
         init.append("    " + " ".join(facts))
     fits = [fit.id for fit in obj.fits]
     objects = f"  (:objects {_names(fits, '            ')} - fit)" if fits else "  (:objects)"
-    return "\n".join([
-        f"(define (problem {obj.id}-{node_names[task.goal_key]})",
-        f"  (:domain causalplan-{obj.id})",
-        objects,
-        "  (:init",
-        *init,
-        "  )",
-        f"  (:goal ({node_names[task.goal_key]})) ; {comment(task.goal)}",
-        ")",
-    ]) + "\n"
+    return (
+        "\n".join(
+            [
+                f"(define (problem {obj.id}-{node_names[task.goal_key]})",
+                f"  (:domain causalplan-{obj.id})",
+                objects,
+                "  (:init",
+                *init,
+                "  )",
+                f"  (:goal ({node_names[task.goal_key]})) ; {comment(task.goal)}",
+                ")",
+            ]
+        )
+        + "\n"
+    )
 
 
 def compile_task(task: PlanningTask) -> CompiledTask:

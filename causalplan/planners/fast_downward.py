@@ -9,6 +9,7 @@ The search binary runs in its own process group. Exit codes map to ``PlanStatus`
 
 from __future__ import annotations
 
+import gc
 import logging
 import os
 import re
@@ -126,8 +127,15 @@ def _run(command: list[str], cwd: Path, deadline: float, memory_mb: int, stdin_p
     started = time.perf_counter()
     stdin = stdin_path.open("rb") if stdin_path else subprocess.DEVNULL
     try:
-        process = subprocess.Popen(command, cwd=cwd, stdin=stdin, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                   start_new_session=True, preexec_fn=_limits(memory_mb))
+        process = subprocess.Popen(
+            command,
+            cwd=cwd,
+            stdin=stdin,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+            preexec_fn=_limits(memory_mb),
+        )
         try:
             output, _ = process.communicate(timeout=max(0.0, deadline - time.monotonic()))
             returncode: int | None = process.returncode
@@ -198,9 +206,13 @@ def _translate(work: Path, deadline: float, memory_mb: int) -> _Run:
     started = time.perf_counter()
     sys.stdout.flush()
     sys.stderr.flush()
+    # Freezing moves the parent's objects out of the collector's reach, so the child's garbage
+    # collections do not touch (and copy) the whole inherited heap: ~2x faster with a big parent.
+    gc.freeze()
     pid = os.fork()
     if pid == 0:
         _translate_in_child(work, memory_mb)
+    gc.unfreeze()
     returncode = _wait(pid, deadline)
     log = work / "translate.log"
     output = log.read_text(encoding="utf-8", errors="replace") if log.exists() else ""
@@ -228,8 +240,13 @@ def _tail(output: str, lines: int = 8) -> str:
     return "\n".join(output.strip().splitlines()[-lines:])
 
 
-def solve(domain: str, problem: str, config: SearchConfig, time_limit: float = DEFAULT_TIME_LIMIT,
-          memory_limit_mb: int = DEFAULT_MEMORY_LIMIT_MB) -> SearchOutcome:
+def solve(
+    domain: str,
+    problem: str,
+    config: SearchConfig,
+    time_limit: float = DEFAULT_TIME_LIMIT,
+    memory_limit_mb: int = DEFAULT_MEMORY_LIMIT_MB,
+) -> SearchOutcome:
     """Translate and search one PDDL task with FD; never raises for planner failures."""
     try:
         binary = search_binary()
@@ -244,27 +261,45 @@ def solve(domain: str, problem: str, config: SearchConfig, time_limit: float = D
         translate = _translate(work, deadline, memory_limit_mb)
         timing["translate"] = translate.seconds
         if translate.returncode is None:
-            return SearchOutcome(PlanStatus.TIMEOUT, timing=timing,
-                                 message=f"The translator did not finish within {time_limit:g} s.")
+            return SearchOutcome(
+                PlanStatus.TIMEOUT, timing=timing, message=f"The translator did not finish within {time_limit:g} s."
+            )
         if translate.returncode != 0:
             status = status_of_exit_code(translate.returncode)
-            return SearchOutcome(status, timing=timing, message=f"Translator exit code {translate.returncode}: "
-                                 f"{_tail(translate.output)}" if status is PlanStatus.ERROR else "")
-        search = _run([str(binary), "--search", config.search, "--internal-plan-file", "plan"], work, deadline,
-                      memory_limit_mb, stdin_path=work / "task.sas")
+            return SearchOutcome(
+                status,
+                timing=timing,
+                message=f"Translator exit code {translate.returncode}: {_tail(translate.output)}"
+                if status is PlanStatus.ERROR
+                else "",
+            )
+        search = _run(
+            [str(binary), "--search", config.search, "--internal-plan-file", "plan"],
+            work,
+            deadline,
+            memory_limit_mb,
+            stdin_path=work / "task.sas",
+        )
         timing["search"] = search.seconds
         if search.returncode == INCOMPLETE_EXIT:
             # The search gave up without proof (its heuristics may prune); a blind A* proves it.
-            search = _run([str(binary), "--search", COMPLETE, "--internal-plan-file", "plan"], work, deadline,
-                          memory_limit_mb, stdin_path=work / "task.sas")
+            search = _run(
+                [str(binary), "--search", COMPLETE, "--internal-plan-file", "plan"],
+                work,
+                deadline,
+                memory_limit_mb,
+                stdin_path=work / "task.sas",
+            )
             timing["confirm"] = search.seconds
         if search.returncode is None:
-            return SearchOutcome(PlanStatus.TIMEOUT, timing=timing,
-                                 message=f"The search did not finish within {time_limit:g} s.")
+            return SearchOutcome(
+                PlanStatus.TIMEOUT, timing=timing, message=f"The search did not finish within {time_limit:g} s."
+            )
         status = status_of_exit_code(search.returncode)
         if status is not PlanStatus.SOLVED:
-            message = f"Search exit code {search.returncode}: {_tail(search.output)}" \
-                if status is PlanStatus.ERROR else ""
+            message = (
+                f"Search exit code {search.returncode}: {_tail(search.output)}" if status is PlanStatus.ERROR else ""
+            )
             return SearchOutcome(status, timing=timing, message=message)
         plan_file = work / "plan"
         if not plan_file.exists():

@@ -30,13 +30,18 @@ def goal_reachable(task: PlanningTask) -> bool:
     return goal_holds(task.carriers(), task.rules, task.goal_key)
 
 
-def plan_task(task: PlanningTask, planner: str = "fd", time_limit: float = fast_downward.DEFAULT_TIME_LIMIT,
-              include_pddl: bool = False) -> PlanResult:
+def plan_task(
+    task: PlanningTask,
+    planner: str = "fd",
+    time_limit: float = fast_downward.DEFAULT_TIME_LIMIT,
+    include_pddl: bool = False,
+) -> PlanResult:
     """Return a replayed plan for ``task`` (or the status saying why there is none)."""
     config = fast_downward.CONFIGS.get(planner)
     if config is None:
-        raise UnknownPlannerError(f"Unknown planner '{planner}'; choose one of: {', '.join(PLANNERS)}.",
-                                  details={"planner": planner})
+        raise UnknownPlannerError(
+            f"Unknown planner '{planner}'; choose one of: {', '.join(PLANNERS)}.", details={"planner": planner}
+        )
     started = time.perf_counter()
     compiled = compile_task(task)
     timing = {"compile": time.perf_counter() - started}
@@ -44,16 +49,22 @@ def plan_task(task: PlanningTask, planner: str = "fd", time_limit: float = fast_
     obj = task.obj
     if not goal_reachable(task):
         timing["total"] = time.perf_counter() - started
-        return PlanResult(PlanStatus.UNSOLVABLE, PRECHECK, obj.id, timing=timing, pddl=pddl,
-                          message=f"Even with every part of the {obj.name} assembled, the model's rules do not "
-                                  f"produce '{task.goal}': no part carries some function the rules need.")
+        return PlanResult(
+            PlanStatus.UNSOLVABLE,
+            PRECHECK,
+            obj.id,
+            timing=timing,
+            pddl=pddl,
+            message=f"Even with every part of the {obj.name} assembled, the model's rules do not "
+            f"produce '{task.goal}': no part carries some function the rules need.",
+        )
     outcome = fast_downward.solve(compiled.domain, compiled.problem, config, time_limit)
     timing.update(outcome.timing)
     if outcome.status is not PlanStatus.SOLVED:
         timing["total"] = time.perf_counter() - started
         message = outcome.message or {
             PlanStatus.UNSOLVABLE: f"No sequence of connections of the {obj.name}'s parts produces '{task.goal}' "
-                                   "under the model.",
+            "under the model.",
             PlanStatus.TIMEOUT: f"The planner did not finish within {time_limit:g} s.",
             PlanStatus.OUT_OF_MEMORY: "The planner ran out of memory.",
         }.get(outcome.status, "The planner failed.")
@@ -64,12 +75,34 @@ def plan_task(task: PlanningTask, planner: str = "fd", time_limit: float = fast_
     timing["total"] = time.perf_counter() - started
     if not (checked.executable and checked.valid_under_model):
         why = checked.failure or "the goal does not hold under the model after the last step"
-        return PlanResult(PlanStatus.ERROR, config.name, obj.id, timing=timing, pddl=pddl,
-                          message=f"The planner's plan failed replay ({why}); it is not returned.")
+        return PlanResult(
+            PlanStatus.ERROR,
+            config.name,
+            obj.id,
+            timing=timing,
+            pddl=pddl,
+            message=f"The planner's plan failed replay ({why}); it is not returned.",
+        )
     fits = {fit.id: fit for fit in obj.fits}
     steps = tuple(PlanStep(action, args[:2], args[2], obj.step_text(fits[args[2]])) for action, args in outcome.actions)
-    message = "" if checked.valid_under_true_mechanism else (
-        f"The plan satisfies the model, but the real {obj.name} would not produce {obj.goal}; it also needs: "
-        + "; ".join(checked.unmet_requirements) + ".")
-    return PlanResult(PlanStatus.SOLVED, config.name, obj.id, steps, True, checked.valid_under_true_mechanism,
-                      checked.unmet_requirements, timing, message, pddl)
+    message = (
+        ""
+        if checked.valid_under_true_mechanism
+        else (
+            f"The plan satisfies the model, but the real {obj.name} would not produce {obj.goal}; it also needs: "
+            + "; ".join(checked.unmet_requirements)
+            + "."
+        )
+    )
+    return PlanResult(
+        PlanStatus.SOLVED,
+        config.name,
+        obj.id,
+        steps,
+        True,
+        checked.valid_under_true_mechanism,
+        checked.unmet_requirements,
+        timing,
+        message,
+        pddl,
+    )

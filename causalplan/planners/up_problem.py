@@ -183,7 +183,13 @@ def build_up_problem(task: PlanningTask) -> tuple[Problem, ActionMap]:
         combine: Callable[..., Any] = And if kind == "and" else Or
         return combine(*(to_up(part) for part in formula[1]))
 
-    problem.add_goal(to_up(goal_structure(task)))
+    goal = goal_structure(task)
+    if goal == FALSE_FORMULA:  # PDDL has no "false": a fluent nothing ever sets says the same
+        never = Fluent(names.get("goal_cannot_hold"), BoolType())
+        problem.add_fluent(never, default_initial_value=False)
+        problem.add_goal(never())
+    elif goal != TRUE_FORMULA:  # true: no goal at all, the empty plan solves it
+        problem.add_goal(to_up(goal))
     return problem, actions
 
 

@@ -47,8 +47,12 @@ class Reason:
 
     def as_dict(self) -> dict[str, object]:
         """Return the reason as a JSON-ready dict."""
-        return {"code": self.code, "severity": self.severity.value, "message": self.message,
-                "labels": list(self.labels)}
+        return {
+            "code": self.code,
+            "severity": self.severity.value,
+            "message": self.message,
+            "labels": list(self.labels),
+        }
 
 
 @dataclass(frozen=True)
@@ -87,15 +91,26 @@ def generalization(training: AssemblyObject, test: AssemblyObject) -> str:
     return "near" if training.category == test.category else "far"
 
 
-def invalid_verdict(model_report: Report, mapping_report: Report, training: str | None,
-                    test: str | None) -> TransferVerdict:
+def invalid_verdict(
+    model_report: Report, mapping_report: Report, training: str | None, test: str | None
+) -> TransferVerdict:
     """Return the verdict for a model or mapping that did not validate."""
-    reasons = [Reason("invalid_model", Severity.ERROR, _located(d.message, d.location.describe()))
-               for d in model_report.errors]
-    reasons += [Reason("invalid_mapping", Severity.ERROR, _located(d.message, d.location.describe()))
-                for d in mapping_report.errors]
-    return TransferVerdict(Verdict.INVALID, training, test, None, "validation", tuple(reasons),
-                           diagnostics={"model": model_report.as_dict(), "mapping": mapping_report.as_dict()})
+    reasons = [
+        Reason("invalid_model", Severity.ERROR, _located(d.message, d.location.describe())) for d in model_report.errors
+    ]
+    reasons += [
+        Reason("invalid_mapping", Severity.ERROR, _located(d.message, d.location.describe()))
+        for d in mapping_report.errors
+    ]
+    return TransferVerdict(
+        Verdict.INVALID,
+        training,
+        test,
+        None,
+        "validation",
+        tuple(reasons),
+        diagnostics={"model": model_report.as_dict(), "mapping": mapping_report.as_dict()},
+    )
 
 
 def _located(message: str, where: str) -> str:
@@ -118,25 +133,47 @@ def _mapping_reasons(model: CausalModel, mapping: Labelling, test: AssemblyObjec
         if key in carriers:
             continue
         if reachable:
-            reasons.append(Reason("missing_function", Severity.WARNING,
-                                  f"No part of the {test.name} carries '{label}'; the model can still produce "
-                                  f"{model.goal} through another rule.", (label,)))
+            reasons.append(
+                Reason(
+                    "missing_function",
+                    Severity.WARNING,
+                    f"No part of the {test.name} carries '{label}'; the model can still produce "
+                    f"{model.goal} through another rule.",
+                    (label,),
+                )
+            )
         else:
-            reasons.append(Reason("missing_function", Severity.ERROR,
-                                  f"No part of the {test.name} carries '{label}', which the model needs for "
-                                  f"{model.goal}.", (label,)))
+            reasons.append(
+                Reason(
+                    "missing_function",
+                    Severity.ERROR,
+                    f"No part of the {test.name} carries '{label}', which the model needs for {model.goal}.",
+                    (label,),
+                )
+            )
     used = model.used_labels()
     mapped_labels = mapping.labels()
     for key, parts in carriers.items():
         if key not in used:
-            reasons.append(Reason("unmodelled_function", Severity.WARNING,
-                                  f"'{mapped_labels[key]}' (given to {', '.join(parts)}) is not in the model: no rule "
-                                  f"uses it, so it cannot help produce {model.goal}.", (mapped_labels[key],)))
+            reasons.append(
+                Reason(
+                    "unmodelled_function",
+                    Severity.WARNING,
+                    f"'{mapped_labels[key]}' (given to {', '.join(parts)}) is not in the model: no rule "
+                    f"uses it, so it cannot help produce {model.goal}.",
+                    (mapped_labels[key],),
+                )
+            )
     return reasons, reachable
 
 
-def evaluate_transfer(model: CausalModel, mapping: Labelling, catalog: Catalog, planner: str = "fd",
-                      time_limit: float = DEFAULT_TIME_LIMIT) -> TransferVerdict:
+def evaluate_transfer(
+    model: CausalModel,
+    mapping: Labelling,
+    catalog: Catalog,
+    planner: str = "fd",
+    time_limit: float = DEFAULT_TIME_LIMIT,
+) -> TransferVerdict:
     """Return the verdict of trying a valid ``model`` on the object of a valid ``mapping``."""
     training, test = catalog.get(model.object_id), catalog.get(mapping.object_id)
     kind = generalization(training, test)
@@ -148,15 +185,33 @@ def evaluate_transfer(model: CausalModel, mapping: Labelling, catalog: Catalog, 
         return TransferVerdict(Verdict.TRANSFERS, training.id, test.id, kind, "planner", tuple(reasons), result)
     if result.status is PlanStatus.SOLVED:
         unmet = "; ".join(result.unmet_requirements)
-        reasons.append(Reason("violates_true_mechanism", Severity.ERROR,
-                              f"The plan satisfies the model, but the real {test.name} would not produce {test.goal}; "
-                              f"it also needs: {unmet}.", result.unmet_requirements))
+        reasons.append(
+            Reason(
+                "violates_true_mechanism",
+                Severity.ERROR,
+                f"The plan satisfies the model, but the real {test.name} would not produce {test.goal}; "
+                f"it also needs: {unmet}.",
+                result.unmet_requirements,
+            )
+        )
         return TransferVerdict(Verdict.FAILS, training.id, test.id, kind, "planner", tuple(reasons), result)
     if result.status is PlanStatus.UNSOLVABLE:
-        reasons.append(Reason("no_assembly_sequence", Severity.ERROR,
-                              f"Every function the model needs is carried by some part, but no order of connecting "
-                              f"the {test.name}'s parts brings them together.", ()))
+        reasons.append(
+            Reason(
+                "no_assembly_sequence",
+                Severity.ERROR,
+                f"Every function the model needs is carried by some part, but no order of connecting "
+                f"the {test.name}'s parts brings them together.",
+                (),
+            )
+        )
         return TransferVerdict(Verdict.FAILS, training.id, test.id, kind, "planner", tuple(reasons), result)
-    reasons.append(Reason("planner_error", Severity.ERROR,
-                          f"The planner could not decide ({result.status.value}): {result.message}", ()))
+    reasons.append(
+        Reason(
+            "planner_error",
+            Severity.ERROR,
+            f"The planner could not decide ({result.status.value}): {result.message}",
+            (),
+        )
+    )
     return TransferVerdict(Verdict.UNDECIDED, training.id, test.id, kind, "planner", tuple(reasons), result)
