@@ -31,10 +31,10 @@ from rich.table import Table
 
 from causalplan.inputs import load_model
 from causalplan.objects.catalog import load_catalog
-from causalplan.objects.synthetic import MAX_PARTS, MIN_PARTS, synthetic_task
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.replay import replay
+from causalplan.planners.synthetic import MAX_PARTS, MIN_PARTS, synthetic_task
 from causalplan.planners.up_problem import solve_with_up
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -54,7 +54,8 @@ PlannerOption = Annotated[
     typer.Option(
         "--planner",
         "-p",
-        help="fd: Fast Downward, LAMA first iteration (fast). fd-opt: Fast Downward, A* (shortest plan).",
+        help="auto: Fast Downward, or the exact MDP when a fit may fail or FD fails. Also fd (LAMA, fast), "
+        "fd-opt (shortest plan), mdp (most reliable plan), up:<engine>. `causalplan planners` lists them.",
     ),
 ]
 TimeLimitOption = Annotated[
@@ -65,7 +66,10 @@ TimeLimitOption = Annotated[
 def _console(stderr: bool = False) -> Console:
     from rich.console import Console
 
-    return Console(stderr=stderr, highlight=False, soft_wrap=True)
+    stream = sys.stderr if stderr else sys.stdout
+    # Piped output gets a wide page, so tables are not cut to 80 columns in files and CI logs.
+    width = None if stream.isatty() else 160
+    return Console(stderr=stderr, highlight=False, soft_wrap=True, width=width)
 
 
 def _fail(code: str, message: str) -> NoReturn:
@@ -203,6 +207,17 @@ def _print_plan(result: PlanResult, console: Console) -> None:
         f"[dim]{len(result.steps)} step(s) by {result.planner_used}, replayed: goal holds under the "
         f"model;[/] the real object works: {mark}"
     )
+    if result.success_probability is not None and result.success_probability < 1.0:
+        console.print(
+            f"Success probability {result.success_probability:.4f} (some fits may fail); expected attempts "
+            f"{result.expected_actions:.2f}."
+        )
+    if result.validated_by_up is not None:
+        console.print(
+            f"unified-planning's validator: {'[green]valid[/]' if result.validated_by_up else '[red]INVALID[/]'}"
+        )
+    if result.fallback_reason:
+        console.print(f"[dim]Used {result.planner_used} because {escape(result.fallback_reason)}.[/]")
     if result.message:
         console.print(f"[yellow]{escape(result.message)}[/]")
 
@@ -218,11 +233,14 @@ def plan(
             help="A step-3 mapping: plan for that object instead, with its parts carrying the model's functions.",
         ),
     ] = None,
-    planner: PlannerOption = "fd",
+    planner: PlannerOption = "auto",
     time_limit: TimeLimitOption = 30.0,
     pddl_out: Annotated[
         Path | None, typer.Option("--pddl-out", help="Also write domain.pddl and problem.pddl to this folder.")
     ] = None,
+    up_validate: Annotated[
+        bool, typer.Option("--up-validate", help="Also check the plan with unified-planning's plan validator.")
+    ] = False,
     as_json: JsonOption = False,
     catalog: CatalogOption = None,
 ) -> None:
@@ -242,7 +260,11 @@ def plan(
     target = objects.get((labelling or causal_model.labelling).object_id)
     try:
         result = plan_task(
-            build_task(causal_model, target, labelling), planner, time_limit, include_pddl=pddl_out is not None
+            build_task(causal_model, target, labelling),
+            planner,
+            time_limit,
+            include_pddl=pddl_out is not None,
+            validate_up=up_validate,
         )
     except CausalPlanError as exc:
         _fail(exc.code, exc.message)
@@ -279,7 +301,7 @@ def _print_verdict(verdict: TransferVerdict, console: Console) -> None:
 def transfer(
     model: Annotated[Path, typer.Argument(help="The causal model of the training object (steps 1-2).")],
     mapping: Annotated[Path, typer.Argument(help="The step-3 mapping of a new object's parts to functions.")],
-    planner: PlannerOption = "fd",
+    planner: PlannerOption = "auto",
     time_limit: TimeLimitOption = 30.0,
     as_json: JsonOption = False,
     catalog: CatalogOption = None,
@@ -382,6 +404,192 @@ def graph(
     if out is not None:
         _console(stderr=True).print(f"Wrote {out}")
     raise typer.Exit(EXIT_OK if loaded.report.is_valid else EXIT_INVALID)
+
+
+def _int_list(text: str, what: str) -> list[int]:
+    try:
+        return [int(item) for item in text.split(",") if item.strip()]
+    except ValueError:
+        _fail("invalid_option", f"{what} must be whole numbers separated by commas, e.g. 10,40,80; got '{text}'.")
+
+
+@app.command()
+def compare(
+    tasks: Annotated[
+        list[Path] | None,
+        typer.Argument(
+            help="Model files, or task files (YAML with model:, mapping:, catalog:). Default: the paper's examples.",
+            show_default=False,
+        ),
+    ] = None,
+    planners_option: Annotated[
+        str, typer.Option("--planners", help="Comma-separated planners (see `causalplan planners`).")
+    ] = "fd,fd-opt,mdp,up:fast-downward",
+    synthetic: Annotated[
+        str | None, typer.Option("--synthetic", help="Also synthetic objects of these sizes, e.g. 10,40,80.")
+    ] = None,
+    timeout: Annotated[float, typer.Option("--timeout", min=0.5, max=3600, help="Seconds per run.")] = 60.0,
+    memory: Annotated[int, typer.Option("--memory", min=256, help="Memory limit per run, in MB.")] = 4096,
+    repeat: Annotated[int, typer.Option("--repeat", min=1, max=50, help="Runs per pair; medians are reported.")] = 1,
+    out: Annotated[Path, typer.Option("--out", help="Folder for compare.csv, compare.json and compare.png.")] = Path(
+        "out/compare"
+    ),
+    catalog: CatalogOption = None,
+) -> None:
+    """Run several planners on several tasks, one process per run, and compare them.
+
+    Prints a table (status, plan length, time, success probability, valid), and writes CSV,
+    JSON and a plot of time against the number of parts. A planner that fails is a row.
+    """
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.table import Table
+
+    from causalplan.comparison import report
+    from causalplan.comparison import tasks as comparison_tasks
+    from causalplan.comparison.runner import compare as run_comparison
+    from causalplan.comparison.runner import total_runs
+    from causalplan.errors import CausalPlanError
+
+    chosen = [name.strip() for name in planners_option.split(",") if name.strip()]
+    for name in chosen:
+        _check_planner(name)
+    try:
+        selected = [comparison_tasks.from_argument(path, list(catalog or [])) for path in tasks or []]
+        sizes = _int_list(synthetic, "--synthetic") if synthetic else []
+        selected += [comparison_tasks.synthetic(size) for size in sizes]
+        if not selected:
+            selected = comparison_tasks.default_tasks(Path.cwd())
+    except CausalPlanError as exc:
+        _fail(exc.code, exc.message)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        _fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
+    console = _console()
+    with Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=_console(stderr=True),
+        transient=True,
+    ) as progress:
+        bar = progress.add_task("comparing", total=total_runs(selected, chosen, repeat))
+
+        def advance(what: str) -> None:
+            progress.update(bar, advance=1, description=what)
+
+        rows = run_comparison(selected, chosen, timeout, memory, repeat, advance)
+    table = Table(
+        "task",
+        "parts",
+        "planner",
+        "status",
+        "length",
+        "time",
+        "P(success)",
+        "valid",
+        title=f"median of {repeat} run(s), limit {timeout:g} s per run",
+    )
+    for row in rows:
+        probability = "-" if row.success_probability is None else f"{row.success_probability:.3f}"
+        valid = "-" if row.valid is None else ("yes" if row.valid else "NO")
+        used = f" ({row.planner_used})" if row.planner_used and row.planner_used != row.planner else ""
+        table.add_row(
+            row.task,
+            str(row.parts),
+            row.planner + used,
+            row.status,
+            "-" if row.plan_length is None else str(row.plan_length),
+            report.format_seconds(row.seconds),
+            probability,
+            valid,
+        )
+    console.print(table)
+    settings = {"planners": chosen, "timeout": timeout, "memory_mb": memory, "repeat": repeat}
+    report.write_csv(rows, out / "compare.csv")
+    report.write_json(rows, out / "compare.json", settings)
+    report.plot(rows, out / "compare.png", timeout)
+    console.print(f"Wrote {out / 'compare.csv'}, {out / 'compare.json'} and {out / 'compare.png'}")
+
+
+@app.command()
+def planners(as_json: JsonOption = False) -> None:
+    """List the planners, what each is for, and whether it can run on this machine."""
+    from rich.table import Table
+
+    from causalplan.planners.pipeline import DESCRIPTIONS, planner_availability
+
+    availability = planner_availability()
+    if as_json:
+        _print_json(
+            [
+                {"name": name, "description": DESCRIPTIONS[name], "available": problem is None, "problem": problem}
+                for name, problem in availability.items()
+            ]
+        )
+        return
+    table = Table("planner", "what it does", "available")
+    for name, problem in availability.items():
+        table.add_row(name, DESCRIPTIONS[name], "yes" if problem is None else f"no: {problem}")
+    _console().print(table)
+
+
+@app.command()
+def serve(
+    host: Annotated[str, typer.Option("--host", help="Address to listen on (0.0.0.0: every interface).")] = "127.0.0.1",
+    port: Annotated[int, typer.Option("--port", min=1, max=65535, help="Port to listen on.")] = 8000,
+    workers: Annotated[
+        int | None,
+        typer.Option(
+            "--workers",
+            min=1,
+            max=64,
+            help="Planner worker processes (default: CAUSALPLAN_PLANNING_WORKERS, else 2).",
+            show_default=False,
+        ),
+    ] = None,
+    database_url: Annotated[
+        str | None,
+        typer.Option(
+            "--database-url",
+            help="SQLAlchemy URL, e.g. postgresql://user:password@host/db (default: CAUSALPLAN_DATABASE_URL, "
+            "else a SQLite file in ~/.local/share/causalplan, created on first start).",
+            show_default=False,
+        ),
+    ] = None,
+) -> None:
+    """Run the HTTP planning service: JSON API under /v1, OpenAPI docs at /docs, /health.
+
+    Other settings come from CAUSALPLAN_* environment variables (see causalplan/service/settings.py).
+    The database is migrated to the newest schema on start. Stop with Ctrl-C.
+    """
+    from pydantic import ValidationError
+
+    from causalplan.errors import CausalPlanError
+    from causalplan.service.main import check_startup
+    from causalplan.service.main import serve as run_service
+    from causalplan.service.settings import Settings
+
+    overrides: dict[str, object] = {}
+    if workers is not None:
+        overrides["planning_workers"] = workers
+    if database_url is not None:
+        overrides["database_url"] = database_url
+    try:
+        settings = Settings(**overrides)  # type: ignore[arg-type]  # the rest from the environment
+    except ValidationError as exc:
+        problems = "; ".join(f"{'.'.join(map(str, e['loc'])) or 'settings'}: {e['msg']}" for e in exc.errors())
+        _fail("invalid_settings", f"The service settings are invalid: {problems}.")
+    try:
+        database = check_startup(settings)
+    except CausalPlanError as exc:
+        _fail(exc.code, exc.message)
+    _console(stderr=True).print(
+        f"causalplan service on http://{host}:{port} (API docs: /docs), database {database}, "
+        f"{settings.planning_workers} planner worker(s)"
+    )
+    run_service(settings, host, port)
 
 
 @app.command()

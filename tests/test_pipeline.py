@@ -57,7 +57,7 @@ def test_a_goal_out_of_reach_is_decided_before_search(catalog: Catalog) -> None:
 
 def test_unknown_planner_is_a_clear_error(catalog: Catalog) -> None:
     task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
-    with pytest.raises(UnknownPlannerError, match="choose one of: fd, fd-opt"):
+    with pytest.raises(UnknownPlannerError, match="choose one of: auto, fd, fd-opt, mdp"):
         plan_task(task, "magic")
 
 

@@ -11,17 +11,17 @@ from causalplan.causal.validation import ObjectSummary, validate_model
 from causalplan.objects.catalog import build_object
 from causalplan.objects.model import AssemblyObject
 from causalplan.objects.schema import ObjectSchema
-from causalplan.objects.synthetic import (
+from causalplan.pddl.task import PlanningTask
+from causalplan.planners.pipeline import plan_task
+from causalplan.planners.replay import replay
+from causalplan.planners.result import PlanStatus
+from causalplan.planners.synthetic import (
     GOAL,
     object_as_dict,
     synthetic_model,
     synthetic_object,
     synthetic_task,
 )
-from causalplan.pddl.task import PlanningTask
-from causalplan.planners.pipeline import plan_task
-from causalplan.planners.replay import replay
-from causalplan.planners.result import PlanStatus
 
 
 def _primary_parents(obj: AssemblyObject) -> dict[str, str]:

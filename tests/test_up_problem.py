@@ -11,13 +11,14 @@ from causalplan.causal.model import CausalModel, Labelling
 from causalplan.causal.rules import Rule, parse_rule
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject, Connector, Fit, Part, Requirement
-from causalplan.objects.synthetic import synthetic_task
 from causalplan.pddl.task import PlanningTask, build_task
-from causalplan.planners.pipeline import plan_task
+from causalplan.planners.pipeline import UP_ENGINES, plan_task
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanStatus
+from causalplan.planners.synthetic import synthetic_task
 from causalplan.planners.up_problem import (
     build_up_problem,
+    engine_problem,
     goal_structure,
     solve_with_up,
     status_of_up_result,
@@ -83,13 +84,14 @@ def test_the_desk_lamp_becomes_one_grounded_action_per_fit(catalog: Catalog) -> 
         ("screw", ("light_bulb", "base_with_cables", "bulb_into_socket")),
     ]
     assert sorted(action.name for action in problem.actions) == sorted(actions)
-    assert sorted(fluent.name for fluent in problem.fluents) == ["active", "available", "in_assembly"]
+    assert sorted(fluent.name for fluent in problem.fluents) == ["active", "available", "detached", "in_assembly"]
     shade = problem.action("clip__shade__base_with_cables__shade_onto_ring")
     # The shade covers the socket: clipping it makes both fits unavailable, and activates its function.
     assert sorted(str(effect) for effect in shade.effects) == [
         "active(node_diffuse_light) := true",
         "available(fit_bulb_into_socket) := false",
         "available(fit_shade_onto_ring) := false",
+        "detached(part_shade) := false",
         "in_assembly(part_shade) := true",
     ]
     initial = {str(fluent): str(value) for fluent, value in problem.explicit_initial_values.items()}
@@ -200,9 +202,22 @@ def test_engine_failures_are_outcomes_not_exceptions(catalog: Catalog) -> None:
     task = _paper_task("paper/desk_lamp.yaml", catalog)
     missing = solve_with_up(task, "no-such-engine", 5)
     assert missing.status is PlanStatus.ERROR and "no-such-engine" in missing.message
-    # pyperplan cannot do negative preconditions: refused, reported, not raised.
-    refused = solve_with_up(task, "pyperplan", 5)
-    assert refused.status is PlanStatus.ERROR and refused.message
+
+
+@pytest.mark.parametrize("engine", UP_ENGINES)
+def test_every_installed_engine_solves_a_task_with_a_disjunctive_goal(engine: str) -> None:
+    # Synthetic tasks have an OR in their goal; pyperplan gets it compiled away by UP itself.
+    task = synthetic_task(8, seed=1)
+    outcome = solve_with_up(task, engine, 60)
+    assert outcome.status is PlanStatus.SOLVED, outcome.message
+    assert replay(task, outcome.actions).valid_under_model
+    assert validate_with_up(task, outcome.actions)
+
+
+def test_engine_availability_is_reported() -> None:
+    assert engine_problem("tamer") is None
+    problem = engine_problem("no-such-engine")
+    assert problem is not None and "no-such-engine" in problem
 
 
 def test_a_synthetic_plan_through_up_replays_and_validates() -> None:

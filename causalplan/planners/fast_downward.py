@@ -109,6 +109,9 @@ def translator_available() -> bool:
 def _limits(memory_mb: int) -> Callable[[], None]:
     def apply() -> None:
         limit = memory_mb * 1024 * 1024
+        _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+        if hard != resource.RLIM_INFINITY:  # a parent's limit (e.g. a comparison worker's) cannot be raised
+            limit = min(limit, hard)
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 
     return apply

@@ -1,7 +1,16 @@
-"""The planning pipeline: compile the task, search, replay the plan, and say what came of it."""
+"""The planning pipeline: choose a planner, search, replay the plan, and say what came of it.
+
+Planners (a plain registry): ``fd`` and ``fd-opt`` run Fast Downward on our PDDL with derived
+predicates; ``mdp`` solves the paper's probabilistic MDP exactly; ``up:<engine>`` solves the
+axiom-free unified-planning formulation with that engine; ``auto`` (the default) runs FD and
+falls back to the MDP when a fit in play may fail (FD's plans are blind to risk) or when FD
+ends with an error, a timeout or is unavailable. Every plan, whatever its route, is replayed
+on the object before it is returned.
+"""
 
 from __future__ import annotations
 
+import math
 import time
 
 from causalplan.causal.graph import goal_holds
@@ -9,14 +18,28 @@ from causalplan.errors import CausalPlanError
 from causalplan.pddl.task import PlanningTask
 from causalplan.pddl.writer import compile_task
 from causalplan.planners import fast_downward
+from causalplan.planners.mdp import relevant_fits, search_outcome, solve_mdp
 from causalplan.planners.replay import replay
-from causalplan.planners.result import PlanResult, PlanStatus, PlanStep
+from causalplan.planners.result import PlanResult, PlanStatus, PlanStep, SearchOutcome
 
-PLANNERS = tuple(fast_downward.CONFIGS)
-"""The planner names ``plan`` accepts."""
+UP_ENGINES = ("fast-downward", "fast-downward-opt", "pyperplan", "pyperplan-opt", "tamer", "enhsp", "enhsp-opt")
+"""unified-planning engines installed with causalplan (``up-*`` packages)."""
+
+PLANNERS: tuple[str, ...] = ("auto", *fast_downward.CONFIGS, "mdp", *(f"up:{engine}" for engine in UP_ENGINES))
+"""Every planner name ``plan_task`` accepts."""
+
+DESCRIPTIONS: dict[str, str] = {
+    "auto": "Fast Downward; the MDP when a fit may fail or FD fails (the default)",
+    **{name: config.description for name, config in fast_downward.CONFIGS.items()},
+    "mdp": "the paper's probabilistic MDP, solved exactly (most reliable plan)",
+    **{f"up:{engine}": f"unified-planning engine '{engine}' on the axiom-free formulation" for engine in UP_ENGINES},
+}
 
 PRECHECK = "precheck"
 """``planner_used`` when the answer was decided before any search."""
+
+MDP_TIME_LIMIT = 10.0
+FALLBACK_STATUSES = (PlanStatus.ERROR, PlanStatus.TIMEOUT, PlanStatus.OUT_OF_MEMORY)
 
 
 class UnknownPlannerError(CausalPlanError):
@@ -30,23 +53,58 @@ def goal_reachable(task: PlanningTask) -> bool:
     return goal_holds(task.carriers(), task.rules, task.goal_key)
 
 
-def plan_task(
-    task: PlanningTask,
-    planner: str = "fd",
-    time_limit: float = fast_downward.DEFAULT_TIME_LIMIT,
-    include_pddl: bool = False,
-) -> PlanResult:
-    """Return a replayed plan for ``task`` (or the status saying why there is none)."""
-    config = fast_downward.CONFIGS.get(planner)
-    if config is None:
-        raise UnknownPlannerError(
-            f"Unknown planner '{planner}'; choose one of: {', '.join(PLANNERS)}.", details={"planner": planner}
-        )
+def planner_availability() -> dict[str, str | None]:
+    """Return each planner with None when it can run here, or why it cannot."""
+    result: dict[str, str | None] = {}
+    try:
+        fast_downward.search_binary()
+        fd_problem = None if fast_downward.translator_available() else "fast-downward.translate is not installed"
+    except CausalPlanError as exc:
+        fd_problem = exc.message
+    for name in PLANNERS:
+        result[name] = fd_problem if name in fast_downward.CONFIGS else None
+    try:
+        from causalplan.planners.up_problem import engine_problem
+    except ImportError as exc:  # pragma: no cover - unified-planning is a dependency
+        return {**result, **{f"up:{engine}": str(exc) for engine in UP_ENGINES}}
+    for engine in UP_ENGINES:
+        result[f"up:{engine}"] = engine_problem(engine)
+    return result
+
+
+def _search(task: PlanningTask, planner: str, time_limit: float, timing: dict[str, float]) -> SearchOutcome:
+    if planner in fast_downward.CONFIGS:
+        started = time.perf_counter()
+        compiled = compile_task(task)
+        timing["compile"] = time.perf_counter() - started
+        return fast_downward.solve(compiled.domain, compiled.problem, fast_downward.CONFIGS[planner], time_limit)
+    if planner == "mdp":
+        started = time.perf_counter()
+        solution = solve_mdp(task, time_limit)
+        return search_outcome(solution, time.perf_counter() - started)
+    from causalplan.planners.up_problem import solve_with_up
+
+    return solve_with_up(task, planner.removeprefix("up:"), time_limit)
+
+
+def _failure_message(status: PlanStatus, task: PlanningTask, time_limit: float) -> str:
+    return {
+        PlanStatus.UNSOLVABLE: f"No sequence of connections of the {task.obj.name}'s parts produces '{task.goal}' "
+        "under the model.",
+        PlanStatus.TIMEOUT: f"The planner did not finish within {time_limit:g} s.",
+        PlanStatus.OUT_OF_MEMORY: "The planner ran out of memory.",
+        PlanStatus.TOO_LARGE: "The task is too large for the exact MDP.",
+    }.get(status, "The planner failed.")
+
+
+def _run(task: PlanningTask, planner: str, time_limit: float, include_pddl: bool, validate_up: bool) -> PlanResult:
     started = time.perf_counter()
-    compiled = compile_task(task)
-    timing = {"compile": time.perf_counter() - started}
-    pddl = {"domain": compiled.domain, "problem": compiled.problem} if include_pddl else None
     obj = task.obj
+    timing: dict[str, float] = {}
+    pddl = None
+    if include_pddl:
+        compiled = compile_task(task)
+        pddl = {"domain": compiled.domain, "problem": compiled.problem}
     if not goal_reachable(task):
         timing["total"] = time.perf_counter() - started
         return PlanResult(
@@ -55,36 +113,50 @@ def plan_task(
             obj.id,
             timing=timing,
             pddl=pddl,
+            success_probability=0.0,
             message=f"Even with every part of the {obj.name} assembled, the model's rules do not "
             f"produce '{task.goal}': no part carries some function the rules need.",
         )
-    outcome = fast_downward.solve(compiled.domain, compiled.problem, config, time_limit)
+    outcome = _search(task, planner, time_limit, timing)
     timing.update(outcome.timing)
+    timing.pop("total", None)
     if outcome.status is not PlanStatus.SOLVED:
         timing["total"] = time.perf_counter() - started
-        message = outcome.message or {
-            PlanStatus.UNSOLVABLE: f"No sequence of connections of the {obj.name}'s parts produces '{task.goal}' "
-            "under the model.",
-            PlanStatus.TIMEOUT: f"The planner did not finish within {time_limit:g} s.",
-            PlanStatus.OUT_OF_MEMORY: "The planner ran out of memory.",
-        }.get(outcome.status, "The planner failed.")
-        return PlanResult(outcome.status, config.name, obj.id, timing=timing, message=message, pddl=pddl)
+        return PlanResult(
+            outcome.status,
+            planner,
+            obj.id,
+            timing=timing,
+            pddl=pddl,
+            message=outcome.message or _failure_message(outcome.status, task, time_limit),
+        )
     replay_started = time.perf_counter()
     checked = replay(task, outcome.actions)
     timing["replay"] = time.perf_counter() - replay_started
-    timing["total"] = time.perf_counter() - started
     if not (checked.executable and checked.valid_under_model):
         why = checked.failure or "the goal does not hold under the model after the last step"
+        timing["total"] = time.perf_counter() - started
         return PlanResult(
             PlanStatus.ERROR,
-            config.name,
+            planner,
             obj.id,
             timing=timing,
             pddl=pddl,
             message=f"The planner's plan failed replay ({why}); it is not returned.",
         )
+    validated: bool | None = None
+    if validate_up or planner.startswith("up:"):
+        from causalplan.planners.up_problem import validate_with_up
+
+        validate_started = time.perf_counter()
+        validated = validate_with_up(task, outcome.actions)
+        timing["up_validate"] = time.perf_counter() - validate_started
+    timing["total"] = time.perf_counter() - started
     fits = {fit.id: fit for fit in obj.fits}
     steps = tuple(PlanStep(action, args[:2], args[2], obj.step_text(fits[args[2]])) for action, args in outcome.actions)
+    probability = outcome.success_probability
+    if probability is None:  # an open-loop plan works only if every step does
+        probability = math.prod(fits[step.fit].probability for step in steps)
     message = (
         ""
         if checked.valid_under_true_mechanism
@@ -96,7 +168,7 @@ def plan_task(
     )
     return PlanResult(
         PlanStatus.SOLVED,
-        config.name,
+        planner,
         obj.id,
         steps,
         True,
@@ -105,4 +177,68 @@ def plan_task(
         timing,
         message,
         pddl,
+        probability,
+        outcome.expected_actions if outcome.expected_actions is not None else float(len(steps)),
+        outcome.policy,
+        None,
+        validated,
     )
+
+
+def _with_fallback(result: PlanResult, reason: str, started: float, first: PlanResult | None = None) -> PlanResult:
+    from dataclasses import replace
+
+    timing = dict(result.timing)
+    if first is not None:
+        timing.update({f"{first.planner_used}_{stage}": seconds for stage, seconds in first.timing.items()})
+    timing["total"] = time.perf_counter() - started
+    return replace(result, fallback_reason=reason, timing=timing)
+
+
+def _auto(task: PlanningTask, time_limit: float, include_pddl: bool, validate_up: bool) -> PlanResult:
+    started = time.perf_counter()
+    risky = sorted(fit.id for fit in relevant_fits(task) if fit.probability < 1.0)
+    if risky:
+        mdp = _run(task, "mdp", min(time_limit, MDP_TIME_LIMIT), include_pddl, validate_up)
+        if mdp.status.is_final():
+            return _with_fallback(
+                mdp,
+                f"fit(s) {', '.join(risky)} may fail (probability below 1); Fast Downward's plans are blind to risk",
+                started,
+            )
+        fd = _run(task, "fd", time_limit, include_pddl, validate_up)
+        return _with_fallback(
+            fd,
+            f"the MDP could not be used ({mdp.status.value}: {mdp.message}); this classical "
+            f"plan ignores that fit(s) {', '.join(risky)} may fail",
+            started,
+            mdp,
+        )
+    fd = _run(task, "fd", time_limit, include_pddl, validate_up)
+    if fd.status not in FALLBACK_STATUSES:
+        return fd
+    mdp = _run(task, "mdp", min(time_limit, MDP_TIME_LIMIT), include_pddl, validate_up)
+    if not mdp.status.is_final():
+        return fd
+    return _with_fallback(mdp, f"Fast Downward ended with '{fd.status.value}': {fd.message}", started, fd)
+
+
+def plan_task(
+    task: PlanningTask,
+    planner: str = "auto",
+    time_limit: float = fast_downward.DEFAULT_TIME_LIMIT,
+    include_pddl: bool = False,
+    validate_up: bool = False,
+) -> PlanResult:
+    """Return a replayed plan for ``task`` (or the status saying why there is none).
+
+    ``validate_up`` also checks the plan with unified-planning's sequential plan validator
+    (always done for ``up:`` planners); the result says so in ``validated_by_up``.
+    """
+    if planner not in PLANNERS:
+        raise UnknownPlannerError(
+            f"Unknown planner '{planner}'; choose one of: {', '.join(PLANNERS)}.", details={"planner": planner}
+        )
+    if planner == "auto":
+        return _auto(task, time_limit, include_pddl, validate_up)
+    return _run(task, planner, time_limit, include_pddl, validate_up)

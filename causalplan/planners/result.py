@@ -13,6 +13,7 @@ class PlanStatus(StrEnum):
     UNSOLVABLE = "unsolvable"
     TIMEOUT = "timeout"
     OUT_OF_MEMORY = "out_of_memory"
+    TOO_LARGE = "too_large"  # the exact MDP declined: beyond the size it solves in seconds
     ERROR = "error"
 
     def is_final(self) -> bool:
@@ -42,6 +43,9 @@ class SearchOutcome:
     actions: tuple[tuple[str, tuple[str, ...]], ...] = ()
     timing: dict[str, float] = field(default_factory=dict)
     message: str = ""
+    success_probability: float | None = None  # set by planners that reason about risk (the MDP)
+    expected_actions: float | None = None
+    policy: tuple[dict[str, object], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -58,6 +62,11 @@ class PlanResult:
     timing: dict[str, float] = field(default_factory=dict)
     message: str = ""
     pddl: dict[str, str] | None = None
+    success_probability: float | None = None
+    expected_actions: float | None = None
+    policy: tuple[dict[str, object], ...] = ()
+    fallback_reason: str | None = None
+    validated_by_up: bool | None = None
 
     @property
     def has_plan(self) -> bool:
@@ -74,9 +83,15 @@ class PlanResult:
             "valid_under_model": self.valid_under_model,
             "valid_under_true_mechanism": self.valid_under_true_mechanism,
             "unmet_requirements": list(self.unmet_requirements),
+            "success_probability": None if self.success_probability is None else round(self.success_probability, 6),
+            "expected_actions": None if self.expected_actions is None else round(self.expected_actions, 6),
+            "fallback_reason": self.fallback_reason,
+            "validated_by_up": self.validated_by_up,
             "timing": {stage: round(seconds, 6) for stage, seconds in self.timing.items()},
             "message": self.message,
         }
+        if self.policy:
+            result["policy"] = list(self.policy)
         if self.pddl is not None:
             result["pddl"] = self.pddl
         return result

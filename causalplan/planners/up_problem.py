@@ -121,7 +121,6 @@ def build_up_problem(task: PlanningTask) -> tuple[Problem, ActionMap]:
         BoolType,
         Fluent,
         InstantaneousAction,
-        Not,
         Object,
         Or,
         Problem,
@@ -134,11 +133,13 @@ def build_up_problem(task: PlanningTask) -> tuple[Problem, ActionMap]:
     fit_type = UserType(names.get("fit"))
     node_type = UserType(names.get("node"))
     in_assembly = Fluent(names.get("in_assembly"), BoolType(), part=part_type)
+    # "not yet assembled" as its own fluent, so engines without negative conditions apply too.
+    detached = Fluent(names.get("detached"), BoolType(), part=part_type)
     available = Fluent(names.get("available"), BoolType(), fit=fit_type)
     active = Fluent(names.get("active"), BoolType(), node=node_type)
 
     problem = Problem(names.get(f"causalplan_{obj.id}"))
-    for fluent in (in_assembly, available, active):
+    for fluent in (in_assembly, detached, available, active):
         problem.add_fluent(fluent, default_initial_value=False)
     parts = {part_id: Object(names.get(f"part_{part_id}"), part_type) for part_id in obj.part_ids}
     fits = {fit.id: Object(names.get(f"fit_{fit.id}"), fit_type) for fit in obj.fits}
@@ -157,8 +158,9 @@ def build_up_problem(task: PlanningTask) -> tuple[Problem, ActionMap]:
         action = InstantaneousAction(name)
         action.add_precondition(available(fits[fit.id]))
         action.add_precondition(in_assembly(parts[fit.fixed_part]))
-        action.add_precondition(Not(in_assembly(parts[fit.moving_part])))
+        action.add_precondition(detached(parts[fit.moving_part]))
         action.add_effect(in_assembly(parts[fit.moving_part]), True)
+        action.add_effect(detached(parts[fit.moving_part]), False)
         for key in functions_of_part.get(fit.moving_part, []):
             action.add_effect(active(nodes[key]), True)
         for other in obj.excluded_fits(fit):
@@ -167,6 +169,8 @@ def build_up_problem(task: PlanningTask) -> tuple[Problem, ActionMap]:
         actions[name] = (fit.primitive, (fit.moving_part, fit.fixed_part, fit.id))
 
     problem.set_initial_value(in_assembly(parts[obj.base]), True)
+    for part_id, part_object in parts.items():
+        problem.set_initial_value(detached(part_object), part_id != obj.base)
     for key in functions_of_part.get(obj.base, []):
         problem.set_initial_value(active(nodes[key]), True)
     for fit_object in fits.values():
@@ -208,6 +212,44 @@ def status_of_up_result(status_name: str) -> PlanStatus:
     return _STATUS_NAMES.get(status_name, PlanStatus.ERROR)
 
 
+COMPILATIONS = ("DISJUNCTIVE_CONDITIONS_REMOVING", "NEGATIVE_CONDITIONS_REMOVING", "CONDITIONAL_EFFECTS_REMOVING")
+"""UP compilations tried, in order, until an engine supports the problem (e.g. pyperplan: no ``or``)."""
+
+
+def compile_for_engine(problem: Problem, engine: str) -> tuple[Problem, list[Callable[..., Any]]]:
+    """Return ``problem`` compiled with UP's own compilers until ``engine`` supports it.
+
+    Also returns the functions that map the compiled problem's actions back, last one first.
+    An engine that supports nothing we can compile to gets the problem as it is (its own
+    error then says why).
+    """
+    from unified_planning.shortcuts import CompilationKind, Compiler, get_environment
+
+    engine_class = get_environment().factory.engine(engine)
+    map_backs: list[Callable[..., Any]] = []
+    for name in COMPILATIONS:
+        if engine_class.supports(problem.kind):
+            break
+        kind = getattr(CompilationKind, name)
+        with Compiler(problem_kind=problem.kind, compilation_kind=kind) as compiler:
+            result = compiler.compile(problem, kind)
+        problem = result.problem
+        map_backs.append(result.map_back_action_instance)
+    return problem, map_backs
+
+
+def engine_problem(engine: str) -> str | None:
+    """Return None when the UP engine is installed and loads, else why it cannot be used."""
+    try:
+        _quiet_environment()
+        from unified_planning.shortcuts import get_environment
+
+        get_environment().factory.engine(engine)
+    except Exception as exc:  # noqa: BLE001 - UP raises assorted errors for missing engines
+        return f"{type(exc).__name__}: {exc}"
+    return None
+
+
 def _quiet_environment() -> None:
     from unified_planning.shortcuts import get_environment
 
@@ -242,8 +284,13 @@ def solve_with_up(
         solve_started = time.perf_counter()
         with warnings.catch_warnings():  # "cannot establish whether X can solve": the status says it
             warnings.simplefilter("ignore")
+            compiled, map_backs = compile_for_engine(problem, engine)
             with OneshotPlanner(name=engine) as planner:
-                result = planner.solve(problem, timeout=remaining)
+                result = planner.solve(compiled, timeout=remaining)
+        plan = result.plan
+        for map_back in reversed(map_backs):
+            if plan is not None:
+                plan = plan.replace_action_instances(map_back)
         timing["solve"] = time.perf_counter() - solve_started
     except Exception as exc:  # noqa: BLE001 - engine missing, problem unsupported, engine crash
         timing["total"] = time.perf_counter() - started
@@ -260,10 +307,10 @@ def solve_with_up(
             PlanStatus.ERROR: f"The engine '{engine}' ended with status {result.status.name}.",
         }.get(status, "")
         return SearchOutcome(status, timing=timing, message=message)
-    if result.plan is None:
+    if plan is None:
         return SearchOutcome(PlanStatus.ERROR, timing=timing, message=f"The engine '{engine}' returned no plan.")
     steps: list[PlanAction] = []
-    for instance in result.plan.actions:
+    for instance in plan.actions:
         mapped = actions.get(instance.action.name)
         if mapped is None:
             return SearchOutcome(

@@ -1,0 +1,97 @@
+"""``causalplan compare``: one process per run, a failing planner is a row, files are written."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from causalplan.cli import app
+from causalplan.comparison import tasks
+from causalplan.comparison.runner import compare, run_once
+from causalplan.errors import CausalPlanError
+from tests.conftest import EXAMPLES, ROOT
+
+
+def test_compare_writes_table_csv_json_and_plot(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(ROOT)
+    result = CliRunner().invoke(
+        app,
+        [
+            "compare",
+            str(EXAMPLES / "paper/desk_lamp.yaml"),
+            "--planners",
+            "fd,mdp,up:pyperplan",
+            "--synthetic",
+            "6",
+            "--out",
+            str(tmp_path),
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    assert "paper/desk_lamp" in result.stdout and "synthetic-6" in result.stdout
+    rows = list(csv.DictReader((tmp_path / "compare.csv").open()))
+    assert [(row["task"], row["planner"]) for row in rows] == [
+        ("paper/desk_lamp", "fd"),
+        ("paper/desk_lamp", "mdp"),
+        ("paper/desk_lamp", "up:pyperplan"),
+        ("synthetic-6", "fd"),
+        ("synthetic-6", "mdp"),
+        ("synthetic-6", "up:pyperplan"),
+    ]
+    assert all(row["status"] == "solved" and row["valid"] == "True" for row in rows)
+    assert {row["plan_length"] for row in rows[:3]} == {"1"}
+    data = json.loads((tmp_path / "compare.json").read_text())
+    assert data["settings"]["planners"] == ["fd", "mdp", "up:pyperplan"]
+    assert (tmp_path / "compare.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_planner_that_runs_out_of_time_is_a_row_not_a_crash() -> None:
+    task = tasks.synthetic(80)
+    rows = compare([task], ["fd-opt", "fd"], time_limit=1.0, memory_mb=4096, repeat=1)
+    assert [(row.planner, row.status) for row in rows] == [("fd-opt", "timeout"), ("fd", "solved")]
+
+
+def test_a_worker_that_dies_is_reported(tmp_path: Path) -> None:
+    record = run_once(tasks.synthetic(10), "fd", time_limit=5.0, memory_mb=16)  # too little to import causalplan
+    assert record["status"] in ("error", "out_of_memory")
+    assert "worker failed" in str(record["message"])
+
+
+def test_repeats_report_medians() -> None:
+    rows = compare([tasks.synthetic(5)], ["mdp"], time_limit=10.0, memory_mb=4096, repeat=3)
+    assert rows[0].repeats == 3 and rows[0].seconds is not None
+
+
+def test_task_files_and_default_tasks(tmp_path: Path) -> None:
+    task_file = tmp_path / "task.yaml"
+    task_file.write_text(
+        f"model: {EXAMPLES / 'paper/desk_lamp.yaml'}\nmapping: {EXAMPLES / 'paper/flashlight_mapping.yaml'}\n"
+    )
+    task = tasks.from_argument(task_file, [])
+    assert task.name == "paper/desk_lamp -> paper/flashlight_mapping" and task.parts == 3
+    assert len(tasks.default_tasks(ROOT)) == len(tasks.DEFAULT_TASKS)
+    with pytest.raises(CausalPlanError, match="not under"):
+        tasks.default_tasks(tmp_path)
+    with pytest.raises(CausalPlanError, match="2 to 400"):
+        tasks.synthetic(1)
+
+
+def test_bad_arguments_are_clear_errors(tmp_path: Path) -> None:
+    runner = CliRunner()
+    result = runner.invoke(app, ["compare", "--planners", "fd,magic"])
+    assert result.exit_code == 2 and "Unknown planner 'magic'" in result.stderr
+    result = runner.invoke(app, ["compare", "--synthetic", "ten"])
+    assert result.exit_code == 2 and "whole numbers" in result.stderr
+    result = runner.invoke(app, ["compare", str(tmp_path / "missing.yaml")])
+    assert result.exit_code == 2 and "There is no file" in result.stderr
+    assert "Traceback" not in result.output
+
+
+def test_fd_runs_under_a_worker_memory_limit_below_its_own_default() -> None:
+    # FD asks for 2048 MB; inside a 1024 MB worker it must take the lower limit, not fail.
+    record = run_once(tasks.synthetic(10), "fd", time_limit=10.0, memory_mb=1024)
+    assert record["status"] == "solved", record
