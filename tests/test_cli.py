@@ -474,11 +474,11 @@ def test_objects_unknown_id_suggests_the_close_one() -> None:
     assert_no_traceback(result)
 
 
-def test_catalog_folder_adds_bedside_lamp() -> None:
+def test_catalog_folder_adds_the_user_objects() -> None:
     result = run("objects", "--json", "--catalog", USER_CATALOG)
     assert result.exit_code == 0
     categories = {item["id"]: item["category"] for item in json.loads(result.stdout)}
-    assert categories == {**BUILTIN_CATEGORIES, "bedside_lamp": "electric"}
+    assert categories == {**BUILTIN_CATEGORIES, "bedside_lamp": "electric", "worn_lamp": "electric"}
 
 
 def test_transfer_to_bedside_lamp_has_no_assembly_sequence() -> None:
