@@ -418,7 +418,8 @@ def compare(
     tasks: Annotated[
         list[Path] | None,
         typer.Argument(
-            help="Model files, or task files (YAML with model:, mapping:, catalog:). Default: the paper's examples.",
+            help="Model files, or task files (YAML with model:, mapping:, catalog:). Default: the paper's examples "
+            "(found under the current folder's examples/).",
             show_default=False,
         ),
     ] = None,
@@ -454,11 +455,12 @@ def compare(
     for name in chosen:
         _check_planner(name)
     try:
-        selected = [comparison_tasks.from_argument(path, list(catalog or [])) for path in tasks or []]
         sizes = _int_list(synthetic, "--synthetic") if synthetic else []
-        selected += [comparison_tasks.synthetic(size) for size in sizes]
-        if not selected:
+        if tasks:
+            selected = [comparison_tasks.from_argument(path, list(catalog or [])) for path in tasks]
+        else:
             selected = comparison_tasks.default_tasks(Path.cwd())
+        selected += [comparison_tasks.synthetic(size) for size in sizes]
     except CausalPlanError as exc:
         _fail(exc.code, exc.message)
     try:
@@ -567,8 +569,6 @@ def serve(
     from pydantic import ValidationError
 
     from causalplan.errors import CausalPlanError
-    from causalplan.service.main import check_startup
-    from causalplan.service.main import serve as run_service
     from causalplan.service.settings import Settings
 
     overrides: dict[str, object] = {}
@@ -581,6 +581,9 @@ def serve(
     except ValidationError as exc:
         problems = "; ".join(f"{'.'.join(map(str, e['loc'])) or 'settings'}: {e['msg']}" for e in exc.errors())
         _fail("invalid_settings", f"The service settings are invalid: {problems}.")
+    from causalplan.service.main import check_startup
+    from causalplan.service.main import serve as run_service
+
     try:
         database = check_startup(settings)
     except CausalPlanError as exc:
@@ -590,6 +593,129 @@ def serve(
         f"{settings.planning_workers} planner worker(s)"
     )
     run_service(settings, host, port)
+
+
+if TYPE_CHECKING:
+    from causalplan.sim import SimulationReport
+
+
+def _print_simulation(report: SimulationReport, console: Console) -> None:
+    from rich.markup import escape
+
+    console.print(f"Simulated {len(report.steps)} step(s) on the {escape(report.object_name)} (headless PyBullet):")
+    for step in report.steps:
+        reach = ""
+        if step.reach is not None:
+            verb = "reaches" if step.reach.reachable else "cannot reach"
+            reach = f" [dim](arm {verb}: {step.reach.error_mm:.1f} mm)[/]"
+        if step.status.value == "passed":
+            console.print(f"  {step.number}. {escape(step.text)} [green]passed[/]{reach}")
+        elif step.status.value == "failed":
+            failure = step.failure.value if step.failure else "failed"
+            console.print(
+                f"  {step.number}. {escape(step.text)} [bold red]FAILED[/]\\[{failure}]: {escape(step.message)}{reach}"
+            )
+        else:
+            console.print(f"  {step.number}. {escape(step.text)} [dim]not run[/]")
+    drift = report.stability[0]
+    still = "[green]yes[/]" if report.is_stable else "[red]no[/]"
+    console.print(f"Holds still while it settles: {still} ({escape(drift.detail)}; tolerance {drift.tolerance:g} mm)")
+    console.print("True mechanism on the simulated assembly:")
+    for requirement in report.requirements:
+        mark = "[green]yes[/]" if requirement.met else "[red]no[/]"
+        console.print(f"  {mark} {escape(requirement.says)}: {escape(requirement.detail)}")
+    produces = "[green]yes[/]" if report.produces_goal else "[red]no[/]"
+    console.print(f"Produces {escape(report.goal)}: {produces}")
+
+
+@app.command()
+def simulate(
+    model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
+    mapping: Annotated[
+        Path | None,
+        typer.Option("--mapping", "-m", help="A step-3 mapping: simulate on that object instead."),
+    ] = None,
+    plan_file: Annotated[
+        Path | None,
+        typer.Option(
+            "--plan",
+            help="The plan to run: the JSON of `causalplan plan --json`, or its 'plan' list. Without it, plan first.",
+        ),
+    ] = None,
+    png: Annotated[Path | None, typer.Option("--png", help="Write a picture of the final assembly (PNG).")] = None,
+    frames: Annotated[
+        Path | None, typer.Option("--frames", help="Write a picture per step to this folder, and strip.png.")
+    ] = None,
+    gif: Annotated[Path | None, typer.Option("--gif", help="Write the steps as an animated GIF.")] = None,
+    arm: Annotated[
+        bool, typer.Option("--arm", help="Add a Panda arm and report whether it reaches each step's grasp poses.")
+    ] = False,
+    as_json: JsonOption = False,
+    catalog: CatalogOption = None,
+) -> None:
+    """Run a plan in a headless physics simulation, check every step, and draw it.
+
+    Each step is checked (connectors fit, the path is clear, the joint is aligned, nothing
+    falls), then the object's true mechanism is judged on the simulated assembly. Exit 0 when
+    everything passes and the object produces its goal, 1 when not (or no plan is found),
+    2 for invalid input, 3 when the planner could not decide.
+    """
+    from causalplan.errors import CausalPlanError
+    from causalplan.pddl.task import build_task
+    from causalplan.planners.pipeline import plan_task
+    from causalplan.sim import RenderMode, read_plan_steps, simulate_plan
+    from causalplan.sim.render import animation, strip
+
+    objects = _catalog(catalog)
+    causal_model = _load_valid_model(model, objects, as_json)
+    labelling = _load_valid_mapping(mapping, objects, as_json) if mapping else None
+    target = objects.get((labelling or causal_model.labelling).object_id)
+    render = RenderMode.FRAMES if frames or gif else RenderMode.FINAL if png else RenderMode.NONE
+    try:
+        if plan_file is not None:
+            try:
+                data = json.loads(plan_file.read_text(encoding="utf-8"))
+            except OSError as exc:
+                _fail("input_file_error", f"Cannot read the plan file {plan_file}: {exc.strerror}.")
+            except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+                _fail("invalid_plan", f"{plan_file} is not JSON: {exc}.")
+            steps = read_plan_steps(data, target)
+        else:
+            result = plan_task(build_task(causal_model, target, labelling))
+            if not result.has_plan:
+                if as_json:
+                    _print_json({"status": result.status.value, "message": result.message, "simulation": None})
+                else:
+                    _print_plan(result, _console())
+                raise typer.Exit(EXIT_NO_PLAN if result.status.is_final() else EXIT_UNDECIDED)
+            steps = read_plan_steps([step.as_dict() for step in result.steps], target)
+        report = simulate_plan(target, steps, render=render, arm=arm)
+    except CausalPlanError as exc:
+        _fail(exc.code, exc.message)
+    written: list[str] = []
+    try:
+        if png is not None and report.picture is not None:
+            png.write_bytes(report.picture.png())
+            written.append(str(png))
+        if frames is not None:
+            frames.mkdir(parents=True, exist_ok=True)
+            for number, picture in enumerate(report.frames):
+                (frames / f"step_{number:02d}.png").write_bytes(picture.png())
+            (frames / "strip.png").write_bytes(strip(report.frames).png())
+            written.append(str(frames))
+        if gif is not None:
+            gif.write_bytes(animation(report.frames))
+            written.append(str(gif))
+    except OSError as exc:
+        _fail("output_not_writable", f"Cannot write {exc.filename}: {exc.strerror}.")
+    if as_json:
+        _print_json({**report.as_dict(), "files": written})
+    else:
+        console = _console()
+        _print_simulation(report, console)
+        for path in written:
+            console.print(f"Wrote {path}")
+    raise typer.Exit(EXIT_OK if report.passed else EXIT_NO_PLAN)
 
 
 @app.command()

@@ -123,13 +123,6 @@ class _Solver:
         self.values: dict[State, _Value] = {}
         self.goal_cache: dict[int, bool] = {}
 
-    def parts_of(self, made: int) -> int:
-        parts = self.c.base
-        for index, moving in enumerate(self.c.moving):
-            if made >> index & 1:
-                parts |= moving
-        return parts
-
     def goal_holds(self, parts: int) -> bool:
         cached = self.goal_cache.get(parts)
         if cached is None:
@@ -140,15 +133,6 @@ class _Solver:
             cached = self.task.goal_key in active_nodes(functions, self.task.rules)
             self.goal_cache[parts] = cached
         return cached
-
-    def unusable(self, made: int, failed: int) -> int:
-        taken = 0
-        for index in range(len(self.c.fits)):
-            if made >> index & 1:
-                taken |= self.c.taken_on_success[index]
-            if failed >> index & 1:
-                taken |= self.c.taken_on_failure[index]
-        return taken
 
     def reachable_parts(self, parts: int, unusable: int) -> int:
         """Return the parts that could still join if every usable fit succeeded (relaxed)."""
@@ -161,33 +145,34 @@ class _Solver:
                     changed = True
         return parts
 
-    def solve(self, state: State) -> _Value:
+    def solve(self, state: State, parts: int, unusable: int) -> _Value:
+        """Return the value of ``state``; ``parts`` and ``unusable`` are derived from it (passed down)."""
         known = self.values.get(state)
         if known is not None:
             return known
         if len(self.values) >= MAX_STATES or time.monotonic() > self.deadline:
             raise _TooLarge
-        made, failed = state
-        parts = self.parts_of(made)
         if self.goal_holds(parts):
             result = _Value(1.0, 1.0, 0.0, -1)
+        elif not self.goal_holds(self.reachable_parts(parts, unusable)):
+            result = _Value(-1.0, 0.0, 0.0, -1)
         else:
-            unusable = self.unusable(made, failed)
-            if not self.goal_holds(self.reachable_parts(parts, unusable)):
-                result = _Value(-1.0, 0.0, 0.0, -1)
-            else:
-                result = self._best_attempt(made, failed, parts, unusable)
+            result = self._best_attempt(state, parts, unusable)
         self.values[state] = result
         return result
 
-    def _best_attempt(self, made: int, failed: int, parts: int, unusable: int) -> _Value:
+    def _best_attempt(self, state: State, parts: int, unusable: int) -> _Value:
+        made, failed = state
+        c = self.c
         best: _Value | None = None
-        for index, p in enumerate(self.c.probability):
-            if unusable >> index & 1 or not parts & self.c.fixed[index] or parts & self.c.moving[index]:
+        for index, p in enumerate(c.probability):
+            if unusable >> index & 1 or not parts & c.fixed[index] or parts & c.moving[index]:
                 continue
             bit = 1 << index
-            success = self.solve((made | bit, failed))
-            failure = self.solve((made, failed | bit)) if p < 1.0 else success
+            success = self.solve((made | bit, failed), parts | c.moving[index], unusable | c.taken_on_success[index])
+            failure = (
+                self.solve((made, failed | bit), parts, unusable | c.taken_on_failure[index]) if p < 1.0 else success
+            )
             q = -STEP_COST + p * success.value + (1 - p) * failure.value
             if best is None or q > best.value + 1e-12:
                 best = _Value(
@@ -255,7 +240,7 @@ def solve_mdp(task: PlanningTask, time_limit: float = 10.0) -> MdpSolution:
     solver = _Solver(task, _compile(task, fits), time.monotonic() + time_limit)
     start: State = (0, 0)
     try:
-        root = solver.solve(start)
+        root = solver.solve(start, solver.c.base, 0)
     except _TooLarge:
         return MdpSolution(
             PlanStatus.TOO_LARGE,
