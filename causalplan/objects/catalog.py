@@ -16,6 +16,7 @@ from causalplan.causal.validation import ObjectSummary
 from causalplan.errors import CatalogError, UnknownObjectError
 from causalplan.objects.model import AssemblyObject, Connector, Fit, Part, Requirement
 from causalplan.objects.schema import RESERVED_WORDS, FitSchema, ObjectSchema
+from causalplan.objects.shapes import build_geometry, unit
 
 OBJECT_FILE_SUFFIXES = (".yaml", ".yml", ".json")
 
@@ -79,7 +80,13 @@ def build_object(schema: ObjectSchema) -> AssemblyObject:
         description=schema.description,
         base=schema.base,
         parts=tuple(
-            Part(p.id, p.name, tuple(Connector(c.id, c.kind, c.spec) for c in p.connectors)) for p in schema.parts
+            Part(
+                p.id,
+                p.name,
+                tuple(Connector(c.id, c.kind, c.spec, c.at, unit(c.axis) if c.axis else None) for c in p.connectors),
+                build_geometry(p.geometry) if p.geometry else None,
+            )
+            for p in schema.parts
         ),
         fits=fits,
         mechanism=tuple(Requirement(tuple(r.any), r.says) for r in schema.mechanism.requires),

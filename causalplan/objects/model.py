@@ -16,22 +16,63 @@ PRIMITIVE_TEXTS: dict[str, str] = {
 """The assembly primitives, each with the sentence that describes one step."""
 
 
+Vector = tuple[float, float, float]
+"""A point or direction in metres, in a part's own frame."""
+
+
+@dataclass(frozen=True)
+class Shape:
+    """One solid primitive of a part's geometry, placed in the part's frame.
+
+    ``size`` is the shape's own bounding box in metres: a box's lengths along x, y, z; a
+    cylinder's diameter, diameter, length (its axis is z); a sphere's diameter three times.
+    ``rotation`` is roll, pitch, yaw in radians; ``color`` is red, green, blue, alpha in 0..1
+    (alpha below 1 draws the shape as glass).
+    """
+
+    kind: str
+    size: Vector
+    position: Vector = (0.0, 0.0, 0.0)
+    rotation: Vector = (0.0, 0.0, 0.0)
+    color: tuple[float, float, float, float] = (0.6, 0.6, 0.6, 1.0)
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """What a part looks like and weighs: its solid shapes, mass, and the light it gives.
+
+    ``light`` shapes are drawn only when the object produces its goal (a lit bulb, a flame).
+    """
+
+    shapes: tuple[Shape, ...]
+    mass: float
+    light: tuple[Shape, ...] = ()
+
+
 @dataclass(frozen=True)
 class Connector:
-    """A place on a part where another part attaches; parts fit when their specs match."""
+    """A place on a part where another part attaches; parts fit when their specs match.
+
+    ``position`` and ``axis`` (optional) give the connector's frame in the part's frame: the
+    point that meets the other part's connector, and the outward direction a mating part
+    comes from. Left out, the simulator puts the connector on a face of the part.
+    """
 
     id: str
     kind: str
     spec: str
+    position: Vector | None = None
+    axis: Vector | None = None
 
 
 @dataclass(frozen=True)
 class Part:
-    """One part of an object."""
+    """One part of an object; ``geometry`` is optional (the simulator then uses a plain cylinder)."""
 
     id: str
     name: str
     connectors: tuple[Connector, ...]
+    geometry: Geometry | None = None
 
 
 @dataclass(frozen=True)

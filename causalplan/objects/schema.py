@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from typing import Annotated, Literal, Self
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from causalplan.objects.model import PRIMITIVE_TEXTS
 
@@ -38,16 +40,85 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
+Coordinate = Annotated[float, Field(ge=-5.0, le=5.0)]
+"""Metres in a part's frame (a part is at most a few metres across)."""
+Length = Annotated[float, Field(ge=0.0001, le=5.0)]
+"""Metres, from a tenth of a millimetre."""
+Point = tuple[Coordinate, Coordinate, Coordinate]
+Angle = Annotated[float, Field(ge=-720.0, le=720.0)]
+"""Degrees. Bounds (as on every number here) also refuse NaN and infinity."""
+Direction = tuple[Coordinate, Coordinate, Coordinate]
+
+_SHAPE_FIELDS = {
+    "box": ({"size"}, "size: [x, y, z]"),
+    "cylinder": ({"radius", "length"}, "radius and length"),
+    "sphere": ({"radius"}, "radius"),
+    "tube": ({"radius", "length", "thickness"}, "radius, length and thickness (top_radius makes a cone)"),
+}
+_SIZE_FIELDS = ("size", "radius", "top_radius", "length", "thickness")
+
+
+class ShapeSchema(_Strict):
+    """One solid of a part, in metres in the part's frame; a tube is a hollow ring of boxes."""
+
+    shape: Literal["box", "cylinder", "sphere", "tube"]
+    size: tuple[Length, Length, Length] | None = Field(default=None, description="box: lengths along x, y, z.")
+    radius: Length | None = Field(default=None, description="cylinder, sphere; tube: outer radius at the bottom.")
+    top_radius: Length | None = Field(default=None, description="tube: outer radius at the top (default radius).")
+    length: Length | None = Field(default=None, description="cylinder, tube: length along the shape's z axis.")
+    thickness: Length | None = Field(default=None, description="tube: wall thickness.")
+    segments: int = Field(default=12, ge=3, le=64, description="tube: number of boxes around.")
+    at: Point = Field(default=(0.0, 0.0, 0.0), description="Centre of the shape in the part's frame.")
+    turn: tuple[Angle, Angle, Angle] = Field(default=(0.0, 0.0, 0.0), description="Roll, pitch, yaw in degrees.")
+    color: str = Field(default="#999999", pattern=r"^#[0-9a-fA-F]{6}([0-9a-fA-F]{2})?$", description="#rrggbb[aa]")
+
+    @model_validator(mode="after")
+    def _fields_for_the_shape(self) -> Self:
+        needed, words = _SHAPE_FIELDS[self.shape]
+        given = {name for name in _SIZE_FIELDS if getattr(self, name) is not None}
+        allowed = needed | ({"top_radius"} if self.shape == "tube" else set())
+        if needed - given:
+            raise ValueError(f"a {self.shape} needs {words}, in metres")
+        if given - allowed:
+            raise ValueError(f"a {self.shape} does not use {', '.join(sorted(given - allowed))}")
+        radius = min(self.radius or 0.0, self.top_radius or self.radius or 0.0)
+        if self.thickness is not None and self.thickness >= radius:
+            raise ValueError("a tube's thickness must be less than its radius")
+        return self
+
+
+class GeometrySchema(_Strict):
+    """What a part looks like in the simulator: solids, mass, and the light it gives when it works."""
+
+    mass: float = Field(default=0.1, gt=0.0, le=1000.0, description="Kilograms.")
+    shapes: list[ShapeSchema] = Field(min_length=1, max_length=200)
+    light: list[ShapeSchema] = Field(
+        default_factory=list, max_length=50, description="Drawn only when the object produces its goal."
+    )
+
+
 class ConnectorSchema(_Strict):
     id: str = Field(pattern=IDENTIFIER_PATTERN, description="Unique within the part.")
     kind: str = Field(min_length=1, max_length=64, description="The physical feature, e.g. 'thread'.")
     spec: str = Field(min_length=1, max_length=64, description="The standard both sides must share, e.g. 'E27'.")
+    at: Point | None = Field(default=None, description="Where the connector meets its mate, in the part's frame.")
+    axis: Direction | None = Field(
+        default=None, description="Outward direction a mating part comes from, in the part's frame."
+    )
+
+    @field_validator("axis")
+    @classmethod
+    def _axis_has_a_direction(cls, value: tuple[float, float, float] | None) -> tuple[float, float, float] | None:
+        if value is not None and sum(component * component for component in value) < 1e-12:
+            raise ValueError("the axis must not be [0, 0, 0]")
+        return value
 
 
 class PartSchema(_Strict):
     id: str = Field(pattern=IDENTIFIER_PATTERN)
     name: str = Field(min_length=1, max_length=80, description="Display name, e.g. 'light bulb'.")
     connectors: list[ConnectorSchema] = Field(default_factory=list)
+    geometry: GeometrySchema | None = Field(default=None, description="Optional; without it, a 5 cm cylinder.")
 
 
 class FitSchema(_Strict):

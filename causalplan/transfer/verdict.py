@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import TYPE_CHECKING
 
 from causalplan.causal.diagnostics import Report, Severity
 from causalplan.causal.graph import goal_holds
@@ -21,6 +22,9 @@ from causalplan.pddl.task import build_task
 from causalplan.planners.fast_downward import DEFAULT_TIME_LIMIT
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult, PlanStatus
+
+if TYPE_CHECKING:
+    from causalplan.sim import SimulationReport
 
 
 class Verdict(StrEnum):
@@ -67,6 +71,7 @@ class TransferVerdict:
     reasons: tuple[Reason, ...] = ()
     plan: PlanResult | None = None
     diagnostics: dict[str, object] = field(default_factory=dict)
+    simulation: SimulationReport | None = None  # the plan run in physics, when it was
 
     def as_dict(self) -> dict[str, object]:
         """Return the verdict as a JSON-ready dict (the ``--json`` output)."""
@@ -81,6 +86,7 @@ class TransferVerdict:
             "plan": [step.as_dict() for step in plan.steps] if plan and plan.has_plan else None,
             "planning": plan.as_dict() if plan else None,
             "diagnostics": self.diagnostics,
+            "simulation": self.simulation.summary() if self.simulation else None,
         }
 
 
@@ -173,8 +179,15 @@ def evaluate_transfer(
     catalog: Catalog,
     planner: str = "fd",
     time_limit: float = DEFAULT_TIME_LIMIT,
+    simulate: bool = True,
 ) -> TransferVerdict:
-    """Return the verdict of trying a valid ``model`` on the object of a valid ``mapping``."""
+    """Return the verdict of trying a valid ``model`` on the object of a valid ``mapping``.
+
+    A plan that replay finds valid under the true mechanism (the fast pre-check) is then run
+    in the physics simulator, unless ``simulate`` is False, and the simulator has the last word.
+    """
+    from causalplan.sim import RenderMode, simulate_plan  # PyBullet loads only when a plan is simulated
+
     training, test = catalog.get(model.object_id), catalog.get(mapping.object_id)
     kind = generalization(training, test)
     reasons, reachable = _mapping_reasons(model, mapping, test)
@@ -182,7 +195,23 @@ def evaluate_transfer(
         return TransferVerdict(Verdict.FAILS, training.id, test.id, kind, "precheck", tuple(reasons))
     result = plan_task(build_task(model, test, mapping), planner, time_limit)
     if result.status is PlanStatus.SOLVED and result.valid_under_true_mechanism:
-        return TransferVerdict(Verdict.TRANSFERS, training.id, test.id, kind, "planner", tuple(reasons), result)
+        simulation = simulate_plan(test, result.steps, render=RenderMode.NONE) if simulate else None
+        if simulation is None or simulation.produces_goal:
+            return TransferVerdict(
+                Verdict.TRANSFERS, training.id, test.id, kind, "planner", tuple(reasons), result, simulation=simulation
+            )
+        reasons.append(
+            Reason(
+                "violates_true_mechanism",
+                Severity.ERROR,
+                f"The plan satisfies the model and, step by step, the {test.name}'s requirements, but in "
+                f"simulation the real {test.name} does not produce {test.goal}: {simulation.explanation()}.",
+                simulation.unmet_requirements,
+            )
+        )
+        return TransferVerdict(
+            Verdict.FAILS, training.id, test.id, kind, "simulator", tuple(reasons), result, simulation=simulation
+        )
     if result.status is PlanStatus.SOLVED:
         unmet = "; ".join(result.unmet_requirements)
         reasons.append(

@@ -1,0 +1,333 @@
+"""Run a plan in physics, step by step, and report what happened: ``simulate_plan``.
+
+The base stands on the table at the origin; the other parts wait in a row behind it. Each
+step checks, in order: the connectors fit, the part to attach to is in the assembly (and
+the moving one is not), the approach path is clear, the part touches its mate at the seat,
+the joined connectors are aligned, and nothing moves while the assembly settles. The robot
+stops at the first failed step. After the plan the assembly settles once more, and the
+object's true mechanism is judged on what was built.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+
+from causalplan.objects.model import AssemblyObject, Connector, Vector
+from causalplan.pddl.task import PlanningTask
+from causalplan.planners.result import PlanStep
+from causalplan.sim import checks
+from causalplan.sim.arm import Arm, reach_step
+from causalplan.sim.geometry import Solid, bounds, mating_pose, solids
+from causalplan.sim.mechanism import Joint, evaluate, seat_error
+from causalplan.sim.motions import MOTIONS, approach, approach_path, approach_start
+from causalplan.sim.plan_steps import StepRequest, check_steps
+from causalplan.sim.poses import Pose, difference
+from causalplan.sim.render import DEFAULT_SIZE, Camera, draw
+from causalplan.sim.report import (
+    Check,
+    Failure,
+    Picture,
+    Reach,
+    RenderMode,
+    SimulationReport,
+    StepReport,
+    StepStatus,
+)
+from causalplan.sim.scene import GROUND, Scene
+
+ROW_GAP = 0.04
+"""Metres between parts waiting on the table, and between them and the assembly."""
+
+
+@dataclass
+class _Run:
+    """The state of one simulation as it goes."""
+
+    obj: AssemblyObject
+    scene: Scene
+    homes: dict[str, Pose]
+    assembled: set[str]
+    joints: list[Joint] = field(default_factory=list)
+    attached_at: dict[str, int] = field(default_factory=dict)
+    arm: Arm | None = None
+
+    def name(self, part_or_ground: str) -> str:
+        return "table" if part_or_ground == GROUND else self.obj.part(part_or_ground).name
+
+
+def _connectors(obj: AssemblyObject, request: StepRequest, joints: list[Joint]) -> tuple[Connector, Connector] | None:
+    """Return the connectors a step joins: its fit's, or a free pair with the same spec."""
+    moving, fixed = obj.part(request.moving), obj.part(request.fixed)
+    by_id = {(part.id, connector.id): connector for part in obj.parts for connector in part.connectors}
+    if request.fit is not None:
+        fit = obj.fit(request.fit)
+        return by_id[(fit.moving_part, fit.moving_connector)], by_id[(fit.fixed_part, fit.fixed_connector)]
+    taken = {(joint.fixed, joint.fixed_connector) for joint in joints if not joint.touch_only}
+    pairs = [(m, f) for m in moving.connectors for f in fixed.connectors if m.spec == f.spec]
+    pairs.sort(key=lambda pair: (fixed.id, pair[1].id) in taken)
+    return pairs[0] if pairs else None
+
+
+def _catalog_fit(obj: AssemblyObject, request: StepRequest, pair: tuple[Connector, Connector]) -> str | None:
+    """Return the catalog fit a step makes (given, or the one joining the same connectors)."""
+    if request.fit is not None:
+        return request.fit
+    for fit in obj.fits:
+        if fit.connectors() == ((request.moving, pair[0].id), (request.fixed, pair[1].id)):
+            return fit.id
+    return None
+
+
+def _settle(run: _Run, seconds: float) -> tuple[tuple[Check, Check], str | None]:
+    """Let the assembly settle; return the stability checks and the part that moved too much, if any."""
+    parts = sorted(run.assembled)
+    before = {part: run.scene.pose(part) for part in parts}
+    run.scene.settle(seconds)
+    moved = {part: difference(before[part], run.scene.pose(part)) for part in parts}
+    drifted = max(parts, key=lambda part: moved[part][0])
+    tilted = max(parts, key=lambda part: moved[part][1])
+    drift, tilt = checks.stability_checks(
+        moved[drifted][0] * 1000, math.degrees(moved[tilted][1]), run.name(drifted), seconds
+    )
+    culprit = drifted if not drift.passed else tilted if not tilt.passed else None
+    return (drift, tilt), culprit
+
+
+@dataclass
+class _StepChecks:
+    """The checks of one step as they are made; the first that fails ends the step."""
+
+    run: _Run
+    number: int
+    request: StepRequest
+    made: list[Check] = field(default_factory=list)
+    reach: Reach | None = None
+
+    def passed(self, *found: Check) -> None:
+        self.made.extend(found)
+
+    def report(self, failure: Failure | None = None, message: str = "", not_run: bool = False) -> StepReport:
+        """Return the step's report: passed, failed with ``failure``, or not run (an earlier step failed)."""
+        request = self.request
+        status = StepStatus.NOT_RUN if not_run else StepStatus.PASSED if failure is None else StepStatus.FAILED
+        return StepReport(
+            self.number,
+            request.action,
+            request.moving,
+            request.fixed,
+            request.fit,
+            request.text(self.run.obj),
+            status,
+            tuple(self.made),
+            failure,
+            message,
+            self.reach,
+        )
+
+    def fail(self, failure: Failure, check: Check, why: str = "") -> StepReport:
+        """Return the report of a step that failed ``check`` (``why`` says more, in front)."""
+        if why:
+            check = replace(check, detail=f"{why}; {check.detail}")
+        self.made.append(check)
+        return self.report(failure, check.detail)
+
+
+def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
+    """Execute one step and return its report (the scene is left as the step left it)."""
+    obj, scene, step = run.obj, run.scene, _StepChecks(run, number, request)
+    motion = MOTIONS[request.action]
+    moving_name, fixed_name = run.name(request.moving), run.name(request.fixed)
+
+    pair = _connectors(obj, request, run.joints)
+    if pair is None:
+        detail = (
+            f"no connector of the {moving_name} ({_specs(obj, request.moving)}) fits one of the {fixed_name} "
+            f"({_specs(obj, request.fixed)})"
+        )
+        return step.fail(Failure.INCOMPATIBLE_CONNECTORS, Check("connectors", False, detail))
+    step.passed(checks.connectors_check(moving_name, pair[0], fixed_name, pair[1]))
+    if request.fixed not in run.assembled:
+        detail = f"the {fixed_name}: not in the assembly, still on the table"
+        return step.fail(Failure.MISSING_PART, Check("parts", False, detail))
+    if request.moving in run.assembled:
+        detail = f"the {moving_name}: already in the assembly since step {run.attached_at[request.moving]}"
+        return step.fail(Failure.ALREADY_ATTACHED, Check("parts", False, detail))
+    step.passed(Check("parts", True, f"the {fixed_name} in the assembly, the {moving_name} free"))
+
+    moving_frame = scene.solids[request.moving].frames[pair[0].id]
+    fixed_frame = scene.solids[request.fixed].frames[pair[1].id]
+    fixed_pose = scene.pose(request.fixed)
+    path = approach_path(fixed_pose, moving_frame, fixed_frame, motion)
+    scene.place(request.moving, path(0.0))
+    direction = fixed_pose.turn(fixed_frame.axis)
+    start = approach_start(scene.bounds([request.moving]), scene.bounds(run.assembled), direction)
+    if run.arm is not None:
+        step.reach = reach_step(run.arm, scene, request.moving, (path(start), path(0.0)))
+    went = approach(scene, request.moving, path, start)
+    if went.hit is not None and went.hit != request.fixed:
+        blocked = checks.path_check(went.hit_depth * 1000, moving_name, run.name(went.hit), went.stopped * 1000)
+        return step.fail(Failure.BLOCKED_PATH, blocked)
+    step.passed(checks.path_check(went.clear_depth * 1000, moving_name))
+
+    contact = checks.contact_check(max(0.0, scene.gap(request.moving, request.fixed)) * 1000, moving_name, fixed_name)
+    if not contact.passed:
+        return step.fail(Failure.NO_CONTACT, contact)
+    step.passed(contact)
+
+    fit_id = _catalog_fit(obj, request, pair)
+    joint = Joint(number, fit_id, request.moving, pair[0].id, request.fixed, pair[1].id, motion.touches_only)
+    if not motion.touches_only:
+        scene.set_dynamic(request.moving, True)
+        if motion.fastens:
+            scene.weld(request.fixed, request.moving)  # where the part really is, so misalignment shows
+        run.assembled.add(request.moving)
+        run.attached_at[request.moving] = number
+        run.joints.append(joint)  # joined, aligned or not: the mechanism judges the seat later
+    offset, tilt = checks.alignment_check(*seat_error(scene, joint))
+    for alignment in (offset, tilt):
+        if not alignment.passed:
+            short = f"stopped against the {fixed_name} {went.stopped * 1000:.1f} mm before the seat"
+            return step.fail(Failure.MISALIGNED, alignment, short if went.hit else "")
+        step.passed(alignment)
+    if motion.touches_only:
+        run.joints.append(joint)  # the flame touched the tip: lit
+        scene.place(request.moving, run.homes[request.moving])  # and goes back to the table
+        return step.report()
+
+    stability, culprit = _settle(run, checks.STEP_SETTLE_SECONDS)
+    for check in stability:
+        if not check.passed:
+            assert culprit is not None
+            return step.fail(Failure.FALLS, check, f"the {run.name(culprit)} fell")
+        step.passed(check)
+    return step.report()
+
+
+def _specs(obj: AssemblyObject, part_id: str) -> str:
+    """Return a part's connectors in words: 'screw base E27, ...'."""
+    return ", ".join(f"{c.kind} {c.spec}" for c in obj.part(part_id).connectors) or "no connectors"
+
+
+def _layout(
+    obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...]
+) -> tuple[dict[str, Pose], tuple[Vector, Vector]]:
+    """Return where each part starts, and the bounds of the assembly the plan means to build.
+
+    The base stands at the origin; the other parts wait in a row behind where the assembly
+    will be. The designed bounds (every part at its seat, lights included) frame the camera.
+    """
+    base = parts[obj.base]
+    homes = {
+        obj.base: Pose((-(base.lower[0] + base.upper[0]) / 2, -(base.lower[1] + base.upper[1]) / 2, -base.lower[2]))
+    }
+    design = {obj.base: homes[obj.base]}
+    joints: list[Joint] = []
+    for request in requests:
+        pair = _connectors(obj, request, joints)
+        if pair is None or request.fixed not in design or request.moving in design:
+            continue
+        if MOTIONS[request.action].touches_only:
+            continue
+        relative = mating_pose(parts[request.moving].frames[pair[0].id], parts[request.fixed].frames[pair[1].id])
+        design[request.moving] = design[request.fixed] * relative
+        joints.append(Joint(0, None, request.moving, pair[0].id, request.fixed, pair[1].id))
+    boxes = [(pose, bounds(parts[part].shapes + parts[part].light)) for part, pose in design.items()]
+    corners = [
+        pose.apply((x, y, z))
+        for pose, (low, high) in boxes
+        for x in (low[0], high[0])
+        for y in (low[1], high[1])
+        for z in (low[2], high[2])
+    ]
+    lower = (min(c[0] for c in corners), min(c[1] for c in corners), min(c[2] for c in corners))
+    upper = (max(c[0] for c in corners), max(c[1] for c in corners), max(c[2] for c in corners))
+    waiting = [part for part in parts if part != obj.base]
+    widths = [parts[part].upper[0] - parts[part].lower[0] for part in waiting]
+    left = -(sum(widths) + ROW_GAP * (len(waiting) - 1)) / 2
+    for part, width in zip(waiting, widths, strict=True):
+        solid = parts[part]
+        row = upper[1] + ROW_GAP - solid.lower[1]
+        homes[part] = Pose((left - solid.lower[0], row, -solid.lower[2]))
+        left += width + ROW_GAP
+    return homes, (lower, upper)
+
+
+def simulate_plan(
+    target: PlanningTask | AssemblyObject,
+    steps: Sequence[StepRequest | PlanStep],
+    *,
+    render: RenderMode = RenderMode.FINAL,
+    arm: bool = False,
+    size: tuple[int, int] = DEFAULT_SIZE,
+) -> SimulationReport:
+    """Return the report of running ``steps`` on the target's object in a fresh headless PyBullet world.
+
+    Raises PlanInputError when a step does not belong to the object, SimulatorUnavailableError
+    when PyBullet cannot start. ``render`` picks the pictures (none, the final assembly, or a
+    frame per step too); ``arm`` adds the Panda's reachability per step.
+    """
+    obj = target.obj if isinstance(target, PlanningTask) else target
+    requests = check_steps(steps, obj)
+    timing: dict[str, float] = {}
+    clock = time.perf_counter()
+    parts = solids(obj)
+    homes, design = _layout(obj, parts, requests)
+    frames: list[Picture] = []
+    with Scene(parts, drawn=render is not RenderMode.NONE) as scene:
+        for part, pose in homes.items():
+            scene.add_part(part, pose, dynamic=part == obj.base)
+        run = _Run(obj, scene, homes, {obj.base}, arm=Arm(scene) if arm else None)
+        camera = Camera.around(scene, *design, size=size) if render is not RenderMode.NONE else None
+        timing["scene"], clock = time.perf_counter() - clock, time.perf_counter()
+        if camera is not None and render is RenderMode.FRAMES:
+            frames.append(draw(scene, camera, (), f"{obj.name}: the parts"))
+        reports: list[StepReport] = []
+        for number, request in enumerate(requests, start=1):
+            if reports and reports[-1].status is not StepStatus.PASSED:
+                reports.append(_StepChecks(run, number, request).report(not_run=True))
+                continue
+            reports.append(_step(run, number, request))
+            if camera is not None and render is RenderMode.FRAMES:
+                lit = _lit_parts(run)
+                caption = f"{number}/{len(requests)} {reports[-1].text} {reports[-1].status.value}"
+                frames.append(draw(scene, camera, lit, caption))
+        timing["steps"], clock = time.perf_counter() - clock, time.perf_counter()
+        if run.arm is not None:
+            run.arm.go_home()
+        stability, culprit = _settle(run, checks.FINAL_SETTLE_SECONDS)
+        timing["settle"], clock = time.perf_counter() - clock, time.perf_counter()
+        requirements = evaluate(obj, scene, run.joints)
+        produces_goal = all(requirement.met for requirement in requirements)
+        timing["mechanism"], clock = time.perf_counter() - clock, time.perf_counter()
+        picture = None
+        if camera is not None:
+            verdict = f"produces {obj.goal}" if produces_goal else f"no {obj.goal}"
+            picture = draw(scene, camera, _lit_parts(run) if produces_goal else (), f"{obj.name}: {verdict}")
+            if render is RenderMode.FRAMES:
+                frames.append(picture)
+            timing["render"] = time.perf_counter() - clock
+    return SimulationReport(
+        object_id=obj.id,
+        object_name=obj.name,
+        goal=obj.goal,
+        steps=tuple(reports),
+        stability=stability,
+        unstable_step=run.attached_at.get(culprit) if culprit else None,
+        requirements=requirements,
+        produces_goal=produces_goal,
+        tolerances=dict(checks.TOLERANCES),
+        arm=arm,
+        timing=timing,
+        picture=picture,
+        frames=tuple(frames),
+    )
+
+
+def _lit_parts(run: _Run) -> tuple[str, ...]:
+    """Return the assembled parts whose light shows: all of them, when the true mechanism holds now."""
+    if not all(requirement.met for requirement in evaluate(run.obj, run.scene, run.joints)):
+        return ()
+    return tuple(sorted(run.assembled))

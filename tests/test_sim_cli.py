@@ -1,0 +1,133 @@
+"""``causalplan simulate``: plans (or reads a plan), runs it in physics, prints and draws what happened."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from click.testing import Result
+from typer.testing import CliRunner
+
+from causalplan.cli import app
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLES = ROOT / "examples"
+DESK_LAMP = EXAMPLES / "paper" / "desk_lamp.yaml"
+FLASHLIGHT_MAPPING = EXAMPLES / "paper" / "flashlight_mapping.yaml"
+FAILED_DESK_LAMP = EXAMPLES / "paper" / "failed_desk_lamp.yaml"
+FAILED_FLASHLIGHT_MAPPING = EXAMPLES / "paper" / "failed_flashlight_mapping.yaml"
+PLANS = EXAMPLES / "plans"
+
+runner = CliRunner(env={"FORCE_COLOR": None, "NO_COLOR": "1", "COLUMNS": "200"})
+
+
+def run(*args: object) -> Result:
+    result = runner.invoke(app, [str(arg) for arg in args])
+    assert "Traceback" not in result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+    return result
+
+
+def run_json(*args: object) -> tuple[int, dict[str, Any]]:
+    result = run(*args, "--json")
+    return result.exit_code, json.loads(result.stdout)
+
+
+def test_without_a_plan_it_plans_first_then_simulates() -> None:
+    result = run("simulate", DESK_LAMP)
+    assert result.exit_code == 0
+    assert "1. Screw the light bulb into the base with cables. passed" in result.stdout
+    assert "Produces light: yes" in result.stdout
+
+
+def test_a_mapping_simulates_the_other_object_as_json() -> None:
+    code, data = run_json("simulate", DESK_LAMP, "--mapping", FLASHLIGHT_MAPPING)
+    assert code == 0
+    assert data["object"] == "flashlight" and data["passed"] and data["files"] == []
+    assert [step["fit"] for step in data["steps"]] == ["batteries_into_bay", "head_onto_case"]
+
+
+def test_a_plan_file_from_the_examples_runs_and_draws(tmp_path: Path) -> None:
+    png = tmp_path / "lamp.png"
+    result = run("simulate", DESK_LAMP, "--plan", PLANS / "desk_lamp_with_shade.json", "--png", png)
+    assert result.exit_code == 0
+    assert "2. Clip the shade onto the base with cables. passed" in result.stdout
+    assert png.read_bytes().startswith(b"\x89PNG\r\n\x1a\n")
+    assert f"Wrote {png}" in result.stdout
+
+
+def test_a_known_bad_plan_fails_with_exit_1_and_says_where() -> None:
+    result = run("simulate", DESK_LAMP, "--plan", PLANS / "desk_lamp_shade_first.json")
+    assert result.exit_code == 1
+    assert "2. Screw the light bulb into the base with cables. FAILED[blocked_path]: " in result.stdout
+    assert "blocked by the shade" in result.stdout
+    assert "Produces light: no" in result.stdout
+
+
+def test_the_flashlight_example_plan_screws_the_head_on_too_early() -> None:
+    code, data = run_json(
+        "simulate", DESK_LAMP, "--mapping", FLASHLIGHT_MAPPING, "--plan", PLANS / "flashlight_head_first.json"
+    )
+    assert code == 1
+    assert (data["steps"][1]["status"], data["steps"][1]["failure"]) == ("failed", "blocked_path")
+
+
+def test_the_output_of_plan_json_is_a_plan_file(tmp_path: Path) -> None:
+    planned = run("plan", DESK_LAMP, "--mapping", FLASHLIGHT_MAPPING, "--json")
+    assert planned.exit_code == 0
+    plan_file = tmp_path / "plan.json"
+    plan_file.write_text(planned.stdout, encoding="utf-8")
+    code, data = run_json("simulate", DESK_LAMP, "--mapping", FLASHLIGHT_MAPPING, "--plan", plan_file)
+    assert code == 0 and data["produces_goal"]
+
+
+def test_frames_and_a_gif(tmp_path: Path) -> None:
+    frames, gif = tmp_path / "frames", tmp_path / "steps.gif"
+    result = run("simulate", DESK_LAMP, "--frames", frames, "--gif", gif)
+    assert result.exit_code == 0
+    assert sorted(path.name for path in frames.iterdir()) == ["step_00.png", "step_01.png", "step_02.png", "strip.png"]
+    assert gif.read_bytes()[:6] == b"GIF89a"
+
+
+def test_the_arm_reports_reach_per_step() -> None:
+    code, data = run_json("simulate", DESK_LAMP, "--arm")
+    assert code == 0 and data["arm"]
+    assert data["steps"][0]["reach"]["reachable"] is True
+
+
+def test_a_plan_with_an_unknown_fit_is_invalid_input(tmp_path: Path) -> None:
+    plan_file = tmp_path / "plan.json"
+    plan_file.write_text(json.dumps([{"action": "screw", "args": ["light_bulb", "shade"], "fit": "glue"}]))
+    result = run("simulate", DESK_LAMP, "--plan", plan_file)
+    assert result.exit_code == 2
+    assert "invalid_plan" in result.stderr and "unknown fit 'glue'" in result.stderr
+
+
+def test_a_plan_with_wrong_args_is_invalid_input(tmp_path: Path) -> None:
+    plan_file = tmp_path / "plan.json"
+    plan_file.write_text(json.dumps([{"action": "screw", "args": ["light_bulb"], "fit": "bulb_into_socket"}]))
+    result = run("simulate", DESK_LAMP, "--plan", plan_file)
+    assert result.exit_code == 2
+    assert "'args' must be two part ids" in result.stderr
+
+
+def test_a_plan_file_that_is_not_json_or_missing_is_invalid_input(tmp_path: Path) -> None:
+    plan_file = tmp_path / "plan.json"
+    plan_file.write_text("steps: [screw]")
+    not_json = run("simulate", DESK_LAMP, "--plan", plan_file)
+    assert not_json.exit_code == 2 and "is not JSON" in not_json.stderr
+    missing = run("simulate", DESK_LAMP, "--plan", tmp_path / "nothing.json")
+    assert missing.exit_code == 2 and "Cannot read the plan file" in missing.stderr
+
+
+def test_no_plan_means_nothing_to_simulate() -> None:
+    code, data = run_json("simulate", FAILED_DESK_LAMP, "--mapping", FAILED_FLASHLIGHT_MAPPING)
+    assert code == 1
+    assert data["status"] == "unsolvable" and data["simulation"] is None
+
+
+def test_an_unwritable_picture_is_a_clear_error(tmp_path: Path) -> None:
+    result = run("simulate", DESK_LAMP, "--png", tmp_path / "no_such_folder" / "lamp.png")
+    assert result.exit_code == 2
+    assert "output_not_writable" in result.stderr
