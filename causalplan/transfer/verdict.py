@@ -177,7 +177,7 @@ def evaluate_transfer(
     model: CausalModel,
     mapping: Labelling,
     catalog: Catalog,
-    planner: str = "fd",
+    planner: str = "auto",
     time_limit: float = DEFAULT_TIME_LIMIT,
     simulate: bool = True,
 ) -> TransferVerdict:
