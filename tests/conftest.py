@@ -13,6 +13,8 @@ from causalplan.objects.catalog import Catalog, load_catalog
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
 
+pytest_plugins = ["tests.service_fixtures"]  # the HTTP service's apps, databases and PostgreSQL server
+
 
 @pytest.fixture(scope="session")
 def catalog() -> Catalog:

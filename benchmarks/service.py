@@ -1,0 +1,239 @@
+"""Time POST /v1/plans on a real server (1 and 8 concurrent clients) against the in-process solve.
+
+    python benchmarks/service.py [--requests N] [--workers W] [--planner fd] [--quick]
+
+Starts ``causalplan serve`` on a free loopback port (a temporary SQLite database), then sends
+bounded loops of requests with httpx: each "new" request is a model the server has not seen
+(its intermediate effect renamed), so it is planned; "cached" requests repeat one model. The
+reference is ``plan_task`` on the same desk-lamp task, in a freshly spawned process as the CLI
+runs it, measured in the same run. Ratios are service / in-process. Results also go to
+``benchmarks/results/service.json``. See benchmarks/README.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import os
+import platform
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import uuid
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from dataclasses import asdict, dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "benchmarks" / "results" / "service.json"
+MODEL: dict[str, Any] = {
+    "object": "desk_lamp",
+    "goal": "light",
+    "functions": {
+        "base_with_cables": ["provide electricity"],
+        "light_bulb": ["turn electricity into light", "close the circuit"],
+    },
+    "rules": [
+        "provide electricity AND close the circuit CAUSES electricity flows",
+        "electricity flows AND turn electricity into light CAUSES light",
+    ],
+}
+CLIENT_COUNTS = (1, 8)
+START_SECONDS = 60.0
+MAX_SECONDS_PER_SCENARIO = 120.0
+
+
+@dataclass
+class Scenario:
+    """The latencies of one scenario, and what came back."""
+
+    name: str
+    clients: int
+    seconds: list[float]
+    wall: float
+    statuses: dict[str, int]
+
+    @property
+    def p50(self) -> float:
+        return statistics.median(self.seconds)
+
+    @property
+    def p95(self) -> float:
+        ordered = sorted(self.seconds)
+        return ordered[min(len(ordered) - 1, round(0.95 * (len(ordered) - 1)))]
+
+    @property
+    def throughput(self) -> float:
+        return len(self.seconds) / self.wall
+
+
+def unique_model() -> dict[str, Any]:
+    """Return the desk-lamp model with its intermediate effect renamed: a request the cache has not seen."""
+    effect = f"electricity flows {uuid.uuid4().hex[:10]}"
+    return {**MODEL, "rules": [rule.replace("electricity flows", effect) for rule in MODEL["rules"]]}
+
+
+def in_process_latencies(requests: int, planner: str) -> tuple[list[float], float]:
+    """Solve the desk-lamp task ``requests`` times with ``plan_task`` (after a warm-up); return times and wall."""
+    from causalplan.causal.documents import SourceMap
+    from causalplan.inputs import model_from_data
+    from causalplan.objects.catalog import load_catalog
+    from causalplan.pddl.task import build_task
+    from causalplan.planners.pipeline import plan_task
+
+    catalog = load_catalog()
+    loaded = model_from_data(MODEL, SourceMap(), catalog)
+    assert loaded.model is not None and loaded.is_valid
+    task = build_task(loaded.model, catalog.get("desk_lamp"))
+    assert plan_task(task, planner).has_plan  # warm-up
+    seconds = []
+    started = time.perf_counter()
+    for _ in range(requests):
+        solve_started = time.perf_counter()
+        result = plan_task(task, planner)
+        seconds.append(time.perf_counter() - solve_started)
+        assert result.has_plan, result.message
+    return seconds, time.perf_counter() - started
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port: int = probe.getsockname()[1]
+        return port
+
+
+def start_server(folder: Path, workers: int) -> tuple[subprocess.Popen[bytes], str]:
+    """Start ``causalplan serve`` on loopback; return it and its base URL once /health answers."""
+    port = free_port()
+    environment = {**os.environ, "CAUSALPLAN_QUEUE_SIZE": "64", "CAUSALPLAN_CACHE_SIZE": "4096"}
+    command = [sys.executable, "-m", "causalplan.cli", "serve", "--host", "127.0.0.1", "--port", str(port)]
+    command += ["--workers", str(workers), "--database-url", f"sqlite:///{folder / 'bench.sqlite3'}"]
+    server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=environment)
+    base = f"http://127.0.0.1:{port}"
+    deadline = time.monotonic() + START_SECONDS
+    while time.monotonic() < deadline:
+        if server.poll() is not None:
+            sys.exit(f"the server stopped: {server.stderr.read().decode() if server.stderr else ''}")
+        try:
+            if httpx.get(f"{base}/health", timeout=30).status_code == 200:
+                return server, base
+        except httpx.TransportError:
+            time.sleep(0.1)
+    server.kill()
+    sys.exit(f"the server did not answer within {START_SECONDS:g} s")
+
+
+def run_clients(base: str, name: str, clients: int, requests: int, planner: str, cached: bool) -> Scenario:
+    """Send ``requests`` POST /v1/plans from ``clients`` threads (each its own connection)."""
+    fixed = unique_model()
+    lock = threading.Lock()
+    seconds: list[float] = []
+    statuses: dict[str, int] = {}
+    deadline = time.monotonic() + MAX_SECONDS_PER_SCENARIO
+
+    def client_loop(count: int) -> None:
+        with httpx.Client(base_url=base, timeout=120) as client:
+            for _ in range(count):
+                if time.monotonic() > deadline:
+                    return
+                body = {"model": fixed if cached else unique_model(), "planner": planner}
+                started = time.perf_counter()
+                response = client.post("/v1/plans", json=body)
+                elapsed = time.perf_counter() - started
+                data = response.json()
+                outcome = data.get("status") if response.status_code == 200 else f"http {response.status_code}"
+                with lock:
+                    seconds.append(elapsed)
+                    statuses[str(outcome)] = statuses.get(str(outcome), 0) + 1
+
+    if cached:  # the first answer fills the cache
+        httpx.post(f"{base}/v1/plans", json={"model": fixed, "planner": planner}, timeout=120)
+    shares = [requests // clients + (1 if index < requests % clients else 0) for index in range(clients)]
+    started = time.perf_counter()
+    with ThreadPoolExecutor(clients) as pool:
+        list(pool.map(client_loop, shares))
+    return Scenario(name, clients, seconds, time.perf_counter() - started, statuses)
+
+
+def milliseconds(value: float) -> str:
+    return f"{value * 1000:.1f} ms"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--requests", type=int, default=60, help="requests per scenario (default 60)")
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 2, help="planner workers (default: cores)")
+    parser.add_argument("--planner", default="fd", help="planner on both sides (default fd)")
+    parser.add_argument("--quick", action="store_true", help="smoke run: 16 requests per scenario")
+    args = parser.parse_args()
+    requests = 16 if args.quick else max(8, args.requests)
+
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as reference_process:
+        reference_seconds, reference_wall = reference_process.submit(
+            in_process_latencies, requests, args.planner
+        ).result()
+    reference = Scenario("in-process plan_task", 1, reference_seconds, reference_wall, {"solved": requests})
+
+    scenarios: list[Scenario] = []
+    with tempfile.TemporaryDirectory(prefix="causalplan-bench-") as folder:
+        server, base = start_server(Path(folder), args.workers)
+        try:
+            for _ in range(2 * args.workers):  # warm-up: every worker has planned once
+                httpx.post(f"{base}/v1/plans", json={"model": unique_model(), "planner": args.planner}, timeout=120)
+            for cached in (False, True):
+                for clients in CLIENT_COUNTS:
+                    name = "POST /v1/plans, " + ("cached" if cached else "new model")
+                    scenarios.append(run_clients(base, name, clients, requests, args.planner, cached))
+        finally:
+            server.send_signal(signal.SIGINT)
+            server.wait(30)
+
+    header = (
+        f"{'scenario':<32} {'clients':>7} {'requests':>8} {'p50':>10} {'p95':>10} {'req/s':>8} "
+        f"{'p50 ratio':>9} {'req/s ratio':>11}  outcomes"
+    )
+    print(
+        f"causalplan service benchmark: planner {args.planner}, {args.workers} worker(s), "
+        f"{os.cpu_count()} core(s), Python {platform.python_version()}"
+    )
+    print(header)
+    print("-" * len(header))
+    for scenario in [reference, *scenarios]:
+        print(
+            f"{scenario.name:<32} {scenario.clients:>7} {len(scenario.seconds):>8} {milliseconds(scenario.p50):>10} "
+            f"{milliseconds(scenario.p95):>10} {scenario.throughput:>8.1f} "
+            f"{scenario.p50 / reference.p50:>8.2f}x {scenario.throughput / reference.throughput:>10.2f}x  "
+            + ", ".join(f"{count} {status}" for status, count in sorted(scenario.statuses.items()))
+        )
+    print("ratios: service / in-process (p50 latency: lower is better; req/s: higher is better)")
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    RESULTS.write_text(
+        json.dumps(
+            {
+                "when": datetime.now(UTC).isoformat(),
+                "planner": args.planner,
+                "workers": args.workers,
+                "cores": os.cpu_count(),
+                "scenarios": [
+                    {**asdict(s), "p50_s": s.p50, "p95_s": s.p95, "requests_per_s": s.throughput}
+                    for s in [reference, *scenarios]
+                ],
+            },
+            indent=2,
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,143 @@
+"""Reading and writing the stored records; database failures become ``StorageError``.
+
+Every write is one transaction: a trial and the inline model it was run with are stored
+together or not at all.
+"""
+
+from __future__ import annotations
+
+import uuid
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Any
+
+from sqlalchemy import func, select
+from sqlalchemy.exc import SQLAlchemyError
+from sqlalchemy.orm import Session
+
+from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH, ModelRecord, TrialRecord
+from causalplan.service.errors import ModelNotFoundError, StorageError
+from causalplan.service.limits import clean_json, clean_text
+
+_SHORT_TEXT = 200
+
+
+@dataclass(frozen=True)
+class ClientIds:
+    """Who sent a request, as the client says (``X-Participant-Id``, ``X-Session-Id``)."""
+
+    participant_id: str | None = None
+    session_id: str | None = None
+
+
+@contextmanager
+def storage_errors(session: Session) -> Iterator[None]:
+    """Turn database failures into StorageError, rolling back whatever was begun."""
+    try:
+        yield
+    except SQLAlchemyError as exc:
+        session.rollback()
+        reason = str(getattr(exc, "orig", None) or exc).strip().splitlines()[0]
+        raise StorageError(
+            f"The database could not be used ({exc.__class__.__name__}: {reason}); nothing was stored.",
+            details={"operation": "storage"},
+        ) from None
+
+
+def _short(text: str | None, length: int = _SHORT_TEXT) -> str | None:
+    return None if text is None else clean_text(text)[:length]
+
+
+def new_model_record(
+    document: dict[str, Any],
+    object_id: str,
+    is_valid: bool,
+    report: dict[str, Any],
+    canonical_hash: str | None,
+    client: ClientIds,
+) -> ModelRecord:
+    """Return an unsaved record of a submitted model."""
+    return ModelRecord(
+        id=uuid.uuid4(),
+        participant_id=_short(client.participant_id, MAX_CLIENT_ID_LENGTH),
+        session_id=_short(client.session_id, MAX_CLIENT_ID_LENGTH),
+        object_id=_short(object_id) or "",
+        is_valid=is_valid,
+        canonical_hash=canonical_hash,
+        document=clean_json(document),
+        report=clean_json(report),
+    )
+
+
+def new_trial_record(
+    model_id: uuid.UUID,
+    mapping: dict[str, Any],
+    planner: str,
+    verdict: dict[str, Any],
+    cached: bool,
+    seconds: float,
+    client: ClientIds,
+) -> TrialRecord:
+    """Return an unsaved record of a transfer trial (``verdict`` is ``TransferVerdict.as_dict()``)."""
+    return TrialRecord(
+        id=uuid.uuid4(),
+        participant_id=_short(client.participant_id, MAX_CLIENT_ID_LENGTH),
+        session_id=_short(client.session_id, MAX_CLIENT_ID_LENGTH),
+        model_id=model_id,
+        mapping=clean_json(mapping),
+        training_object=_short(verdict.get("training_object")),
+        test_object=_short(verdict.get("test_object")),
+        planner=_short(planner, 64) or "",
+        verdict=str(verdict["verdict"]),
+        generalization=verdict.get("generalization"),
+        decided_by=str(verdict["decided_by"]),
+        cached=cached,
+        seconds=seconds,
+        result=clean_json(verdict),
+    )
+
+
+def save(session: Session, records: Sequence[ModelRecord | TrialRecord]) -> None:
+    """Store ``records`` in one transaction (all or none)."""
+    with storage_errors(session):
+        session.add_all(records)
+        session.commit()
+
+
+def get_model(session: Session, model_id: uuid.UUID) -> ModelRecord:
+    """Return the stored model with this id; ModelNotFoundError when there is none."""
+    with storage_errors(session):
+        record = session.get(ModelRecord, model_id)
+    if record is None:
+        raise ModelNotFoundError(f"There is no stored model with id {model_id}.", details={"model_id": str(model_id)})
+    return record
+
+
+def list_trials(
+    session: Session,
+    offset: int,
+    limit: int,
+    participant_id: str | None = None,
+    session_id: str | None = None,
+) -> tuple[list[TrialRecord], int]:
+    """Return a page of trials (newest first) and how many match the filters in all."""
+    query = select(TrialRecord)
+    if participant_id is not None:
+        query = query.where(TrialRecord.participant_id == participant_id)
+    if session_id is not None:
+        query = query.where(TrialRecord.session_id == session_id)
+    with storage_errors(session):
+        count = session.scalar(select(func.count()).select_from(query.subquery())) or 0
+        page = session.scalars(
+            query.order_by(TrialRecord.created_at.desc(), TrialRecord.id).offset(offset).limit(limit)
+        ).all()
+    return list(page), count
+
+
+def all_records(session: Session) -> tuple[list[ModelRecord], list[TrialRecord]]:
+    """Return every stored model and trial, oldest first."""
+    with storage_errors(session):
+        models = session.scalars(select(ModelRecord).order_by(ModelRecord.created_at, ModelRecord.id)).all()
+        trials = session.scalars(select(TrialRecord).order_by(TrialRecord.created_at, TrialRecord.id)).all()
+    return list(models), list(trials)

@@ -1,0 +1,1 @@
+"""Storage: SQLAlchemy 2 records, the engine, and the Alembic migrations."""

@@ -1,0 +1,97 @@
+"""Dependencies of the routes, as ``Annotated`` aliases (``SessionDep``, ``SettingsDep``, ...)."""
+
+from __future__ import annotations
+
+import secrets
+import threading
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import Annotated
+
+from fastapi import Depends, Header, Request
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+from sqlalchemy import Engine
+from sqlalchemy.orm import Session
+
+from causalplan.objects.catalog import Catalog
+from causalplan.service.cache import ResultCache
+from causalplan.service.crud import ClientIds
+from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH
+from causalplan.service.errors import NotAuthenticatedError, ResearchDisabledError
+from causalplan.service.planning import PlannerPool
+from causalplan.service.settings import Settings
+
+
+@dataclass
+class Services:
+    """What the app holds while it runs: set up on start-up, closed on shutdown."""
+
+    settings: Settings
+    catalog: Catalog
+    engine: Engine
+    pool: PlannerPool
+    cache: ResultCache
+    revision: str
+    probe: dict[str, object] | None = None
+    probe_done: threading.Event = field(default_factory=threading.Event)
+
+
+def get_services(request: Request) -> Services:
+    services: Services = request.app.state.services
+    return services
+
+
+ServicesDep = Annotated[Services, Depends(get_services)]
+
+
+def get_settings(services: ServicesDep) -> Settings:
+    return services.settings
+
+
+def get_catalog(services: ServicesDep) -> Catalog:
+    return services.catalog
+
+
+def get_session(services: ServicesDep) -> Iterator[Session]:
+    with Session(services.engine, expire_on_commit=False) as session:
+        yield session
+
+
+SettingsDep = Annotated[Settings, Depends(get_settings)]
+CatalogDep = Annotated[Catalog, Depends(get_catalog)]
+SessionDep = Annotated[Session, Depends(get_session)]
+
+
+def get_client_ids(
+    x_participant_id: Annotated[
+        str | None,
+        Header(max_length=MAX_CLIENT_ID_LENGTH, description="Who submits (a study participant); stored as given."),
+    ] = None,
+    x_session_id: Annotated[
+        str | None, Header(max_length=MAX_CLIENT_ID_LENGTH, description="The client's session; stored as given.")
+    ] = None,
+) -> ClientIds:
+    return ClientIds(x_participant_id or None, x_session_id or None)
+
+
+ClientIdsDep = Annotated[ClientIds, Depends(get_client_ids)]
+
+_bearer = HTTPBearer(auto_error=False, description="The research token (CAUSALPLAN_RESEARCH_TOKEN).")
+
+
+def require_research_token(
+    settings: SettingsDep, credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)]
+) -> None:
+    """Let the request through only with ``Authorization: Bearer <research token>``."""
+    if settings.research_token is None:
+        raise ResearchDisabledError(
+            "The research endpoints are disabled: start the service with CAUSALPLAN_RESEARCH_TOKEN set."
+        )
+    if credentials is None:
+        raise NotAuthenticatedError("This endpoint needs 'Authorization: Bearer <research token>'.")
+    expected = settings.research_token.get_secret_value().encode()
+    if not secrets.compare_digest(credentials.credentials.encode(), expected):
+        raise NotAuthenticatedError("The bearer token is not the research token.")
+
+
+ResearchAccessDep = Annotated[None, Depends(require_research_token)]

@@ -1,0 +1,182 @@
+"""The service's errors: children of ``CausalPlanError``, each with its HTTP status.
+
+Routes raise these (or let lower packages' errors through); ``http_status`` and the one
+handler in ``main`` turn every one of them into ``{"error": {"code", "message", "details"}}``.
+"""
+
+from __future__ import annotations
+
+from causalplan.errors import CatalogError, CausalPlanError, InputFileError, PlannerUnavailableError, UnknownObjectError
+from causalplan.planners.pipeline import UnknownPlannerError
+
+
+class ServiceError(CausalPlanError):
+    """An error of the HTTP service; ``status_code`` is its HTTP status, ``headers`` go with it."""
+
+    code = "service_error"
+    status_code = 500
+
+    def __init__(
+        self, message: str, *, details: dict[str, object] | None = None, headers: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(message, details=details)
+        self.headers = headers or {}
+
+
+class InvalidRequestError(ServiceError):
+    """The request is malformed: not JSON, wrong field types, or fields that contradict each other."""
+
+    code = "invalid_request"
+    status_code = 422
+
+
+class InvalidModelError(ServiceError):
+    """The causal model did not validate; ``details`` holds the report with the CLI's codes."""
+
+    code = "invalid_model"
+    status_code = 422
+
+
+class InvalidMappingError(ServiceError):
+    """The step-3 mapping did not validate; ``details`` holds the report with the CLI's codes."""
+
+    code = "invalid_mapping"
+    status_code = 422
+
+
+class LimitExceededError(ServiceError):
+    """A request is over one of the service's limits (parts, rules, label length, time limit)."""
+
+    code = "limit_exceeded"
+    status_code = 422
+
+    def __init__(self, code: str, message: str, *, details: dict[str, object] | None = None) -> None:
+        super().__init__(message, details=details)
+        self.code = code
+
+
+class BodyTooLargeError(ServiceError):
+    """The request body is larger than ``max_body_bytes``."""
+
+    code = "body_too_large"
+    status_code = 413
+
+
+class NotFoundError(ServiceError):
+    """A stored record or a route does not exist."""
+
+    code = "not_found"
+    status_code = 404
+
+
+class ModelNotFoundError(NotFoundError):
+    """No stored model has this id."""
+
+    code = "model_not_found"
+
+
+class NotAuthenticatedError(ServiceError):
+    """A research endpoint was called without the right bearer token."""
+
+    code = "not_authenticated"
+    status_code = 401
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message, headers={"WWW-Authenticate": "Bearer"})
+
+
+class ResearchDisabledError(ServiceError):
+    """The research endpoints are off because no token is configured."""
+
+    code = "research_disabled"
+    status_code = 403
+
+
+class QueueFullError(ServiceError):
+    """Every planner worker is busy and the queue is full; ``Retry-After`` says when to try again."""
+
+    code = "queue_full"
+    status_code = 429
+
+    def __init__(self, message: str, retry_after: int) -> None:
+        super().__init__(message, details={"retry_after": retry_after}, headers={"Retry-After": str(retry_after)})
+
+
+class PlanningTimeoutError(ServiceError):
+    """A worker was still busy well after the solve's time limit, so it was killed."""
+
+    code = "planning_timeout"
+    status_code = 504
+
+
+class WorkerCrashedError(ServiceError):
+    """The worker running this solve died (killed, out of memory, or crashed); it has been replaced."""
+
+    code = "planner_crashed"
+    status_code = 503
+
+    def __init__(self, message: str, *, details: dict[str, object] | None = None) -> None:
+        super().__init__(message, details=details, headers={"Retry-After": "1"})
+
+
+class PlannerOutOfMemoryError(ServiceError):
+    """The planner worker itself ran out of memory (its limit is ``worker_memory_mb``)."""
+
+    code = "planner_out_of_memory"
+    status_code = 503
+
+
+class StorageError(ServiceError):
+    """The database could not be read or written; nothing of the request was stored."""
+
+    code = "storage_unavailable"
+    status_code = 503
+
+
+class MethodNotAllowedError(ServiceError):
+    """The route exists, but not for this HTTP method."""
+
+    code = "method_not_allowed"
+    status_code = 405
+
+
+class InternalError(ServiceError):
+    """A bug: something failed that should not; the log has the traceback, the client does not."""
+
+    code = "internal_error"
+    status_code = 500
+
+
+_LOWER_STATUS: dict[type[CausalPlanError], int] = {
+    UnknownObjectError: 404,
+    UnknownPlannerError: 422,
+    InputFileError: 422,
+    PlannerUnavailableError: 503,
+    CatalogError: 500,
+}
+
+
+def http_status(exc: CausalPlanError) -> int:
+    """Return the HTTP status of any causalplan error (500 for ones no table knows)."""
+    if isinstance(exc, ServiceError):
+        return exc.status_code
+    for cls in type(exc).__mro__:
+        if cls in _LOWER_STATUS:
+            return _LOWER_STATUS[cls]
+    return 500
+
+
+def error_body(code: str, message: str, details: dict[str, object] | None = None) -> dict[str, object]:
+    """Return the one error shape: ``{"error": {"code", "message", "details"}}``."""
+    return {"error": {"code": code, "message": message, "details": details or {}}}
+
+
+def error_class(code: str) -> type[CausalPlanError]:
+    """Return the ``CausalPlanError`` subclass with this ``code`` (the root when none has it)."""
+    pending: list[type[CausalPlanError]] = [CausalPlanError]
+    while pending:
+        cls = pending.pop()
+        if cls.code == code:
+            return cls
+        pending.extend(cls.__subclasses__())
+    return CausalPlanError

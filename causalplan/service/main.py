@@ -1,0 +1,261 @@
+"""The app factory: routes, the one error handler, the body limit, and start-up/shutdown.
+
+``create_app(settings)`` returns the ASGI app; ``serve`` runs it with uvicorn (what
+``causalplan serve`` calls). Another ASGI server can use ``causalplan.service.main:create_app``
+as a factory, with the settings from the environment.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import AsyncIterator, Awaitable, Callable, MutableMapping
+from contextlib import asynccontextmanager
+from typing import Any
+
+import anyio.to_thread
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+import causalplan
+from causalplan.errors import CausalPlanError
+from causalplan.objects.catalog import load_catalog
+from causalplan.service.cache import ResultCache
+from causalplan.service.db.migrate import upgrade
+from causalplan.service.db.session import create_database_engine
+from causalplan.service.deps import Services
+from causalplan.service.errors import BodyTooLargeError, error_body, http_status
+from causalplan.service.planning import PlannerPool
+from causalplan.service.responses import SafeJSONResponse
+from causalplan.service.routes import health, models, objects, plans, research, transfers
+from causalplan.service.schemas import error_responses
+from causalplan.service.settings import Settings
+from causalplan.service.worker import probe_job
+
+logger = logging.getLogger(__name__)
+
+Scope = MutableMapping[str, Any]
+Message = MutableMapping[str, Any]
+Receive = Callable[[], Awaitable[Message]]
+Send = Callable[[Message], Awaitable[None]]
+ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
+
+PROBE_TIMEOUT_SECONDS = 60.0
+_HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 413: "body_too_large"}
+
+
+def start_services(settings: Settings) -> Services:
+    """Prepare the database (migrations), load the catalog and start the planner pool."""
+    catalog = load_catalog(settings.catalog_folders)
+    engine = create_database_engine(settings.database_url)
+    try:
+        revision = upgrade(engine)
+        pool = PlannerPool(
+            settings.planning_workers, settings.queue_size, settings.worker_memory_mb, settings.queue_wait_seconds
+        )
+        pool.start()
+    except BaseException:
+        engine.dispose()
+        raise
+    services = Services(settings, catalog, engine, pool, ResultCache(settings.cache_size), revision)
+    threading.Thread(target=_probe, args=(services,), name="causalplan-probe", daemon=True).start()
+    return services
+
+
+def check_startup(settings: Settings) -> str:
+    """Load the catalog and migrate the database, so start-up problems show as plain errors.
+
+    Returns the database URL with any password hidden.
+    """
+    load_catalog(settings.catalog_folders)
+    engine = create_database_engine(settings.database_url)
+    try:
+        upgrade(engine)
+        return engine.url.render_as_string()
+    finally:
+        engine.dispose()
+
+
+_probe_lock = threading.Lock()
+_probe_result: dict[str, object] | None = None
+
+
+def _probe(services: Services) -> None:
+    # Imports every optional backend, which slows a process's later forks: so it runs in a
+    # process of its own, once per server process (what a worker can import does not change).
+    global _probe_result
+    try:
+        with _probe_lock:
+            if _probe_result is None:
+                _probe_result = services.pool.run_isolated(probe_job, (), PROBE_TIMEOUT_SECONDS)
+            services.probe = _probe_result
+    except Exception:
+        logger.exception("the planner probe failed")
+    finally:
+        services.probe_done.set()
+
+
+def stop_services(services: Services) -> None:
+    """Stop the workers and close the database connections."""
+    services.pool.close()
+    services.engine.dispose()
+
+
+class BodyLimitMiddleware:
+    """Refuse request bodies over ``max_bytes`` with 413, before any route reads them."""
+
+    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
+        self.app = app
+        self.max_bytes = max_bytes
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        declared = dict(scope["headers"]).get(b"content-length")
+        if declared is not None and declared.isdigit() and int(declared) > self.max_bytes:
+            await self._refuse(scope, receive, send)
+            return
+        chunks: list[bytes] = []
+        size = 0
+        more = True
+        while more:
+            message = await receive()
+            if message["type"] == "http.disconnect":
+                return
+            chunk = message.get("body", b"")
+            size += len(chunk)
+            if size > self.max_bytes:
+                await self._refuse(scope, receive, send)
+                return
+            chunks.append(chunk)
+            more = message.get("more_body", False)
+        body = b"".join(chunks)
+        delivered = False
+
+        async def replay() -> Message:
+            nonlocal delivered
+            if delivered:
+                return await receive()
+            delivered = True
+            return {"type": "http.request", "body": body, "more_body": False}
+
+        await self.app(scope, replay, send)
+
+    async def _refuse(self, scope: Scope, receive: Receive, send: Send) -> None:
+        error = BodyTooLargeError(
+            f"The request body is over the limit of {self.max_bytes} bytes.", details={"limit": self.max_bytes}
+        )
+        response = SafeJSONResponse(error_body(error.code, error.message, error.details), status_code=413)
+        await response(scope, receive, send)
+
+
+def _error_response(
+    code: str,
+    message: str,
+    status: int,
+    details: dict[str, object] | None = None,
+    headers: dict[str, str] | None = None,
+) -> SafeJSONResponse:
+    return SafeJSONResponse(error_body(code, message, details), status_code=status, headers=headers)
+
+
+async def handle_causalplan_error(_: Request, exc: Exception) -> SafeJSONResponse:
+    """The one handler of every causalplan error: its code, message, details and HTTP status."""
+    assert isinstance(exc, CausalPlanError)
+    status = http_status(exc)
+    if status >= 500:
+        logger.warning("%s: %s", exc.code, exc.message)
+    return _error_response(exc.code, exc.message, status, exc.details, getattr(exc, "headers", None))
+
+
+def _location(loc: tuple[Any, ...]) -> str:
+    return " > ".join(str(piece) for piece in loc if piece != "body") or "body"
+
+
+async def handle_validation_error(_: Request, exc: Exception) -> SafeJSONResponse:
+    """Turn FastAPI's request validation errors into the one error shape."""
+    assert isinstance(exc, RequestValidationError)
+    errors = [
+        {
+            "location": _location(tuple(error.get("loc", ()))),
+            "message": str(error.get("msg", "")),
+            "type": error["type"],
+        }
+        for error in exc.errors()
+    ]
+    is_json = any(error["type"] == "json_invalid" for error in errors)
+    summary = "; ".join(f"{error['location']}: {error['message']}" for error in errors[:3])
+    return _error_response(
+        "invalid_json" if is_json else "invalid_request",
+        ("The body is not valid JSON: " if is_json else "The request is invalid: ") + summary,
+        422,
+        {"errors": errors},
+    )
+
+
+async def handle_http_error(_: Request, exc: Exception) -> SafeJSONResponse:
+    """Turn Starlette's HTTP errors (unknown route, wrong method) into the one error shape."""
+    assert isinstance(exc, StarletteHTTPException)
+    if exc.status_code == 400:  # FastAPI's answer to a body it cannot decode (e.g. not UTF-8)
+        return _error_response("invalid_json", "The body could not be read: send UTF-8 JSON.", 422)
+    code = _HTTP_CODES.get(exc.status_code, "http_error")
+    message = {
+        404: "There is no such route; the API is described at /docs.",
+        405: "This route does not accept that method.",
+    }.get(exc.status_code, str(exc.detail))
+    return _error_response(code, message, exc.status_code, headers=getattr(exc, "headers", None))
+
+
+async def handle_unexpected_error(_: Request, exc: Exception) -> SafeJSONResponse:
+    """A bug: log the traceback, answer in the one error shape without it."""
+    logger.error("unexpected error", exc_info=exc)
+    return _error_response("internal_error", "Something went wrong on the server; the log has the details.", 500)
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Return the service's ASGI app (settings from the environment when none are given)."""
+    settings = settings or Settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        services = await anyio.to_thread.run_sync(start_services, settings)
+        # Each waiting solve holds one of anyio's worker threads; leave room for the other routes.
+        limiter = anyio.to_thread.current_default_thread_limiter()
+        limiter.total_tokens = max(limiter.total_tokens, settings.max_in_flight + 20)
+        app.state.services = services
+        try:
+            yield
+        finally:
+            await anyio.to_thread.run_sync(stop_services, services)
+
+    app = FastAPI(
+        title="causalplan",
+        version=causalplan.__version__,
+        summary="Teach a robot why an object works, then plan with that knowledge.",
+        description=(
+            "Post a causal model (which parts carry which functions, and keyword rules that produce "
+            "the goal); get its validation report, a replayed assembly plan from Fast Downward, and "
+            "transfer verdicts for other objects. Errors always have the shape "
+            '`{"error": {"code", "message", "details"}}`.'
+        ),
+        lifespan=lifespan,
+        default_response_class=SafeJSONResponse,
+        responses=error_responses(413, 422),
+    )
+    app.add_exception_handler(CausalPlanError, handle_causalplan_error)
+    app.add_exception_handler(RequestValidationError, handle_validation_error)
+    app.add_exception_handler(StarletteHTTPException, handle_http_error)
+    app.add_exception_handler(Exception, handle_unexpected_error)
+    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
+    for module in (models, plans, transfers, objects, research, health):
+        app.include_router(module.router)
+    return app
+
+
+def serve(settings: Settings, host: str, port: int, log_level: str = "info") -> None:
+    """Run the service with uvicorn until interrupted (what ``causalplan serve`` does)."""
+    import uvicorn
+
+    uvicorn.run(create_app(settings), host=host, port=port, log_level=log_level, timeout_graceful_shutdown=10)

@@ -1,0 +1,341 @@
+"""The planner pool: worker processes that each run one solve at a time, behind a queue limit.
+
+Why not ``concurrent.futures.ProcessPoolExecutor``: when one of its workers dies, the whole
+executor breaks and every queued solve fails; and it cannot kill the one worker that overruns
+its time limit. Here each request owns one worker while it runs, so a killed or stuck worker
+fails only that request, and is replaced before the next one needs it.
+
+Request threads call ``PlannerPool.run``; it blocks the calling thread (FastAPI runs the
+routes in a thread pool), never the event loop.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import queue
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager, suppress
+from dataclasses import dataclass
+from multiprocessing.connection import Connection
+from typing import Any, TypeVar
+
+from causalplan.errors import CausalPlanError
+from causalplan.service.errors import (
+    InternalError,
+    PlanningTimeoutError,
+    QueueFullError,
+    WorkerCrashedError,
+    error_class,
+)
+
+logger = logging.getLogger(__name__)
+
+T = TypeVar("T")
+
+_STOP_SECONDS = 2.0
+_START_SECONDS = 60.0
+_WORKER_MAIN = "from causalplan.service.worker import main; main()"
+
+
+def _worker_environment() -> dict[str, str]:
+    # Jobs are pickled by reference (module and name), so a worker must import what the app
+    # can: it gets the app's import path, not just the interpreter's default one.
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(path for path in sys.path if path)}
+
+
+class _Worker:
+    """One worker process (``python -c 'from causalplan.service.worker import main; main()'``).
+
+    It is a fresh interpreter, not a fork of the app (which runs uvicorn's and anyio's threads),
+    in a process group of its own, and talks to the app over a private socket pair.
+    """
+
+    def __init__(self, memory_mb: int, quiet: bool = False) -> None:
+        parent_end, child_end = socket.socketpair()
+        with child_end:
+            self.process = subprocess.Popen(
+                [sys.executable, "-c", _WORKER_MAIN, str(child_end.fileno()), str(memory_mb)],
+                pass_fds=[child_end.fileno()],
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,  # C extensions print banners; errors still reach stderr
+                stderr=subprocess.DEVNULL if quiet else None,
+                process_group=0,
+                env=_worker_environment(),
+            )
+        self.connection = Connection(parent_end.detach())
+        self.is_ready = False
+
+    @property
+    def pid(self) -> int:
+        return self.process.pid
+
+    def is_alive(self) -> bool:
+        return self.process.poll() is None
+
+    def wait_ready(self, timeout: float) -> None:
+        """Wait for the worker's hello (sent once it has imported the planners)."""
+        if self.is_ready:
+            return
+        if not self.connection.poll(timeout):
+            raise TimeoutError
+        self.connection.recv()
+        self.is_ready = True
+
+    def call(self, function: Callable[..., Any], args: tuple[Any, ...], timeout: float) -> tuple[Any, ...]:
+        """Send one job and return the worker's reply; TimeoutError or EOFError when there is none.
+
+        A worker that has just been started is waited for first, within the same ``timeout``.
+        """
+        deadline = time.monotonic() + timeout
+        self.wait_ready(timeout)
+        self.connection.send((function, args))
+        if not self.connection.poll(max(0.0, deadline - time.monotonic())):
+            raise TimeoutError
+        reply: tuple[Any, ...] = self.connection.recv()  # EOFError when the worker died
+        return reply
+
+    def exit_code(self) -> int | None:
+        """Return the exit code of a worker that has stopped (None if it is still running)."""
+        try:
+            return self.process.wait(_STOP_SECONDS)
+        except subprocess.TimeoutExpired:
+            return None
+
+    def kill(self) -> None:
+        """Kill the worker and what it started in its process group (the translator)."""
+        with suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.process.pid, signal.SIGKILL)
+        with suppress(ProcessLookupError):
+            self.process.kill()
+        self.process.wait()
+        self.connection.close()
+
+    def stop(self) -> None:
+        """Ask the worker to finish, and kill it if it does not."""
+        with suppress(BrokenPipeError, OSError):
+            self.connection.send(None)
+        try:
+            self.process.wait(_STOP_SECONDS)
+        except subprocess.TimeoutExpired:
+            self.kill()
+        else:
+            self.connection.close()
+
+
+@dataclass(frozen=True)
+class PoolStats:
+    """What /health shows of the pool."""
+
+    workers: int
+    busy: int
+    waiting: int
+    max_in_flight: int
+    completed: int
+    replaced: int
+
+    def as_dict(self) -> dict[str, int]:
+        """Return the stats as a JSON-ready dict."""
+        return dict(vars(self))
+
+
+class PlannerPool:
+    """``size`` worker processes; at most ``size + queue_size`` solves running or waiting."""
+
+    def __init__(self, size: int, queue_size: int, memory_mb: int, queue_wait_seconds: float) -> None:
+        self.size = size
+        self.max_in_flight = size + queue_size
+        self.memory_mb = memory_mb
+        self.queue_wait_seconds = queue_wait_seconds
+        self._idle: queue.SimpleQueue[_Worker] = queue.SimpleQueue()
+        self._lock = threading.Lock()
+        self._in_flight = 0
+        self._busy = 0
+        self._completed = 0
+        self._replaced = 0
+        self._seconds_per_job = 0.05  # moving average, for Retry-After
+        self._workers: set[_Worker] = set()
+        self._closed = False
+
+    def start(self) -> None:
+        """Start the workers and wait until each has imported the planners."""
+        workers = [self._spawn() for _ in range(self.size)]
+        try:
+            for worker in workers:
+                worker.wait_ready(_START_SECONDS)
+        except (TimeoutError, EOFError, OSError):
+            self.close()
+            raise WorkerCrashedError(
+                "A planner worker did not start; run `python -c 'import causalplan.service.worker'` to see why."
+            ) from None
+        for worker in workers:
+            self._idle.put(worker)
+
+    def _spawn(self) -> _Worker:
+        worker = _Worker(self.memory_mb)
+        with self._lock:
+            self._workers.add(worker)
+        return worker
+
+    def _discard(self, worker: _Worker) -> None:
+        with self._lock:
+            self._workers.discard(worker)
+            self._replaced += 1
+
+    def worker_pids(self) -> list[int]:
+        """Return the process ids of the current workers."""
+        with self._lock:
+            return [worker.pid for worker in self._workers]
+
+    def stats(self) -> PoolStats:
+        """Return the pool's current numbers."""
+        with self._lock:
+            return PoolStats(
+                self.size,
+                self._busy,
+                self._in_flight - self._busy,
+                self.max_in_flight,
+                self._completed,
+                self._replaced,
+            )
+
+    def retry_after(self) -> int:
+        """Return the seconds after which a refused request may find room (at least 1)."""
+        with self._lock:
+            return max(1, math.ceil(self._seconds_per_job * self._in_flight / self.size))
+
+    @contextmanager
+    def _admitted(self) -> Iterator[None]:
+        with self._lock:
+            full = self._closed or self._in_flight >= self.max_in_flight
+            if not full:
+                self._in_flight += 1
+        if full:
+            retry = self.retry_after()
+            raise QueueFullError(
+                f"All {self.size} planner worker(s) are busy and {self.max_in_flight - self.size} request(s) "
+                f"are already waiting. Try again in {retry} s.",
+                retry,
+            )
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._in_flight -= 1
+
+    def _take_worker(self) -> _Worker:
+        try:
+            worker = self._idle.get(timeout=self.queue_wait_seconds)
+        except queue.Empty:
+            retry = self.retry_after()
+            raise QueueFullError(
+                f"No planner worker became free within {self.queue_wait_seconds:g} s. Try again in {retry} s.", retry
+            ) from None
+        if not worker.is_alive():  # died while idle (e.g. killed from outside): not this request's fault
+            logger.warning("planner worker %s died while idle; replacing it", worker.pid)
+            self._discard(worker)
+            worker.kill()
+            worker = self._spawn()
+        return worker
+
+    def run(self, function: Callable[..., T], args: tuple[Any, ...], timeout: float) -> T:
+        """Run ``function(*args)`` in a worker; kill it after ``timeout`` seconds.
+
+        Raises QueueFullError (429), PlanningTimeoutError (504), WorkerCrashedError (503), the
+        ``CausalPlanError`` the job raised, or InternalError for a bug in the job.
+        """
+        with self._admitted():
+            worker = self._take_worker()
+            with self._lock:
+                self._busy += 1
+            started = time.perf_counter()
+            try:
+                reply = worker.call(function, args, timeout)
+            except TimeoutError:
+                self._replace(worker)
+                raise PlanningTimeoutError(
+                    f"The planner worker was still busy {timeout:g} s after the solve started, so it was "
+                    "stopped. Try a smaller model or a lower time_limit.",
+                    details={"seconds": round(timeout, 3)},
+                ) from None
+            except (EOFError, OSError):
+                exit_code = worker.exit_code()
+                self._replace(worker)
+                raise WorkerCrashedError(
+                    "The planner worker running this request stopped unexpectedly (killed, out of memory, "
+                    "or crashed). It has been replaced; sending the request again should work.",
+                    details={"exit_code": exit_code},
+                ) from None
+            finally:
+                with self._lock:
+                    self._busy -= 1
+            seconds = time.perf_counter() - started
+            with self._lock:
+                self._completed += 1
+                self._seconds_per_job = 0.8 * self._seconds_per_job + 0.2 * seconds
+            self._idle.put(worker)
+        result: T = _unwrap(reply)
+        return result
+
+    def _replace(self, worker: _Worker) -> None:
+        logger.warning("replacing planner worker %s", worker.pid)
+        worker.kill()
+        self._discard(worker)
+        if not self._closed:
+            self._idle.put(self._spawn())
+
+    def run_isolated(self, function: Callable[..., T], args: tuple[Any, ...], timeout: float) -> T:
+        """Run one job in a fresh process that exits afterwards (for probes that import a lot)."""
+        worker = _Worker(self.memory_mb, quiet=True)
+        try:
+            reply = worker.call(function, args, timeout)
+        except TimeoutError:
+            worker.kill()
+            raise PlanningTimeoutError(f"The probe did not finish within {timeout:g} s.") from None
+        except (EOFError, OSError):
+            worker.kill()
+            raise WorkerCrashedError("The probe process stopped unexpectedly.") from None
+        worker.stop()
+        result: T = _unwrap(reply)
+        return result
+
+    def close(self) -> None:
+        """Stop every worker (busy ones are killed)."""
+        self._closed = True
+        with self._lock:
+            workers = list(self._workers)
+            self._workers.clear()
+        idle: set[_Worker] = set()
+        while True:
+            try:
+                idle.add(self._idle.get_nowait())
+            except queue.Empty:
+                break
+        for worker in workers:
+            if worker in idle:
+                worker.stop()
+            else:
+                worker.kill()
+
+
+def _unwrap(reply: tuple[Any, ...]) -> Any:
+    kind = reply[0]
+    if kind == "ok":
+        return reply[1]
+    if kind == "error":
+        _, code, message, details = reply
+        try:
+            error = error_class(code)(message, details=details)
+        except TypeError:  # a class with another constructor: keep the code, lose the class
+            error = CausalPlanError(message, details=details)
+            error.code = code
+        raise error
+    logger.error("planner worker job failed:\n%s", reply[1])
+    raise InternalError("The planner failed unexpectedly; the server log has the details.")

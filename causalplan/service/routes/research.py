@@ -1,0 +1,96 @@
+"""GET /v1/trials and GET /v1/export: everything stored, for researchers with the token."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from datetime import UTC, datetime
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Query
+from fastapi.responses import Response
+
+from causalplan.service import crud
+from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH, ModelRecord, TrialRecord
+from causalplan.service.deps import ResearchAccessDep, SessionDep
+from causalplan.service.responses import SafeJSONResponse
+from causalplan.service.schemas import ExportOut, StoredModelOut, TrialOut, TrialsOut, error_responses
+
+router = APIRouter(prefix="/v1", tags=["research"], responses=error_responses(401, 403, 503))
+
+MAX_PAGE = 1000
+CSV_TABLES = ("trials", "models")
+_FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+@router.get("/trials", response_model=TrialsOut, summary="List transfer trials")
+def list_trials(
+    _: ResearchAccessDep,
+    session: SessionDep,
+    offset: Annotated[int, Query(ge=0, le=1_000_000_000)] = 0,
+    limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 100,
+    participant_id: Annotated[str | None, Query(max_length=MAX_CLIENT_ID_LENGTH)] = None,
+    session_id: Annotated[str | None, Query(max_length=MAX_CLIENT_ID_LENGTH)] = None,
+) -> TrialsOut:
+    """Return stored trials, newest first, optionally of one participant or session."""
+    trials, count = crud.list_trials(session, offset, limit, participant_id, session_id)
+    return TrialsOut(data=[TrialOut.model_validate(trial) for trial in trials], count=count)
+
+
+def _cell(value: object) -> str:
+    text = value if isinstance(value, str) else json.dumps(value, ensure_ascii=False) if value is not None else ""
+    # A cell starting like a formula would run in a spreadsheet; participants write these labels.
+    return "'" + text if text.startswith(_FORMULA_STARTS) else text
+
+
+def _csv(columns: list[str], rows: list[dict[str, Any]]) -> bytes:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(columns)
+    for row in rows:
+        writer.writerow([_cell(row[column]) for column in columns])
+    return buffer.getvalue().encode("utf-8", "replace")
+
+
+def _trial_row(trial: TrialRecord) -> dict[str, Any]:
+    return TrialOut.model_validate(trial).model_dump(mode="json")
+
+
+def _model_row(model: ModelRecord) -> dict[str, Any]:
+    return StoredModelOut.model_validate(model).model_dump(mode="json")
+
+
+@router.get(
+    "/export",
+    response_model=ExportOut,
+    summary="Export everything stored",
+    responses={200: {"content": {"text/csv": {"schema": {"type": "string"}}}, "description": "JSON or CSV."}},
+)
+def export(
+    _: ResearchAccessDep,
+    session: SessionDep,
+    format: Annotated[Literal["json", "csv"], Query(description="json (models and trials) or csv.")] = "json",
+    table: Annotated[Literal["trials", "models"], Query(description="For csv: which table.")] = "trials",
+) -> Response:
+    """Export every stored model and trial as JSON, or one table as CSV (JSON values in cells)."""
+    models, trials = crud.all_records(session)
+    stamp = datetime.now(UTC)
+    if format == "json":
+        data = {
+            "exported_at": stamp.isoformat(),
+            "models": [_model_row(model) for model in models],
+            "trials": [_trial_row(trial) for trial in trials],
+        }
+        return SafeJSONResponse(
+            data, headers={"Content-Disposition": f'attachment; filename="causalplan-{stamp:%Y%m%dT%H%M%SZ}.json"'}
+        )
+    if table == "trials":
+        body = _csv(list(TrialOut.model_fields), [_trial_row(trial) for trial in trials])
+    else:
+        body = _csv(list(StoredModelOut.model_fields), [_model_row(model) for model in models])
+    return Response(
+        body,
+        media_type="text/csv; charset=utf-8",
+        headers={"Content-Disposition": f'attachment; filename="causalplan-{table}-{stamp:%Y%m%dT%H%M%SZ}.csv"'},
+    )

@@ -1,0 +1,54 @@
+"""POST /v1/transfers: try a model on a new object (step 3) and store the trial."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+
+from causalplan.service import crud, submissions
+from causalplan.service.deps import ClientIdsDep, ServicesDep, SessionDep
+from causalplan.service.schemas import TransferIn, TransferOut, error_responses
+from causalplan.transfer.verdict import invalid_verdict
+
+router = APIRouter(prefix="/v1/transfers", tags=["transfers"], responses=error_responses(404, 429, 503, 504))
+
+
+@router.post("", response_model=TransferOut, summary="Test whether a model transfers")
+def create_transfer(body: TransferIn, services: ServicesDep, session: SessionDep, client: ClientIdsDep) -> TransferOut:
+    """Plan the model on the mapping's object and say whether it transfers, and why or why not.
+
+    The same JSON as `causalplan transfer --json`, plus `cached`, `trial_id` and `model_id`.
+    Every trial is stored with the inline model (if any) in one transaction. An invalid model
+    or mapping is answered with 422 and the CLI's codes; that trial is stored too, as 'invalid'.
+    """
+    planner = submissions.resolve_planner(body.planner)
+    time_limit = submissions.resolve_time_limit(body.time_limit, services.settings)
+    submission = submissions.model_for_request(body.model, body.model_id, services, session, client)
+    mapping, mapping_report, mapping_document = submissions.read_mapping(body.mapping, services)
+    new_records = [submission.record] if submission.is_new else []
+    problem = submissions.invalid_input_error(submission, mapping_report)
+    if problem is not None:
+        verdict = invalid_verdict(
+            submission.report,
+            mapping_report,
+            submission.model.object_id if submission.model else None,
+            str(mapping_document.get("object")) if mapping_document.get("object") is not None else None,
+        ).as_dict()
+        trial = crud.new_trial_record(submission.record.id, mapping_document, planner, verdict, False, 0.0, client)
+        crud.save(session, [*new_records, trial])
+        problem.details.update({"verdict": verdict, "trial_id": str(trial.id)})
+        raise problem
+    assert submission.model is not None and mapping is not None
+    answer = submissions.transfer(services, submission.model, mapping, planner, time_limit)
+    trial = crud.new_trial_record(
+        submission.record.id, mapping_document, planner, answer.data, answer.cached, answer.seconds, client
+    )
+    crud.save(session, [*new_records, trial])
+    return TransferOut.model_validate(
+        {
+            **answer.data,
+            "planner_requested": body.planner,
+            "cached": answer.cached,
+            "trial_id": trial.id,
+            "model_id": submission.record.id,
+        }
+    )

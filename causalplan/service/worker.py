@@ -1,0 +1,144 @@
+"""What runs inside a planner worker process: its loop, and the jobs the service sends it.
+
+A worker serves one job at a time over its socket: it receives ``(function, args)``, runs it
+and sends back ``("ok", value)``, ``("error", code, message, details)`` for a
+``CausalPlanError``, or ``("crash", text)`` for anything else. Fast Downward's translator
+forks from this process and its search binary starts from it, so the app's own process
+(with uvicorn's threads) never does either.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import signal
+import sys
+import traceback
+from collections.abc import Callable
+from functools import cache
+from importlib import metadata
+from importlib.util import find_spec
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Any
+
+from causalplan.causal.model import CausalModel, Labelling
+from causalplan.errors import CausalPlanError
+from causalplan.objects.catalog import Catalog, load_catalog
+from causalplan.pddl.task import build_task
+from causalplan.planners import fast_downward, pipeline
+from causalplan.transfer.verdict import evaluate_transfer
+
+Job = tuple[Callable[..., Any], tuple[Any, ...]]
+OPTIONAL_BACKENDS = ("unified_planning", "up_fast_downward", "up_pyperplan", "up_tamer", "pybullet", "matplotlib")
+"""Modules some planners or commands use; /health reports the ones that fail to import."""
+
+
+def main() -> None:
+    """Run as a worker: ``argv`` holds the socket's file descriptor and the memory limit in MB."""
+    descriptor, memory_mb = int(sys.argv[1]), int(sys.argv[2])
+    serve(Connection(descriptor), memory_mb)
+
+
+def serve(connection: Connection, memory_mb: int) -> None:
+    """Say hello, then run jobs from ``connection`` until it closes or sends None."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C stops the server, which then stops us
+    limit = memory_mb * 1024 * 1024
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    connection.send(("ready", os.getpid()))
+    while True:
+        try:
+            job: Job | None = connection.recv()
+        except (EOFError, OSError):
+            return
+        if job is None:
+            return
+        function, args = job
+        try:
+            reply: tuple[Any, ...] = ("ok", function(*args))
+        except CausalPlanError as exc:
+            reply = ("error", exc.code, exc.message, exc.details)
+        except MemoryError:
+            reply = ("error", "planner_out_of_memory", "The planner worker ran out of memory.", {})
+        except Exception:  # noqa: BLE001 - reported to the service, which logs it and answers clearly
+            reply = ("crash", traceback.format_exc())
+        try:
+            connection.send(reply)
+        except (BrokenPipeError, OSError):
+            return
+
+
+@cache
+def _catalog(folders: tuple[Path, ...]) -> Catalog:
+    return load_catalog(folders)
+
+
+def plan_job(
+    model: CausalModel,
+    mapping: Labelling | None,
+    planner: str,
+    time_limit: float,
+    catalog_folders: tuple[Path, ...],
+) -> dict[str, object]:
+    """Plan ``model`` (on the mapping's object if given); return ``PlanResult.as_dict()`` with PDDL."""
+    catalog = _catalog(catalog_folders)
+    target = catalog.get((mapping or model.labelling).object_id)
+    result = pipeline.plan_task(build_task(model, target, mapping), planner, time_limit, include_pddl=True)
+    return result.as_dict()
+
+
+def transfer_job(
+    model: CausalModel,
+    mapping: Labelling,
+    planner: str,
+    time_limit: float,
+    catalog_folders: tuple[Path, ...],
+) -> dict[str, object]:
+    """Return the transfer verdict of ``model`` through ``mapping``, as ``causalplan transfer --json``."""
+    return evaluate_transfer(model, mapping, _catalog(catalog_folders), planner, time_limit).as_dict()
+
+
+def _version(distribution: str) -> str | None:
+    try:
+        return metadata.version(distribution)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+def probe_job() -> dict[str, object]:
+    """Return what this worker can run: planner binaries, their versions, failed optional imports."""
+    try:
+        binary: str | None = str(fast_downward.search_binary())
+        binary_problem = None
+    except CausalPlanError as exc:
+        binary, binary_problem = None, exc.message
+    failed: dict[str, str] = {}
+    for module in OPTIONAL_BACKENDS:
+        if find_spec(module) is None:
+            failed[module] = "not installed"
+            continue
+        try:
+            __import__(module)
+        except Exception as exc:  # noqa: BLE001 - any import failure is what /health reports
+            failed[module] = f"{exc.__class__.__name__}: {exc}"
+    # The registry's own availability check, where it has one (it imports unified-planning's
+    # engines, which is why the probe runs in a throwaway process).
+    availability = getattr(pipeline, "planner_availability", None)
+    problems: dict[str, str | None] = availability() if availability else dict.fromkeys(pipeline.PLANNERS)
+    return {
+        "planners": [
+            {"name": name, "available": problems.get(name) is None, "problem": problems.get(name)}
+            for name in pipeline.PLANNERS
+        ],
+        "fast_downward": {
+            "search_binary": binary,
+            "search_binary_found": binary is not None,
+            "problem": binary_problem,
+            "translator_found": fast_downward.translator_available(),
+            "versions": {
+                "up-fast-downward": _version("up-fast-downward"),
+                "fast-downward-translate": _version("fast-downward.translate") or _version("fast-downward-translate"),
+            },
+        },
+        "optional_backends_failed": failed,
+    }

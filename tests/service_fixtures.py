@@ -1,0 +1,260 @@
+"""Fixtures and helpers of the service tests: apps on SQLite or a real PostgreSQL, and worker jobs.
+
+PostgreSQL: ``CAUSALPLAN_TEST_POSTGRES_URL`` (set by ``.ci/run``) names a server where the tests
+may create databases; without it, a throwaway cluster is started from Debian's ``postgresql``
+binaries for the session. Each app gets a database of its own.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import shutil
+import socket
+import subprocess
+import tempfile
+import time
+import uuid
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+from sqlalchemy.engine import make_url
+
+from causalplan.service.deps import Services
+from causalplan.service.main import create_app
+from causalplan.service.settings import Settings
+
+POSTGRES_URL_VARIABLE = "CAUSALPLAN_TEST_POSTGRES_URL"
+RESEARCH_TOKEN = "research-token-for-tests"
+AUTH = {"Authorization": f"Bearer {RESEARCH_TOKEN}"}
+
+DESK_LAMP: dict[str, Any] = {
+    "object": "desk_lamp",
+    "goal": "light",
+    "functions": {
+        "base_with_cables": ["provide electricity"],
+        "light_bulb": ["turn electricity into light", "close the circuit"],
+    },
+    "rules": [
+        "provide electricity AND close the circuit CAUSES electricity flows",
+        "electricity flows AND turn electricity into light CAUSES light",
+    ],
+}
+FLASHLIGHT_MAPPING: dict[str, Any] = {
+    "object": "flashlight",
+    "functions": {"batteries": ["provide electricity"], "head": ["turn electricity into light", "close the circuit"]},
+}
+FAILED_DESK_LAMP: dict[str, Any] = {
+    "object": "desk_lamp",
+    "goal": "light",
+    "functions": {
+        "base_with_cables": ["provide electricity"],
+        "light_bulb": ["turn electricity into light"],
+        "shade": ["diffuse light"],
+    },
+    "rules": ["provide electricity AND turn electricity into light AND diffuse light CAUSES light"],
+}
+FAILED_FLASHLIGHT_MAPPING: dict[str, Any] = {
+    "object": "flashlight",
+    "functions": {"batteries": ["provide electricity"], "case": ["hold things together"], "head": ["diffuse light"]},
+}
+
+
+def error_of(response: Any, status: int) -> dict[str, Any]:
+    """Assert the one error shape and ``status``; return the error."""
+    assert response.status_code == status, response.text
+    body = response.json()
+    assert set(body) == {"error"}
+    assert set(body["error"]) == {"code", "message", "details"}
+    assert body["error"]["message"]
+    assert "Traceback" not in response.text
+    error: dict[str, Any] = body["error"]
+    return error
+
+
+def with_unique_effect(model: dict[str, Any]) -> dict[str, Any]:
+    """Return ``model`` with its intermediate effect renamed uniquely (a request the cache has not seen)."""
+    effect = f"electricity flows {uuid.uuid4().hex[:8]}"
+    rules = [rule.replace("electricity flows", effect) for rule in model["rules"]]
+    return {**model, "rules": rules}
+
+
+def free_port() -> int:
+    """Return a TCP port on 127.0.0.1 that is free right now."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port: int = probe.getsockname()[1]
+        return port
+
+
+def settings_for(database_url: str, **overrides: Any) -> Settings:
+    """Return test settings: few workers, the research token, and ``overrides``."""
+    values: dict[str, Any] = {
+        "database_url": database_url,
+        "research_token": RESEARCH_TOKEN,
+        "planning_workers": 2,
+        "default_time_limit": 20.0,
+        **overrides,
+    }
+    return Settings(**values)
+
+
+@contextmanager
+def running_client(settings: Settings) -> Iterator[TestClient]:
+    """Start an app with ``settings`` (workers, migrations) and yield a client; stop it afterwards."""
+    with TestClient(create_app(settings), raise_server_exceptions=False) as client:
+        yield client
+
+
+def services_of(client: TestClient) -> Services:
+    """Return the running app's services (pool, cache, engine)."""
+    services: Services = client.app.state.services  # type: ignore[attr-defined]
+    return services
+
+
+# -- PostgreSQL --------------------------------------------------------------------------------
+
+
+def _postgres_binaries() -> Path:
+    found = shutil.which("initdb")
+    if found:
+        return Path(found).resolve().parent
+    versions = sorted(glob.glob("/usr/lib/postgresql/*/bin/initdb"), key=lambda p: int(p.split("/")[4]))
+    if not versions:
+        pytest.fail(
+            f"No PostgreSQL server binaries: install Debian's 'postgresql' package, or set {POSTGRES_URL_VARIABLE} "
+            "to a server where the tests may create databases."
+        )
+    return Path(versions[-1]).parent
+
+
+def _as_server_user(command: list[str]) -> list[str]:
+    # initdb and postgres refuse to run as root; Debian's package creates the 'postgres' user.
+    return ["runuser", "-u", "postgres", "--", *command] if os.geteuid() == 0 else command
+
+
+@contextmanager
+def throwaway_postgres() -> Iterator[str]:
+    """Start a PostgreSQL cluster in a temporary folder on a free port; yield its admin URL."""
+    binaries = _postgres_binaries()
+    folder = Path(tempfile.mkdtemp(prefix="causalplan-pg-"))
+    if os.geteuid() == 0:
+        shutil.chown(folder, "postgres", "postgres")
+    data, port = folder / "data", free_port()
+    run = lambda command: subprocess.run(  # noqa: E731 - a local shorthand
+        _as_server_user(command), check=True, capture_output=True, text=True, timeout=120
+    )
+    try:
+        run([str(binaries / "initdb"), "-D", str(data), "-U", "postgres", "--auth=trust", "--no-sync"])
+        options = f"-p {port} -k {folder} -c listen_addresses=127.0.0.1 -c fsync=off -c synchronous_commit=off"
+        run([str(binaries / "pg_ctl"), "-D", str(data), "-o", options, "-l", str(folder / "log"), "-w", "start"])
+    except subprocess.CalledProcessError as exc:
+        log = (folder / "log").read_text() if (folder / "log").exists() else ""
+        shutil.rmtree(folder, ignore_errors=True)
+        pytest.fail(f"Could not start PostgreSQL: {exc.stderr or exc.stdout}\n{log}")
+    try:
+        yield f"postgresql+psycopg://postgres@127.0.0.1:{port}/postgres"
+    finally:
+        subprocess.run(
+            _as_server_user([str(binaries / "pg_ctl"), "-D", str(data), "-m", "immediate", "stop"]),
+            capture_output=True,
+            timeout=60,
+        )
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def postgres_admin_url() -> Iterator[str]:
+    """A PostgreSQL URL where databases may be created: from .ci/run, or a throwaway cluster."""
+    url = os.environ.get(POSTGRES_URL_VARIABLE)
+    if url:
+        yield Settings(database_url=url).database_url  # the psycopg 3 driver, whatever the URL says
+        return
+    with throwaway_postgres() as started:
+        yield started
+
+
+@contextmanager
+def postgres_database(admin_url: str) -> Iterator[str]:
+    """Create an empty database on the server of ``admin_url``; yield its URL; drop it afterwards."""
+    import psycopg
+
+    name = f"causalplan_test_{uuid.uuid4().hex[:12]}"
+    admin = make_url(admin_url)
+    conninfo = admin.set(drivername="postgresql").render_as_string(hide_password=False)
+    with psycopg.connect(conninfo, autocommit=True) as connection:
+        connection.execute(f'CREATE DATABASE "{name}"')
+    try:
+        yield admin.set(database=name).render_as_string(hide_password=False)
+    finally:
+        with psycopg.connect(conninfo, autocommit=True) as connection:
+            connection.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
+    """An empty database: a SQLite file, then a real PostgreSQL database (each test runs on both)."""
+    if request.param == "sqlite":
+        yield f"sqlite:///{tmp_path / 'causalplan.sqlite3'}"
+        return
+    with postgres_database(request.getfixturevalue("postgres_admin_url")) as url:
+        yield url
+
+
+@pytest.fixture(scope="module", params=["sqlite", "postgresql"])
+def storage_client(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+    """A running app per database kind (SQLite, PostgreSQL), shared by a module's tests."""
+    if request.param == "sqlite":
+        url = f"sqlite:///{tmp_path_factory.mktemp('db') / 'causalplan.sqlite3'}"
+        with running_client(settings_for(url)) as client:
+            yield client
+        return
+    with (
+        postgres_database(request.getfixturevalue("postgres_admin_url")) as url,
+        running_client(settings_for(url)) as client,
+    ):
+        yield client
+
+
+@pytest.fixture(scope="module")
+def live_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """A real uvicorn server (in a thread, on a free loopback port) on SQLite; yields its base URL."""
+    import threading
+
+    import uvicorn
+
+    url = f"sqlite:///{tmp_path_factory.mktemp('db') / 'causalplan.sqlite3'}"
+    settings = settings_for(url, default_time_limit=5.0, max_time_limit=10.0)
+    server = uvicorn.Server(
+        uvicorn.Config(create_app(settings), host="127.0.0.1", port=free_port(), log_level="warning")
+    )
+    thread = threading.Thread(target=server.run, name="uvicorn", daemon=True)
+    thread.start()
+    wait_until(lambda: server.started or not thread.is_alive(), seconds=60)
+    assert server.started, "uvicorn did not start"
+    try:
+        yield f"http://127.0.0.1:{server.config.port}"
+    finally:
+        server.should_exit = True
+        thread.join(30)
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+    """A running app on SQLite, shared by a module's tests."""
+    url = f"sqlite:///{tmp_path_factory.mktemp('db') / 'causalplan.sqlite3'}"
+    with running_client(settings_for(url)) as running:
+        yield running
+
+
+def wait_until(condition: Callable[[], bool], seconds: float = 20.0) -> None:
+    """Wait until ``condition()`` holds (fail after ``seconds``)."""
+    deadline = time.monotonic() + seconds
+    while not condition():
+        if time.monotonic() > deadline:
+            pytest.fail(f"condition not met within {seconds} s")
+        time.sleep(0.02)

@@ -1,0 +1,32 @@
+"""Jobs for the planner workers in the pool tests: module-level and light, so a worker imports them fast."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+SLOW_JOB_SECONDS = 2.0
+
+
+def sleep_then_plan(*args: Any) -> dict[str, object]:
+    """Sleep for ``SLOW_JOB_SECONDS``, then plan as usual (a slow solve)."""
+    from causalplan.service.worker import plan_job
+
+    time.sleep(SLOW_JOB_SECONDS)
+    return plan_job(*args)
+
+
+def crash_with_exception(*_: Any) -> dict[str, object]:
+    """Fail the way a bug would."""
+    raise RuntimeError("a bug in a planner")
+
+
+def sleep_forever(*_: Any) -> dict[str, object]:
+    """Hang, as a planner stuck outside Fast Downward's own limits would."""
+    time.sleep(3600)
+    return {}
+
+
+def allocate_too_much(*_: Any) -> dict[str, object]:
+    """Ask for more memory than the worker's address-space limit allows."""
+    return {"size": len(bytearray(64 * 1024**3))}

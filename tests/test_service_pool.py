@@ -1,0 +1,180 @@
+"""The planner pool under load and faults: 429 when full, killed and stuck workers, bugs; the cache."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+from fastapi.testclient import TestClient
+
+from causalplan.causal.documents import SourceMap
+from causalplan.inputs import model_from_data
+from causalplan.objects.catalog import Catalog
+from causalplan.service import main, worker
+from causalplan.service.cache import ResultCache, request_key
+from tests.service_fixtures import (
+    DESK_LAMP,
+    error_of,
+    running_client,
+    services_of,
+    settings_for,
+    wait_until,
+    with_unique_effect,
+)
+from tests.service_jobs import allocate_too_much, crash_with_exception, sleep_forever, sleep_then_plan
+
+
+@pytest.fixture(scope="module")
+def one_worker(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+    """An app with one planner worker and no queue: a second solve at once is refused."""
+    url = f"sqlite:///{tmp_path_factory.mktemp('db') / 'causalplan.sqlite3'}"
+    settings = settings_for(url, planning_workers=1, queue_size=0, solve_grace_seconds=1.0)
+    with running_client(settings) as client:
+        yield client
+
+
+def post_in_background(client: TestClient, body: dict[str, Any]) -> tuple[threading.Thread, list[httpx.Response]]:
+    """Post a plan request from another thread; return the thread and where its response lands."""
+    responses: list[httpx.Response] = []
+    thread = threading.Thread(target=lambda: responses.append(client.post("/v1/plans", json=body)))
+    thread.start()
+    return thread, responses
+
+
+def test_a_full_queue_is_429_with_retry_after(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
+    pool = services_of(one_worker).pool
+    monkeypatch.setattr(worker, "plan_job", sleep_then_plan)
+    thread, responses = post_in_background(one_worker, {"model": with_unique_effect(DESK_LAMP)})
+    wait_until(lambda: pool.stats().busy == 1)
+    refused = one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)})
+    error = error_of(refused, 429)
+    assert error["code"] == "queue_full"
+    assert int(refused.headers["Retry-After"]) >= 1
+    assert error["details"]["retry_after"] == int(refused.headers["Retry-After"])
+    # Answers from the cache need no worker, so they are not refused.
+    thread.join()
+    assert responses[0].status_code == 200 and responses[0].json()["status"] == "solved"
+
+
+def test_a_killed_worker_fails_only_its_request(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
+    pool = services_of(one_worker).pool
+    monkeypatch.setattr(worker, "plan_job", sleep_then_plan)
+    thread, responses = post_in_background(one_worker, {"model": with_unique_effect(DESK_LAMP)})
+    wait_until(lambda: pool.stats().busy == 1)
+    [pid] = pool.worker_pids()
+    os.kill(pid, signal.SIGKILL)
+    thread.join()
+    error = error_of(responses[0], 503)
+    assert error["code"] == "planner_crashed"
+    assert error["details"]["exit_code"] == -signal.SIGKILL
+    assert responses[0].headers["Retry-After"] == "1"
+    monkeypatch.undo()
+    after = one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)})
+    assert after.status_code == 200 and after.json()["status"] == "solved"
+    assert pool.worker_pids() != [pid] and pool.stats().replaced >= 1
+
+
+def test_a_worker_killed_while_idle_is_replaced_before_use(one_worker: TestClient) -> None:
+    pool = services_of(one_worker).pool
+    [pid] = pool.worker_pids()
+    os.kill(pid, signal.SIGKILL)
+    wait_until(lambda: not Path(f"/proc/{pid}").exists() or "zombie" in Path(f"/proc/{pid}/status").read_text())
+    response = one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)})
+    assert response.status_code == 200 and response.json()["status"] == "solved"
+
+
+def test_a_stuck_worker_is_killed_after_its_time_limit(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(worker, "plan_job", sleep_forever)
+    response = one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP), "time_limit": 0.5})
+    error = error_of(response, 504)
+    assert error["code"] == "planning_timeout"
+    assert error["details"] == {"seconds": 1.5}
+    monkeypatch.undo()
+    after = one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)})
+    assert after.status_code == 200 and after.json()["status"] == "solved"
+
+
+def test_a_bug_in_a_job_is_500_without_a_traceback(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(worker, "plan_job", crash_with_exception)
+    error = error_of(one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}), 500)
+    assert error["code"] == "internal_error"
+    assert "a bug in a planner" not in error["message"]
+    monkeypatch.undo()
+    assert one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}).status_code == 200
+
+
+def test_a_worker_out_of_memory_is_503_and_keeps_serving(
+    one_worker: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(worker, "plan_job", allocate_too_much)
+    error = error_of(one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}), 503)
+    assert error["code"] == "planner_out_of_memory"
+    monkeypatch.undo()
+    assert one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}).status_code == 200
+
+
+def test_a_missing_planner_binary_is_reported_and_planning_still_answers(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("CAUSALPLAN_FD_BINARY", str(tmp_path / "no-such-downward"))  # the workers inherit it
+    monkeypatch.setattr(main, "_probe_result", None)  # probe this server's workers afresh (restored after)
+    with running_client(settings_for(f"sqlite:///{tmp_path}/db.sqlite3", planning_workers=1)) as client:
+        health = client.get("/health").json()
+        assert health["status"] == "degraded"
+        assert health["fast_downward"]["search_binary_found"] is False
+        assert "no-such-downward" in health["fast_downward"]["problem"]
+        fd = next(planner for planner in health["planners"] if planner["name"] == "fd")
+        assert fd["available"] is False and fd["problem"]
+        body = client.post("/v1/plans", json={"model": DESK_LAMP, "planner": "fd"}).json()
+        assert body["status"] == "error" and "no-such-downward" in body["message"]
+
+
+def test_a_full_queue_with_a_waiting_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    settings = settings_for(f"sqlite:///{tmp_path}/db.sqlite3", planning_workers=1, queue_size=1)
+    with running_client(settings) as client:
+        pool = services_of(client).pool
+        monkeypatch.setattr(worker, "plan_job", sleep_then_plan)
+        running = post_in_background(client, {"model": with_unique_effect(DESK_LAMP)})
+        wait_until(lambda: pool.stats().busy == 1)
+        waiting = post_in_background(client, {"model": with_unique_effect(DESK_LAMP)})
+        wait_until(lambda: pool.stats().waiting == 1)
+        assert error_of(client.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}), 429)
+        for thread, responses in (running, waiting):
+            thread.join()
+            assert responses[0].status_code == 200
+
+
+def test_the_cache_keeps_the_most_recently_used() -> None:
+    cache = ResultCache(2)
+    for key in ("a", "b"):
+        cache.put(key, {"key": key})
+    assert cache.get("a") == {"key": "a"}
+    cache.put("c", {"key": "c"})
+    assert cache.get("b") is None and cache.get("a") is not None and cache.get("c") is not None
+    copy = cache.get("a")
+    assert copy is not None
+    copy["key"] = "changed"
+    assert cache.get("a") == {"key": "a"}
+    assert cache.stats() == {"size": 2, "entries": 2, "hits": 5, "misses": 1}
+    ResultCache(0).put("x", {})
+
+
+def test_canonical_keys_ignore_layout_but_not_meaning(catalog: Catalog) -> None:
+    def model(data: dict[str, Any]) -> Any:
+        loaded = model_from_data(data, SourceMap(), catalog)
+        assert loaded.is_valid, loaded.report.as_dict()
+        return loaded.model
+
+    base = model(DESK_LAMP)
+    layout = model({**DESK_LAMP, "rules": [r.replace(" AND ", " and  ") for r in reversed(DESK_LAMP["rules"])]})
+    other = model({**DESK_LAMP, "goal": "Light"})
+    assert request_key("plan", base, None, "fd") == request_key("plan", layout, None, "fd")
+    assert request_key("plan", base, None, "fd") != request_key("plan", base, None, "fd-opt")
+    assert request_key("plan", base, None, "fd") != request_key("transfer", base, None, "fd")
+    assert request_key("plan", base, None, "fd") != request_key("plan", other, None, "fd")  # answers quote it

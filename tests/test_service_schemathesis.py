@@ -1,0 +1,45 @@
+"""Schemathesis against the OpenAPI document: generated requests to every route of a real server, never a 5xx.
+
+Bounded: a few examples per route and no shrinking, so the whole module takes seconds.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import httpx
+import schemathesis
+from hypothesis import HealthCheck, Phase, settings
+from schemathesis.checks import (
+    content_type_conformance,
+    not_a_server_error,
+    response_schema_conformance,
+    status_code_conformance,
+)
+
+from causalplan.service.main import create_app
+from tests.service_fixtures import AUTH, settings_for
+
+# The document of the app the server runs (building an app starts nothing: no workers, no database).
+OPENAPI = create_app(settings_for("sqlite://")).openapi()
+schema = schemathesis.openapi.from_dict(OPENAPI)
+
+
+def test_the_server_serves_this_document(live_server: str) -> None:
+    assert httpx.get(f"{live_server}/openapi.json").json() == OPENAPI
+
+
+@schema.parametrize()
+@settings(
+    max_examples=25,
+    deadline=None,
+    phases=[Phase.explicit, Phase.generate],
+    suppress_health_check=list(HealthCheck),
+    derandomize=True,
+)
+def test_no_request_makes_the_service_fail(case: Any, live_server: str) -> None:
+    case.call_and_validate(
+        base_url=live_server,
+        headers=AUTH,
+        checks=[not_a_server_error, status_code_conformance, content_type_conformance, response_schema_conformance],
+    )

@@ -1,0 +1,105 @@
+"""`causalplan serve`: a real uvicorn server on a free port, talked to over HTTP with httpx."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx
+import pytest
+
+from tests.service_fixtures import DESK_LAMP, FLASHLIGHT_MAPPING, free_port
+
+START_SECONDS = 60.0
+
+
+def children_of(pid: int) -> set[int]:
+    """Return the ids of the processes whose parent is ``pid``."""
+    children = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            children.add(int(stat.parent.name))
+    return children
+
+
+def is_running(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def serve(tmp_path: Path, *options: str) -> tuple[subprocess.Popen[str], str]:
+    """Start ``causalplan serve`` on a free port; return the process and its base URL once it answers."""
+    port = free_port()
+    environment = {**os.environ, "XDG_DATA_HOME": str(tmp_path / "data")}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "causalplan.cli", "serve", "--port", str(port), *options],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=environment,
+    )
+    base = f"http://127.0.0.1:{port}"
+    deadline = time.monotonic() + START_SECONDS
+    while time.monotonic() < deadline:
+        if process.poll() is not None:
+            pytest.fail(f"the server stopped: {process.communicate()[0]}")
+        try:
+            if httpx.get(f"{base}/health", timeout=5).status_code == 200:
+                return process, base
+        except httpx.TransportError:
+            time.sleep(0.1)
+    process.kill()
+    pytest.fail(f"the server did not answer within {START_SECONDS} s: {process.communicate()[0]}")
+
+
+def test_the_real_server_plans_stores_and_stops_cleanly(tmp_path: Path) -> None:
+    process, base = serve(tmp_path, "--workers", "2")
+    try:
+        with httpx.Client(base_url=base, timeout=30) as client:
+            health = client.get("/health").json()
+            assert health["status"] == "ok" and health["pool"]["workers"] == 2
+            assert health["database"]["backend"] == "sqlite"
+            plan = client.post("/v1/plans", json={"model": DESK_LAMP}, headers={"X-Participant-Id": "real"})
+            assert plan.status_code == 200
+            assert plan.json()["plan"][0]["text"] == "Screw the light bulb into the base with cables."
+            verdict = client.post("/v1/transfers", json={"model": DESK_LAMP, "mapping": FLASHLIGHT_MAPPING}).json()
+            assert verdict["verdict"] == "transfers"
+            model = client.get(f"/v1/models/{plan.json()['model_id']}").json()
+            assert model["participant_id"] == "real"
+            assert client.get("/v1/nothing").json()["error"]["code"] == "not_found"
+            assert client.get("/docs").status_code == 200
+        workers = children_of(process.pid)
+        assert len(workers) >= 2
+    finally:
+        process.send_signal(signal.SIGINT)
+        output = process.communicate(timeout=30)[0]
+    assert process.returncode == 0, output
+    assert "Application shutdown complete" in output
+    assert "Traceback" not in output
+    assert not [pid for pid in workers if is_running(pid)]
+    # The default database: a SQLite file in the data folder, created on first start.
+    assert (tmp_path / "data" / "causalplan" / "causalplan.sqlite3").exists()
+
+
+def test_bad_settings_are_a_clear_error_not_a_traceback(tmp_path: Path) -> None:
+    command = [sys.executable, "-m", "causalplan.cli", "serve", "--database-url", "mysql://nobody@127.0.0.1:1/x"]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2
+    assert "error[storage_unavailable]" in result.stderr and "Traceback" not in result.stderr
+    environment = {**os.environ, "CAUSALPLAN_MAX_TIME_LIMIT": "5", "CAUSALPLAN_DEFAULT_TIME_LIMIT": "30"}
+    result = subprocess.run(
+        [sys.executable, "-m", "causalplan.cli", "serve"], capture_output=True, text=True, timeout=60, env=environment
+    )
+    assert result.returncode == 2
+    assert "error[invalid_settings]" in result.stderr and "max_time_limit" in result.stderr

@@ -1,0 +1,137 @@
+"""Storage on SQLite and on a real PostgreSQL: migrations, one transaction per request, odd text, outages."""
+
+from __future__ import annotations
+
+import json
+import uuid
+from typing import Any
+
+import pytest
+from alembic.autogenerate import compare_metadata
+from alembic.runtime.migration import MigrationContext
+from fastapi.testclient import TestClient
+from sqlalchemy import func, inspect, select
+from sqlalchemy.orm import Session
+
+from causalplan.service import crud
+from causalplan.service.db.migrate import current_revision, head_revision, upgrade
+from causalplan.service.db.models import Base, ModelRecord, TrialRecord
+from causalplan.service.db.session import create_database_engine
+from causalplan.service.errors import StorageError
+from tests.service_fixtures import (
+    AUTH,
+    DESK_LAMP,
+    FLASHLIGHT_MAPPING,
+    error_of,
+    postgres_database,
+    running_client,
+    services_of,
+    settings_for,
+)
+
+
+def test_migrations_build_exactly_the_models_schema(database_url: str) -> None:
+    engine = create_database_engine(database_url)
+    try:
+        assert current_revision(engine) is None
+        assert upgrade(engine) == head_revision() == "0001"
+        assert upgrade(engine) == "0001"  # a second start changes nothing
+        assert set(inspect(engine).get_table_names()) == {"alembic_version", "models", "trials"}
+        with engine.connect() as connection:
+            differences = compare_metadata(MigrationContext.configure(connection), Base.metadata)
+        assert differences == []
+    finally:
+        engine.dispose()
+
+
+def test_a_sqlite_file_and_its_folder_are_created_on_first_start(tmp_path: Any) -> None:
+    path = tmp_path / "new" / "folder" / "causalplan.sqlite3"
+    with running_client(settings_for(f"sqlite:///{path}", planning_workers=1)) as client:
+        assert client.get("/health").json()["database"]["revision"] == "0001"
+    assert path.exists()
+
+
+def test_the_database_url_accepts_plain_postgresql_urls() -> None:
+    url = settings_for("postgresql://user:secret@db.example/causalplan").database_url
+    assert url == "postgresql+psycopg://user:secret@db.example/causalplan"
+
+
+def test_a_trial_and_its_inline_model_are_stored_together_or_not_at_all(
+    storage_client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    participant = f"atomic-{uuid.uuid4().hex[:8]}"
+    real = crud.new_trial_record
+
+    def broken_trial(*args: Any, **kwargs: Any) -> TrialRecord:
+        trial = real(*args, **kwargs)
+        trial.verdict = None  # type: ignore[assignment]  # NOT NULL: the insert fails inside the transaction
+        return trial
+
+    monkeypatch.setattr(crud, "new_trial_record", broken_trial)
+    response = storage_client.post(
+        "/v1/transfers",
+        json={"model": DESK_LAMP, "mapping": FLASHLIGHT_MAPPING},
+        headers={"X-Participant-Id": participant},
+    )
+    error = error_of(response, 503)
+    assert error["code"] == "storage_unavailable" and "nothing was stored" in error["message"]
+    engine = services_of(storage_client).engine
+    with Session(engine) as session:
+        models = session.scalar(select(func.count()).where(ModelRecord.participant_id == participant))
+        trials = session.scalar(select(func.count()).where(TrialRecord.participant_id == participant))
+    assert (models, trials) == (0, 0)
+    monkeypatch.setattr(crud, "new_trial_record", real)
+    response = storage_client.post(
+        "/v1/transfers",
+        json={"model": DESK_LAMP, "mapping": FLASHLIGHT_MAPPING},
+        headers={"X-Participant-Id": participant},
+    )
+    assert response.status_code == 200
+    with Session(engine) as session:
+        models = session.scalar(select(func.count()).where(ModelRecord.participant_id == participant))
+        trials = session.scalar(select(func.count()).where(TrialRecord.participant_id == participant))
+    assert (models, trials) == (1, 1)
+
+
+def test_text_no_database_column_takes_is_stored_cleaned(storage_client: TestClient) -> None:
+    participant = f"odd-{uuid.uuid4().hex[:8]}"
+    mapping = {"object": "flash\\u0000light" + "x" * 300, "functions": {"he\\ud800ad": ["nul \\u0000 label"]}}
+    body = json.dumps({"model": DESK_LAMP, "mapping": "MAPPING"}).replace('"MAPPING"', json.dumps(mapping))
+    body = body.replace("\\\\u0000", "\\u0000").replace("\\\\ud800", "\\ud800")  # real escapes in the JSON text
+    response = storage_client.post(
+        "/v1/transfers",
+        content=body.encode(),
+        headers={"Content-Type": "application/json", "X-Participant-Id": participant},
+    )
+    error = error_of(response, 422)
+    assert error["code"] == "invalid_mapping"
+    trials = storage_client.get("/v1/trials", params={"participant_id": participant}, headers=AUTH).json()["data"]
+    [trial] = trials
+    assert trial["verdict"] == "invalid"
+    assert trial["test_object"] == ("flash\ufffdlight" + "x" * 300)[:200]
+    assert trial["mapping"]["functions"] == {"he\ufffdad": ["nul \ufffd label"]}
+
+
+def test_an_unreachable_database_is_503_and_health_says_so(postgres_admin_url: str) -> None:
+    import psycopg
+    from sqlalchemy.engine import make_url
+
+    with postgres_database(postgres_admin_url) as url, running_client(settings_for(url, planning_workers=1)) as client:
+        assert client.post("/v1/models", json=DESK_LAMP).status_code == 201
+        admin = make_url(postgres_admin_url).set(drivername="postgresql").render_as_string(hide_password=False)
+        with psycopg.connect(admin, autocommit=True) as connection:
+            connection.execute(f'DROP DATABASE "{make_url(url).database}" WITH (FORCE)')
+        error = error_of(client.post("/v1/models", json=DESK_LAMP), 503)
+        assert error["code"] == "storage_unavailable"
+        health = client.get("/health").json()
+        assert health["status"] == "degraded"
+        assert health["database"]["reachable"] is False and health["database"]["problem"]
+        assert client.post("/v1/plans", json={"model_id": str(uuid.uuid4())}).status_code == 503
+
+
+def test_a_database_that_cannot_be_reached_at_start_is_a_clear_error() -> None:
+    engine = create_database_engine("postgresql+psycopg://nobody@127.0.0.1:1/none")
+    with pytest.raises(StorageError, match="Cannot prepare the database"):
+        upgrade(engine)
+    with pytest.raises(StorageError, match="not valid"):
+        create_database_engine("not a url")
