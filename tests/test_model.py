@@ -407,3 +407,9 @@ def test_numeric_part_ids_become_text() -> None:
     assert problems == []
     assert model is not None
     assert model.labelling.functions == {"1": ("a",)}
+
+
+def test_an_empty_object_is_an_error_not_a_crash_later() -> None:
+    for text in ("object:\nfunctions: {}\nrules: []\n", '{"object": null, "functions": {}, "rules": []}'):
+        _, problems = model_from(text)
+        assert only(problems, "invalid_type").location.line == 1

@@ -236,9 +236,9 @@ def _read_functions(value: object, source: SourceMap, problems: list[Diagnostic]
 
 
 def _read_object_id(data: Mapping[object, object], source: SourceMap, problems: list[Diagnostic]) -> str:
-    value = data.get("object")
-    if value is None:
+    if "object" not in data:  # reported as missing_field already
         return ""
+    value = data["object"]
     if not isinstance(value, str) or not value.strip():
         problems.append(
             error(

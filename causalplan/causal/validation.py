@@ -106,7 +106,7 @@ def _check_causes(model: CausalModel) -> list[Diagnostic]:
 
 def _example_cause(model: CausalModel) -> str:
     labels = model.labelling.labels()
-    return next(iter(labels.values()), "SOME FUNCTION")
+    return next(iter(labels.values()), "provide electricity")
 
 
 def _check_goal(model: CausalModel) -> list[Diagnostic]:
