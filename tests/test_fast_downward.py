@@ -163,3 +163,46 @@ def test_a_missing_binary_is_an_error_not_a_crash(monkeypatch: pytest.MonkeyPatc
         fast_downward.search_binary.cache_clear()
     assert outcome.status is PlanStatus.ERROR
     assert "/nonexistent/downward" in outcome.message
+
+
+def _sas(task: PlanningTask, mode: str, monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> bytes:
+    """Return the SAS file the translator writes for ``task`` in ``mode`` (in-process or fork)."""
+    monkeypatch.setenv("CAUSALPLAN_TRANSLATOR", mode)
+    compiled = compile_task(task)
+    work = tmp_path / mode
+    work.mkdir(parents=True)
+    (work / "domain.pddl").write_text(compiled.domain)
+    (work / "problem.pddl").write_text(compiled.problem)
+    run = fast_downward._translate(work, time.monotonic() + 60, 2048)
+    assert run.returncode == 0, run.output
+    return (work / "task.sas").read_bytes()
+
+
+@pytest.mark.parametrize("size", [3, 40])
+def test_in_process_translation_writes_exactly_what_a_fresh_process_writes(
+    size: int, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    from causalplan.planners.synthetic import synthetic_task
+
+    task = synthetic_task(size, seed=2)
+    first = _sas(task, "in-process", monkeypatch, tmp_path / "a")
+    again = _sas(task, "in-process", monkeypatch, tmp_path / "b")  # translator state left from the first
+    forked = _sas(task, "fork", monkeypatch, tmp_path / "c")
+    assert first == again == forked
+
+
+def test_an_in_process_translation_stops_at_its_deadline_and_the_next_solve_works(catalog: Catalog) -> None:
+    from causalplan.planners.synthetic import synthetic_task
+
+    big = compile_task(synthetic_task(320, seed=0))
+    outcome = solve(big.domain, big.problem, CONFIGS["fd"], time_limit=0.05)
+    assert outcome.status is PlanStatus.TIMEOUT
+    small = compile_task(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
+    assert solve(small.domain, small.problem, CONFIGS["fd"]).status is PlanStatus.SOLVED
+
+
+def test_the_forked_translator_is_still_available(monkeypatch: pytest.MonkeyPatch, catalog: Catalog) -> None:
+    monkeypatch.setenv("CAUSALPLAN_TRANSLATOR", "fork")
+    compiled = compile_task(build_task(example_model("near/candle.yaml", catalog), catalog.get("candle")))
+    outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd"])
+    assert outcome.status is PlanStatus.SOLVED and len(outcome.actions) == 2

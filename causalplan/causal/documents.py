@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import yaml
@@ -14,14 +15,25 @@ from causalplan.causal.diagnostics import Diagnostic, Location, error
 PathKey = tuple[str | int, ...]
 
 MAX_DOCUMENT_BYTES = 1_000_000
+SAFE_LOADER: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+"""libyaml's safe loader where PyYAML has it: about ten times faster than the pure-Python one."""
 
 
 @dataclass(frozen=True)
 class SourceMap:
-    """The file a document came from and the 1-based line of each value, by path."""
+    """The file a document came from and the 1-based line of each value, by path.
+
+    The lines are worked out from ``text`` only when a location is first asked for: valid
+    documents (the built-in catalog on every start) never pay for it.
+    """
 
     file: str | None = None
-    lines: dict[PathKey, int] = field(default_factory=dict)
+    text: str | None = field(default=None, repr=False, compare=False)
+
+    @cached_property
+    def lines(self) -> dict[PathKey, int]:
+        """Return the 1-based line of each value, by path (empty when there is no text)."""
+        return _line_map(self.text) if self.text else {}
 
     def locate(self, *path: str | int, rule: int | None = None, part: str | None = None) -> Location:
         """Return the location of ``path``, falling back to its nearest located parent."""
@@ -49,7 +61,7 @@ def _record_lines(node: yaml.Node, path: PathKey, lines: dict[PathKey, int], see
 
 def _line_map(text: str) -> dict[PathKey, int]:
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
+        root = yaml.compose(text, Loader=SAFE_LOADER)
     except (yaml.YAMLError, RecursionError):
         return {}
     lines: dict[PathKey, int] = {}
@@ -99,9 +111,9 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
                 ],
             )
         # JSON allows tabs between tokens (never inside strings); YAML does not.
-        return data, SourceMap(file_name, _line_map(text.replace("\t", " "))), []
+        return data, SourceMap(file_name, text.replace("\t", " ")), []
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=SAFE_LOADER)
     except RecursionError:
         return None, SourceMap(file_name), _too_deep(file_name)
     except yaml.YAMLError as exc:
@@ -121,7 +133,7 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
                 )
             ],
         )
-    return data, SourceMap(file_name, _line_map(text)), []
+    return data, SourceMap(file_name, text), []
 
 
 def read_document(path: Path) -> tuple[object, SourceMap, list[Diagnostic]]:

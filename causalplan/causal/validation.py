@@ -122,7 +122,23 @@ def _check_goal(model: CausalModel) -> list[Diagnostic]:
     ]
 
 
+def _is_acyclic(model: CausalModel) -> bool:
+    """Return whether the rules form no cycle (stdlib only: networkx costs ~0.1 s to import)."""
+    from graphlib import CycleError, TopologicalSorter
+
+    sorter: TopologicalSorter[str] = TopologicalSorter()
+    for rule in model.rules:
+        sorter.add(rule.effect_key, *rule.cause_keys)
+    try:
+        sorter.prepare()
+    except CycleError:
+        return False
+    return True
+
+
 def _check_cycles(model: CausalModel) -> list[Diagnostic]:
+    if _is_acyclic(model):
+        return []
     import networkx as nx
 
     from causalplan.causal.graph import causal_graph

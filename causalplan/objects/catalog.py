@@ -1,4 +1,8 @@
-"""The object catalog: the built-in objects shipped as data files, plus a user's own folder."""
+"""The object catalog: the built-in objects shipped as data files, plus a user's own folder.
+
+Checking an object file needs pydantic (~0.15 s to import with the schema); a file that was
+checked before is read back from ``objects.cache`` instead, keyed by its exact text.
+"""
 
 from __future__ import annotations
 
@@ -6,17 +10,21 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-
-from pydantic import ValidationError
+from typing import TYPE_CHECKING
 
 from causalplan.causal.diagnostics import Location
 from causalplan.causal.documents import parse_text
 from causalplan.causal.labels import closest
 from causalplan.causal.validation import ObjectSummary
 from causalplan.errors import CatalogError, UnknownObjectError
+from causalplan.objects.cache import cached_object
 from causalplan.objects.model import AssemblyObject, Connector, Fit, Part, Requirement
-from causalplan.objects.schema import RESERVED_WORDS, FitSchema, ObjectSchema
 from causalplan.objects.shapes import build_geometry, unit
+
+if TYPE_CHECKING:
+    from pydantic import ValidationError
+
+    from causalplan.objects.schema import FitSchema, ObjectSchema
 
 OBJECT_FILE_SUFFIXES = (".yaml", ".yml", ".json")
 
@@ -50,6 +58,8 @@ def _build_fit(schema: FitSchema, specs: dict[tuple[str, str], str]) -> Fit:
 
 def build_object(schema: ObjectSchema) -> AssemblyObject:
     """Cross-check a schema-valid object file and return the object; ValueError says what is wrong."""
+    from causalplan.objects.schema import RESERVED_WORDS
+
     part_ids = [part.id for part in schema.parts]
     fit_ids = [fit.id for fit in schema.fits]
     for ids, what in ((part_ids, "part"), (fit_ids, "fit")):
@@ -103,7 +113,15 @@ def _describe_validation_error(exc: ValidationError) -> str:
 
 
 def parse_object(text: str, file_name: str) -> AssemblyObject:
-    """Parse one object file's text; CatalogError says what is wrong and where."""
+    """Parse one object file's text (or take it from the cache); CatalogError says what is wrong and where."""
+    return cached_object(text, lambda: _parse_object(text, file_name))
+
+
+def _parse_object(text: str, file_name: str) -> AssemblyObject:
+    from pydantic import ValidationError
+
+    from causalplan.objects.schema import ObjectSchema
+
     data, source, problems = parse_text(text, file_name)
     if problems:
         raise CatalogError(

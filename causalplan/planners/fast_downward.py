@@ -1,14 +1,16 @@
 """Fast Downward, run directly on our PDDL: the only module that starts planner processes.
 
-Both stages run as child processes in a private temporary directory (so concurrent solves
-never share FD's ``output.sas``), with a memory limit; at the time limit they are killed.
-The translator runs in a forked copy of this process, which has already imported it: that
-saves a Python start-up (~100 ms here) per plan, and its global state dies with the child.
-The search binary runs in its own process group. Exit codes map to ``PlanStatus`` in one place.
+Each solve has a private temporary directory (so concurrent solves never share FD's
+``output.sas``), a memory limit and a time limit. The translator is FD's Python package:
+on the main thread it runs in this process (no start-up at all; an alarm stops it at the
+deadline, RLIMIT_AS bounds its memory), on other threads in a forked copy of this process
+that is killed at the deadline. The search binary runs as its own process group, killed at
+the deadline. Exit codes map to ``PlanStatus`` in one place.
 """
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import logging
 import os
@@ -20,6 +22,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -117,6 +120,15 @@ def _limits(memory_mb: int) -> Callable[[], None]:
     return apply
 
 
+def _limit_process(pid: int, memory_mb: int) -> None:
+    limit = memory_mb * 1024 * 1024
+    _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    if hard != resource.RLIM_INFINITY:
+        limit = min(limit, hard)
+    with contextlib.suppress(ProcessLookupError):  # it has already finished
+        resource.prlimit(pid, resource.RLIMIT_AS, (limit, limit))
+
+
 @dataclass(frozen=True)
 class _Run:
     returncode: int | None  # None: killed at the time limit
@@ -137,8 +149,10 @@ def _run(command: list[str], cwd: Path, deadline: float, memory_mb: int, stdin_p
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,
             start_new_session=True,
-            preexec_fn=_limits(memory_mb),
         )
+        # Limited right after the start rather than in a preexec_fn: that would stop Python
+        # from using vfork, and spawning from a large process would cost ~10 ms more.
+        _limit_process(process.pid, memory_mb)
         try:
             output, _ = process.communicate(timeout=max(0.0, deadline - time.monotonic()))
             returncode: int | None = process.returncode
@@ -157,6 +171,26 @@ TRANSLATE_CRITICAL_ERROR = 30
 TRANSLATE_INPUT_ERROR = 31
 
 
+def _run_translator(work: Path) -> int:
+    """Run FD's translator on ``work``'s files in this process; return its exit code.
+
+    Paths are absolute and the SAS file is named, so nothing depends on the working folder.
+    """
+    from fast_downward.translate import main, options, pddl_parser
+
+    options.set_options([str(work / "domain.pddl"), str(work / "problem.pddl"), "--sas-file", str(work / "task.sas")])
+    try:
+        main.main()
+    except MemoryError:
+        return TRANSLATE_OUT_OF_MEMORY
+    except pddl_parser.ParseError as exc:
+        print(exc)
+        return TRANSLATE_INPUT_ERROR
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else TRANSLATE_CRITICAL_ERROR
+    return 0
+
+
 def _translate_in_child(work: Path, memory_mb: int) -> int:
     """Run FD's translator in this (forked) process; return its exit code. Never returns normally."""
     log = os.open(work / "translate.log", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
@@ -165,20 +199,7 @@ def _translate_in_child(work: Path, memory_mb: int) -> int:
     code = TRANSLATE_CRITICAL_ERROR
     try:
         _limits(memory_mb)()
-        os.chdir(work)
-        from fast_downward.translate import main, options, pddl_parser
-
-        options.set_options(["domain.pddl", "problem.pddl", "--sas-file", "task.sas"])
-        try:
-            main.main()
-            code = 0
-        except MemoryError:
-            code = TRANSLATE_OUT_OF_MEMORY
-        except pddl_parser.ParseError as exc:
-            print(exc)
-            code = TRANSLATE_INPUT_ERROR
-        except SystemExit as exc:
-            code = exc.code if isinstance(exc.code, int) else TRANSLATE_CRITICAL_ERROR
+        code = _run_translator(work)
     except BaseException:  # noqa: BLE001 - anything else is the translator's critical error
         import traceback
 
@@ -187,6 +208,57 @@ def _translate_in_child(work: Path, memory_mb: int) -> int:
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)
+
+
+class _TranslatorTimeout(Exception):
+    """Raised by the alarm inside an in-process translation that reached its deadline."""
+
+
+def _translate_here(work: Path, deadline: float, memory_mb: int) -> _Run:
+    """Translate in this process (main thread only): no fork, no start-up; limits by alarm and rlimit.
+
+    FD's translator keeps module state between runs, but rebuilds all of it from the options
+    and files of each run (tests check that its output is byte-identical to a fresh process's).
+    """
+    import io
+
+    started = time.perf_counter()
+    remaining = deadline - time.monotonic()
+    if remaining <= 0:
+        return _Run(None, 0.0, "")
+    captured = io.StringIO()
+
+    def on_alarm(signum: int, frame: object) -> None:
+        raise _TranslatorTimeout
+
+    previous_handler = signal.signal(signal.SIGALRM, on_alarm)
+    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    limit = memory_mb * 1024 * 1024 if hard == resource.RLIM_INFINITY else min(memory_mb * 1024 * 1024, hard)
+    returncode: int | None
+    try:
+        resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+        signal.setitimer(signal.ITIMER_REAL, remaining)
+        with contextlib.redirect_stdout(captured), contextlib.redirect_stderr(captured):
+            returncode = _run_translator(work)
+    except _TranslatorTimeout:
+        returncode = None
+    except Exception:  # noqa: BLE001 - anything else is the translator's critical error
+        import traceback
+
+        captured.write(traceback.format_exc())
+        returncode = TRANSLATE_CRITICAL_ERROR
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous_handler)
+        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
+    return _Run(returncode, time.perf_counter() - started, captured.getvalue())
+
+
+def _translator_in_process() -> bool:
+    """Return whether to translate in this process: only on the main thread (alarms need it)."""
+    if os.environ.get("CAUSALPLAN_TRANSLATOR", "in-process") == "fork":
+        return False
+    return threading.current_thread() is threading.main_thread()
 
 
 def _wait(pid: int, deadline: float) -> int | None:
@@ -206,6 +278,8 @@ def _translate(work: Path, deadline: float, memory_mb: int) -> _Run:
     """Run the translator on ``work``'s domain.pddl and problem.pddl, writing task.sas."""
     import fast_downward.translate.main  # noqa: F401 - imported once here, so the fork has it
 
+    if _translator_in_process():
+        return _translate_here(work, deadline, memory_mb)
     started = time.perf_counter()
     sys.stdout.flush()
     sys.stderr.flush()

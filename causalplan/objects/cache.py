@@ -1,0 +1,66 @@
+"""A disk cache of checked catalog objects, so a command does not re-validate unchanged files.
+
+Each entry is the pickled ``AssemblyObject`` of one object file, named by a hash of the file's
+exact text and the causalplan version: an edited file, or a new causalplan, misses the cache.
+Only files that passed every check are stored. The folder is ``CAUSALPLAN_CACHE_DIR``, else
+``$XDG_CACHE_HOME/causalplan``, else ``~/.cache/causalplan``; ``CAUSALPLAN_CACHE_DIR=off``
+turns it off. A cache that cannot be read or written is ignored (it only costs time).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import pickle
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+from causalplan import __version__
+from causalplan.objects.model import AssemblyObject
+
+logger = logging.getLogger(__name__)
+
+
+def cache_folder() -> Path | None:
+    """Return the cache folder, or None when caching is off."""
+    configured = os.environ.get("CAUSALPLAN_CACHE_DIR")
+    if configured == "off":
+        return None
+    if configured:
+        return Path(configured)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "causalplan"
+
+
+def _entry(text: str) -> Path | None:
+    folder = cache_folder()
+    if folder is None:
+        return None
+    digest = hashlib.sha256(f"{__version__}\0{text}".encode()).hexdigest()[:32]
+    return folder / f"object-{digest}.pickle"
+
+
+def cached_object(text: str, parse: Callable[[], AssemblyObject]) -> AssemblyObject:
+    """Return the object of a file's ``text``: from the cache, or ``parse()`` it and store it."""
+    entry = _entry(text)
+    if entry is not None:
+        try:
+            loaded = pickle.loads(entry.read_bytes())
+            if isinstance(loaded, AssemblyObject):
+                return loaded
+        except FileNotFoundError:
+            pass
+        except Exception as exc:  # noqa: BLE001 - a damaged or stale entry is re-made, never trusted
+            logger.debug("ignoring catalog cache entry %s: %s", entry, exc)
+    obj = parse()
+    if entry is not None:
+        try:
+            entry.parent.mkdir(parents=True, exist_ok=True)
+            with tempfile.NamedTemporaryFile(dir=entry.parent, delete=False, suffix=".tmp") as handle:
+                handle.write(pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL))
+            os.replace(handle.name, entry)
+        except OSError as exc:
+            logger.debug("cannot write catalog cache entry %s: %s", entry, exc)
+    return obj
