@@ -40,3 +40,11 @@ def example_mapping(relative: str, catalog: Catalog) -> Labelling:
     assert loaded.is_valid, loaded.report.as_dict()
     assert loaded.mapping is not None
     return loaded.mapping
+
+
+@pytest.fixture(autouse=True)
+def _fresh_solve_cache() -> None:
+    """Start every test with Fast Downward's answer cache empty, so runs are real unless a test repeats them."""
+    from causalplan.planners import fast_downward
+
+    fast_downward.clear_solve_cache()

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from causalplan import __version__
+from causalplan.objects.model import AssemblyObject
 from causalplan.pddl.identifiers import comment, node_identifiers
 from causalplan.pddl.task import PlanningTask
 
@@ -53,7 +54,7 @@ def write_domain(task: PlanningTask, node_names: dict[str, str]) -> str:
     lines = [
         f";; causalplan {__version__}: the {comment(task.obj.name)} and a causal model of '{comment(task.goal)}'.",
         f"(define (domain causalplan-{task.obj.id})",
-        f"  (:requirements {REQUIREMENTS})",
+        requirements_line(),
         "  (:types part fit)",
         f"  (:constants {_names(list(task.obj.part_ids), '              ')} - part)",
         "  (:predicates",
@@ -79,17 +80,26 @@ def write_domain(task: PlanningTask, node_names: dict[str, str]) -> str:
         lines.append(f"  ;; rule {rule.index}: {comment(rule.text)}")
         lines.append(f"  (:derived ({node_names[rule.effect_key]}) {body})")
     lines += ["", "  ;; Assembly primitives: attach a new part to the assembly through a free fit."]
-    lines += [_action(primitive) for primitive in primitives]
-    lines.append(")")
+    lines += [actions_text(primitives), ")"]
     return "\n".join(lines) + "\n"
 
 
-def write_problem(task: PlanningTask, node_names: dict[str, str]) -> str:
-    """Return the problem: the fits as objects, the starting assembly, the goal node."""
-    obj = task.obj
+def requirements_line() -> str:
+    """Return the domain's ``:requirements`` line."""
+    return f"  (:requirements {REQUIREMENTS})"
+
+
+def actions_text(primitives: list[str]) -> str:
+    """Return the action schemas of ``primitives``, one per primitive."""
+    return "\n".join(_action(primitive) for primitive in primitives)
+
+
+def problem_text(obj: AssemblyObject, goal: str, goal_comment: str | None = None, comments: bool = True) -> str:
+    """Return the problem: the fits as objects, the starting assembly, the goal predicate ``goal``."""
     init = [f"    (in-assembly {obj.base})"]
     for fit in obj.fits:
-        init.append(f"    ;; {fit.id}: {comment(obj.step_text(fit))}")
+        if comments:
+            init.append(f"    ;; {fit.id}: {comment(obj.step_text(fit))}")
         facts = [
             f"(available {fit.id})",
             f"({_fit_predicate(fit.primitive)} {fit.id})",
@@ -100,21 +110,23 @@ def write_problem(task: PlanningTask, node_names: dict[str, str]) -> str:
         init.append("    " + " ".join(facts))
     fits = [fit.id for fit in obj.fits]
     objects = f"  (:objects {_names(fits, '            ')} - fit)" if fits else "  (:objects)"
-    return (
-        "\n".join(
-            [
-                f"(define (problem {obj.id}-{node_names[task.goal_key]})",
-                f"  (:domain causalplan-{obj.id})",
-                objects,
-                "  (:init",
-                *init,
-                "  )",
-                f"  (:goal ({node_names[task.goal_key]})) ; {comment(task.goal)}",
-                ")",
-            ]
-        )
-        + "\n"
-    )
+    goal_line = f"  (:goal ({goal}))" + (f" ; {comment(goal_comment)}" if goal_comment and comments else "")
+    lines = [
+        f"(define (problem {obj.id}-{goal})",
+        f"  (:domain causalplan-{obj.id})",
+        objects,
+        "  (:init",
+        *init,
+        "  )",
+        goal_line,
+        ")",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def write_problem(task: PlanningTask, node_names: dict[str, str]) -> str:
+    """Return the problem: the fits as objects, the starting assembly, the goal node."""
+    return problem_text(task.obj, node_names[task.goal_key], task.goal)
 
 
 def compile_task(task: PlanningTask) -> CompiledTask:

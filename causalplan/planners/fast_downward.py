@@ -24,8 +24,9 @@ import sys
 import tempfile
 import threading
 import time
+from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 from importlib.util import find_spec
 from pathlib import Path
@@ -317,7 +318,12 @@ def _tail(output: str, lines: int = 8) -> str:
     return "\n".join(output.strip().splitlines()[-lines:])
 
 
-def solve(
+SOLVE_CACHE_SIZE = 512
+_solved: OrderedDict[tuple[str, str, str], SearchOutcome] = OrderedDict()
+_solved_lock = threading.Lock()
+
+
+def _solve_uncached(
     domain: str,
     problem: str,
     config: SearchConfig,
@@ -382,3 +388,39 @@ def solve(
         if not plan_file.exists():
             return SearchOutcome(PlanStatus.ERROR, timing=timing, message="FD reported success but wrote no plan.")
         return SearchOutcome(PlanStatus.SOLVED, parse_plan(plan_file.read_text(encoding="utf-8")), timing)
+
+
+def solve(
+    domain: str,
+    problem: str,
+    config: SearchConfig,
+    time_limit: float = DEFAULT_TIME_LIMIT,
+    memory_limit_mb: int = DEFAULT_MEMORY_LIMIT_MB,
+) -> SearchOutcome:
+    """Translate and search one PDDL task with FD; never raises for planner failures.
+
+    Definite answers (a plan, or proof there is none) are kept in a bounded in-memory cache
+    keyed by the exact PDDL texts and configuration: FD is deterministic, so a repeated task
+    gets the same answer without running it (``timing`` then has only ``cached``).
+    """
+    key = (config.search, domain, problem)
+    started = time.perf_counter()
+    with _solved_lock:
+        known = _solved.get(key)
+        if known is not None:
+            _solved.move_to_end(key)
+    if known is not None:
+        return replace(known, timing={"cached": time.perf_counter() - started})
+    outcome = _solve_uncached(domain, problem, config, time_limit, memory_limit_mb)
+    if outcome.status in (PlanStatus.SOLVED, PlanStatus.UNSOLVABLE):
+        with _solved_lock:
+            _solved[key] = outcome
+            while len(_solved) > SOLVE_CACHE_SIZE:
+                _solved.popitem(last=False)
+    return outcome
+
+
+def clear_solve_cache() -> None:
+    """Forget every cached answer (tests and benchmarks that time real runs use it)."""
+    with _solved_lock:
+        _solved.clear()
