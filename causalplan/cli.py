@@ -516,6 +516,80 @@ def compare(
 
 
 @app.command()
+def batch(
+    trials_file: Annotated[
+        Path,
+        typer.Argument(help='Trials: JSON Lines, one {"id", "model", "mapping"} per line (or a JSON/YAML list).'),
+    ],
+    planner: PlannerOption = "auto",
+    time_limit: TimeLimitOption = 30.0,
+    simulate: Annotated[
+        bool, typer.Option("--simulate/--no-simulate", help="Check plans in the physics simulator (as transfer does).")
+    ] = True,
+    out: Annotated[Path, typer.Option("--out", help="Folder for verdicts.csv and verdicts.json.")] = Path("out/batch"),
+    catalog: CatalogOption = None,
+) -> None:
+    """Judge many transfer trials (e.g. a study's participants) and write their verdicts and reasons.
+
+    What can be decided without the planner is (invalid input, a function no part carries);
+    equal planning problems are solved once. The verdicts are those `causalplan transfer`
+    gives one trial at a time.
+    """
+    import csv
+    import time
+
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.table import Table
+
+    from causalplan.transfer.batch import CSV_COLUMNS, read_trials, run_batch
+
+    _check_planner(planner)
+    objects = _catalog(catalog)
+    if not trials_file.is_file():
+        _fail("file_not_found", f"There is no file {trials_file}.")
+    trials = list(read_trials(trials_file))
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        _fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
+    started = time.perf_counter()
+    with Progress(
+        TextColumn("judging trials"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=_console(stderr=True),
+        transient=True,
+    ) as progress:
+        bar = progress.add_task("trials", total=len(trials))
+        results = run_batch(trials, objects, planner, time_limit, simulate, lambda: progress.advance(bar))
+    seconds = time.perf_counter() - started
+    with (out / "verdicts.csv").open("w", newline="", encoding="utf-8") as handle:
+        writer = csv.DictWriter(handle, fieldnames=CSV_COLUMNS)
+        writer.writeheader()
+        writer.writerows(result.row() for result in results)
+    (out / "verdicts.json").write_text(
+        json.dumps([{"id": result.trial_id, **result.verdict.as_dict()} for result in results], indent=1) + "\n",
+        encoding="utf-8",
+    )
+    console = _console()
+    table = Table("verdict", "trials", "decided by", title=f"{len(results)} trials from {trials_file}")
+    verdicts = sorted({result.verdict.verdict.value for result in results})
+    for value in verdicts:
+        mine = [result for result in results if result.verdict.verdict.value == value]
+        deciders: dict[str, int] = {}
+        for result in mine:
+            deciders[result.verdict.decided_by] = deciders.get(result.verdict.decided_by, 0) + 1
+        table.add_row(value, str(len(mine)), ", ".join(f"{name} {count}" for name, count in sorted(deciders.items())))
+    console.print(table)
+    rate = len(results) / seconds if seconds > 0 else float("inf")
+    console.print(
+        f"{len(results)} trials in {seconds:.2f} s ({rate:.0f} trials/s). "
+        f"Wrote {out / 'verdicts.csv'} and {out / 'verdicts.json'}"
+    )
+
+
+@app.command()
 def planners(as_json: JsonOption = False) -> None:
     """List the planners, what each is for, and whether it can run on this machine."""
     from rich.table import Table

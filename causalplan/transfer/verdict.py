@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import StrEnum
+from functools import lru_cache
 from typing import TYPE_CHECKING
 
 from causalplan.causal.diagnostics import Report, Severity
@@ -21,7 +22,7 @@ from causalplan.objects.model import AssemblyObject
 from causalplan.pddl.task import build_task
 from causalplan.planners.fast_downward import DEFAULT_TIME_LIMIT
 from causalplan.planners.pipeline import plan_task
-from causalplan.planners.result import PlanResult, PlanStatus
+from causalplan.planners.result import PlanResult, PlanStatus, PlanStep
 
 if TYPE_CHECKING:
     from causalplan.sim import SimulationReport
@@ -173,6 +174,14 @@ def _mapping_reasons(model: CausalModel, mapping: Labelling, test: AssemblyObjec
     return reasons, reachable
 
 
+@lru_cache(maxsize=256)
+def _simulated(obj: AssemblyObject, steps: tuple[PlanStep, ...]) -> SimulationReport:
+    """Return the simulator's report of ``steps`` on ``obj`` (deterministic, so cached)."""
+    from causalplan.sim import RenderMode, simulate_plan  # PyBullet loads only when a plan is simulated
+
+    return simulate_plan(obj, steps, render=RenderMode.NONE)
+
+
 def evaluate_transfer(
     model: CausalModel,
     mapping: Labelling,
@@ -186,8 +195,6 @@ def evaluate_transfer(
     A plan that replay finds valid under the true mechanism (the fast pre-check) is then run
     in the physics simulator, unless ``simulate`` is False, and the simulator has the last word.
     """
-    from causalplan.sim import RenderMode, simulate_plan  # PyBullet loads only when a plan is simulated
-
     training, test = catalog.get(model.object_id), catalog.get(mapping.object_id)
     kind = generalization(training, test)
     reasons, reachable = _mapping_reasons(model, mapping, test)
@@ -195,7 +202,7 @@ def evaluate_transfer(
         return TransferVerdict(Verdict.FAILS, training.id, test.id, kind, "precheck", tuple(reasons))
     result = plan_task(build_task(model, test, mapping), planner, time_limit)
     if result.status is PlanStatus.SOLVED and result.valid_under_true_mechanism:
-        simulation = simulate_plan(test, result.steps, render=RenderMode.NONE) if simulate else None
+        simulation = _simulated(test, result.steps) if simulate else None
         if simulation is None or simulation.produces_goal:
             return TransferVerdict(
                 Verdict.TRANSFERS, training.id, test.id, kind, "planner", tuple(reasons), result, simulation=simulation
