@@ -89,6 +89,7 @@ def in_process_latencies(requests: int, planner: str) -> tuple[list[float], floa
     from causalplan.inputs import model_from_data
     from causalplan.objects.catalog import load_catalog
     from causalplan.pddl.task import build_task
+    from causalplan.planners import fast_downward
     from causalplan.planners.pipeline import plan_task
 
     catalog = load_catalog()
@@ -99,10 +100,34 @@ def in_process_latencies(requests: int, planner: str) -> tuple[list[float], floa
     seconds = []
     started = time.perf_counter()
     for _ in range(requests):
+        fast_downward.clear_solve_cache()  # every solve a real one, as for a model never seen
         solve_started = time.perf_counter()
         result = plan_task(task, planner)
         seconds.append(time.perf_counter() - solve_started)
         assert result.has_plan, result.message
+    return seconds, time.perf_counter() - started
+
+
+def up_latencies(requests: int) -> tuple[list[float], float]:
+    """Solve the same task through unified-planning's OneshotPlanner("fast-downward"); return times and wall."""
+    from causalplan.causal.documents import SourceMap
+    from causalplan.inputs import model_from_data
+    from causalplan.objects.catalog import load_catalog
+    from causalplan.pddl.task import build_task
+    from causalplan.planners.up_problem import solve_with_up
+
+    catalog = load_catalog()
+    loaded = model_from_data(MODEL, SourceMap(), catalog)
+    assert loaded.model is not None
+    task = build_task(loaded.model, catalog.get("desk_lamp"))
+    solve_with_up(task, "fast-downward")  # warm-up: imports
+    seconds = []
+    started = time.perf_counter()
+    for _ in range(requests):
+        solve_started = time.perf_counter()
+        outcome = solve_with_up(task, "fast-downward")
+        seconds.append(time.perf_counter() - solve_started)
+        assert outcome.actions, outcome.message
     return seconds, time.perf_counter() - started
 
 
@@ -113,10 +138,16 @@ def free_port() -> int:
         return port
 
 
-def start_server(folder: Path, workers: int) -> tuple[subprocess.Popen[bytes], str]:
-    """Start ``causalplan serve`` on loopback; return it and its base URL once /health answers."""
+def start_server(folder: Path, workers: int, cold: bool = False) -> tuple[subprocess.Popen[bytes], str]:
+    """Start ``causalplan serve`` on loopback; return it and its base URL once /health answers.
+
+    ``cold``: the workers keep no Fast Downward answers, so every new model is really solved
+    (otherwise a model that differs only in its words shares the solve of an earlier one).
+    """
     port = free_port()
     environment = {**os.environ, "CAUSALPLAN_QUEUE_SIZE": "64", "CAUSALPLAN_CACHE_SIZE": "4096"}
+    if cold:
+        environment["CAUSALPLAN_SOLVE_CACHE_SIZE"] = "0"
     command = [sys.executable, "-m", "causalplan.cli", "serve", "--host", "127.0.0.1", "--port", str(port)]
     command += ["--workers", str(workers), "--database-url", f"sqlite:///{folder / 'bench.sqlite3'}"]
     server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=environment)
@@ -185,22 +216,30 @@ def main() -> None:
         ).result()
     reference = Scenario("in-process plan_task", 1, reference_seconds, reference_wall, {"solved": requests})
 
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as up_process:
+        up_seconds, up_wall = up_process.submit(up_latencies, requests).result()
+    up_reference = Scenario("unified-planning OneshotPlanner", 1, up_seconds, up_wall, {"solved": requests})
+
     scenarios: list[Scenario] = []
-    with tempfile.TemporaryDirectory(prefix="causalplan-bench-") as folder:
-        server, base = start_server(Path(folder), args.workers)
-        try:
-            for _ in range(2 * args.workers):  # warm-up: every worker has planned once
-                httpx.post(f"{base}/v1/plans", json={"model": unique_model(), "planner": args.planner}, timeout=120)
-            for cached in (False, True):
-                for clients in CLIENT_COUNTS:
-                    name = "POST /v1/plans, " + ("cached" if cached else "new model")
-                    scenarios.append(run_clients(base, name, clients, requests, args.planner, cached))
-        finally:
-            server.send_signal(signal.SIGINT)
-            server.wait(30)
+    for cold in (True, False):
+        with tempfile.TemporaryDirectory(prefix="causalplan-bench-") as folder:
+            server, base = start_server(Path(folder), args.workers, cold)
+            try:
+                for _ in range(2 * args.workers):  # warm-up: every worker has planned once
+                    body = {"model": unique_model(), "planner": args.planner}
+                    httpx.post(f"{base}/v1/plans", json=body, timeout=120)
+                for cached in (False, True) if not cold else (False,):
+                    for clients in CLIENT_COUNTS:
+                        name = "POST /v1/plans, " + (
+                            "cached" if cached else "new model, cold" if cold else "new words, same problem"
+                        )
+                        scenarios.append(run_clients(base, name, clients, requests, args.planner, cached))
+            finally:
+                server.send_signal(signal.SIGINT)
+                server.wait(30)
 
     header = (
-        f"{'scenario':<32} {'clients':>7} {'requests':>8} {'p50':>10} {'p95':>10} {'req/s':>8} "
+        f"{'scenario':<40} {'clients':>7} {'requests':>8} {'p50':>10} {'p95':>10} {'req/s':>8} "
         f"{'p50 ratio':>9} {'req/s ratio':>11}  outcomes"
     )
     print(
@@ -211,12 +250,26 @@ def main() -> None:
     print("-" * len(header))
     for scenario in [reference, *scenarios]:
         print(
-            f"{scenario.name:<32} {scenario.clients:>7} {len(scenario.seconds):>8} {milliseconds(scenario.p50):>10} "
+            f"{scenario.name:<40} {scenario.clients:>7} {len(scenario.seconds):>8} {milliseconds(scenario.p50):>10} "
             f"{milliseconds(scenario.p95):>10} {scenario.throughput:>8.1f} "
             f"{scenario.p50 / reference.p50:>8.2f}x {scenario.throughput / reference.throughput:>10.2f}x  "
             + ", ".join(f"{count} {status}" for status, count in sorted(scenario.statuses.items()))
         )
-    print("ratios: service / in-process (p50 latency: lower is better; req/s: higher is better)")
+    print(
+        f"{up_reference.name:<40} {1:>7} {len(up_seconds):>8} {milliseconds(up_reference.p50):>10} "
+        f"{milliseconds(up_reference.p95):>10} {up_reference.throughput:>8.1f} "
+        f"{up_reference.p50 / reference.p50:>8.2f}x {up_reference.throughput / reference.throughput:>10.2f}x"
+    )
+    print("ratios: against the in-process plan_task (p50 latency: lower is better; req/s: higher is better)")
+    cold_one = next(s for s in scenarios if s.name.endswith("cold") and s.clients == 1)
+    cached_one = next(s for s in scenarios if s.name.endswith("cached") and s.clients == 1)
+    speedup = up_reference.p50 / cold_one.p50
+    print(
+        f"targets: cold p50 {milliseconds(cold_one.p50)} (<= 15 ms: {'met' if cold_one.p50 <= 0.015 else 'NOT met'}),"
+        f" p95 {milliseconds(cold_one.p95)} (<= 40 ms: {'met' if cold_one.p95 <= 0.040 else 'NOT met'}); "
+        f"UP / service cold: {speedup:.1f}x (>= 8x: {'met' if speedup >= 8 else 'NOT met'}); "
+        f"cached p50 {milliseconds(cached_one.p50)} (<= 2 ms: {'met' if cached_one.p50 <= 0.002 else 'NOT met'})"
+    )
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     RESULTS.write_text(
         json.dumps(
@@ -227,7 +280,7 @@ def main() -> None:
                 "cores": os.cpu_count(),
                 "scenarios": [
                     {**asdict(s), "p50_s": s.p50, "p95_s": s.p95, "requests_per_s": s.throughput}
-                    for s in [reference, *scenarios]
+                    for s in [reference, up_reference, *scenarios]
                 ],
             },
             indent=2,

@@ -318,7 +318,8 @@ def _tail(output: str, lines: int = 8) -> str:
     return "\n".join(output.strip().splitlines()[-lines:])
 
 
-SOLVE_CACHE_SIZE = 512
+SOLVE_CACHE_SIZE = int(os.environ.get("CAUSALPLAN_SOLVE_CACHE_SIZE", "512"))
+"""Answers kept in memory (``CAUSALPLAN_SOLVE_CACHE_SIZE``; 0 turns the cache off)."""
 _solved: OrderedDict[tuple[str, str, str], SearchOutcome] = OrderedDict()
 _solved_lock = threading.Lock()
 
@@ -412,7 +413,7 @@ def solve(
     if known is not None:
         return replace(known, timing={"cached": time.perf_counter() - started})
     outcome = _solve_uncached(domain, problem, config, time_limit, memory_limit_mb)
-    if outcome.status in (PlanStatus.SOLVED, PlanStatus.UNSOLVABLE):
+    if SOLVE_CACHE_SIZE > 0 and outcome.status in (PlanStatus.SOLVED, PlanStatus.UNSOLVABLE):
         with _solved_lock:
             _solved[key] = outcome
             while len(_solved) > SOLVE_CACHE_SIZE:
