@@ -28,7 +28,7 @@ from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
 from causalplan.service.planning import PlannerPool
 from causalplan.service.responses import SafeJSONResponse
-from causalplan.service.routes import health, models, objects, plans, research, transfers
+from causalplan.service.routes import health, models, objects, plans, research, simulations, transfers
 from causalplan.service.schemas import error_responses
 from causalplan.service.settings import Settings
 from causalplan.service.worker import probe_job
@@ -249,7 +249,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_exception_handler(StarletteHTTPException, handle_http_error)
     app.add_exception_handler(Exception, handle_unexpected_error)
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
-    for module in (models, plans, transfers, objects, research, health):
+    for module in (models, plans, simulations, transfers, objects, research, health):
         app.include_router(module.router)
     return app
 

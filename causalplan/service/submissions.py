@@ -192,3 +192,25 @@ def transfer(services: Services, model: CausalModel, mapping: Labelling, planner
     if data["verdict"] != Verdict.UNDECIDED.value:
         services.cache.put(key, data)
     return Answer(data, False, time.perf_counter() - started)
+
+
+def simulate(
+    services: Services, model: CausalModel, mapping: Labelling | None, planner: str, time_limit: float, picture: bool
+) -> Answer:
+    """Return the plan and its simulation report (and picture), from the cache or a worker."""
+    started = time.perf_counter()
+    key = request_key(f"simulate:{picture}", model, mapping, planner)
+    cached = services.cache.get(key)
+    if cached is not None:
+        return Answer(cached, True, time.perf_counter() - started)
+    args = (model, mapping, planner, time_limit, tuple(services.settings.catalog_folders), picture)
+    grace = services.settings.solve_grace_seconds + SIMULATION_SECONDS
+    data = services.pool.run(worker.simulate_job, args, time_limit + grace)
+    planning = data["planning"]
+    if isinstance(planning, dict) and PlanStatus(str(planning["status"])).is_final():
+        services.cache.put(key, data)
+    return Answer(data, False, time.perf_counter() - started)
+
+
+SIMULATION_SECONDS = 30.0
+"""Time a worker gets for the simulation and its picture, beyond the planner's limit."""

@@ -142,3 +142,33 @@ def probe_job() -> dict[str, object]:
         },
         "optional_backends_failed": failed,
     }
+
+
+def simulate_job(
+    model: CausalModel,
+    mapping: Labelling | None,
+    planner: str,
+    time_limit: float,
+    catalog_folders: tuple[Path, ...],
+    picture: bool,
+) -> dict[str, object]:
+    """Plan ``model`` (on the mapping's object), run the plan in the physics simulator.
+
+    Returns the plan (as ``causalplan plan --json``), the simulator's report and, when asked,
+    the picture of the final assembly as a PNG data URL.
+    """
+    import base64
+
+    from causalplan.sim import RenderMode, simulate_plan
+
+    catalog = _catalog(catalog_folders)
+    target = catalog.get((mapping or model.labelling).object_id)
+    result = pipeline.plan_task(build_task(model, target, mapping), planner, time_limit)
+    data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "image": None}
+    if not result.has_plan:
+        return data
+    report = simulate_plan(target, result.steps, render=RenderMode.FINAL if picture else RenderMode.NONE)
+    data["simulation"] = report.as_dict()
+    if picture and report.picture is not None:
+        data["image"] = "data:image/png;base64," + base64.b64encode(report.picture.png()).decode("ascii")
+    return data

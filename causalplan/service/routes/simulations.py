@@ -1,0 +1,48 @@
+"""POST /v1/simulations: plan a model and run the plan in the headless physics simulator."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter
+from pydantic import Field
+
+from causalplan.service import crud, submissions
+from causalplan.service.deps import ClientIdsDep, ServicesDep, SessionDep
+from causalplan.service.schemas import PlanIn, error_responses
+
+router = APIRouter(prefix="/v1/simulations", tags=["simulations"], responses=error_responses(404, 429, 503, 504))
+
+
+class SimulationIn(PlanIn):
+    """POST /v1/simulations: what POST /v1/plans takes, and whether to draw the final assembly."""
+
+    picture: bool = Field(default=True, description="Also return a PNG of the final assembly as a data URL.")
+
+
+@router.post("", summary="Plan a model and simulate the plan")
+def create_simulation(
+    body: SimulationIn, services: ServicesDep, session: SessionDep, client: ClientIdsDep
+) -> dict[str, Any]:
+    """Plan as POST /v1/plans does, then run the plan in headless PyBullet and check every step.
+
+    Returns `planning` (the plan request's JSON), `simulation` (per-step checks with measured
+    figures, stability, the true mechanism on the simulated assembly, `produces_goal`) and
+    `image` (a PNG data URL of the final assembly, when `picture` is true), plus `cached`.
+    """
+    planner = submissions.resolve_planner(body.planner)
+    time_limit = submissions.resolve_time_limit(body.time_limit, services.settings)
+    submission = submissions.model_for_request(body.model, body.model_id, services, session, client)
+    mapping, mapping_report = None, None
+    if body.mapping is not None:
+        mapping, mapping_report, _ = submissions.read_mapping(body.mapping, services)
+    problem = submissions.invalid_input_error(submission, mapping_report)
+    if problem is not None:
+        if submission.is_new:
+            crud.save(session, [submission.record])
+        raise problem
+    assert submission.model is not None
+    answer = submissions.simulate(services, submission.model, mapping, planner, time_limit, body.picture)
+    if submission.is_new:
+        crud.save(session, [submission.record])
+    return {**answer.data, "cached": answer.cached, "model_id": str(submission.record.id)}
