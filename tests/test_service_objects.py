@@ -46,8 +46,8 @@ def test_health_reports_planners_database_pool_and_limits(client: TestClient) ->
     assert health["database"] == {
         "reachable": True,
         "backend": "sqlite",
-        "revision": "0001",
-        "expected_revision": "0001",
+        "revision": "0002",
+        "expected_revision": "0002",
         "problem": None,
     }
     assert health["pool"]["workers"] == 2 and health["pool"]["max_in_flight"] == 18
@@ -69,6 +69,7 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/models/{model_id}",
         "/v1/models/{model_id}/graph",
         "/v1/plans",
+        "/v1/simulations",
         "/v1/transfers",
         "/v1/objects",
         "/v1/objects/{object_id}",
