@@ -46,8 +46,8 @@ def test_health_reports_planners_database_pool_and_limits(client: TestClient) ->
     assert health["database"] == {
         "reachable": True,
         "backend": "sqlite",
-        "revision": "0001",
-        "expected_revision": "0001",
+        "revision": "0002",
+        "expected_revision": "0002",
         "problem": None,
     }
     assert health["pool"]["workers"] == 2 and health["pool"]["max_in_flight"] == 18
@@ -75,6 +75,11 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/objects/{object_id}",
         "/v1/trials",
         "/v1/export",
+        "/v1/experiments",
+        "/v1/experiments/{experiment_id}",
+        "/v1/experiments/{experiment_id}/participants",
+        "/v1/experiments/{experiment_id}/results",
+        "/v1/experiments/{experiment_id}/export",
         "/health",
     }
     plans = spec["paths"]["/v1/plans"]["post"]["responses"]

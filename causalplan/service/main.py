@@ -31,6 +31,7 @@ from causalplan.service.responses import SafeJSONResponse
 from causalplan.service.routes import health, models, objects, plans, research, simulations, transfers
 from causalplan.service.schemas import error_responses
 from causalplan.service.settings import Settings
+from causalplan.service.web import routers as web_routers
 from causalplan.service.worker import probe_job
 
 logger = logging.getLogger(__name__)
@@ -251,6 +252,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
     for module in (models, plans, simulations, transfers, objects, research, health):
         app.include_router(module.router)
+    for router in web_routers():  # the participant and research pages, and /v1/experiments
+        app.include_router(router)
     return app
 
 

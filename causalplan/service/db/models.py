@@ -1,4 +1,4 @@
-"""The stored records: every submitted model and every transfer trial, with who sent it and when.
+"""The stored records: every submitted model and transfer trial, and the experiments run in the browser.
 
 The schema is managed by the Alembic migrations in ``migrations/``; change a table here, then
 add a revision there (see ``migrate.py``).
@@ -10,7 +10,19 @@ import uuid
 from datetime import UTC, datetime
 from typing import Any
 
-from sqlalchemy import JSON, Boolean, DateTime, Float, ForeignKey, Index, MetaData, String, Uuid
+from sqlalchemy import (
+    JSON,
+    Boolean,
+    DateTime,
+    Float,
+    ForeignKey,
+    Index,
+    Integer,
+    MetaData,
+    String,
+    UniqueConstraint,
+    Uuid,
+)
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
 MAX_CLIENT_ID_LENGTH = 128
@@ -77,3 +89,70 @@ class TrialRecord(Base):
     result: Mapped[dict[str, Any]] = mapped_column(JSON)
 
     model: Mapped[ModelRecord] = relationship(back_populates="trials")
+
+
+MAX_CODE_LENGTH = 64
+"""Longest participant link code (the codes made are 22 characters)."""
+
+
+class ExperimentRecord(Base):
+    """A study: its conditions (training and test objects), counterbalancing and options."""
+
+    __tablename__ = "experiments"
+
+    id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now, index=True)
+    name: Mapped[str] = mapped_column(String(200))
+    description: Mapped[str] = mapped_column(String(2000), default="")
+    design: Mapped[dict[str, Any]] = mapped_column(JSON)
+    is_demo: Mapped[bool] = mapped_column(Boolean, default=False)
+
+    participants: Mapped[list[ParticipantRecord]] = relationship(back_populates="experiment")
+
+
+class ParticipantRecord(Base):
+    """One participant link: condition, counterbalanced object order, progress and saved work.
+
+    ``code`` is the opaque secret in the participant's link; ``work`` holds everything typed
+    so far (drafts included), so a reload or a lost connection loses nothing.
+    """
+
+    __tablename__ = "participants"
+
+    id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
+    code: Mapped[str] = mapped_column(String(MAX_CODE_LENGTH), unique=True)
+    experiment_id: Mapped[uuid.UUID] = mapped_column(ForeignKey("experiments.id", ondelete="RESTRICT"), index=True)
+    condition: Mapped[str] = mapped_column(String(200))
+    ordinal: Mapped[int] = mapped_column(Integer)
+    training_order: Mapped[list[str]] = mapped_column(JSON)
+    test_order: Mapped[list[str]] = mapped_column(JSON)
+    stage: Mapped[str] = mapped_column(String(16))
+    position: Mapped[int] = mapped_column(Integer, default=0)
+    work: Mapped[dict[str, Any]] = mapped_column(JSON)
+    model_id: Mapped[uuid.UUID | None] = mapped_column(ForeignKey("models.id", ondelete="RESTRICT"))
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+    started_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    updated_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+
+    experiment: Mapped[ExperimentRecord] = relationship(back_populates="participants")
+    trials: Mapped[list[ParticipantTrialRecord]] = relationship(
+        back_populates="participant", order_by="ParticipantTrialRecord.position"
+    )
+
+
+class ParticipantTrialRecord(Base):
+    """A participant's step-3 trial on one test object (at most one per object)."""
+
+    __tablename__ = "participant_trials"
+    __table_args__ = (UniqueConstraint("participant_id", "test_object", name="uq_participant_trials_test_object"),)
+
+    id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
+    participant_id: Mapped[uuid.UUID] = mapped_column(ForeignKey("participants.id", ondelete="RESTRICT"), index=True)
+    trial_id: Mapped[uuid.UUID] = mapped_column(ForeignKey("trials.id", ondelete="RESTRICT"), unique=True)
+    test_object: Mapped[str] = mapped_column(String(200))
+    position: Mapped[int] = mapped_column(Integer)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+
+    participant: Mapped[ParticipantRecord] = relationship(back_populates="trials")
+    trial: Mapped[TrialRecord] = relationship()

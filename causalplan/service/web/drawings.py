@@ -1,0 +1,82 @@
+"""The pictures the pages show, kept once drawn: causal graphs (matplotlib, here) and simulator pictures (workers)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+from collections.abc import Hashable, Sequence
+from typing import Any
+
+from causalplan.causal.model import CausalModel
+from causalplan.errors import CausalPlanError
+from causalplan.objects.model import AssemblyObject
+from causalplan.service.deps import Services
+from causalplan.service.routes.models import _draw_lock  # one lock for every matplotlib drawing in the app
+from causalplan.service.web import pictures
+from causalplan.service.web.diagram import diagram_svg
+from causalplan.service.web.pictures import PictureCache
+from causalplan.service.web.results import Rate, chart_svg
+
+logger = logging.getLogger(__name__)
+
+PICTURE_SECONDS = 20.0
+"""Longest a worker may take to draw an object's parts or a plan's result."""
+SVG_HEADERS = {
+    "Content-Security-Policy": "default-src 'none'; style-src 'unsafe-inline'",
+    "X-Content-Type-Options": "nosniff",
+}
+
+_graphs = PictureCache(256)
+_part_pictures = PictureCache(512)
+_plan_pictures = PictureCache(256)
+
+
+def document_key(document: dict[str, Any]) -> str:
+    """Return a short hash of a model document (what its graph is cached under, and its URL's version)."""
+    text = json.dumps(document, sort_keys=True, ensure_ascii=False)
+    return hashlib.sha256(text.encode("utf-8", "replace")).hexdigest()[:16]
+
+
+def graph_svg(model: CausalModel, key: str) -> bytes:
+    """Return the model's causal graph as the pages' SVG, drawn once per ``key``."""
+    svg = _graphs.get(key, lambda: {key: diagram_svg(model)})
+    assert svg is not None
+    return svg
+
+
+def rates_chart(rates: Sequence[Rate]) -> bytes:
+    """Return the bar chart of an experiment's transfer rates (SVG)."""
+    with _draw_lock:
+        return chart_svg(rates)
+
+
+def part_picture(services: Services, obj: AssemblyObject, part_id: str) -> tuple[bytes, str]:
+    """Return the simulator's picture of one part (PNG), or a plain drawing (SVG) when it cannot draw now."""
+    folders = tuple(services.settings.catalog_folders)
+
+    def draw() -> dict[Hashable, bytes]:
+        drawn = services.pool.run(pictures.part_pictures_job, (obj.id, folders), PICTURE_SECONDS)
+        return {(folders, obj.id, part): png for part, png in drawn.items()}
+
+    try:
+        png = _part_pictures.get((folders, obj.id, part_id), draw)
+    except CausalPlanError as exc:  # busy, crashed, or no simulator: a drawing now, the picture next time
+        logger.info("no picture of %s.%s: %s", obj.id, part_id, exc.message)
+        png = None
+    if png is None:
+        return pictures.drawing(obj.part(part_id).name), "image/svg+xml"
+    return png, "image/png"
+
+
+def plan_picture(services: Services, obj: AssemblyObject, fit_ids: tuple[str, ...]) -> bytes:
+    """Return the simulator's picture of the object after the plan that makes ``fit_ids`` (PNG)."""
+    folders = tuple(services.settings.catalog_folders)
+    key = (folders, obj.id, fit_ids)
+
+    def draw() -> dict[Hashable, bytes]:
+        return {key: services.pool.run(pictures.assembly_picture_job, (obj.id, fit_ids, folders), PICTURE_SECONDS)}
+
+    png = _plan_pictures.get(key, draw)
+    assert png is not None
+    return png

@@ -1,0 +1,212 @@
+"""One participant's way through an experiment: which page they are on, what they may change, their work.
+
+The participant record holds the stage and the position in it (which training or test
+object), and ``work``: every draft as typed (step-1 labels per part, the rule box, step-3
+choices), the tutorial's answers and, once step 2 is submitted, the frozen model. Pages that
+are behind the participant (the training model, once step 3 has begun) cannot be changed.
+"""
+
+from __future__ import annotations
+
+import copy
+import uuid
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any
+
+from causalplan.objects.catalog import Catalog
+from causalplan.objects.model import AssemblyObject
+from causalplan.service.db.models import ParticipantRecord, utc_now
+from causalplan.service.web.design import Design
+from causalplan.service.web.errors import StepLockedError
+from causalplan.service.web.study import ParticipantModel, Stage, labels_from_text, rules_from_text
+
+MAX_PLAN_REQUESTS_KEPT = 50
+"""Each 'Show the robot's plan' is logged with the rules of that moment (for research), up to this many."""
+
+
+@dataclass
+class Journey:
+    """A participant record with its experiment's design and objects (in the participant's order)."""
+
+    participant: ParticipantRecord
+    design: Design
+    training: tuple[AssemblyObject, ...]
+    tests: tuple[AssemblyObject, ...]
+
+    @classmethod
+    def of(cls, participant: ParticipantRecord, catalog: Catalog) -> Journey:
+        """Return the journey of a stored participant (UnknownObjectError if the catalog lost an object)."""
+        design = Design.from_dict(participant.experiment.design)
+        return cls(
+            participant,
+            design,
+            tuple(catalog.get(object_id) for object_id in participant.training_order),
+            tuple(catalog.get(object_id) for object_id in participant.test_order),
+        )
+
+    # -- where they are ---------------------------------------------------------------------------
+
+    @property
+    def stage(self) -> Stage:
+        return Stage(self.participant.stage)
+
+    @property
+    def position(self) -> int:
+        return self.participant.position
+
+    @property
+    def goal(self) -> str:
+        return self.training[0].goal
+
+    def current_page(self) -> str:
+        """Return the path (after ``/p/<code>/``) of the page the participant should be on."""
+        if self.stage in (Stage.STEP1, Stage.STEP3):
+            return f"{self.stage.value}/{self.position + 1}"
+        return self.stage.value
+
+    def may_open(self, stage: Stage, index: int = 0) -> bool:
+        """Return whether the page of ``stage`` (object ``index``) is open to the participant now."""
+        if stage is Stage.STEP1:
+            # Going back to step 1 from step 2 is allowed; once step 3 begins the model is fixed.
+            in_range = 0 <= index < len(self.training)
+            return in_range and ((self.stage is Stage.STEP1 and index <= self.position) or self.stage is Stage.STEP2)
+        if stage is Stage.STEP3:
+            return self.stage is Stage.STEP3 and index == self.position
+        return self.stage is stage
+
+    def require_open(self, stage: Stage, index: int = 0) -> None:
+        """Raise StepLockedError unless the page of ``stage`` (object ``index``) is open."""
+        if not self.may_open(stage, index):
+            raise StepLockedError(
+                "This part of the study is closed: it is finished (the training model cannot change once "
+                "step 3 has begun) or not reached yet.",
+                details={"stage": self.stage.value, "position": self.position},
+            )
+
+    def progress(self) -> str:
+        """Return where the participant is, in words (for the researcher)."""
+        if self.stage is Stage.STEP1:
+            return f"step 1, object {self.position + 1} of {len(self.training)}"
+        if self.stage is Stage.STEP3:
+            return f"step 3, object {self.position + 1} of {len(self.tests)}"
+        return {Stage.TUTORIAL: "tutorial", Stage.STEP2: "step 2", Stage.DONE: "finished"}[self.stage]
+
+    # -- their work ---------------------------------------------------------------------------------
+
+    def _work(self) -> dict[str, Any]:
+        return copy.deepcopy(self.participant.work or {})
+
+    def _save(self, work: dict[str, Any]) -> None:
+        # A new dict, so SQLAlchemy sees the JSON column change.
+        now = utc_now()
+        self.participant.work = work
+        self.participant.updated_at = now
+        if self.participant.started_at is None:
+            self.participant.started_at = now
+
+    def tutorial_work(self) -> dict[str, Any]:
+        tutorial: dict[str, Any] = self._work().get("tutorial", {})
+        return tutorial
+
+    def save_tutorial(self, rules: str | None = None, answers: dict[str, str] | None = None) -> None:
+        work = self._work()
+        tutorial = work.setdefault("tutorial", {})
+        if rules is not None:
+            tutorial["rules"] = rules
+        if answers is not None:
+            tutorial["answers"] = answers
+        self._save(work)
+
+    def function_texts(self, object_id: str) -> dict[str, str]:
+        """Return the step-1 boxes of a training object as typed (part id -> text)."""
+        texts: dict[str, str] = self._work().get("functions", {}).get(object_id, {})
+        return texts
+
+    def save_functions(self, object_id: str, texts: dict[str, str]) -> None:
+        work = self._work()
+        work.setdefault("functions", {})[object_id] = texts
+        self._save(work)
+
+    def rules_text(self) -> str:
+        return str(self._work().get("rules", ""))
+
+    def save_rules(self, text: str) -> None:
+        work = self._work()
+        work["rules"] = text
+        self._save(work)
+
+    def draft_model(self) -> ParticipantModel:
+        """Return the model as it stands in the step-1 and step-2 boxes."""
+        functions = {
+            obj.id: {
+                part: labels_from_text(text)
+                for part, text in self.function_texts(obj.id).items()
+                if part in obj.part_ids and labels_from_text(text)
+            }
+            for obj in self.training
+        }
+        rules, _ = rules_from_text(self.rules_text())
+        return ParticipantModel(self.goal, functions, tuple(rules))
+
+    def submitted_model(self) -> ParticipantModel | None:
+        """Return the model submitted in step 2 (None before)."""
+        data = self._work().get("model")
+        return ParticipantModel.from_dict(data) if data else None
+
+    def mapping_entries(self, object_id: str) -> dict[str, dict[str, Any]]:
+        """Return the step-3 choices for a test object as saved (part id -> chosen labels and new lines)."""
+        entries: dict[str, dict[str, Any]] = self._work().get("mappings", {}).get(object_id, {})
+        return entries
+
+    def save_mapping(self, object_id: str, entries: dict[str, dict[str, Any]]) -> None:
+        work = self._work()
+        work.setdefault("mappings", {})[object_id] = entries
+        self._save(work)
+
+    def log_plan_request(self, at: datetime) -> None:
+        """Remember that the participant asked for the robot's plan, with the rules at that moment."""
+        work = self._work()
+        log = work.setdefault("plan_requests", [])
+        log.append({"at": at.isoformat(), "rules": list(self.draft_model().rules)})
+        work["plan_requests"] = log[-MAX_PLAN_REQUESTS_KEPT:]
+        self._save(work)
+
+    # -- moving on ----------------------------------------------------------------------------------
+
+    def finish_tutorial(self) -> None:
+        self.require_open(Stage.TUTORIAL)
+        self._move(Stage.STEP1, 0)
+
+    def finish_functions(self, index: int) -> None:
+        """Move on from step 1 of training object ``index``: to the next object, or to step 2."""
+        self.require_open(Stage.STEP1, index)
+        if self.stage is Stage.STEP2:
+            return  # they came back to change labels; step 2 is where they go next
+        if index + 1 < len(self.training):
+            self._move(Stage.STEP1, max(self.position, index + 1))
+        else:
+            self._move(Stage.STEP2, 0)
+
+    def finish_model(self, model: ParticipantModel, model_id: uuid.UUID) -> None:
+        """Freeze the model submitted in step 2 and begin step 3."""
+        self.require_open(Stage.STEP2)
+        work = self._work()
+        work["model"] = model.as_dict()
+        self._save(work)
+        self.participant.model_id = model_id
+        self._move(Stage.STEP3, 0)
+
+    def finish_test(self, index: int) -> None:
+        """Move on from step 3 of test object ``index``: to the next test object, or to the end."""
+        self.require_open(Stage.STEP3, index)
+        if index + 1 < len(self.tests):
+            self._move(Stage.STEP3, index + 1)
+        else:
+            self._move(Stage.DONE, 0)
+            self.participant.finished_at = utc_now()
+
+    def _move(self, stage: Stage, position: int) -> None:
+        self.participant.stage = stage.value
+        self.participant.position = position
+        self._save(self._work())

@@ -1,0 +1,117 @@
+"""What a participant's actions do: plan their draft model, submit it, and run a step-3 trial.
+
+Models and trials go into the service's own tables (``models``, ``trials``), exactly as the
+JSON API stores them, so ``GET /v1/trials`` and ``/v1/export`` have them too; the
+experiment's ``participant_trials`` row links each trial to its participant.
+"""
+
+from __future__ import annotations
+
+import uuid
+from typing import Any
+
+from sqlalchemy.orm import Session
+
+from causalplan.service import crud, submissions
+from causalplan.service.crud import ClientIds
+from causalplan.service.db.models import ParticipantTrialRecord, utc_now
+from causalplan.service.deps import Services
+from causalplan.service.errors import InvalidModelError
+from causalplan.service.web import store
+from causalplan.service.web.errors import StepLockedError
+from causalplan.service.web.journey import Journey
+from causalplan.service.web.study import MappingCheck, ModelCheck, ParticipantModel, Stage, model_on
+
+
+def client_ids(journey: Journey) -> ClientIds:
+    """Return who the stored records are from: the participant's id and the experiment's."""
+    return ClientIds(str(journey.participant.id), f"experiment:{journey.participant.experiment_id}")
+
+
+def invalid_model_error(check: ModelCheck) -> InvalidModelError:
+    """Return the 422 error of an invalid draft model (details: the report, with `check`'s codes)."""
+    return InvalidModelError(
+        "The model is not valid yet: " + "; ".join(f"[{d.code}] {d.message}" for d in check.report.errors[:3]),
+        details={"model": check.report.as_dict()},
+    )
+
+
+def plans(services: Services, journey: Journey, participant_model: ParticipantModel) -> list[dict[str, Any]]:
+    """Return the robot's plan of the (valid) model on each training object, with where its picture is."""
+    planner = submissions.default_planner()
+    found = []
+    for obj in journey.training:
+        answer = submissions.plan(
+            services, model_on(participant_model, obj.id), None, planner, services.settings.default_time_limit
+        )
+        steps = answer.data.get("plan") or []
+        fits = [str(step.get("fit") or "") for step in steps]
+        picture = None
+        if steps and all(fits):
+            picture = f"/p/{journey.participant.code}/pictures/{obj.id}.png?fits={','.join(fits)}"
+        found.append(
+            {
+                "object": obj.id,
+                "name": obj.name,
+                "status": str(answer.data["status"]),
+                "steps": [str(step["text"]) for step in steps],
+                "message": str(answer.data.get("message", "")),
+                "works": bool(answer.data.get("valid_under_true_mechanism")),
+                "picture_url": picture,
+            }
+        )
+    return found
+
+
+def submit_model(session: Session, journey: Journey, participant_model: ParticipantModel, check: ModelCheck) -> None:
+    """Store the valid model (as the first training object's model file), freeze it, and begin step 3."""
+    journey.require_open(Stage.STEP2)
+    if not check.is_valid or check.model is None:
+        raise invalid_model_error(check)
+    first = journey.training[0].id
+    record = crud.new_model_record(
+        participant_model.document(first),
+        first,
+        True,
+        check.report.as_dict(),
+        submissions.model_hash(model_on(participant_model, first)),
+        client_ids(journey),
+    )
+    with crud.storage_errors(session):  # the model and the participant's move to step 3 together
+        session.add(record)
+        session.flush()
+        journey.finish_model(participant_model, record.id)
+        session.add(journey.participant)
+        session.commit()
+
+
+def run_trial(services: Services, session: Session, journey: Journey, index: int, mapping: MappingCheck) -> None:
+    """Try the participant's model on test object ``index`` through their mapping; store the trial."""
+    journey.require_open(Stage.STEP3, index)
+    participant_model = journey.submitted_model()
+    model_id = journey.participant.model_id
+    if participant_model is None or model_id is None or mapping.mapping is None:
+        raise StepLockedError("There is no submitted model or valid mapping to try.")
+    test = journey.tests[index]
+    if store.trial_of(session, journey.participant, test.id) is not None:
+        raise StepLockedError(f"Your answer for the {test.name} is already recorded.")
+    planner = submissions.default_planner()
+    model = model_on(participant_model, journey.training[0].id)
+    answer = submissions.transfer(services, model, mapping.mapping, planner, services.settings.default_time_limit)
+    trial = crud.new_trial_record(
+        model_id, mapping.document, planner, answer.data, answer.cached, answer.seconds, client_ids(journey)
+    )
+    link = ParticipantTrialRecord(
+        id=uuid.uuid4(),
+        participant_id=journey.participant.id,
+        trial_id=trial.id,
+        test_object=test.id,
+        position=index,
+        created_at=utc_now(),
+    )
+    # The trial first: the link's foreign key needs it, and the two are committed together.
+    with crud.storage_errors(session):
+        session.add(trial)
+        session.flush()
+        session.add(link)
+        session.commit()

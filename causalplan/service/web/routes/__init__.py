@@ -1,0 +1,1 @@
+"""The web routes: participant pages and their JSON, research pages, the experiment API, and assets."""

@@ -1,0 +1,190 @@
+"""The research pages, at ``/research``: sign in, define experiments, make links, see results, export.
+
+They need the research token: as a bearer header, or typed once into the sign-in form, which
+sets an HttpOnly cookie (see ``auth``).
+"""
+
+from __future__ import annotations
+
+import uuid
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Query, Request, Response
+from pydantic import ValidationError
+
+from causalplan.service.deps import CatalogDep, SessionDep, SettingsDep
+from causalplan.service.web import experiments, store
+from causalplan.service.web.auth import ResearchPageDep, is_token, sign_in, sign_out
+from causalplan.service.web.drawings import SVG_HEADERS, rates_chart
+from causalplan.service.web.errors import InvalidExperimentError
+from causalplan.service.web.forms import Form, read_form
+from causalplan.service.web.schemas import ExperimentIn
+from causalplan.service.web.templating import PageRoute, redirect, render
+
+router = APIRouter(prefix="/research", route_class=PageRoute, include_in_schema=False)
+
+FORM_CONDITIONS = 4
+"""Condition rows on the new-experiment form (empty rows are ignored)."""
+
+
+def _local_next(target: str) -> str:
+    # Only pages of this server's research area: never an open redirect to another site.
+    return (
+        target if target.startswith("/research") and not target.startswith("//") and "\\" not in target else "/research"
+    )
+
+
+@router.get("/login")
+def login_form(
+    request: Request, settings: SettingsDep, target: Annotated[str, Query(alias="next", max_length=500)] = "/research"
+) -> Response:
+    return render(
+        request, "login.html", enabled=settings.research_token is not None, next=_local_next(target), failed=False
+    )
+
+
+@router.post("/login")
+async def login(request: Request, settings: SettingsDep) -> Response:
+    form = await read_form(request)
+    token = form.text("token", "", max_length=1000)
+    target = _local_next(form.text("next", "/research", max_length=500))
+    if not is_token(token, settings):
+        return render(
+            request,
+            "login.html",
+            status_code=401,
+            enabled=settings.research_token is not None,
+            next=target,
+            failed=True,
+        )
+    response = redirect(target)
+    sign_in(response, request, settings)
+    return response
+
+
+@router.post("/logout")
+def logout(_: ResearchPageDep) -> Response:
+    response = redirect("/research/login")
+    sign_out(response)
+    return response
+
+
+@router.get("")
+def experiments_page(request: Request, _: ResearchPageDep, session: SessionDep) -> Response:
+    return render(request, "research_index.html", experiments=store.list_experiments(session))
+
+
+def _new_form(
+    request: Request, catalog: CatalogDep, values: dict[str, Any] | None = None, errors: list[str] | None = None
+) -> Response:
+    return render(
+        request,
+        "research_new.html",
+        status_code=422 if errors else 200,
+        objects=sorted(catalog.objects.values(), key=lambda obj: (obj.goal != "light", obj.category, obj.id)),
+        rows=range(FORM_CONDITIONS),
+        values=values or {},
+        errors=errors or [],
+    )
+
+
+@router.get("/experiments/new")
+def new_experiment(request: Request, _: ResearchPageDep, catalog: CatalogDep) -> Response:
+    defaults = {
+        "counterbalance_training": True,
+        "counterbalance_tests": True,
+        "show_verdict": True,
+        "tutorial": True,
+        "conditions": [],
+    }
+    return _new_form(request, catalog, defaults)
+
+
+def _experiment_values(form: Form) -> dict[str, Any]:
+    conditions = []
+    for row in range(FORM_CONDITIONS):
+        name = form.text(f"condition:{row}:name", "", max_length=100).strip()
+        training = [
+            value for value in (form.text(f"condition:{row}:training:{i}", "", max_length=200) for i in (0, 1)) if value
+        ]
+        tests = form.texts(f"condition:{row}:tests", max_count=50, max_length=200)
+        if name or training or tests:
+            conditions.append({"name": name, "training": training, "tests": tests})
+    return {
+        "name": form.text("name", "", max_length=200),
+        "description": form.text("description", "", max_length=2000),
+        "conditions": conditions,
+        "counterbalance_training": form.flag("counterbalance_training"),
+        "counterbalance_tests": form.flag("counterbalance_tests"),
+        "show_verdict": form.flag("show_verdict"),
+        "tutorial": form.flag("tutorial"),
+    }
+
+
+@router.post("/experiments")
+async def create_experiment(request: Request, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep) -> Response:
+    values = _experiment_values(await read_form(request))
+    problems: list[str] = []
+    if not values["name"].strip():
+        problems.append("Give the experiment a name.")
+    for number, condition in enumerate(values["conditions"], start=1):
+        if not condition["training"]:
+            problems.append(f"Condition {number} ('{condition['name']}') has no training object.")
+        if not condition["tests"]:
+            problems.append(f"Condition {number} ('{condition['name']}') has no test object.")
+    if not values["conditions"]:
+        problems.append("Fill in at least one condition: a name, a training object and a test object.")
+    if problems:
+        return _new_form(request, catalog, values, problems)
+    try:
+        record = experiments.create(session, catalog, ExperimentIn.model_validate(values))
+    except ValidationError as exc:
+        problems = [" > ".join(str(piece) for piece in e["loc"]) + f": {e['msg']}" for e in exc.errors()]
+        return _new_form(request, catalog, values, problems)
+    except InvalidExperimentError as exc:
+        errors = exc.details.get("errors")
+        return _new_form(
+            request, catalog, values, [str(e) for e in errors] if isinstance(errors, list) else [exc.message]
+        )
+    return redirect(f"/research/experiments/{record.id}")
+
+
+@router.get("/experiments/{experiment_id}")
+def experiment_page(
+    request: Request, experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep
+) -> Response:
+    experiment = store.get_experiment(session, experiment_id)
+    data = experiments.results(session, catalog, experiment, request)
+    return render(request, "research_experiment.html", record=experiment, **data)
+
+
+@router.post("/experiments/{experiment_id}/participants")
+async def make_links(request: Request, experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep) -> Response:
+    experiment = store.get_experiment(session, experiment_id)
+    form = await read_form(request)
+    count_text = form.text("count", "1", max_length=6).strip()
+    condition = form.text("condition", "", max_length=100)
+    count = int(count_text) if count_text.isdigit() else 0
+    store.add_participants(session, experiment, count, condition or None)
+    return redirect(f"/research/experiments/{experiment_id}#participants")
+
+
+@router.get("/experiments/{experiment_id}/chart.svg")
+def chart(experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep) -> Response:
+    experiment = store.get_experiment(session, experiment_id)
+    svg = rates_chart(experiments.rates_of(session, catalog, experiment))
+    return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
+
+
+@router.get("/experiments/{experiment_id}/export")
+def export(
+    request: Request,
+    experiment_id: uuid.UUID,
+    _: ResearchPageDep,
+    session: SessionDep,
+    catalog: CatalogDep,
+    format: Annotated[Literal["json", "csv"], Query()] = "json",
+    table: Annotated[Literal["trials", "participants"], Query()] = "trials",
+) -> Response:
+    experiment = store.get_experiment(session, experiment_id)
+    return experiments.export(session, catalog, experiment, request, format, table)

@@ -1,0 +1,235 @@
+"""What the experiment API and the pages' small JSON endpoints send and receive (``*In`` / ``*Out``)."""
+
+from __future__ import annotations
+
+import uuid
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from causalplan.service.schemas import DiagnosticOut, UtcDatetime
+
+ObjectId = Annotated[str, Field(min_length=1, max_length=200)]
+MAX_RULES_TEXT = 200_000
+MAX_PART_TEXT = 10_000
+
+
+class _In(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class _Out(BaseModel):
+    model_config = ConfigDict(from_attributes=True)
+
+
+# -- experiments (researchers, bearer token) --------------------------------------------------------
+
+
+class ConditionIn(_In):
+    name: str = Field(min_length=1, max_length=100, description="e.g. 'near' or 'far'.", examples=["near"])
+    training: list[ObjectId] = Field(
+        min_length=1, max_length=2, description="Catalog ids of the training objects: one, or two one model explains."
+    )
+    tests: list[ObjectId] = Field(min_length=1, max_length=8, description="Catalog ids of the test objects (new ones).")
+
+
+class ExperimentIn(_In):
+    """POST /v1/experiments: a new experiment."""
+
+    name: str = Field(min_length=1, max_length=200)
+    description: str = Field(default="", max_length=2000)
+    conditions: list[ConditionIn] = Field(min_length=1, max_length=8)
+    counterbalance_training: bool = Field(default=True, description="Order the training objects by a Latin square.")
+    counterbalance_tests: bool = Field(default=True, description="Order the test objects by a Latin square.")
+    show_verdict: bool = Field(default=True, description="Show participants whether their model transferred.")
+    tutorial: bool = Field(default=True, description="Begin with the toy-car tutorial.")
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "name": "Near and far generalization",
+                    "conditions": [
+                        {"name": "near", "training": ["desk_lamp", "flashlight"], "tests": ["candle"]},
+                        {"name": "far", "training": ["desk_lamp", "candle"], "tests": ["flashlight"]},
+                    ],
+                }
+            ]
+        },
+    )
+
+
+class ConditionOut(_Out):
+    name: str
+    training: list[str]
+    tests: list[str]
+
+
+class ExperimentLinks(_Out):
+    page: str
+    results: str
+    participants: str
+    export_json: str
+    export_csv: str
+
+
+class ExperimentOut(_Out):
+    """A stored experiment."""
+
+    id: uuid.UUID
+    created_at: UtcDatetime
+    name: str
+    description: str
+    conditions: list[ConditionOut]
+    counterbalance_training: bool
+    counterbalance_tests: bool
+    show_verdict: bool
+    tutorial: bool
+    is_demo: bool
+    participants: int
+    links: ExperimentLinks
+
+
+class LinksIn(_In):
+    """POST /v1/experiments/{id}/participants: make participant links."""
+
+    count: int = Field(ge=1, le=500, description="How many links to make.")
+    condition: str | None = Field(
+        default=None, max_length=100, description="Put them all in this condition; left out, spread them evenly."
+    )
+
+
+class ParticipantOut(_Out):
+    """One participant link and how far its participant got."""
+
+    id: uuid.UUID
+    code: str
+    url: str
+    condition: str
+    ordinal: int = Field(description="Number within the condition; picks the Latin-square rows.")
+    training_order: list[str]
+    test_order: list[str]
+    stage: Literal["tutorial", "step1", "step2", "step3", "done"]
+    progress: str
+    created_at: UtcDatetime
+    started_at: UtcDatetime | None
+    updated_at: UtcDatetime | None
+    finished_at: UtcDatetime | None
+
+
+class ParticipantsOut(_Out):
+    data: list[ParticipantOut]
+
+
+class RateOut(_Out):
+    condition: str
+    test_object: str
+    generalization: str | None
+    trials: int
+    transfers: int
+    fails: int
+    undecided: int
+    rate: float | None = Field(description="transfers / trials (null without trials).")
+
+
+class TrialRowOut(_Out):
+    """One step-3 trial: the participant's model, mapping, verdict and reasons."""
+
+    model_config = ConfigDict(extra="allow")
+
+    trial_id: uuid.UUID
+    participant_id: uuid.UUID
+    condition: str
+    test_object: str
+    position: int
+    generalization: str | None
+    verdict: str
+    decided_by: str
+    reasons: list[dict[str, Any]]
+    plan: list[str | None]
+    model: dict[str, Any] | None
+    mapping: dict[str, Any]
+
+
+class ResultsOut(_Out):
+    """An experiment's results: participants, transfer rates, and every trial."""
+
+    experiment: ExperimentOut
+    participants: list[ParticipantOut]
+    rates: list[RateOut]
+    trials: list[TrialRowOut]
+
+
+# -- the participant pages' endpoints -----------------------------------------------------------------
+
+
+class TutorialDraftIn(_In):
+    step: Literal["tutorial"]
+    answers: dict[Annotated[str, Field(max_length=40)], Annotated[str, Field(max_length=40)]] = Field(max_length=10)
+
+
+class FunctionsDraftIn(_In):
+    step: Literal["step1"]
+    object: ObjectId
+    functions: dict[Annotated[str, Field(max_length=200)], Annotated[str, Field(max_length=MAX_PART_TEXT)]] = Field(
+        max_length=64
+    )
+
+
+class MappingEntryIn(_In):
+    chosen: list[Annotated[str, Field(max_length=200)]] = Field(default_factory=list, max_length=64)
+    added: str = Field(default="", max_length=MAX_PART_TEXT)
+
+
+class MappingDraftIn(_In):
+    step: Literal["step3"]
+    object: ObjectId
+    mapping: dict[Annotated[str, Field(max_length=200)], MappingEntryIn] = Field(max_length=64)
+
+
+DraftIn = Annotated[TutorialDraftIn | FunctionsDraftIn | MappingDraftIn, Field(discriminator="step")]
+
+
+class SavedOut(_Out):
+    saved: bool
+    saved_at: UtcDatetime
+
+
+class CheckIn(_In):
+    """The rule box as typed: checked like `causalplan check` and saved."""
+
+    rules: str = Field(max_length=MAX_RULES_TEXT)
+    practice: bool = Field(default=False, description="The tutorial's practice box (the toy car).")
+
+
+class PlanIn(_In):
+    """The rule box as typed: saved, then planned on each training object."""
+
+    rules: str = Field(max_length=MAX_RULES_TEXT)
+
+
+class LineDiagnosticOut(DiagnosticOut):
+    line: int | None = Field(description="The line of the rule box it is about (null: the whole model).")
+
+
+class CheckOut(_Out):
+    valid: bool
+    errors: list[LineDiagnosticOut]
+    warnings: list[LineDiagnosticOut]
+    graph_url: str | None
+    saved_at: UtcDatetime
+
+
+class PlanForObjectOut(_Out):
+    object: str
+    name: str
+    status: str
+    steps: list[str]
+    message: str
+    works: bool = Field(description="Whether the plan makes the real object produce its goal (replayed).")
+    picture_url: str | None
+
+
+class PlansOut(_Out):
+    plans: list[PlanForObjectOut]

@@ -1,0 +1,306 @@
+// The participant pages' script: save as one types, check rules live, show the robot's plan.
+// Every page also works without it (the forms post to the server, which checks everything again).
+// Text from the server is only ever put into the page as text (textContent), never as HTML.
+"use strict";
+
+(function () {
+  const status = document.getElementById("save-status");
+
+  function say(text, isProblem) {
+    if (!status) return;
+    status.textContent = text;
+    status.classList.toggle("problem", Boolean(isProblem));
+  }
+
+  function debounce(action, milliseconds) {
+    let timer = null;
+    const wrapped = function () {
+      clearTimeout(timer);
+      timer = setTimeout(action, milliseconds);
+    };
+    wrapped.flush = function () {
+      if (timer !== null) {
+        clearTimeout(timer);
+        timer = null;
+        action();
+      }
+    };
+    return wrapped;
+  }
+
+  async function postJson(url, body) {
+    const response = await fetch(url, {
+      method: "POST",
+      headers: { "Content-Type": "application/json", Accept: "application/json" },
+      body: JSON.stringify(body),
+      credentials: "same-origin",
+    });
+    let data = null;
+    try {
+      data = await response.json();
+    } catch (error) {
+      data = null;
+    }
+    if (!response.ok) {
+      const message = data && data.error ? data.error.message : "The server answered " + response.status + ".";
+      const failure = new Error(message);
+      failure.status = response.status;
+      failure.data = data;
+      throw failure;
+    }
+    return data;
+  }
+
+  function savedAt(isoTime) {
+    const when = isoTime ? new Date(isoTime) : new Date();
+    return "Saved at " + when.toLocaleTimeString([], { hour: "2-digit", minute: "2-digit", second: "2-digit" }) + ".";
+  }
+
+  const main = document.getElementById("main");
+  const code = main ? main.dataset.code : null;
+
+  // -- saving drafts -----------------------------------------------------------------------------------
+
+  function draftOf(form) {
+    const kind = form.dataset.autosave;
+    if (kind === "step1") {
+      const functions = {};
+      form.querySelectorAll("textarea[data-part]").forEach(function (box) {
+        functions[box.dataset.part] = box.value;
+      });
+      return { step: "step1", object: form.dataset.object, functions: functions };
+    }
+    if (kind === "step3") {
+      const mapping = {};
+      form.querySelectorAll("[data-part]").forEach(function (item) {
+        const part = item.dataset.part;
+        const chosen = Array.from(item.querySelectorAll('input[type="checkbox"]:checked')).map(function (box) {
+          return box.value;
+        });
+        const added = item.querySelector("textarea");
+        mapping[part] = { chosen: chosen, added: added ? added.value : "" };
+      });
+      return { step: "step3", object: form.dataset.object, mapping: mapping };
+    }
+    const answers = {};
+    form.querySelectorAll('input[type="radio"]:checked').forEach(function (box) {
+      answers[box.name.replace(/^answer:/, "")] = box.value;
+    });
+    return { step: "tutorial", answers: answers };
+  }
+
+  function autosave(form) {
+    const url = "/p/" + code + "/draft";
+    let retry = 1000;
+    let pending = false;
+
+    async function save() {
+      pending = false;
+      say("Saving…");
+      try {
+        const data = await postJson(url, draftOf(form));
+        retry = 1000;
+        say(savedAt(data.saved_at));
+      } catch (error) {
+        if (error.status && error.status < 500 && error.status !== 429) {
+          say("Not saved: " + error.message, true);
+          return;
+        }
+        pending = true;
+        say("Not saved yet (no connection?): trying again…", true);
+        setTimeout(save, retry);
+        retry = Math.min(retry * 2, 30000);
+      }
+    }
+
+    const later = debounce(save, 600);
+    const changed = function (event) {
+      if (event.target.matches("[data-check-url]")) return; // the rule box saves itself as it is checked
+      pending = true;
+      say("Changes not saved yet…");
+      later();
+    };
+    form.addEventListener("input", changed);
+    form.addEventListener("change", changed);
+    form.addEventListener("submit", function () {
+      pending = false; // the form itself carries the work to the server
+    });
+    window.addEventListener("pagehide", function () {
+      if (pending && navigator.sendBeacon) {
+        navigator.sendBeacon(url, new Blob([JSON.stringify(draftOf(form))], { type: "application/json" }));
+      }
+    });
+  }
+
+  document.querySelectorAll("form[data-autosave]").forEach(autosave);
+
+  // -- checking rules as they are typed --------------------------------------------------------------
+
+  function showProblems(container, report) {
+    container.textContent = "";
+    const items = report.errors.concat(report.warnings);
+    container.classList.toggle("ok", report.valid && items.length === 0);
+    if (!items.length) return;
+    const list = document.createElement("ul");
+    items.forEach(function (item) {
+      const entry = document.createElement("li");
+      entry.className = item.severity;
+      const head = document.createElement("strong");
+      let where = "";
+      if (item.line) where = " (line " + item.line + ")";
+      head.textContent = (item.severity === "error" ? "Problem" : "Note") + where + ": ";
+      entry.appendChild(head);
+      entry.appendChild(document.createTextNode(item.message + " "));
+      if (item.hint) {
+        const hint = document.createElement("span");
+        hint.className = "hint";
+        hint.textContent = item.hint;
+        entry.appendChild(hint);
+      }
+      const codeName = document.createElement("code");
+      codeName.className = "code";
+      codeName.textContent = item.code;
+      entry.appendChild(codeName);
+      list.appendChild(entry);
+    });
+    container.appendChild(list);
+  }
+
+  function setSubmittable(valid) {
+    document.querySelectorAll("[data-needs-valid]").forEach(function (button) {
+      button.disabled = !valid;
+      button.setAttribute("aria-disabled", valid ? "false" : "true");
+    });
+    const note = document.getElementById("submit-note");
+    if (note) note.hidden = valid;
+  }
+
+  const rules = document.querySelector("textarea[data-check-url]");
+  if (rules) {
+    const problems = document.getElementById("problems");
+    const graph = document.getElementById("graph");
+    const practice = rules.dataset.practice === "true";
+    let sent = 0;
+    let shown = 0;
+
+    async function check() {
+      const number = ++sent;
+      say("Checking…");
+      try {
+        const report = await postJson(rules.dataset.checkUrl, { rules: rules.value, practice: practice });
+        if (number < shown) return; // an older answer arriving late
+        shown = number;
+        showProblems(problems, report);
+        setSubmittable(report.valid);
+        if (graph) {
+          if (report.graph_url) {
+            if (graph.getAttribute("src") !== report.graph_url) graph.src = report.graph_url;
+            graph.hidden = false;
+            const link = document.getElementById("graph-link");
+            if (link) link.href = report.graph_url;
+          } else {
+            graph.hidden = true;
+          }
+        }
+        say(savedAt(report.saved_at));
+      } catch (error) {
+        say("Not checked or saved: " + error.message, true);
+      }
+    }
+
+    const later = debounce(check, 350);
+    rules.addEventListener("input", function () {
+      say("Changes not saved yet…");
+      later();
+    });
+    check();
+
+    document.querySelectorAll("button[data-insert]").forEach(function (button) {
+      button.addEventListener("click", function () {
+        const text = button.dataset.insert;
+        const start = rules.selectionStart;
+        const end = rules.selectionEnd;
+        rules.value = rules.value.slice(0, start) + text + rules.value.slice(end);
+        rules.focus();
+        rules.selectionStart = rules.selectionEnd = start + text.length;
+        rules.dispatchEvent(new Event("input"));
+      });
+    });
+  }
+
+  // -- the robot's plan ----------------------------------------------------------------------------------
+
+  const planButton = document.getElementById("show-plan");
+  if (planButton && rules) {
+    const section = document.getElementById("plan");
+    const body = document.getElementById("plan-body");
+    planButton.addEventListener("click", async function () {
+      planButton.disabled = true;
+      section.hidden = false;
+      body.textContent = "The robot is planning…";
+      try {
+        const data = await postJson(planButton.dataset.planUrl, { rules: rules.value });
+        body.textContent = "";
+        data.plans.forEach(function (plan) {
+          const block = document.createElement("div");
+          block.className = "plan-object";
+          const title = document.createElement("h3");
+          title.textContent = "The " + plan.name;
+          block.appendChild(title);
+          if (plan.steps.length) {
+            const list = document.createElement("ol");
+            plan.steps.forEach(function (step) {
+              const item = document.createElement("li");
+              item.textContent = step;
+              list.appendChild(item);
+            });
+            block.appendChild(list);
+          } else {
+            const none = document.createElement("p");
+            none.textContent = plan.status === "solved"
+              ? "Nothing to assemble: your rules are satisfied as the object stands."
+              : "The robot found no plan (" + plan.status + "). " + plan.message;
+            block.appendChild(none);
+          }
+          if (plan.steps.length && !plan.works && plan.message) {
+            const warning = document.createElement("p");
+            warning.className = "feedback";
+            warning.textContent = plan.message;
+            block.appendChild(warning);
+          }
+          if (plan.picture_url) {
+            const picture = document.createElement("img");
+            picture.src = plan.picture_url;
+            picture.alt = "The " + plan.name + " after the robot's plan, in the simulator";
+            picture.width = 480;
+            picture.height = 360;
+            block.appendChild(picture);
+          }
+          body.appendChild(block);
+        });
+        const advice = document.createElement("p");
+        advice.className = "small";
+        advice.textContent = "Not what you expected? Change your rules (or your functions in step 1) and look again.";
+        body.appendChild(advice);
+      } catch (error) {
+        body.textContent = "No plan: " + error.message;
+      } finally {
+        planButton.disabled = false;
+      }
+    });
+  }
+
+  // -- forms: one submission at a time ----------------------------------------------------------------
+
+  document.querySelectorAll("form").forEach(function (form) {
+    form.addEventListener("submit", function (event) {
+      if (form.dataset.sending === "true") {
+        event.preventDefault();
+        return;
+      }
+      form.dataset.sending = "true";
+      const button = form.querySelector('button[type="submit"]');
+      if (button && form.id === "step3-form") button.textContent = "The robot is trying your model…";
+    });
+  });
+})();

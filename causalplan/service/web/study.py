@@ -1,0 +1,279 @@
+"""What one participant works on: the stages, the saved work, and their causal model and mappings.
+
+A participant's model is their step-1 labels of each training object and one set of step-2
+rules. With one training object it is exactly a model file, checked by the same reader and
+validation as ``causalplan check`` (same codes and messages). With two, the rules must explain
+both: they are checked once against the two objects' labels together (part ids written
+``object.part``), and each object must produce the goal with its own parts' functions.
+
+Everything here takes and returns values; storing them is ``store``'s job.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Any
+
+from causalplan.causal.diagnostics import Diagnostic, Report, error
+from causalplan.causal.documents import SourceMap
+from causalplan.causal.graph import goal_holds
+from causalplan.causal.labels import display_label, normalize_label
+from causalplan.causal.model import CausalModel, Labelling, read_model
+from causalplan.causal.validation import ObjectSummary, validate_model
+from causalplan.inputs import mapping_from_data, model_from_data
+from causalplan.objects.catalog import Catalog
+from causalplan.objects.model import AssemblyObject
+from causalplan.service.errors import LimitExceededError
+from causalplan.service.limits import check_labelling_limits, check_model_limits
+from causalplan.service.settings import Settings
+
+
+class Stage(StrEnum):
+    """Where a participant is, in the order they go through it."""
+
+    TUTORIAL = "tutorial"
+    STEP1 = "step1"  # label the parts of each training object with functions
+    STEP2 = "step2"  # one set of rules for the training objects
+    STEP3 = "step3"  # map each test object's parts to the model's functions
+    DONE = "done"
+
+
+def labels_from_text(text: str) -> list[str]:
+    """Return the labels of a 'one function per line' box: non-empty lines, spaces tidied."""
+    return [display_label(line) for line in text.splitlines() if line.strip()]
+
+
+def rules_from_text(text: str) -> tuple[list[str], list[int]]:
+    """Return the rules of the rule box (non-empty lines) and the 1-based line of each."""
+    rules: list[str] = []
+    lines: list[int] = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        if line.strip():
+            rules.append(line.strip())
+            lines.append(number)
+    return rules, lines
+
+
+@dataclass(frozen=True)
+class ParticipantModel:
+    """Steps 1 and 2 of one participant: labels per training object (in their order) and the rules."""
+
+    goal: str
+    functions: Mapping[str, Mapping[str, Sequence[str]]]
+    """Training object id -> part id -> function labels."""
+    rules: tuple[str, ...]
+
+    @property
+    def object_ids(self) -> tuple[str, ...]:
+        return tuple(self.functions)
+
+    @property
+    def merged_id(self) -> str:
+        """Return the id the model goes by: the training object's, or ``a_and_b`` for two."""
+        return "_and_".join(self.object_ids)
+
+    def document(self, object_id: str) -> dict[str, Any]:
+        """Return the model file of one training object: its labels and all the rules."""
+        return {
+            "object": object_id,
+            "goal": self.goal,
+            "functions": {part: list(labels) for part, labels in self.functions[object_id].items() if labels},
+            "rules": list(self.rules),
+        }
+
+    def merged_document(self) -> dict[str, Any]:
+        """Return one document with every training object's labels (parts named ``object.part``)."""
+        if len(self.object_ids) == 1:
+            return self.document(self.object_ids[0])
+        return {
+            "object": self.merged_id,
+            "goal": self.goal,
+            "functions": {
+                f"{object_id}.{part}": list(labels)
+                for object_id, parts in self.functions.items()
+                for part, labels in parts.items()
+                if labels
+            },
+            "rules": list(self.rules),
+        }
+
+    def function_labels(self) -> list[str]:
+        """Return the distinct function labels of step 1, first spelling kept, in the order given."""
+        seen: dict[str, str] = {}
+        for parts in self.functions.values():
+            for labels in parts.values():
+                for label in labels:
+                    seen.setdefault(normalize_label(label), display_label(label))
+        return list(seen.values())
+
+    def as_dict(self) -> dict[str, Any]:
+        """Return the model as stored with the participant (and exported)."""
+        return {
+            "goal": self.goal,
+            "functions": {
+                object_id: {p: list(ls) for p, ls in parts.items()} for object_id, parts in self.functions.items()
+            },
+            "rules": list(self.rules),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> ParticipantModel:
+        """Return the model stored by ``as_dict``."""
+        return cls(str(data["goal"]), data["functions"], tuple(data["rules"]))
+
+
+@dataclass(frozen=True)
+class ModelCheck:
+    """A participant model as read (None when unreadable), to draw, and its validation report."""
+
+    model: CausalModel | None
+    report: Report
+
+    @property
+    def is_valid(self) -> bool:
+        return self.model is not None and self.report.is_valid
+
+
+def _limits_report(document: Mapping[str, Any], settings: Settings) -> Report | None:
+    try:
+        check_model_limits(document, settings)
+    except LimitExceededError as exc:
+        return Report((error(exc.code, exc.message),))
+    return None
+
+
+def check_model(participant_model: ParticipantModel, catalog: Catalog, settings: Settings) -> ModelCheck:
+    """Validate a participant's model (the service's limits first); return it with the report."""
+    document = participant_model.merged_document()
+    over = _limits_report(document, settings)
+    if over is not None:
+        return ModelCheck(None, over)
+    if len(participant_model.object_ids) == 1:
+        loaded = model_from_data(document, SourceMap(), catalog)
+        return ModelCheck(loaded.model, loaded.report)
+    model, problems = read_model(document, SourceMap())
+    if model is None:
+        return ModelCheck(None, Report(tuple(problems)))
+    objects = [catalog.get(object_id) for object_id in participant_model.object_ids]
+    summary = ObjectSummary(
+        participant_model.merged_id,
+        tuple(document["functions"]),
+        objects[0].goal,
+        " and ".join(obj.name for obj in objects),
+    )
+    report = validate_model(model, {summary.id: summary}, problems)
+    if report.is_valid:
+        report = report.merged(Report(tuple(_unexplained(participant_model, model, objects))))
+    return ModelCheck(model, report)
+
+
+def _unexplained(
+    participant_model: ParticipantModel, model: CausalModel, objects: list[AssemblyObject]
+) -> list[Diagnostic]:
+    """Return an error for each training object whose own functions do not produce the goal."""
+    problems = []
+    for obj in objects:
+        functions = {
+            normalize_label(label) for labels in participant_model.functions[obj.id].values() for label in labels
+        }
+        if not goal_holds(functions, model.rules, model.goal_key):
+            problems.append(
+                error(
+                    "object_not_explained",
+                    f"With the functions of the {obj.name}'s parts, no chain of rules produces {model.goal}.",
+                    hint=f"One model must explain both objects: add a rule whose causes are functions of the "
+                    f"{obj.name}'s parts, or give its parts the functions your rules use (step 1).",
+                )
+            )
+    return problems
+
+
+def model_on(participant_model: ParticipantModel, object_id: str) -> CausalModel:
+    """Return the (validated) model as the planner sees it on one training object."""
+    model, _ = read_model(participant_model.document(object_id), SourceMap())
+    assert model is not None, "a document built from a model always reads"
+    return model
+
+
+def rule_lines(report: Report, lines: Sequence[int]) -> list[dict[str, object]]:
+    """Return the report's diagnostics as dicts, each with the line of the rule box it is about."""
+    found: list[dict[str, object]] = []
+    for diagnostic in report.diagnostics:
+        item = diagnostic.as_dict()
+        rule = diagnostic.location.rule
+        item["line"] = lines[rule - 1] if rule is not None and 0 < rule <= len(lines) else None
+        found.append(item)
+    return found
+
+
+@dataclass(frozen=True)
+class MappingCheck:
+    """A step-3 mapping document, the mapping read from it (None when unreadable), and its report."""
+
+    document: dict[str, Any]
+    mapping: Labelling | None
+    report: Report
+
+    @property
+    def is_valid(self) -> bool:
+        return self.mapping is not None and self.report.is_valid
+
+
+def mapping_document(obj: AssemblyObject, entries: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
+    """Return the mapping file of a test object from step 3's entries (chosen labels and new lines)."""
+    functions: dict[str, list[str]] = {}
+    for part in obj.part_ids:
+        entry = entries.get(part, {})
+        labels = [*entry.get("chosen", []), *labels_from_text(str(entry.get("added", "")))]
+        if labels:
+            functions[part] = labels
+    return {"object": obj.id, "functions": functions}
+
+
+def check_mapping(document: dict[str, Any], catalog: Catalog, settings: Settings) -> MappingCheck:
+    """Validate a step-3 mapping (limits, the reader, and at least one function given)."""
+    try:
+        check_labelling_limits(document, settings, "mapping")
+    except LimitExceededError as exc:
+        return MappingCheck(document, None, Report((error(exc.code, exc.message),)))
+    loaded = mapping_from_data(document, SourceMap(), catalog)
+    report = loaded.report
+    if not document["functions"]:
+        report = report.merged(
+            Report(
+                (
+                    error(
+                        "empty_mapping",
+                        "No part has a function yet.",
+                        hint="Tick the functions each part has (or add new ones) before you submit.",
+                    ),
+                )
+            )
+        )
+    return MappingCheck(document, loaded.mapping, report)
+
+
+def check_functions(obj: AssemblyObject, texts: Mapping[str, str], catalog: Catalog, settings: Settings) -> Report:
+    """Validate step 1 of one training object: the labels as a model file's ``functions`` would be read."""
+    document = {
+        "object": obj.id,
+        "functions": {
+            part: labels_from_text(texts.get(part, "")) for part in obj.part_ids if texts.get(part, "").strip()
+        },
+    }
+    checked = check_mapping(document, catalog, settings)
+    if "empty_mapping" in checked.report.codes():
+        others = tuple(d for d in checked.report.diagnostics if d.code != "empty_mapping")
+        return Report(
+            (
+                *others,
+                error(
+                    "no_functions",
+                    f"No part of the {obj.name} has a function yet.",
+                    hint=f"Write what the parts do to produce {obj.goal}, one function per line.",
+                ),
+            )
+        )
+    return checked.report
