@@ -23,11 +23,12 @@ from causalplan.planners import pipeline
 from causalplan.planners.result import PlanStatus
 from causalplan.service import worker
 from causalplan.service.cache import canonical_model, request_key
-from causalplan.service.crud import ClientIds, get_model, new_model_record
+from causalplan.service.crud import ClientIds, get_model, new_model_record, save
 from causalplan.service.db.models import ModelRecord
 from causalplan.service.deps import Services
 from causalplan.service.errors import InvalidMappingError, InvalidModelError, LimitExceededError
 from causalplan.service.limits import check_labelling_limits, check_model_limits, clean_json
+from causalplan.service.schemas import PlanIn
 from causalplan.service.settings import Settings
 from causalplan.transfer.verdict import Verdict
 
@@ -214,3 +215,24 @@ def simulate(
 
 SIMULATION_SECONDS = 30.0
 """Time a worker gets for the simulation and its picture, beyond the planner's limit."""
+
+
+def plan_inputs(
+    body: PlanIn, services: Services, session: Session, client: ClientIds
+) -> tuple[ModelSubmission, Labelling | None, Report | None, str, float]:
+    """Read a plan-like request: its model, mapping, planner and time limit.
+
+    An invalid model or mapping raises the 422 error (an inline model is stored first).
+    """
+    planner = resolve_planner(body.planner)
+    time_limit = resolve_time_limit(body.time_limit, services.settings)
+    submission = model_for_request(body.model, body.model_id, services, session, client)
+    mapping, mapping_report = None, None
+    if body.mapping is not None:
+        mapping, mapping_report, _ = read_mapping(body.mapping, services)
+    problem = invalid_input_error(submission, mapping_report)
+    if problem is not None:
+        if submission.is_new:
+            save(session, [submission.record])
+        raise problem
+    return submission, mapping, mapping_report, planner, time_limit

@@ -19,17 +19,7 @@ def create_plan(body: PlanIn, services: ServicesDep, session: SessionDep, client
     answered before) and `model_id`. An inline model is stored, valid or not. An invalid
     model or mapping is answered with 422 and the CLI's codes.
     """
-    planner = submissions.resolve_planner(body.planner)
-    time_limit = submissions.resolve_time_limit(body.time_limit, services.settings)
-    submission = submissions.model_for_request(body.model, body.model_id, services, session, client)
-    mapping, mapping_report = None, None
-    if body.mapping is not None:
-        mapping, mapping_report, _ = submissions.read_mapping(body.mapping, services)
-    problem = submissions.invalid_input_error(submission, mapping_report)
-    if problem is not None:
-        if submission.is_new:
-            crud.save(session, [submission.record])
-        raise problem
+    submission, mapping, mapping_report, planner, time_limit = submissions.plan_inputs(body, services, session, client)
     assert submission.model is not None
     answer = submissions.plan(services, submission.model, mapping, planner, time_limit)
     if submission.is_new:

@@ -30,17 +30,7 @@ def create_simulation(
     figures, stability, the true mechanism on the simulated assembly, `produces_goal`) and
     `image` (a PNG data URL of the final assembly, when `picture` is true), plus `cached`.
     """
-    planner = submissions.resolve_planner(body.planner)
-    time_limit = submissions.resolve_time_limit(body.time_limit, services.settings)
-    submission = submissions.model_for_request(body.model, body.model_id, services, session, client)
-    mapping, mapping_report = None, None
-    if body.mapping is not None:
-        mapping, mapping_report, _ = submissions.read_mapping(body.mapping, services)
-    problem = submissions.invalid_input_error(submission, mapping_report)
-    if problem is not None:
-        if submission.is_new:
-            crud.save(session, [submission.record])
-        raise problem
+    submission, mapping, _report, planner, time_limit = submissions.plan_inputs(body, services, session, client)
     assert submission.model is not None
     answer = submissions.simulate(services, submission.model, mapping, planner, time_limit, body.picture)
     if submission.is_new:
