@@ -150,21 +150,28 @@ def check(
     raise typer.Exit(EXIT_OK if report.is_valid else EXIT_INVALID)
 
 
+def _stop_if_invalid(report: Report, path: Path, as_json: bool, advice: str = "") -> None:
+    """Print the problems of an invalid input (as JSON or words) and exit with 2; return if it is valid."""
+    if report.is_valid:
+        return
+    if as_json:
+        _print_json({"status": "invalid", "file": str(path), **report.as_dict()})
+    else:
+        console = _console(stderr=True)
+        _print_report(report, console)
+        if advice:
+            console.print(advice)
+    raise typer.Exit(EXIT_INVALID)
+
+
 def _load_valid_model(path: Path, objects: Catalog, as_json: bool) -> CausalModel:
     from causalplan.inputs import load_model
 
     loaded = load_model(path, objects)
-    if not loaded.is_valid:
-        if as_json:
-            _print_json({"status": "invalid", "file": str(path), **loaded.report.as_dict()})
-        else:
-            console = _console(stderr=True)
-            _print_report(loaded.report, console)
-            console.print(
-                f"{path}: the model is invalid, so there is nothing to plan. "
-                f"Run `causalplan check {path}` after fixing it."
-            )
-        raise typer.Exit(EXIT_INVALID)
+    advice = (
+        f"{path}: the model is invalid, so there is nothing to plan. Run `causalplan check {path}` after fixing it."
+    )
+    _stop_if_invalid(loaded.report, path, as_json, advice)
     assert loaded.model is not None
     return loaded.model
 
@@ -173,12 +180,7 @@ def _load_valid_mapping(path: Path, objects: Catalog, as_json: bool) -> Labellin
     from causalplan.inputs import load_mapping
 
     loaded = load_mapping(path, objects)
-    if not loaded.is_valid:
-        if as_json:
-            _print_json({"status": "invalid", "file": str(path), **loaded.report.as_dict()})
-        else:
-            _print_report(loaded.report, _console(stderr=True))
-        raise typer.Exit(EXIT_INVALID)
+    _stop_if_invalid(loaded.report, path, as_json)
     assert loaded.mapping is not None
     return loaded.mapping
 

@@ -7,7 +7,7 @@ from pathlib import Path
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from causalplan.causal.documents import MAX_DOCUMENT_BYTES, SourceMap, describe_path, parse_text, read_document
+from causalplan.causal.documents import MAX_DOCUMENT_BYTES, SourceMap, parse_text, read_document
 
 MODEL_YAML = """\
 # the paper's desk lamp
@@ -151,14 +151,6 @@ def test_empty_document_is_none_without_problems() -> None:
     data, _, problems = parse_text("", "model.yaml")
     assert data is None
     assert problems == []
-
-
-def test_describe_path() -> None:
-    assert describe_path(["functions", "shade", 2]) == "functions > shade > 2"
-    assert describe_path([]) == "the document"
-
-
-# --- malformed text --------------------------------------------------------------------------
 
 
 def test_yaml_tab_indentation_is_syntax_error_at_its_line() -> None:

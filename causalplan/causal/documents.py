@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -171,8 +170,3 @@ def read_document(path: Path) -> tuple[object, SourceMap, list[Diagnostic]]:
             [error("file_not_readable", f"{name} cannot be read: {exc.strerror}.", Location(file=name))],
         )
     return parse_text(text, name)
-
-
-def describe_path(path: Sequence[str | int]) -> str:
-    """Return a document path in words, e.g. ``functions > shade > 2``."""
-    return " > ".join(str(piece) for piece in path) or "the document"

@@ -77,10 +77,6 @@ class Settings(BaseSettings):
         return self
 
     @property
-    def is_sqlite(self) -> bool:
-        return self.database_url.startswith("sqlite")
-
-    @property
     def max_in_flight(self) -> int:
         """Return how many solves may be running or waiting at once before requests get 429."""
         return self.planning_workers + self.queue_size

@@ -5,7 +5,6 @@ The pages and ``/v1/experiments`` call the same functions, so both show the same
 
 from __future__ import annotations
 
-import uuid
 from datetime import UTC, datetime
 from typing import Any
 
@@ -156,11 +155,3 @@ def export(
 def rates_of(session: Session, catalog: Catalog, experiment: ExperimentRecord) -> list[Rate]:
     """Return an experiment's transfer rates per condition and test object."""
     return transfer_rates(Design.from_dict(experiment.design), store.trials_of(session, experiment.id), catalog)
-
-
-def parse_id(text: str) -> uuid.UUID | None:
-    """Return ``text`` as a UUID (None when it is not one)."""
-    try:
-        return uuid.UUID(text)
-    except ValueError:
-        return None
