@@ -1,18 +1,20 @@
-"""The ``causalplan`` command line: check, plan, transfer, compile, graph, objects.
+"""The ``causalplan`` command line: check, plan, transfer, compile, graph, objects, and more.
 
-Each command imports what it needs when it runs, so ``causalplan --help`` and quick
-commands start fast. Exit codes: 0 success, 1 no plan / no transfer, 2 invalid input,
-3 the planner could not decide.
+Built on click, and each command imports what it needs when it runs, so ``causalplan --help``
+and ``causalplan plan`` start fast: the sentences are styled with click, and rich (tables,
+progress bars) is loaded only by the commands that draw them. Exit codes: 0 success, 1 no
+plan / no transfer, 2 invalid input, 3 the planner could not decide.
 """
 
 from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, NoReturn
+from typing import TYPE_CHECKING, NoReturn
 
-import typer
+import click
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -21,46 +23,68 @@ if TYPE_CHECKING:
     from causalplan.causal.model import CausalModel, Labelling
     from causalplan.objects.catalog import Catalog
     from causalplan.planners.result import PlanResult
+    from causalplan.sim import SimulationReport
     from causalplan.transfer.verdict import TransferVerdict
 
 EXIT_OK, EXIT_NO_PLAN, EXIT_INVALID, EXIT_UNDECIDED = 0, 1, 2, 3
 
-app = typer.Typer(
+
+@click.group(
     name="causalplan",
-    help=(
-        "Teach a robot why an object works, then plan with that knowledge.\n\n"
-        "A model file says which parts of an object carry which functions (step 1) and keyword rules "
-        "such as 'provide electricity AND turn electricity into light CAUSES light' (step 2). "
-        "A mapping file gives another object's parts the model's functions (step 3).\n\n"
-        "Start with: causalplan plan examples/paper/desk_lamp.yaml"
-    ),
-    no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
-    rich_markup_mode=None,
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 110, "show_default": True},
+    epilog="Exit codes: 0 done, 1 no plan or no transfer, 2 invalid input, 3 the planner could not decide. "
+    "Run `causalplan COMMAND --help` for a command's options.",
+)
+def app() -> None:
+    """Teach a robot why an object works, then plan with that knowledge.
+
+    A model file says which parts of an object carry which functions (step 1) and keyword rules
+    such as 'provide electricity AND turn electricity into light CAUSES light' (step 2).
+    A mapping file gives another object's parts the model's functions (step 3).
+
+    Start with: causalplan plan examples/paper/desk_lamp.yaml
+    """
+
+
+FILE = click.Path(path_type=Path)
+catalog_option = click.option(
+    "--catalog",
+    type=FILE,
+    multiple=True,
+    show_default=False,
+    help="A folder of your own object files (YAML/JSON) to add to the built-in catalog. Repeatable.",
+)
+json_option = click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON instead of sentences.")
+planner_option = click.option(
+    "--planner",
+    "-p",
+    default="auto",
+    help="auto: Fast Downward, or the exact MDP when a fit may fail or FD fails. Also fd (LAMA, fast), "
+    "fd-opt (shortest plan), mdp (most reliable plan), up:<engine>. `causalplan planners` lists them.",
+)
+time_limit_option = click.option(
+    "--time-limit",
+    type=click.FloatRange(0.1, 3600),
+    default=30.0,
+    help="Seconds the planner may run before it is stopped.",
 )
 
-CatalogOption = Annotated[
-    list[Path] | None,
-    typer.Option(
-        "--catalog",
-        help="A folder of your own object files (YAML/JSON) to add to the built-in catalog. Repeatable.",
-        show_default=False,
-    ),
-]
-JsonOption = Annotated[bool, typer.Option("--json", help="Print machine-readable JSON instead of sentences.")]
-PlannerOption = Annotated[
-    str,
-    typer.Option(
-        "--planner",
-        "-p",
-        help="auto: Fast Downward, or the exact MDP when a fit may fail or FD fails. Also fd (LAMA, fast), "
-        "fd-opt (shortest plan), mdp (most reliable plan), up:<engine>. `causalplan planners` lists them.",
-    ),
-]
-TimeLimitOption = Annotated[
-    float, typer.Option("--time-limit", min=0.1, max=3600, help="Seconds the planner may run before it is stopped.")
-]
+
+def _exit(code: int) -> NoReturn:
+    raise SystemExit(code)
+
+
+def _say(message: str = "", *, err: bool = False) -> None:
+    """Print one line; click drops the colours when the stream is not a terminal."""
+    click.echo(message, err=err)
+
+
+def _mark(ok: bool, yes: str = "yes", no: str = "no") -> str:
+    return click.style(yes, fg="green") if ok else click.style(no, fg="red")
+
+
+def _dim(text: str) -> str:
+    return click.style(text, dim=True)
 
 
 def _console(stderr: bool = False) -> Console:
@@ -73,18 +97,16 @@ def _console(stderr: bool = False) -> Console:
 
 
 def _fail(code: str, message: str) -> NoReturn:
-    from rich.markup import escape
-
-    _console(stderr=True).print(f"[bold red]error[/]\\[{code}]: {escape(message)}")
-    raise typer.Exit(EXIT_INVALID)
+    _say(f"{click.style('error', fg='red', bold=True)}[{code}]: {message}", err=True)
+    _exit(EXIT_INVALID)
 
 
-def _catalog(folders: list[Path] | None) -> Catalog:
+def _catalog(folders: Sequence[Path]) -> Catalog:
     from causalplan.errors import CausalPlanError
     from causalplan.objects.catalog import load_catalog
 
     try:
-        return load_catalog(folders or ())
+        return load_catalog(folders)
     except CausalPlanError as exc:
         _fail(exc.code, exc.message)
 
@@ -93,18 +115,14 @@ def _print_json(data: object) -> None:
     sys.stdout.write(json.dumps(data, indent=2, ensure_ascii=False) + "\n")
 
 
-def _print_report(report: Report, console: Console) -> None:
-    from rich.markup import escape
-
+def _print_report(report: Report, *, err: bool = False) -> None:
     for diagnostic in report.diagnostics:
         color = "red" if diagnostic.severity.value == "error" else "yellow"
         where = diagnostic.location.describe()
-        console.print(
-            f"[bold {color}]{diagnostic.severity.value}[/]\\[{diagnostic.code}]"
-            f"{' ' + escape(where) if where else ''}: {escape(diagnostic.message)}"
-        )
+        severity = click.style(diagnostic.severity.value, fg=color, bold=True)
+        _say(f"{severity}[{diagnostic.code}]{' ' + where if where else ''}: {diagnostic.message}", err=err)
         if diagnostic.hint:
-            console.print(f"  [dim]hint:[/] {escape(diagnostic.hint)}")
+            _say(f"  {_dim('hint:')} {diagnostic.hint}", err=err)
 
 
 def _check_planner(planner: str) -> None:
@@ -122,15 +140,15 @@ def _is_mapping_file(path: Path) -> bool:
     return not problems and isinstance(data, dict) and "rules" not in data
 
 
-@app.command()
-def check(
-    model: Annotated[Path, typer.Argument(help="A model file (or a step-3 mapping file) in YAML or JSON.")],
-    as_json: JsonOption = False,
-    catalog: CatalogOption = None,
-) -> None:
+@app.command(short_help="Validate a model or mapping: what is wrong, where, how to fix it.")
+@click.argument("model", type=FILE)
+@json_option
+@catalog_option
+def check(model: Path, as_json: bool, catalog: tuple[Path, ...]) -> None:
     """Validate a model (or mapping): errors with a code, where, and how to fix them.
 
-    Exit 0 when valid (warnings allowed), 2 when invalid.
+    MODEL is a model file (or a step-3 mapping file) in YAML or JSON. Exit 0 when valid
+    (warnings allowed), 2 when invalid.
     """
     from causalplan.inputs import load_mapping, load_model
 
@@ -140,14 +158,10 @@ def check(
     if as_json:
         _print_json({"file": str(model), "kind": kind, **report.as_dict()})
     else:
-        console = _console()
-        _print_report(report, console)
-        verdict = "[green]valid[/]" if report.is_valid else "[red]invalid[/]"
-        counts = f"{len(report.errors)} error(s), {len(report.warnings)} warning(s)"
-        from rich.markup import escape
-
-        console.print(f"{escape(str(model))}: {kind} is {verdict} ({counts})")
-    raise typer.Exit(EXIT_OK if report.is_valid else EXIT_INVALID)
+        _print_report(report)
+        verdict = _mark(report.is_valid, "valid", "invalid")
+        _say(f"{model}: {kind} is {verdict} ({len(report.errors)} error(s), {len(report.warnings)} warning(s))")
+    _exit(EXIT_OK if report.is_valid else EXIT_INVALID)
 
 
 def _stop_if_invalid(report: Report, path: Path, as_json: bool, advice: str = "") -> None:
@@ -157,11 +171,10 @@ def _stop_if_invalid(report: Report, path: Path, as_json: bool, advice: str = ""
     if as_json:
         _print_json({"status": "invalid", "file": str(path), **report.as_dict()})
     else:
-        console = _console(stderr=True)
-        _print_report(report, console)
+        _print_report(report, err=True)
         if advice:
-            console.print(advice)
-    raise typer.Exit(EXIT_INVALID)
+            _say(advice, err=True)
+    _exit(EXIT_INVALID)
 
 
 def _load_valid_model(path: Path, objects: Catalog, as_json: bool) -> CausalModel:
@@ -194,62 +207,58 @@ def _write_pddl(folder: Path, domain: str, problem: str) -> None:
         _fail("output_not_writable", f"Cannot write the PDDL to {folder}: {exc.strerror}.")
 
 
-def _print_plan(result: PlanResult, console: Console) -> None:
-    from rich.markup import escape
-
+def _print_plan(result: PlanResult) -> None:
     if not result.has_plan:
-        console.print(f"[bold red]No plan[/] ({result.status.value}): {escape(result.message)}")
+        _say(f"{click.style('No plan', fg='red', bold=True)} ({result.status.value}): {result.message}")
         return
     if not result.steps:
-        console.print("The goal already holds: no step is needed.")
+        _say("The goal already holds: no step is needed.")
     for number, step in enumerate(result.steps, start=1):
-        console.print(f"{number}. {escape(step.text)}")
-    mark = "[green]yes[/]" if result.valid_under_true_mechanism else "[red]no[/]"
-    console.print(
-        f"[dim]{len(result.steps)} step(s) by {result.planner_used}, replayed: goal holds under the "
-        f"model;[/] the real object works: {mark}"
-    )
+        _say(f"{number}. {step.text}")
+    replayed = _dim(f"{len(result.steps)} step(s) by {result.planner_used}, replayed: goal holds under the model;")
+    _say(f"{replayed} the real object works: {_mark(result.valid_under_true_mechanism)}")
     if result.success_probability is not None and result.success_probability < 1.0:
-        console.print(
+        _say(
             f"Success probability {result.success_probability:.4f} (some fits may fail); expected attempts "
             f"{result.expected_actions:.2f}."
         )
     if result.validated_by_up is not None:
-        console.print(
-            f"unified-planning's validator: {'[green]valid[/]' if result.validated_by_up else '[red]INVALID[/]'}"
-        )
+        _say(f"unified-planning's validator: {_mark(result.validated_by_up, 'valid', 'INVALID')}")
     if result.fallback_reason:
-        console.print(f"[dim]Used {result.planner_used} because {escape(result.fallback_reason)}.[/]")
+        _say(_dim(f"Used {result.planner_used} because {result.fallback_reason}."))
     if result.message:
-        console.print(f"[yellow]{escape(result.message)}[/]")
+        _say(click.style(result.message, fg="yellow"))
 
 
-@app.command()
+@app.command(short_help="Plan the assembly that makes the model's goal hold.")
+@click.argument("model", type=FILE)
+@click.option(
+    "--mapping",
+    "-m",
+    type=FILE,
+    help="A step-3 mapping: plan for that object instead, with its parts carrying the model's functions.",
+)
+@planner_option
+@time_limit_option
+@click.option("--pddl-out", type=FILE, help="Also write domain.pddl and problem.pddl to this folder.")
+@click.option("--up-validate", is_flag=True, help="Also check the plan with unified-planning's plan validator.")
+@json_option
+@catalog_option
 def plan(
-    model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
-    mapping: Annotated[
-        Path | None,
-        typer.Option(
-            "--mapping",
-            "-m",
-            help="A step-3 mapping: plan for that object instead, with its parts carrying the model's functions.",
-        ),
-    ] = None,
-    planner: PlannerOption = "auto",
-    time_limit: TimeLimitOption = 30.0,
-    pddl_out: Annotated[
-        Path | None, typer.Option("--pddl-out", help="Also write domain.pddl and problem.pddl to this folder.")
-    ] = None,
-    up_validate: Annotated[
-        bool, typer.Option("--up-validate", help="Also check the plan with unified-planning's plan validator.")
-    ] = False,
-    as_json: JsonOption = False,
-    catalog: CatalogOption = None,
+    model: Path,
+    mapping: Path | None,
+    planner: str,
+    time_limit: float,
+    pddl_out: Path | None,
+    up_validate: bool,
+    as_json: bool,
+    catalog: tuple[Path, ...],
 ) -> None:
     """Plan how to assemble the object so the model's goal holds, and print the steps.
 
-    Every plan is replayed on the object before it is shown: against the model, and against
-    the object's true mechanism. Exit 0 with a plan, 1 without one, 2 for invalid input.
+    MODEL is the causal model file (YAML or JSON). Every plan is replayed on the object before
+    it is shown: against the model, and against the object's true mechanism. Exit 0 with a
+    plan, 1 without one, 2 for invalid input.
     """
     from causalplan.errors import CausalPlanError
     from causalplan.pddl.task import build_task
@@ -277,41 +286,39 @@ def plan(
         data.pop("pddl", None)
         _print_json(data)
     else:
-        _print_plan(result, _console())
-    raise typer.Exit(EXIT_OK if result.has_plan else EXIT_NO_PLAN)
+        _print_plan(result)
+    _exit(EXIT_OK if result.has_plan else EXIT_NO_PLAN)
 
 
-def _print_verdict(verdict: TransferVerdict, console: Console) -> None:
-    from rich.markup import escape
-
+def _print_verdict(verdict: TransferVerdict) -> None:
     colors = {"transfers": "green", "fails": "red", "invalid": "red", "undecided": "yellow"}
     kind = f" ({verdict.generalization}-generalization)" if verdict.generalization in ("near", "far") else ""
-    console.print(
-        f"[bold {colors[verdict.verdict.value]}]{verdict.verdict.value}[/]: "
-        f"{verdict.training_object} → {verdict.test_object}{kind}, decided by {verdict.decided_by}"
-    )
+    value = click.style(verdict.verdict.value, fg=colors[verdict.verdict.value], bold=True)
+    _say(f"{value}: {verdict.training_object} → {verdict.test_object}{kind}, decided by {verdict.decided_by}")
     for reason in verdict.reasons:
-        color = "red" if reason.severity.value == "error" else "yellow"
-        console.print(f"  [{color}]{reason.severity.value}[/]\\[{reason.code}]: {escape(reason.message)}")
+        severity = click.style(reason.severity.value, fg="red" if reason.severity.value == "error" else "yellow")
+        _say(f"  {severity}[{reason.code}]: {reason.message}")
     if verdict.plan is not None and verdict.plan.has_plan:
-        console.print("Plan:")
+        _say("Plan:")
         for number, step in enumerate(verdict.plan.steps, start=1):
-            console.print(f"  {number}. {escape(step.text)}")
+            _say(f"  {number}. {step.text}")
 
 
-@app.command()
+@app.command(short_help="Test whether a model transfers to a new object (step 3).")
+@click.argument("model", type=FILE)
+@click.argument("mapping", type=FILE)
+@planner_option
+@time_limit_option
+@json_option
+@catalog_option
 def transfer(
-    model: Annotated[Path, typer.Argument(help="The causal model of the training object (steps 1-2).")],
-    mapping: Annotated[Path, typer.Argument(help="The step-3 mapping of a new object's parts to functions.")],
-    planner: PlannerOption = "auto",
-    time_limit: TimeLimitOption = 30.0,
-    as_json: JsonOption = False,
-    catalog: CatalogOption = None,
+    model: Path, mapping: Path, planner: str, time_limit: float, as_json: bool, catalog: tuple[Path, ...]
 ) -> None:
     """Test whether a model transfers to a new object (step 3), and say why or why not.
 
-    Exit 0 when it transfers, 1 when it fails, 2 when the model or mapping is invalid,
-    3 when the planner could not decide (e.g. it timed out).
+    MODEL is the causal model of the training object (steps 1-2); MAPPING maps a new object's
+    parts to the model's functions (step 3). Exit 0 when it transfers, 1 when it fails, 2 when
+    the model or mapping is invalid, 3 when the planner could not decide (e.g. it timed out).
     """
     from causalplan.errors import CausalPlanError
     from causalplan.inputs import load_mapping, load_model
@@ -336,20 +343,20 @@ def transfer(
     if as_json:
         _print_json(verdict.as_dict())
     else:
-        _print_verdict(verdict, _console())
-    raise typer.Exit(verdict.verdict.exit_code)
+        _print_verdict(verdict)
+    _exit(verdict.verdict.exit_code)
 
 
-@app.command(name="compile")
-def compile_command(
-    model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Folder to write domain.pddl and problem.pddl to.")],
-    mapping: Annotated[
-        Path | None, typer.Option("--mapping", "-m", help="Compile for a step-3 mapping's object.")
-    ] = None,
-    catalog: CatalogOption = None,
-) -> None:
-    """Compile a model to a PDDL 2.2 domain and problem with derived predicates, without planning."""
+@app.command(name="compile", short_help="Write the model as PDDL (domain and problem), without planning.")
+@click.argument("model", type=FILE)
+@click.option("--out", "-o", type=FILE, required=True, help="Folder to write domain.pddl and problem.pddl to.")
+@click.option("--mapping", "-m", type=FILE, help="Compile for a step-3 mapping's object.")
+@catalog_option
+def compile_command(model: Path, out: Path, mapping: Path | None, catalog: tuple[Path, ...]) -> None:
+    """Compile a model to a PDDL 2.2 domain and problem with derived predicates, without planning.
+
+    MODEL is the causal model file (YAML or JSON).
+    """
     from causalplan.pddl.task import build_task
     from causalplan.pddl.writer import compile_task
 
@@ -359,34 +366,32 @@ def compile_command(
     target = objects.get((labelling or causal_model.labelling).object_id)
     compiled = compile_task(build_task(causal_model, target, labelling))
     _write_pddl(out, compiled.domain, compiled.problem)
-    _console().print(f"Wrote {out / 'domain.pddl'} and {out / 'problem.pddl'}")
+    _say(f"Wrote {out / 'domain.pddl'} and {out / 'problem.pddl'}")
 
 
-@app.command()
-def graph(
-    model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
-    out: Annotated[
-        Path | None,
-        typer.Option(
-            "--out",
-            "-o",
-            help="Write a picture (.png, .svg, .pdf) or Graphviz text (.dot); without it, DOT goes to the screen.",
-        ),
-    ] = None,
-    as_json: JsonOption = False,
-    catalog: CatalogOption = None,
-) -> None:
+@app.command(short_help="Draw the model's causal graph (PNG, SVG, PDF or DOT).")
+@click.argument("model", type=FILE)
+@click.option(
+    "--out",
+    "-o",
+    type=FILE,
+    help="Write a picture (.png, .svg, .pdf) or Graphviz text (.dot); without it, DOT goes to the screen.",
+)
+@json_option
+@catalog_option
+def graph(model: Path, out: Path | None, as_json: bool, catalog: tuple[Path, ...]) -> None:
     """Draw the model's causal graph, left to right from the parts' functions to the goal.
 
-    Invalid models are drawn too (causes nothing produces are red), to help see what is wrong.
+    MODEL is the causal model file (YAML or JSON). Invalid models are drawn too (causes
+    nothing produces are red), to help see what is wrong.
     """
     from causalplan.causal.render import PICTURE_SUFFIXES, draw, to_dot, to_json
     from causalplan.inputs import load_model
 
     loaded = load_model(model, _catalog(catalog))
     if loaded.model is None:
-        _print_report(loaded.report, _console(stderr=True))
-        raise typer.Exit(EXIT_INVALID)
+        _print_report(loaded.report, err=True)
+        _exit(EXIT_INVALID)
     if as_json:
         _print_json(to_json(loaded.model))
     elif out is None:
@@ -404,8 +409,8 @@ def graph(
     else:
         _fail("unknown_format", f"Cannot tell the format of {out}: use .png, .svg, .pdf or .dot.")
     if out is not None:
-        _console(stderr=True).print(f"Wrote {out}")
-    raise typer.Exit(EXIT_OK if loaded.report.is_valid else EXIT_INVALID)
+        _say(f"Wrote {out}", err=True)
+    _exit(EXIT_OK if loaded.report.is_valid else EXIT_INVALID)
 
 
 def _int_list(text: str, what: str) -> list[int]:
@@ -415,34 +420,38 @@ def _int_list(text: str, what: str) -> list[int]:
         _fail("invalid_option", f"{what} must be whole numbers separated by commas, e.g. 10,40,80; got '{text}'.")
 
 
-@app.command()
+@app.command(short_help="Compare planners on tasks: a table, CSV, JSON and a plot.")
+@click.argument("tasks", nargs=-1, type=FILE)
+@click.option(
+    "--planners",
+    "planners_option",
+    default="fd,fd-opt,mdp,up:fast-downward",
+    help="Comma-separated planners (see `causalplan planners`).",
+)
+@click.option("--synthetic", help="Also synthetic objects of these sizes, e.g. 10,40,80.")
+@click.option("--timeout", type=click.FloatRange(0.5, 3600), default=60.0, help="Seconds per run.")
+@click.option("--memory", type=click.IntRange(min=256), default=4096, help="Memory limit per run, in MB.")
+@click.option("--repeat", type=click.IntRange(1, 50), default=1, help="Runs per pair; medians are reported.")
+@click.option(
+    "--out", type=FILE, default=Path("out/compare"), help="Folder for compare.csv, compare.json and compare.png."
+)
+@catalog_option
 def compare(
-    tasks: Annotated[
-        list[Path] | None,
-        typer.Argument(
-            help="Model files, or task files (YAML with model:, mapping:, catalog:). Default: the paper's examples "
-            "(found under the current folder's examples/).",
-            show_default=False,
-        ),
-    ] = None,
-    planners_option: Annotated[
-        str, typer.Option("--planners", help="Comma-separated planners (see `causalplan planners`).")
-    ] = "fd,fd-opt,mdp,up:fast-downward",
-    synthetic: Annotated[
-        str | None, typer.Option("--synthetic", help="Also synthetic objects of these sizes, e.g. 10,40,80.")
-    ] = None,
-    timeout: Annotated[float, typer.Option("--timeout", min=0.5, max=3600, help="Seconds per run.")] = 60.0,
-    memory: Annotated[int, typer.Option("--memory", min=256, help="Memory limit per run, in MB.")] = 4096,
-    repeat: Annotated[int, typer.Option("--repeat", min=1, max=50, help="Runs per pair; medians are reported.")] = 1,
-    out: Annotated[Path, typer.Option("--out", help="Folder for compare.csv, compare.json and compare.png.")] = Path(
-        "out/compare"
-    ),
-    catalog: CatalogOption = None,
+    tasks: tuple[Path, ...],
+    planners_option: str,
+    synthetic: str | None,
+    timeout: float,
+    memory: int,
+    repeat: int,
+    out: Path,
+    catalog: tuple[Path, ...],
 ) -> None:
     """Run several planners on several tasks, one process per run, and compare them.
 
-    Prints a table (status, plan length, time, success probability, valid), and writes CSV,
-    JSON and a plot of time against the number of parts. A planner that fails is a row.
+    TASKS are model files, or task files (YAML with model:, mapping:, catalog:); the default is
+    the paper's examples (found under the current folder's examples/). Prints a table (status,
+    plan length, time, success probability, valid), and writes CSV, JSON and a plot of time
+    against the number of parts. A planner that fails is a row.
     """
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
     from rich.table import Table
@@ -459,7 +468,7 @@ def compare(
     try:
         sizes = _int_list(synthetic, "--synthetic") if synthetic else []
         if tasks:
-            selected = [comparison_tasks.from_argument(path, list(catalog or [])) for path in tasks]
+            selected = [comparison_tasks.from_argument(path, list(catalog)) for path in tasks]
         else:
             selected = comparison_tasks.default_tasks(Path.cwd())
         selected += [comparison_tasks.synthetic(size) for size in sizes]
@@ -517,22 +526,19 @@ def compare(
     console.print(f"Wrote {out / 'compare.csv'}, {out / 'compare.json'} and {out / 'compare.png'}")
 
 
-@app.command()
+@app.command(short_help="Judge many transfer trials; write their verdicts and reasons.")
+@click.argument("trials_file", metavar="TRIALS", type=FILE)
+@planner_option
+@time_limit_option
+@click.option("--simulate/--no-simulate", default=True, help="Check plans in the physics simulator (as transfer does).")
+@click.option("--out", type=FILE, default=Path("out/batch"), help="Folder for verdicts.csv and verdicts.json.")
+@catalog_option
 def batch(
-    trials_file: Annotated[
-        Path,
-        typer.Argument(help='Trials: JSON Lines, one {"id", "model", "mapping"} per line (or a JSON/YAML list).'),
-    ],
-    planner: PlannerOption = "auto",
-    time_limit: TimeLimitOption = 30.0,
-    simulate: Annotated[
-        bool, typer.Option("--simulate/--no-simulate", help="Check plans in the physics simulator (as transfer does).")
-    ] = True,
-    out: Annotated[Path, typer.Option("--out", help="Folder for verdicts.csv and verdicts.json.")] = Path("out/batch"),
-    catalog: CatalogOption = None,
+    trials_file: Path, planner: str, time_limit: float, simulate: bool, out: Path, catalog: tuple[Path, ...]
 ) -> None:
     """Judge many transfer trials (e.g. a study's participants) and write their verdicts and reasons.
 
+    TRIALS is a JSON Lines file, one {"id", "model", "mapping"} per line (or a JSON/YAML list).
     What can be decided without the planner is (invalid input, a function no part carries);
     equal planning problems are solved once. The verdicts are those `causalplan transfer`
     gives one trial at a time.
@@ -591,8 +597,9 @@ def batch(
     )
 
 
-@app.command()
-def planners(as_json: JsonOption = False) -> None:
+@app.command(short_help="List the planners and whether each can run here.")
+@json_option
+def planners(as_json: bool) -> None:
     """List the planners, what each is for, and whether it can run on this machine."""
     from rich.table import Table
 
@@ -613,30 +620,22 @@ def planners(as_json: JsonOption = False) -> None:
     _console().print(table)
 
 
-@app.command()
-def serve(
-    host: Annotated[str, typer.Option("--host", help="Address to listen on (0.0.0.0: every interface).")] = "127.0.0.1",
-    port: Annotated[int, typer.Option("--port", min=1, max=65535, help="Port to listen on.")] = 8000,
-    workers: Annotated[
-        int | None,
-        typer.Option(
-            "--workers",
-            min=1,
-            max=64,
-            help="Planner worker processes (default: CAUSALPLAN_PLANNING_WORKERS, else 2).",
-            show_default=False,
-        ),
-    ] = None,
-    database_url: Annotated[
-        str | None,
-        typer.Option(
-            "--database-url",
-            help="SQLAlchemy URL, e.g. postgresql://user:password@host/db (default: CAUSALPLAN_DATABASE_URL, "
-            "else a SQLite file in ~/.local/share/causalplan, created on first start).",
-            show_default=False,
-        ),
-    ] = None,
-) -> None:
+@app.command(short_help="Run the HTTP planning service (JSON API and participant pages).")
+@click.option("--host", default="127.0.0.1", help="Address to listen on (0.0.0.0: every interface).")
+@click.option("--port", type=click.IntRange(1, 65535), default=8000, help="Port to listen on.")
+@click.option(
+    "--workers",
+    type=click.IntRange(1, 64),
+    show_default=False,
+    help="Planner worker processes (default: CAUSALPLAN_PLANNING_WORKERS, else 2).",
+)
+@click.option(
+    "--database-url",
+    show_default=False,
+    help="SQLAlchemy URL, e.g. postgresql://user:password@host/db (default: CAUSALPLAN_DATABASE_URL, "
+    "else a SQLite file in ~/.local/share/causalplan, created on first start).",
+)
+def serve(host: str, port: int, workers: int | None, database_url: str | None) -> None:
     """Run the HTTP planning service: JSON API under /v1, OpenAPI docs at /docs, /health.
 
     Other settings come from CAUSALPLAN_* environment variables (see causalplan/service/settings.py).
@@ -664,77 +663,70 @@ def serve(
         database = check_startup(settings)
     except CausalPlanError as exc:
         _fail(exc.code, exc.message)
-    _console(stderr=True).print(
+    _say(
         f"causalplan service on http://{host}:{port} (API docs: /docs), database {database}, "
-        f"{settings.planning_workers} planner worker(s)"
+        f"{settings.planning_workers} planner worker(s)",
+        err=True,
     )
     run_service(settings, host, port)
 
 
-if TYPE_CHECKING:
-    from causalplan.sim import SimulationReport
-
-
-def _print_simulation(report: SimulationReport, console: Console) -> None:
-    from rich.markup import escape
-
-    console.print(f"Simulated {len(report.steps)} step(s) on the {escape(report.object_name)} (headless PyBullet):")
+def _print_simulation(report: SimulationReport) -> None:
+    _say(f"Simulated {len(report.steps)} step(s) on the {report.object_name} (headless PyBullet):")
     for step in report.steps:
         reach = ""
         if step.reach is not None:
             verb = "reaches" if step.reach.reachable else "cannot reach"
-            reach = f" [dim](arm {verb}: {step.reach.error_mm:.1f} mm)[/]"
+            reach = " " + _dim(f"(arm {verb}: {step.reach.error_mm:.1f} mm)")
         if step.status.value == "passed":
-            console.print(f"  {step.number}. {escape(step.text)} [green]passed[/]{reach}")
+            _say(f"  {step.number}. {step.text} {_mark(True, 'passed')}{reach}")
         elif step.status.value == "failed":
             failure = step.failure.value if step.failure else "failed"
-            console.print(
-                f"  {step.number}. {escape(step.text)} [bold red]FAILED[/]\\[{failure}]: {escape(step.message)}{reach}"
-            )
+            failed = click.style("FAILED", fg="red", bold=True)
+            _say(f"  {step.number}. {step.text} {failed}[{failure}]: {step.message}{reach}")
         else:
-            console.print(f"  {step.number}. {escape(step.text)} [dim]not run[/]")
+            _say(f"  {step.number}. {step.text} {_dim('not run')}")
     drift = report.stability[0]
-    still = "[green]yes[/]" if report.is_stable else "[red]no[/]"
-    console.print(f"Holds still while it settles: {still} ({escape(drift.detail)}; tolerance {drift.tolerance:g} mm)")
-    console.print("True mechanism on the simulated assembly:")
+    _say(f"Holds still while it settles: {_mark(report.is_stable)} ({drift.detail}; tolerance {drift.tolerance:g} mm)")
+    _say("True mechanism on the simulated assembly:")
     for requirement in report.requirements:
-        mark = "[green]yes[/]" if requirement.met else "[red]no[/]"
-        console.print(f"  {mark} {escape(requirement.says)}: {escape(requirement.detail)}")
-    produces = "[green]yes[/]" if report.produces_goal else "[red]no[/]"
-    console.print(f"Produces {escape(report.goal)}: {produces}")
+        _say(f"  {_mark(requirement.met)} {requirement.says}: {requirement.detail}")
+    _say(f"Produces {report.goal}: {_mark(report.produces_goal)}")
 
 
-@app.command()
+@app.command(short_help="Check a plan in a headless physics simulation, and draw it.")
+@click.argument("model", type=FILE)
+@click.option("--mapping", "-m", type=FILE, help="A step-3 mapping: simulate on that object instead.")
+@click.option(
+    "--plan",
+    "plan_file",
+    type=FILE,
+    help="The plan to run: the JSON of `causalplan plan --json`, or its 'plan' list. Without it, plan first.",
+)
+@click.option("--png", type=FILE, help="Write a picture of the final assembly (PNG).")
+@click.option("--frames", type=FILE, help="Write a picture per step to this folder, and strip.png.")
+@click.option("--gif", type=FILE, help="Write the steps as an animated GIF.")
+@click.option("--arm", is_flag=True, help="Add a Panda arm and report whether it reaches each step's grasp poses.")
+@json_option
+@catalog_option
 def simulate(
-    model: Annotated[Path, typer.Argument(help="The causal model file (YAML or JSON).")],
-    mapping: Annotated[
-        Path | None,
-        typer.Option("--mapping", "-m", help="A step-3 mapping: simulate on that object instead."),
-    ] = None,
-    plan_file: Annotated[
-        Path | None,
-        typer.Option(
-            "--plan",
-            help="The plan to run: the JSON of `causalplan plan --json`, or its 'plan' list. Without it, plan first.",
-        ),
-    ] = None,
-    png: Annotated[Path | None, typer.Option("--png", help="Write a picture of the final assembly (PNG).")] = None,
-    frames: Annotated[
-        Path | None, typer.Option("--frames", help="Write a picture per step to this folder, and strip.png.")
-    ] = None,
-    gif: Annotated[Path | None, typer.Option("--gif", help="Write the steps as an animated GIF.")] = None,
-    arm: Annotated[
-        bool, typer.Option("--arm", help="Add a Panda arm and report whether it reaches each step's grasp poses.")
-    ] = False,
-    as_json: JsonOption = False,
-    catalog: CatalogOption = None,
+    model: Path,
+    mapping: Path | None,
+    plan_file: Path | None,
+    png: Path | None,
+    frames: Path | None,
+    gif: Path | None,
+    arm: bool,
+    as_json: bool,
+    catalog: tuple[Path, ...],
 ) -> None:
     """Run a plan in a headless physics simulation, check every step, and draw it.
 
-    Each step is checked (connectors fit, the path is clear, the joint is aligned, nothing
-    falls), then the object's true mechanism is judged on the simulated assembly. Exit 0 when
-    everything passes and the object produces its goal, 1 when not (or no plan is found),
-    2 for invalid input, 3 when the planner could not decide.
+    MODEL is the causal model file (YAML or JSON). Each step is checked (connectors fit, the
+    path is clear, the joint is aligned, nothing falls), then the object's true mechanism is
+    judged on the simulated assembly. Exit 0 when everything passes and the object produces
+    its goal, 1 when not (or no plan is found), 2 for invalid input, 3 when the planner could
+    not decide.
     """
     from causalplan.errors import CausalPlanError
     from causalplan.pddl.task import build_task
@@ -762,8 +754,8 @@ def simulate(
                 if as_json:
                     _print_json({"status": result.status.value, "message": result.message, "simulation": None})
                 else:
-                    _print_plan(result, _console())
-                raise typer.Exit(EXIT_NO_PLAN if result.status.is_final() else EXIT_UNDECIDED)
+                    _print_plan(result)
+                _exit(EXIT_NO_PLAN if result.status.is_final() else EXIT_UNDECIDED)
             steps = read_plan_steps([step.as_dict() for step in result.steps], target)
         report = simulate_plan(target, steps, render=render, arm=arm)
     except CausalPlanError as exc:
@@ -787,20 +779,18 @@ def simulate(
     if as_json:
         _print_json({**report.as_dict(), "files": written})
     else:
-        console = _console()
-        _print_simulation(report, console)
+        _print_simulation(report)
         for path in written:
-            console.print(f"Wrote {path}")
-    raise typer.Exit(EXIT_OK if report.passed else EXIT_NO_PLAN)
+            _say(f"Wrote {path}")
+    _exit(EXIT_OK if report.passed else EXIT_NO_PLAN)
 
 
-@app.command()
-def objects(
-    object_id: Annotated[str | None, typer.Argument(help="Show one object in detail.")] = None,
-    as_json: JsonOption = False,
-    catalog: CatalogOption = None,
-) -> None:
-    """List the catalog's objects, or show one: parts, connectors, fits, true mechanism."""
+@app.command(short_help="List the catalog's objects, or show one in detail.")
+@click.argument("object_id", required=False, metavar="[OBJECT]")
+@json_option
+@catalog_option
+def objects(object_id: str | None, as_json: bool, catalog: tuple[Path, ...]) -> None:
+    """List the catalog's objects, or show one (OBJECT): parts, connectors, fits, true mechanism."""
     from dataclasses import asdict
 
     from rich.markup import escape
@@ -855,7 +845,7 @@ def objects(
 
 def main() -> None:
     """Run the command line."""
-    app()
+    app(prog_name="causalplan")
 
 
 if __name__ == "__main__":

@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 from click.testing import Result
-from typer.testing import CliRunner
+from click.testing import CliRunner
 
 from causalplan.cli import app
 

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from click.testing import Result
-from typer.testing import CliRunner
+from click.testing import CliRunner
 
 from causalplan.cli import app
 
