@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -15,10 +17,10 @@ from causalplan.objects.catalog import Catalog, build_object
 from causalplan.objects.schema import ObjectSchema
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.pddl.writer import compile_task
-from causalplan.planners import fast_downward
+from causalplan.planners import fast_downward, search_processes
 from causalplan.planners.fast_downward import CONFIGS, parse_plan, solve, status_of_exit_code
 from causalplan.planners.result import PlanStatus
-from tests.conftest import example_model
+from tests.conftest import example_mapping, example_model
 
 
 def star_task(n_parts: int) -> PlanningTask:
@@ -106,8 +108,12 @@ def test_the_time_limit_stops_the_search_and_leaves_no_process() -> None:
     outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd-opt"], time_limit=1.0)
     assert outcome.status is PlanStatus.TIMEOUT
     assert time.monotonic() - started < 10
-    children = Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children").read_text().split()
-    assert children == []
+    search_processes.stop_idle()  # the killed search's replacement, waiting for the next task
+    assert _children() == []
+
+
+def _children() -> list[int]:
+    return [int(pid) for pid in Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children").read_text().split()]
 
 
 def test_the_memory_limit_is_reported_as_out_of_memory() -> None:
@@ -165,30 +171,50 @@ def test_a_missing_binary_is_an_error_not_a_crash(monkeypatch: pytest.MonkeyPatc
     assert "/nonexistent/downward" in outcome.message
 
 
-def _sas(task: PlanningTask, mode: str, monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> bytes:
-    """Return the SAS file the translator writes for ``task`` in ``mode`` (in-process or fork)."""
+def _sas(task: PlanningTask, mode: str, monkeypatch: pytest.MonkeyPatch) -> str:
+    """Return the SAS task the translator writes for ``task`` in ``mode`` (in-process or fork)."""
     monkeypatch.setenv("CAUSALPLAN_TRANSLATOR", mode)
     compiled = compile_task(task)
-    work = tmp_path / mode
-    work.mkdir(parents=True)
-    (work / "domain.pddl").write_text(compiled.domain)
-    (work / "problem.pddl").write_text(compiled.problem)
-    run = fast_downward._translate(work, time.monotonic() + 60, 2048)
+    run = fast_downward._translate(compiled.domain, compiled.problem, time.monotonic() + 60, 2048)
     assert run.returncode == 0, run.output
-    return (work / "task.sas").read_bytes()
+    assert run.product is not None
+    return run.product
 
 
-@pytest.mark.parametrize("size", [3, 40])
-def test_in_process_translation_writes_exactly_what_a_fresh_process_writes(
-    size: int, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+def _sas_of_the_translators_own_process(task: PlanningTask, tmp_path: Path) -> str:
+    """Return the SAS task of ``python -m fast_downward.translate`` on ``task``'s PDDL files."""
+    compiled = compile_task(task)
+    (tmp_path / "domain.pddl").write_text(compiled.domain, encoding="utf-8")
+    (tmp_path / "problem.pddl").write_text(compiled.problem, encoding="utf-8")
+    command = [sys.executable, "-m", "fast_downward.translate", "domain.pddl", "problem.pddl", "--sas-file", "out.sas"]
+    subprocess.run(command, cwd=tmp_path, check=True, capture_output=True)
+    return (tmp_path / "out.sas").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize(("size", "seed"), [(3, 2), (12, 5), (40, 2)])
+def test_translation_writes_exactly_what_the_translators_own_process_writes(
+    size: int, seed: int, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     from causalplan.planners.synthetic import synthetic_task
 
-    task = synthetic_task(size, seed=2)
-    first = _sas(task, "in-process", monkeypatch, tmp_path / "a")
-    again = _sas(task, "in-process", monkeypatch, tmp_path / "b")  # translator state left from the first
-    forked = _sas(task, "fork", monkeypatch, tmp_path / "c")
-    assert first == again == forked
+    task = synthetic_task(size, seed=seed)
+    first = _sas(task, "in-process", monkeypatch)
+    again = _sas(task, "in-process", monkeypatch)  # translator state left from the first
+    forked = _sas(task, "fork", monkeypatch)
+    assert first == again == forked == _sas_of_the_translators_own_process(task, tmp_path)
+
+
+def test_translation_of_every_golden_case_matches_the_translators_own_process(
+    catalog: Catalog, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    from tests.test_golden import CASES
+
+    for case, (model_file, mapping_file) in sorted(CASES.items()):
+        model = example_model(model_file, catalog)
+        mapping = example_mapping(mapping_file, catalog) if mapping_file else None
+        task = build_task(model, catalog.get(mapping.object_id if mapping else model.object_id), mapping)
+        (tmp_path / case).mkdir()
+        assert _sas(task, "in-process", monkeypatch) == _sas_of_the_translators_own_process(task, tmp_path / case), case
 
 
 def test_an_in_process_translation_stops_at_its_deadline_and_the_next_solve_works(catalog: Catalog) -> None:

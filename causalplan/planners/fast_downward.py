@@ -1,17 +1,19 @@
-"""Fast Downward, run directly on our PDDL: the only module that starts planner processes.
+"""Fast Downward, run directly on our PDDL: the one module that runs it (``search_processes`` starts it).
 
-Each solve has a private temporary directory (so concurrent solves never share FD's
-``output.sas``), a memory limit and a time limit. The translator is FD's Python package:
-on the main thread it runs in this process (no start-up at all; an alarm stops it at the
-deadline, RLIMIT_AS bounds its memory), on other threads in a forked copy of this process
-that is killed at the deadline. The search binary runs as its own process group, killed at
-the deadline. Exit codes map to ``PlanStatus`` in one place.
+The translator is FD's Python package, run on the PDDL texts in memory: on the main thread in
+this process (no start-up at all; an alarm stops it at the deadline, RLIMIT_AS bounds its
+memory), on other threads in a forked copy of this process that is killed at the deadline.
+The SAS task it produces goes to the search binary's stdin: a process started ahead of time
+(``search_processes``; ``CAUSALPLAN_SEARCH_PRESTART=0`` starts one per search instead), in its
+own process group and private folder, memory-limited when it gets its task and killed at the
+deadline. Exit codes map to ``PlanStatus`` in one place.
 """
 
 from __future__ import annotations
 
 import contextlib
 import gc
+import io
 import logging
 import os
 import re
@@ -30,8 +32,10 @@ from dataclasses import dataclass, replace
 from functools import cache
 from importlib.util import find_spec
 from pathlib import Path
+from typing import Any
 
 from causalplan.errors import PlannerUnavailableError
+from causalplan.planners import search_processes
 from causalplan.planners.result import PlanStatus, SearchOutcome
 
 logger = logging.getLogger(__name__)
@@ -39,14 +43,17 @@ logger = logging.getLogger(__name__)
 DEFAULT_TIME_LIMIT = 30.0
 DEFAULT_MEMORY_LIMIT_MB = 2048
 
+# Silent: FD's log is only read for the tail of an error, and errors are printed regardless;
+# writing the rest through a pipe cost ~0.5 ms of a ~5 ms search on the paper's objects.
 LAMA_FIRST = (
-    "let(hlm, eval_modify_costs(landmark_sum(lm_factory=lm_reasonable_orders_hps(lm_rhw()),pref=false),"
-    "cost_type=one),let(hff, eval_modify_costs(ff(),cost_type=one),"
-    "lazy_greedy([hff,hlm],preferred=[hff,hlm],cost_type=one,reopen_closed=false)))"
+    "let(hlm, eval_modify_costs(landmark_sum(lm_factory=lm_reasonable_orders_hps(lm_rhw(verbosity=silent),"
+    "verbosity=silent),pref=false,verbosity=silent),cost_type=one),"
+    "let(hff, eval_modify_costs(ff(verbosity=silent),cost_type=one),"
+    "lazy_greedy([hff,hlm],preferred=[hff,hlm],cost_type=one,reopen_closed=false,verbosity=silent)))"
 )
-OPTIMAL = "astar(hmax())"
+OPTIMAL = "astar(hmax(verbosity=silent),verbosity=silent)"
 """A* with h^max: admissible with derived predicates (ours never occur negated)."""
-COMPLETE = "astar(blind())"
+COMPLETE = "astar(blind(verbosity=silent),verbosity=silent)"
 """Blind A*: complete, so exhausting it proves that no plan exists."""
 
 
@@ -135,36 +142,54 @@ class _Run:
     returncode: int | None  # None: killed at the time limit
     seconds: float
     output: str
+    product: str | None = None  # the translator's SAS task, the search's plan
 
 
-def _run(command: list[str], cwd: Path, deadline: float, memory_mb: int, stdin_path: Path | None = None) -> _Run:
-    """Run one FD component in its own process group; kill the group at ``deadline``."""
-    logger.debug("running (cwd %s): %s", cwd, shlex.join(command))
-    started = time.perf_counter()
-    stdin = stdin_path.open("rb") if stdin_path else subprocess.DEVNULL
+PLAN_FILE = "plan"
+"""Where the search writes its plan: in its process's private folder."""
+
+
+def _search_command(binary: Path, search: str) -> search_processes.Command:
+    return (str(binary), "--search", search, "--internal-plan-file", PLAN_FILE)
+
+
+def _prestart_enabled() -> bool:
+    """Return whether searches use processes started ahead (``CAUSALPLAN_SEARCH_PRESTART=0``: no)."""
+    return os.environ.get("CAUSALPLAN_SEARCH_PRESTART", "1") != "0"
+
+
+def _search(command: search_processes.Command, sas: bytes, deadline: float, memory_mb: int) -> _Run:
+    """Run one search on ``sas`` in a started search process; return its exit code, output and plan."""
+    began = time.perf_counter()
+    search = search_processes.take(command) if _prestart_enabled() else search_processes.start(command)
     try:
-        process = subprocess.Popen(
-            command,
-            cwd=cwd,
-            stdin=stdin,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,
-        )
-        # Limited right after the start rather than in a preexec_fn: that would stop Python
-        # from using vfork, and spawning from a large process would cost ~10 ms more.
-        _limit_process(process.pid, memory_mb)
-        try:
-            output, _ = process.communicate(timeout=max(0.0, deadline - time.monotonic()))
-            returncode: int | None = process.returncode
-        except subprocess.TimeoutExpired:
-            os.killpg(process.pid, signal.SIGKILL)
-            output, _ = process.communicate()
-            returncode = None
+        returncode, output = _hand_over(search, command, sas, deadline, memory_mb)
+        plan_file = search.folder / PLAN_FILE
+        plan = plan_file.read_text(encoding="utf-8") if plan_file.exists() else None
     finally:
-        if stdin_path and not isinstance(stdin, int):
-            stdin.close()
-    return _Run(returncode, time.perf_counter() - started, output.decode("utf-8", "replace"))
+        search_processes.discard(search)
+    return _Run(returncode, time.perf_counter() - began, output.decode("utf-8", "replace"), plan)
+
+
+def _hand_over(
+    search: search_processes.Started, command: search_processes.Command, sas: bytes, deadline: float, memory_mb: int
+) -> tuple[int | None, bytes]:
+    """Write the task to the search's stdin and collect its output; kill its group at ``deadline``.
+
+    Returns the exit code (None when killed at the time limit) and the output.
+    """
+    logger.debug("searching (cwd %s): %s", search.folder, shlex.join(command))
+    process = search.process
+    # Limited now, for this solve, rather than when started: each solve may have its own limit,
+    # and a preexec_fn would stop Python from using vfork (~10 ms more from a large process).
+    _limit_process(process.pid, memory_mb)
+    try:
+        output, _ = process.communicate(sas, timeout=max(0.0, deadline - time.monotonic()))
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        output, _ = process.communicate()
+        return None, output
+    return process.returncode, output
 
 
 TRANSLATE_OUT_OF_MEMORY = 20
@@ -172,39 +197,66 @@ TRANSLATE_CRITICAL_ERROR = 30
 TRANSLATE_INPUT_ERROR = 31
 
 
-def _run_translator(work: Path) -> int:
-    """Run FD's translator on ``work``'s files in this process; return its exit code.
+@cache
+def _translator_options() -> Any:
+    """Return the translator's options: its defaults (file names are never read, so any will do)."""
+    from fast_downward.translate import options
 
-    Paths are absolute and the SAS file is named, so nothing depends on the working folder.
-    """
-    from fast_downward.translate import main, options, pddl_parser
+    return options.parse_args(["domain.pddl", "problem.pddl"])
 
-    options.set_options([str(work / "domain.pddl"), str(work / "problem.pddl"), "--sas-file", str(work / "task.sas")])
+
+def _parse_pddl(kind: str, text: str) -> Any:
+    """Return the nested lists of a PDDL text, as the translator's ``parse_pddl_file`` does for a file."""
+    from fast_downward.translate.pddl_parser import ParseError, lisp_parser
+
     try:
-        main.main()
+        return lisp_parser.parse_nested_list(io.StringIO(text, newline=None))  # lines split as open() does
+    except ParseError as exc:
+        raise ParseError(f"Error: Could not parse {kind} file: {kind}.pddl\nReason: {exc}") from exc
+
+
+def _run_translator(domain: str, problem: str) -> tuple[int, str | None]:
+    """Run FD's translator on the PDDL texts in this process; return its exit code and the SAS task.
+
+    The steps of the translator's ``main.main()`` on texts in memory: no files to write and read
+    back, no argument parsing per run (the options never change), and no statistics (only printed).
+    Tests check that its SAS task is byte-identical to the translator's own, run as a process.
+    """
+    from fast_downward.translate import main, normalize, options, pddl_parser
+    from fast_downward.translate.pddl_parser import parsing_functions
+
+    options.options = _translator_options()  # set on every run: it is the translator's global
+    try:
+        task = parsing_functions.parse_task(_parse_pddl("domain", domain), _parse_pddl("problem", problem))
+        normalize.normalize(task)
+        sas = io.StringIO()
+        main.pddl_to_sas(task).output(sas)
     except MemoryError:
-        return TRANSLATE_OUT_OF_MEMORY
+        return TRANSLATE_OUT_OF_MEMORY, None
     except pddl_parser.ParseError as exc:
         print(exc)
-        return TRANSLATE_INPUT_ERROR
+        return TRANSLATE_INPUT_ERROR, None
     except SystemExit as exc:
-        return exc.code if isinstance(exc.code, int) else TRANSLATE_CRITICAL_ERROR
-    return 0
+        return (exc.code if isinstance(exc.code, int) else TRANSLATE_CRITICAL_ERROR), None
+    return 0, sas.getvalue()
 
 
-def _translate_in_child(work: Path, memory_mb: int) -> int:
-    """Run FD's translator in this (forked) process; return its exit code. Never returns normally."""
+def _translate_in_child(domain: str, problem: str, work: Path, memory_mb: int) -> None:
+    """Translate in this (forked) process into ``work``/task.sas; exit with the translator's code."""
     log = os.open(work / "translate.log", os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     os.dup2(log, 1)
     os.dup2(log, 2)
     code = TRANSLATE_CRITICAL_ERROR
     try:
         _limits(memory_mb)()
-        code = _run_translator(work)
+        code, sas = _run_translator(domain, problem)
+        if sas is not None:
+            (work / "task.sas").write_text(sas, encoding="utf-8")
     except BaseException:  # noqa: BLE001 - anything else is the translator's critical error
         import traceback
 
         traceback.print_exc()
+        code = TRANSLATE_CRITICAL_ERROR
     finally:
         sys.stdout.flush()
         sys.stderr.flush()
@@ -215,14 +267,12 @@ class _TranslatorTimeout(Exception):
     """Raised by the alarm inside an in-process translation that reached its deadline."""
 
 
-def _translate_here(work: Path, deadline: float, memory_mb: int) -> _Run:
+def _translate_here(domain: str, problem: str, deadline: float, memory_mb: int) -> _Run:
     """Translate in this process (main thread only): no fork, no start-up; limits by alarm and rlimit.
 
     FD's translator keeps module state between runs, but rebuilds all of it from the options
-    and files of each run (tests check that its output is byte-identical to a fresh process's).
+    and texts of each run (tests check that its output is byte-identical to a fresh process's).
     """
-    import io
-
     started = time.perf_counter()
     remaining = deadline - time.monotonic()
     if remaining <= 0:
@@ -236,11 +286,12 @@ def _translate_here(work: Path, deadline: float, memory_mb: int) -> _Run:
     soft, hard = resource.getrlimit(resource.RLIMIT_AS)
     limit = memory_mb * 1024 * 1024 if hard == resource.RLIM_INFINITY else min(memory_mb * 1024 * 1024, hard)
     returncode: int | None
+    sas: str | None = None
     try:
         resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
         signal.setitimer(signal.ITIMER_REAL, remaining)
         with contextlib.redirect_stdout(captured), contextlib.redirect_stderr(captured):
-            returncode = _run_translator(work)
+            returncode, sas = _run_translator(domain, problem)
     except _TranslatorTimeout:
         returncode = None
     except Exception:  # noqa: BLE001 - anything else is the translator's critical error
@@ -252,7 +303,7 @@ def _translate_here(work: Path, deadline: float, memory_mb: int) -> _Run:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous_handler)
         resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
-    return _Run(returncode, time.perf_counter() - started, captured.getvalue())
+    return _Run(returncode, time.perf_counter() - started, captured.getvalue(), sas)
 
 
 def _translator_in_process() -> bool:
@@ -275,26 +326,29 @@ def _wait(pid: int, deadline: float) -> int | None:
     return os.waitstatus_to_exitcode(status) if ready else None
 
 
-def _translate(work: Path, deadline: float, memory_mb: int) -> _Run:
-    """Run the translator on ``work``'s domain.pddl and problem.pddl, writing task.sas."""
+def _translate(domain: str, problem: str, deadline: float, memory_mb: int) -> _Run:
+    """Run the translator on the PDDL texts; its ``product`` is the SAS task."""
     import fast_downward.translate.main  # noqa: F401 - imported once here, so the fork has it
 
     if _translator_in_process():
-        return _translate_here(work, deadline, memory_mb)
+        return _translate_here(domain, problem, deadline, memory_mb)
     started = time.perf_counter()
-    sys.stdout.flush()
-    sys.stderr.flush()
-    # Freezing moves the parent's objects out of the collector's reach, so the child's garbage
-    # collections do not touch (and copy) the whole inherited heap: ~2x faster with a big parent.
-    gc.freeze()
-    pid = os.fork()
-    if pid == 0:
-        _translate_in_child(work, memory_mb)
-    gc.unfreeze()
-    returncode = _wait(pid, deadline)
-    log = work / "translate.log"
-    output = log.read_text(encoding="utf-8", errors="replace") if log.exists() else ""
-    return _Run(returncode, time.perf_counter() - started, output)
+    with tempfile.TemporaryDirectory(prefix="causalplan-translate-") as folder:
+        work = Path(folder)
+        sys.stdout.flush()
+        sys.stderr.flush()
+        # Freezing moves the parent's objects out of the collector's reach, so the child's garbage
+        # collections do not touch (and copy) the whole inherited heap: ~2x faster with a big parent.
+        gc.freeze()
+        pid = os.fork()
+        if pid == 0:
+            _translate_in_child(domain, problem, work, memory_mb)
+        gc.unfreeze()
+        returncode = _wait(pid, deadline)
+        log, sas = work / "translate.log", work / "task.sas"
+        output = log.read_text(encoding="utf-8", errors="replace") if log.exists() else ""
+        product = sas.read_text(encoding="utf-8") if returncode == 0 and sas.exists() else None
+    return _Run(returncode, time.perf_counter() - started, output, product)
 
 
 _PLAN_LINE = re.compile(r"^\(([^()\s]+)((?:\s+[^()\s]+)*)\)\s*$")
@@ -338,57 +392,43 @@ def _solve_uncached(
         return SearchOutcome(PlanStatus.ERROR, message=exc.message)
     deadline = time.monotonic() + time_limit
     timing: dict[str, float] = {}
-    with tempfile.TemporaryDirectory(prefix="causalplan-fd-") as folder:
-        work = Path(folder)
-        (work / "domain.pddl").write_text(domain, encoding="utf-8")
-        (work / "problem.pddl").write_text(problem, encoding="utf-8")
-        translate = _translate(work, deadline, memory_limit_mb)
-        timing["translate"] = translate.seconds
-        if translate.returncode is None:
-            return SearchOutcome(
-                PlanStatus.TIMEOUT, timing=timing, message=f"The translator did not finish within {time_limit:g} s."
-            )
-        if translate.returncode != 0:
-            status = status_of_exit_code(translate.returncode)
-            return SearchOutcome(
-                status,
-                timing=timing,
-                message=f"Translator exit code {translate.returncode}: {_tail(translate.output)}"
-                if status is PlanStatus.ERROR
-                else "",
-            )
-        search = _run(
-            [str(binary), "--search", config.search, "--internal-plan-file", "plan"],
-            work,
-            deadline,
-            memory_limit_mb,
-            stdin_path=work / "task.sas",
+    translate = _translate(domain, problem, deadline, memory_limit_mb)
+    timing["translate"] = translate.seconds
+    if translate.returncode is None:
+        return SearchOutcome(
+            PlanStatus.TIMEOUT, timing=timing, message=f"The translator did not finish within {time_limit:g} s."
         )
-        timing["search"] = search.seconds
-        if search.returncode == INCOMPLETE_EXIT:
-            # The search gave up without proof (its heuristics may prune); a blind A* proves it.
-            search = _run(
-                [str(binary), "--search", COMPLETE, "--internal-plan-file", "plan"],
-                work,
-                deadline,
-                memory_limit_mb,
-                stdin_path=work / "task.sas",
-            )
-            timing["confirm"] = search.seconds
-        if search.returncode is None:
-            return SearchOutcome(
-                PlanStatus.TIMEOUT, timing=timing, message=f"The search did not finish within {time_limit:g} s."
-            )
-        status = status_of_exit_code(search.returncode)
-        if status is not PlanStatus.SOLVED:
-            message = (
-                f"Search exit code {search.returncode}: {_tail(search.output)}" if status is PlanStatus.ERROR else ""
-            )
-            return SearchOutcome(status, timing=timing, message=message)
-        plan_file = work / "plan"
-        if not plan_file.exists():
-            return SearchOutcome(PlanStatus.ERROR, timing=timing, message="FD reported success but wrote no plan.")
-        return SearchOutcome(PlanStatus.SOLVED, parse_plan(plan_file.read_text(encoding="utf-8")), timing)
+    if translate.returncode != 0:
+        status = status_of_exit_code(translate.returncode)
+        return SearchOutcome(
+            status,
+            timing=timing,
+            message=f"Translator exit code {translate.returncode}: {_tail(translate.output)}"
+            if status is PlanStatus.ERROR
+            else "",
+        )
+    if translate.product is None:
+        return SearchOutcome(
+            PlanStatus.ERROR, timing=timing, message="The translator reported success but wrote no task."
+        )
+    sas = translate.product.encode("utf-8")
+    search = _search(_search_command(binary, config.search), sas, deadline, memory_limit_mb)
+    timing["search"] = search.seconds
+    if search.returncode == INCOMPLETE_EXIT:
+        # The search gave up without proof (its heuristics may prune); a blind A* proves it.
+        search = _search(_search_command(binary, COMPLETE), sas, deadline, memory_limit_mb)
+        timing["confirm"] = search.seconds
+    if search.returncode is None:
+        return SearchOutcome(
+            PlanStatus.TIMEOUT, timing=timing, message=f"The search did not finish within {time_limit:g} s."
+        )
+    status = status_of_exit_code(search.returncode)
+    if status is not PlanStatus.SOLVED:
+        message = f"Search exit code {search.returncode}: {_tail(search.output)}" if status is PlanStatus.ERROR else ""
+        return SearchOutcome(status, timing=timing, message=message)
+    if search.product is None:
+        return SearchOutcome(PlanStatus.ERROR, timing=timing, message="FD reported success but wrote no plan.")
+    return SearchOutcome(PlanStatus.SOLVED, parse_plan(search.product), timing)
 
 
 def solve(
@@ -425,3 +465,19 @@ def clear_solve_cache() -> None:
     """Forget every cached answer (tests and benchmarks that time real runs use it)."""
     with _solved_lock:
         _solved.clear()
+
+
+def prestart(config: SearchConfig = CONFIGS["fd"], keep_warm: bool = True) -> None:
+    """Start the search process for ``config`` in the background now, so a later solve finds it ready.
+
+    A one-shot CLI command calls it before its slow imports, with ``keep_warm=False``: it solves
+    once, so no replacement is started after it. Does nothing when prestarting is off or FD's
+    binary is missing (the solve reports that).
+    """
+    if not _prestart_enabled():
+        return
+    try:
+        binary = search_binary()
+    except PlannerUnavailableError:
+        return
+    search_processes.prestart(_search_command(binary, config.search), keep_warm)

@@ -19,7 +19,6 @@ from causalplan.pddl.canonical import canonical_pddl
 from causalplan.pddl.task import PlanningTask
 from causalplan.pddl.writer import compile_task
 from causalplan.planners import fast_downward
-from causalplan.planners.mdp import relevant_fits, search_outcome, solve_mdp
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanResult, PlanStatus, PlanStep, SearchOutcome
 
@@ -82,6 +81,8 @@ def _search(task: PlanningTask, planner: str, time_limit: float, timing: dict[st
         timing["compile"] = time.perf_counter() - started
         return fast_downward.solve(compiled.domain, compiled.problem, fast_downward.CONFIGS[planner], time_limit)
     if planner == "mdp":
+        from causalplan.planners.mdp import search_outcome, solve_mdp
+
         started = time.perf_counter()
         solution = solve_mdp(task, time_limit)
         return search_outcome(solution, time.perf_counter() - started)
@@ -199,6 +200,8 @@ def _with_fallback(result: PlanResult, reason: str, started: float, first: PlanR
 
 
 def _auto(task: PlanningTask, time_limit: float, include_pddl: bool, validate_up: bool) -> PlanResult:
+    from causalplan.planners.mdp import relevant_fits  # here: what never plans need not import the MDP
+
     started = time.perf_counter()
     risky = sorted(fit.id for fit in relevant_fits(task) if fit.probability < 1.0)
     if risky:

@@ -1,0 +1,220 @@
+"""Search processes started before their task exists, so that a solve does not wait for one.
+
+Fast Downward's search binary reads its whole task from stdin before it even parses its
+options (planner.cc: ``tasks::read_root_task(cin)`` comes first), and it needs the end of
+stdin to finish reading. So it can be started ahead of time (process creation, loading the
+224 MB binary, dynamic linking, static initialisation: ~2-3 ms here) and left blocking on
+stdin; a solve then writes the task, closes stdin and waits for the plan.
+
+The pool keeps at most one idle process per command (a command fixes the search
+configuration). Taking it starts its replacement on a background thread, off the solve's
+critical path. Every started process has its own process group and its own private folder
+as working directory (where ``--internal-plan-file`` puts the plan). The caller of ``take``
+owns the process from then on and ends it with ``discard``.
+
+Forks and exit: a forked child forgets the parent's idle processes and closes its copies of
+their stdin (if it kept them, the parent closing stdin would not reach the process as its end
+while the child lives); it never waits for or kills them (the pool remembers its owner's pid).
+At exit the idle processes are killed, reaped and their folders removed. A process whose owner
+dies without cleaning up reads the end of stdin and exits by itself.
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import os
+import shutil
+import signal
+import subprocess
+import tempfile
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+
+Command = tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Started:
+    """A process started ahead of its input, the private folder it runs in, and who started it."""
+
+    process: subprocess.Popen[bytes]
+    folder: Path
+    owner: int  # the pid of the process that started it: only that one may use, kill or reap it
+
+
+_live: dict[int, Started] = {}
+"""Every started process not yet discarded, by pid: a forked child closes its copies of their pipes."""
+
+
+def start(command: Command) -> Started:
+    """Start ``command`` in a new private folder and process group, stdin and stdout piped."""
+    folder = Path(tempfile.mkdtemp(prefix="causalplan-fd-"))
+    try:
+        process = subprocess.Popen(
+            command,
+            cwd=folder,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+            bufsize=0,  # unbuffered: a forked child's copy of stdin holds no data it could flush
+        )
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
+    started = Started(process, folder, os.getpid())
+    _live[process.pid] = started
+    return started
+
+
+def discard(started: Started) -> None:
+    """Kill ``started``'s process group if it still runs, reap it, and remove its folder.
+
+    Only in the process that started it: a forked child must never touch its parent's.
+    """
+    if started.owner != os.getpid():
+        return
+    process = started.process
+    if process.poll() is None:  # not reaped yet, so its pid (= group id) cannot have been reused
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(process.pid, signal.SIGKILL)
+    process.communicate()  # closes the pipes and reaps it
+    _live.pop(process.pid, None)
+    shutil.rmtree(started.folder, ignore_errors=True)
+
+
+class _Pool:
+    """At most one idle started process per command, owned by the process that started them."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._owner = os.getpid()
+        self._idle: dict[Command, Started] = {}
+        self._starting: dict[Command, threading.Thread] = {}
+        self.keep_warm = True
+
+    def take(self, command: Command) -> Started:
+        """Return a started process for ``command`` (the idle one, else a new one); start its replacement."""
+        ready = self._pop_idle(command)
+        if ready is not None and ready.process.poll() is not None:  # it died while idle
+            discard(ready)
+            ready = None
+        taken = ready or start(command)
+        if self.keep_warm:
+            self.prestart(command)
+        return taken
+
+    def prestart(self, command: Command) -> None:
+        """Start an idle process for ``command`` on a background thread, unless one is there or coming."""
+        with self._lock:
+            self._check_owner()
+            if command in self._idle or command in self._starting:
+                return
+            thread = threading.Thread(target=self._start_idle, args=(command,), name="causalplan-prestart", daemon=True)
+            try:
+                thread.start()  # under the lock: ``_pop_idle`` may join it as soon as it is listed
+            except RuntimeError:  # the interpreter is shutting down: no new threads
+                return
+            self._starting[command] = thread
+
+    def idle_pids(self) -> list[int]:
+        """Return the pids of this process's idle processes."""
+        with self._lock:
+            self._check_owner()
+            return [started.process.pid for started in self._idle.values()]
+
+    def stop(self) -> None:
+        """Wait for processes being started, then kill, reap and remove every idle process."""
+        with self._lock:
+            self._check_owner()
+            starting = list(self._starting.values())
+        for thread in starting:
+            thread.join()
+        with self._lock:
+            self._check_owner()
+            idle, self._idle = list(self._idle.values()), {}
+        for started in idle:
+            discard(started)
+
+    def forget_after_fork(self) -> None:
+        """In a forked child: forget the parent's processes without touching them; close its pipe copies."""
+        self._lock = threading.Lock()  # the parent's may be held by a thread that does not exist here
+        self._forget()
+
+    def _pop_idle(self, command: Command) -> Started | None:
+        """Return the idle process for ``command``; wait for the one being started if there is none yet."""
+        with self._lock:
+            self._check_owner()
+            starting = self._starting.get(command) if command not in self._idle else None
+        if starting is not None:  # started earlier, so it is ready sooner than a new one would be
+            starting.join()
+        with self._lock:
+            return self._idle.pop(command, None)
+
+    def _start_idle(self, command: Command) -> None:
+        started: Started | None = None
+        try:
+            started = start(command)
+        except OSError:  # a missing binary: the solve that needs it reports that
+            pass
+        finally:
+            with self._lock:
+                if self._starting.get(command) is threading.current_thread():
+                    del self._starting[command]
+                keep = started is not None and command not in self._idle
+                if started is not None and keep:
+                    self._idle[command] = started
+        if started is not None and not keep:
+            discard(started)
+
+    def _check_owner(self) -> None:
+        """Forget the parent's processes in a forked child that the at-fork hook did not see."""
+        if os.getpid() != self._owner:
+            self._forget()
+
+    def _forget(self) -> None:
+        self._idle, self._starting, self._owner = {}, {}, os.getpid()
+        inherited = [started for started in list(_live.values()) if started.owner != self._owner]
+        for started in inherited:
+            del _live[started.process.pid]
+            for pipe in (started.process.stdin, started.process.stdout):
+                if pipe is not None:
+                    with contextlib.suppress(OSError):
+                        pipe.close()
+        # Kept, never discarded: they are the parent's children, so this process must not reap them.
+        _inherited.extend(inherited)
+
+
+_inherited: list[Started] = []
+
+
+_POOL = _Pool()
+os.register_at_fork(after_in_child=_POOL.forget_after_fork)
+atexit.register(_POOL.stop)
+
+
+def take(command: Command) -> Started:
+    """Return a started process for ``command``, ready for its input; the caller must ``discard`` it."""
+    return _POOL.take(command)
+
+
+def prestart(command: Command, keep_warm: bool = True) -> None:
+    """Start a process for ``command`` in the background now, so the next ``take`` finds it ready.
+
+    ``keep_warm=False`` is for a process that solves once (a CLI command): taking a process then
+    starts no replacement that would only be killed at exit.
+    """
+    _POOL.keep_warm = keep_warm
+    _POOL.prestart(command)
+
+
+def idle_pids() -> list[int]:
+    """Return the pids of the idle started processes."""
+    return _POOL.idle_pids()
+
+
+def stop_idle() -> None:
+    """Kill, reap and remove every idle process and its folder (also done at exit)."""
+    _POOL.stop()
