@@ -11,8 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from click.testing import Result
-from click.testing import CliRunner
+from click.testing import CliRunner, Result
 
 from causalplan.cli import app
 

@@ -174,7 +174,10 @@ def test_canonical_keys_ignore_layout_but_not_meaning(catalog: Catalog) -> None:
     base = model(DESK_LAMP)
     layout = model({**DESK_LAMP, "rules": [r.replace(" AND ", " and  ") for r in reversed(DESK_LAMP["rules"])]})
     other = model({**DESK_LAMP, "goal": "Light"})
-    assert request_key("plan", base, None, "fd") == request_key("plan", layout, None, "fd")
-    assert request_key("plan", base, None, "fd") != request_key("plan", base, None, "fd-opt")
-    assert request_key("plan", base, None, "fd") != request_key("transfer", base, None, "fd")
-    assert request_key("plan", base, None, "fd") != request_key("plan", other, None, "fd")  # answers quote it
+    key = request_key("plan", base, None, "fd", 30.0, "catalog")
+    assert key == request_key("plan", layout, None, "fd", 30.0, "catalog")
+    assert key != request_key("plan", base, None, "fd-opt", 30.0, "catalog")
+    assert key != request_key("transfer", base, None, "fd", 30.0, "catalog")
+    assert key != request_key("plan", other, None, "fd", 30.0, "catalog")  # answers quote it
+    assert key != request_key("plan", base, None, "fd", 5.0, "catalog")
+    assert key != request_key("plan", base, None, "fd", 30.0, "another catalog")

@@ -6,8 +6,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from click.testing import Result
-from click.testing import CliRunner
+from click.testing import CliRunner, Result
 
 from causalplan.cli import app
 

@@ -14,7 +14,7 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import Session
 
 from causalplan.objects.catalog import Catalog
-from causalplan.service.cache import ResultCache
+from causalplan.service.cache import LruCache, ResultCache
 from causalplan.service.crud import ClientIds
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH
 from causalplan.service.errors import NotAuthenticatedError, ResearchDisabledError
@@ -32,11 +32,19 @@ class Services:
     pool: PlannerPool
     cache: ResultCache
     revision: str
+    reads: LruCache[object]
+    """What reading model and mapping documents gave, by the document's exact JSON."""
+    catalog_key: str
+    """The catalog's fingerprint, part of every answer's cache key."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
 
 
-def get_services(request: Request) -> Services:
+# Dependencies that do not block are `async def`: FastAPI runs a plain `def` dependency in a
+# worker thread, and each hop there and back costs ~0.1-0.2 ms on every request.
+
+
+async def get_services(request: Request) -> Services:
     services: Services = request.app.state.services
     return services
 
@@ -44,16 +52,21 @@ def get_services(request: Request) -> Services:
 ServicesDep = Annotated[Services, Depends(get_services)]
 
 
-def get_settings(services: ServicesDep) -> Settings:
+async def get_settings(services: ServicesDep) -> Settings:
     return services.settings
 
 
-def get_catalog(services: ServicesDep) -> Catalog:
+async def get_catalog(services: ServicesDep) -> Catalog:
     return services.catalog
 
 
+def open_session(services: Services) -> Session:
+    """Return a new session on the app's database (objects stay readable after a commit)."""
+    return Session(services.engine, expire_on_commit=False)
+
+
 def get_session(services: ServicesDep) -> Iterator[Session]:
-    with Session(services.engine, expire_on_commit=False) as session:
+    with open_session(services) as session:
         yield session
 
 
@@ -62,7 +75,7 @@ CatalogDep = Annotated[Catalog, Depends(get_catalog)]
 SessionDep = Annotated[Session, Depends(get_session)]
 
 
-def get_client_ids(
+async def get_client_ids(
     x_participant_id: Annotated[
         str | None,
         Header(max_length=MAX_CLIENT_ID_LENGTH, description="Who submits (a study participant); stored as given."),

@@ -6,7 +6,6 @@ The routes stay thin: they call these, store what is to be stored, and shape the
 from __future__ import annotations
 
 import hashlib
-import json
 import time
 import uuid
 from dataclasses import dataclass
@@ -14,15 +13,24 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
-from causalplan.causal.diagnostics import Report
+from causalplan.causal.diagnostics import Diagnostic, Report
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
+from causalplan.pddl.task import build_task
+from causalplan.pddl.writer import compile_task
 from causalplan.planners import pipeline
 from causalplan.planners.result import PlanStatus
 from causalplan.service import worker
-from causalplan.service.cache import canonical_model, request_key
+from causalplan.service.cache import (
+    answer_key,
+    canonical_labelling,
+    canonical_model,
+    canonical_text,
+    document_key,
+    request_key,
+)
 from causalplan.service.crud import ClientIds, get_model, new_model_record, save
 from causalplan.service.db.models import ModelRecord
 from causalplan.service.deps import Services
@@ -72,6 +80,31 @@ def resolve_time_limit(requested: float | None, settings: Settings) -> float:
     return requested
 
 
+@dataclass(frozen=True)
+class ModelRead:
+    """What reading and validating a model document gave: the same for every request that sends it."""
+
+    model: CausalModel | None
+    report: Report
+    report_data: dict[str, Any]
+    canonical: str | None
+    """The canonical text of a valid model (its hash is stored; answers are keyed by it)."""
+
+    @property
+    def is_valid(self) -> bool:
+        return self.model is not None and self.report.is_valid
+
+
+@dataclass(frozen=True)
+class MappingRead:
+    """What reading and validating a step-3 mapping document gave: the same for every request that sends it."""
+
+    mapping: Labelling | None
+    """The mapping when it is valid (None otherwise)."""
+    report: Report
+    canonical: str | None
+
+
 @dataclass
 class ModelSubmission:
     """A model from a request: read and validated, plus the record to store if it came inline."""
@@ -81,48 +114,88 @@ class ModelSubmission:
     record: ModelRecord
     is_new: bool
     """Whether the model came inline (and so is to be stored with the request)."""
+    canonical: str | None = None
+    """The canonical text of a valid model (see ``ModelRead``)."""
 
     @property
     def is_valid(self) -> bool:
         return self.model is not None and self.report.is_valid
 
 
+def model_text(model: CausalModel) -> str:
+    """Return the model's canonical text: equal for models that differ only in layout."""
+    return canonical_text(canonical_model(model))
+
+
+def text_hash(canonical: str) -> str:
+    """Return the stored hash of a model's canonical text."""
+    return hashlib.sha256(canonical.encode("utf-8", "replace")).hexdigest()
+
+
 def model_hash(model: CausalModel) -> str:
     """Return the hash of the model's canonical form (equal for models that differ only in layout)."""
-    text = json.dumps(canonical_model(model), sort_keys=True, ensure_ascii=False)
-    return hashlib.sha256(text.encode("utf-8", "replace")).hexdigest()
+    return text_hash(model_text(model))
 
 
-def read_model(document: dict[str, Any], services: Services, client: ClientIds) -> ModelSubmission:
-    """Validate an inline model (limits first, then the reader); return it with its unsaved record."""
-    storable = clean_json(document, "the model")  # refuses NaN and deep nesting
+def _read_model_document(document: dict[str, Any], services: Services) -> ModelRead:
     check_model_limits(document, services.settings)
     # The reader sees the text as sent, so a NUL or a lone surrogate is reported as the CLI would.
     loaded = model_from_data(document, SourceMap(), services.catalog)
     model = loaded.model
+    canonical = model_text(model) if model is not None and loaded.is_valid else None
+    return ModelRead(model, loaded.report, loaded.report.as_dict(), canonical)
+
+
+def read_model(document: dict[str, Any], services: Services, client: ClientIds) -> ModelSubmission:
+    """Validate an inline model (limits first, then the reader); return it with its unsaved record.
+
+    A document read before (the same JSON) is not read again: the reader's answer is kept.
+    """
+    storable = clean_json(document, "the model")  # refuses NaN and deep nesting
+    key, size = document_key("model", document)
+    read = services.reads.get(key)
+    if not isinstance(read, ModelRead):
+        read = _read_model_document(document, services)
+        services.reads.put(key, read, size)
+    model = read.model
     record = new_model_record(
         storable,
         model.object_id if model is not None else "",
-        loaded.is_valid,
-        loaded.report.as_dict(),
-        model_hash(model) if model is not None and loaded.is_valid else None,
+        read.is_valid,
+        read.report_data,
+        text_hash(read.canonical) if read.canonical is not None else None,
         client,
     )
-    return ModelSubmission(model, loaded.report, record, is_new=True)
+    return ModelSubmission(model, read.report, record, is_new=True, canonical=read.canonical)
 
 
 def stored_model(session_model: ModelRecord, catalog: Catalog) -> ModelSubmission:
     """Re-read a stored model against the catalog the server has now."""
     loaded = model_from_data(session_model.document, SourceMap(), catalog)
-    return ModelSubmission(loaded.model, loaded.report, session_model, is_new=False)
+    canonical = model_text(loaded.model) if loaded.model is not None and loaded.is_valid else None
+    return ModelSubmission(loaded.model, loaded.report, session_model, is_new=False, canonical=canonical)
 
 
-def read_mapping(document: dict[str, Any], services: Services) -> tuple[Labelling | None, Report, dict[str, Any]]:
-    """Validate an inline step-3 mapping; return it, its report and the cleaned document."""
-    storable = clean_json(document, "the mapping")
+def _read_mapping_document(document: dict[str, Any], services: Services) -> MappingRead:
     check_labelling_limits(document, services.settings, "mapping")
     loaded = mapping_from_data(document, SourceMap(), services.catalog)
-    return loaded.mapping if loaded.is_valid else None, loaded.report, storable
+    if not loaded.is_valid or loaded.mapping is None:
+        return MappingRead(None, loaded.report, None)
+    return MappingRead(loaded.mapping, loaded.report, canonical_text(canonical_labelling(loaded.mapping)))
+
+
+def read_mapping(document: dict[str, Any], services: Services) -> tuple[MappingRead, dict[str, Any]]:
+    """Validate an inline step-3 mapping; return what reading it gave and the cleaned document.
+
+    A document read before (the same JSON) is not read again.
+    """
+    storable = clean_json(document, "the mapping")
+    key, size = document_key("mapping", document)
+    read = services.reads.get(key)
+    if not isinstance(read, MappingRead):
+        read = _read_mapping_document(document, services)
+        services.reads.put(key, read, size)
+    return read, storable
 
 
 def model_for_request(
@@ -167,10 +240,26 @@ class Answer:
     seconds: float
 
 
-def plan(services: Services, model: CausalModel, mapping: Labelling | None, planner: str, time_limit: float) -> Answer:
-    """Return the plan of ``model`` (on ``mapping``'s object), from the cache or a worker."""
+def _key(
+    services: Services, kind: str, model: CausalModel, mapping: Labelling | None, planner: str, limit: float
+) -> str:
+    return request_key(kind, model, mapping, planner, limit, services.catalog_key)
+
+
+def plan(
+    services: Services,
+    model: CausalModel,
+    mapping: Labelling | None,
+    planner: str,
+    time_limit: float,
+    key: str | None = None,
+) -> Answer:
+    """Return the plan of ``model`` (on ``mapping``'s object), from the cache or a worker.
+
+    ``key``: the request's answer key (``PlanInputs.key``), when the caller has it already.
+    """
     started = time.perf_counter()
-    key = request_key("plan", model, mapping, planner)
+    key = key or _key(services, "plan", model, mapping, planner, time_limit)
     cached = services.cache.get(key)
     if cached is not None:
         return Answer(cached, True, time.perf_counter() - started)
@@ -184,7 +273,7 @@ def plan(services: Services, model: CausalModel, mapping: Labelling | None, plan
 def transfer(services: Services, model: CausalModel, mapping: Labelling, planner: str, time_limit: float) -> Answer:
     """Return the transfer verdict of ``model`` through ``mapping``, from the cache or a worker."""
     started = time.perf_counter()
-    key = request_key("transfer", model, mapping, planner)
+    key = _key(services, "transfer", model, mapping, planner, time_limit)
     cached = services.cache.get(key)
     if cached is not None:
         return Answer(cached, True, time.perf_counter() - started)
@@ -196,11 +285,17 @@ def transfer(services: Services, model: CausalModel, mapping: Labelling, planner
 
 
 def simulate(
-    services: Services, model: CausalModel, mapping: Labelling | None, planner: str, time_limit: float, picture: bool
+    services: Services,
+    model: CausalModel,
+    mapping: Labelling | None,
+    planner: str,
+    time_limit: float,
+    picture: bool,
+    key: str | None = None,
 ) -> Answer:
     """Return the plan and its simulation report (and picture), from the cache or a worker."""
     started = time.perf_counter()
-    key = request_key(f"simulate:{picture}", model, mapping, planner)
+    key = key or _key(services, f"simulate:{picture}", model, mapping, planner, time_limit)
     cached = services.cache.get(key)
     if cached is not None:
         return Answer(cached, True, time.perf_counter() - started)
@@ -213,13 +308,42 @@ def simulate(
     return Answer(data, False, time.perf_counter() - started)
 
 
+def compiled_pddl(services: Services, model: CausalModel, mapping: Labelling | None) -> dict[str, str]:
+    """Return the PDDL domain and problem of a plan request (pure and ~0.1 ms: done here, not by a worker)."""
+    target = services.catalog.get((mapping or model.labelling).object_id)
+    compiled = compile_task(build_task(model, target, mapping))
+    return {"domain": compiled.domain, "problem": compiled.problem}
+
+
 SIMULATION_SECONDS = 30.0
 """Time a worker gets for the simulation and its picture, beyond the planner's limit."""
 
 
-def plan_inputs(
-    body: PlanIn, services: Services, session: Session, client: ClientIds
-) -> tuple[ModelSubmission, Labelling | None, Report | None, str, float]:
+@dataclass(frozen=True)
+class PlanInputs:
+    """A plan-like request, read: its model (and the record to store), mapping, planner and time limit."""
+
+    submission: ModelSubmission
+    model: CausalModel
+    mapping: Labelling | None
+    mapping_report: Report | None
+    planner: str
+    time_limit: float
+    model_text: str
+    mapping_text: str
+    catalog_key: str
+
+    def key(self, kind: str) -> str:
+        """Return the answer key of this request for answers of ``kind`` ('plan', 'simulate:True', ...)."""
+        return answer_key(kind, self.model_text, self.mapping_text, self.planner, self.time_limit, self.catalog_key)
+
+    @property
+    def warnings(self) -> list[Diagnostic]:
+        """Return the validation warnings of the model and the mapping."""
+        return [*self.submission.report.warnings, *(self.mapping_report.warnings if self.mapping_report else [])]
+
+
+def plan_inputs(body: PlanIn, services: Services, session: Session, client: ClientIds) -> PlanInputs:
     """Read a plan-like request: its model, mapping, planner and time limit.
 
     An invalid model or mapping raises the 422 error (an inline model is stored first).
@@ -227,12 +351,25 @@ def plan_inputs(
     planner = resolve_planner(body.planner)
     time_limit = resolve_time_limit(body.time_limit, services.settings)
     submission = model_for_request(body.model, body.model_id, services, session, client)
-    mapping, mapping_report = None, None
-    if body.mapping is not None:
-        mapping, mapping_report, _ = read_mapping(body.mapping, services)
+    mapping_read = read_mapping(body.mapping, services)[0] if body.mapping is not None else None
+    mapping_report = mapping_read.report if mapping_read is not None else None
     problem = invalid_input_error(submission, mapping_report)
     if problem is not None:
         if submission.is_new:
-            save(session, [submission.record])
+            save(services.engine, [submission.record])
         raise problem
-    return submission, mapping, mapping_report, planner, time_limit
+    assert submission.model is not None and submission.canonical is not None
+    mapping, mapping_text = None, canonical_text(None)
+    if mapping_read is not None and mapping_read.canonical is not None:
+        mapping, mapping_text = mapping_read.mapping, mapping_read.canonical
+    return PlanInputs(
+        submission,
+        submission.model,
+        mapping,
+        mapping_report,
+        planner,
+        time_limit,
+        submission.canonical,
+        mapping_text,
+        services.catalog_key,
+    )

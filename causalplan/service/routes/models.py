@@ -58,7 +58,6 @@ def model_out(record: ModelRecord, request: Request) -> ModelOut:
 def create_model(
     document: Annotated[ModelDocument, Body(description="The model, in the same schema as model files.")],
     services: ServicesDep,
-    session: SessionDep,
     client: ClientIdsDep,
     request: Request,
     response: Response,
@@ -69,7 +68,7 @@ def create_model(
     is kept all the same for research: `details.model_id` is its id.
     """
     submission = read_model(document, services, client)
-    crud.save(session, [submission.record])
+    crud.save(services.engine, [submission.record])
     if not submission.is_valid:
         raise InvalidModelError(
             "The model is invalid: "

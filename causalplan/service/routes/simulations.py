@@ -30,9 +30,11 @@ def create_simulation(
     figures, stability, the true mechanism on the simulated assembly, `produces_goal`) and
     `image` (a PNG data URL of the final assembly, when `picture` is true), plus `cached`.
     """
-    submission, mapping, _report, planner, time_limit = submissions.plan_inputs(body, services, session, client)
-    assert submission.model is not None
-    answer = submissions.simulate(services, submission.model, mapping, planner, time_limit, body.picture)
-    if submission.is_new:
-        crud.save(session, [submission.record])
-    return {**answer.data, "cached": answer.cached, "model_id": str(submission.record.id)}
+    inputs = submissions.plan_inputs(body, services, session, client)
+    key = inputs.key(f"simulate:{body.picture}")
+    answer = submissions.simulate(
+        services, inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, body.picture, key
+    )
+    if inputs.submission.is_new:
+        crud.save(services.engine, [inputs.submission.record])
+    return {**answer.data, "cached": answer.cached, "model_id": str(inputs.submission.record.id)}

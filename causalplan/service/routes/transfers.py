@@ -23,26 +23,27 @@ def create_transfer(body: TransferIn, services: ServicesDep, session: SessionDep
     planner = submissions.resolve_planner(body.planner)
     time_limit = submissions.resolve_time_limit(body.time_limit, services.settings)
     submission = submissions.model_for_request(body.model, body.model_id, services, session, client)
-    mapping, mapping_report, mapping_document = submissions.read_mapping(body.mapping, services)
+    mapping_read, mapping_document = submissions.read_mapping(body.mapping, services)
     new_records = [submission.record] if submission.is_new else []
-    problem = submissions.invalid_input_error(submission, mapping_report)
+    problem = submissions.invalid_input_error(submission, mapping_read.report)
     if problem is not None:
         verdict = invalid_verdict(
             submission.report,
-            mapping_report,
+            mapping_read.report,
             submission.model.object_id if submission.model else None,
             str(mapping_document.get("object")) if mapping_document.get("object") is not None else None,
         ).as_dict()
         trial = crud.new_trial_record(submission.record.id, mapping_document, planner, verdict, False, 0.0, client)
-        crud.save(session, [*new_records, trial])
+        crud.save(services.engine, [*new_records, trial])
         problem.details.update({"verdict": verdict, "trial_id": str(trial.id)})
         raise problem
+    mapping = mapping_read.mapping
     assert submission.model is not None and mapping is not None
     answer = submissions.transfer(services, submission.model, mapping, planner, time_limit)
     trial = crud.new_trial_record(
         submission.record.id, mapping_document, planner, answer.data, answer.cached, answer.seconds, client
     )
-    crud.save(session, [*new_records, trial])
+    crud.save(services.engine, [*new_records, trial])
     return TransferOut.model_validate(
         {
             **answer.data,
