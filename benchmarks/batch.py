@@ -142,6 +142,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--sample", type=int, default=100, help="trials judged by the plain path")
     parser.add_argument("--keep", type=Path, help="also keep the generated trials in this file")
+    parser.add_argument("--output", type=Path, default=ROOT / "benchmarks" / "results" / "batch.json")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         trials = Path(folder) / "trials.jsonl"
@@ -166,6 +167,21 @@ def main() -> None:
     print(f"plain path (one trial at a time, caches emptied, {args.sample} trials): {plain_rate:.1f} trials/s")
     print(f"ratio fast/plain: {fast_rate / plain_rate:.1f}x; same verdicts on the sample: {same}")
     print(f"target >= {TARGET:.0f} trials/s: {'met' if fast_rate >= TARGET else 'NOT met'}")
+    report = {
+        "trials": args.trials,
+        "seed": args.seed,
+        "verdicts": counts,
+        "decided_by": deciders,
+        "fast_seconds": fast_seconds,
+        "fast_trials_per_s": fast_rate,
+        "plain_sample": args.sample,
+        "plain_trials_per_s": plain_rate,
+        "same_verdicts_on_sample": same,
+        "target_trials_per_s": TARGET,
+        "met": fast_rate >= TARGET and same,
+    }
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    args.output.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
 
 
 if __name__ == "__main__":
