@@ -3,7 +3,8 @@
     python benchmarks/run.py [--repeat K] [--sizes 10,40,80,160] [--quick] [--up-time-limit S]
 
 Both routes start from the same ``PlanningTask``: ours is ``plan_task(task, "fd")`` (compile to
-PDDL with derived predicates, translate in a forked worker, search, replay); UP's is
+PDDL with derived predicates, translate in-process, search with a search process started
+ahead of the task, replay); UP's is
 ``solve_with_up(task, "fast-downward")`` (build the axiom-free UP problem, then
 ``OneshotPlanner(name="fast-downward")``, which writes PDDL and runs FD's driver). Every case
 is run once to warm up, then ``--repeat`` times; the tables show medians of wall time.
@@ -207,9 +208,8 @@ def run_route(route: str, sizes: list[int], repeat: int, up_time_limit: float) -
 def measure_in_worker(route: str, sizes: list[int], repeat: int, up_time_limit: float) -> dict[str, list[RouteResult]]:
     """Run ``run_route`` in a fresh (spawned) process, so the routes cannot slow each other down.
 
-    In one process, having unified-planning loaded makes every fork of our translator worker
-    slower (the child's garbage collector touches the inherited heap: copy-on-write), which
-    would charge UP's memory to our route.
+    In one process, unified-planning's imports and heap (and a forked translator's copy of
+    it, where the translator runs in a child) would be charged to our route.
     """
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=1, mp_context=context) as pool:

@@ -155,12 +155,15 @@ def start_server(folder: Path, workers: int, cold: bool = False) -> tuple[subpro
         environment["CAUSALPLAN_SOLVE_CACHE_SIZE"] = "0"
     command = [sys.executable, "-m", "causalplan.cli", "serve", "--host", "127.0.0.1", "--port", str(port)]
     command += ["--workers", str(workers), "--database-url", f"sqlite:///{folder / 'bench.sqlite3'}"]
-    server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=environment)
+    # Its log (one access line per request) goes to a file: an unread pipe would fill and stall it.
+    log = folder / "server.log"
+    with log.open("wb") as handle:
+        server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=handle, env=environment)
     base = f"http://127.0.0.1:{port}"
     deadline = time.monotonic() + START_SECONDS
     while time.monotonic() < deadline:
         if server.poll() is not None:
-            sys.exit(f"the server stopped: {server.stderr.read().decode() if server.stderr else ''}")
+            sys.exit(f"the server stopped: {log.read_text(errors='replace')}")
         try:
             if httpx.get(f"{base}/health", timeout=30).status_code == 200:
                 return server, base
