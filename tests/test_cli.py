@@ -91,6 +91,42 @@ def test_plan_desk_lamp_as_a_real_process() -> None:
     assert "Traceback" not in completed.stderr
 
 
+HEAVY_MODULES = (
+    "typer",
+    "rich",
+    "pydantic",
+    "networkx",
+    "numpy",
+    "matplotlib",
+    "unified_planning",
+    "pybullet",
+    "fastapi",
+)
+IMPORTS_OF_A_PLAN = """
+import sys
+from causalplan.cli import main
+heavy = sys.argv[2:]
+sys.argv = ["causalplan", "plan", sys.argv[1]]
+try:
+    main()
+except SystemExit as exc:
+    code = exc.code
+print(code, sorted(name for name in heavy if name in sys.modules))
+"""
+
+
+def test_plan_imports_only_what_it_needs() -> None:
+    """`causalplan plan` loads none of the heavy libraries: each costs 20-200 ms per run (issue 8)."""
+    completed = subprocess.run(
+        [sys.executable, "-c", IMPORTS_OF_A_PLAN, str(DESK_LAMP), *HEAVY_MODULES],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert completed.stdout.strip().splitlines()[-1] == "0 []", completed.stderr
+
+
 def test_help_lists_the_commands() -> None:
     result = run("--help")
     assert result.exit_code == 0
