@@ -232,3 +232,26 @@ def test_the_forked_translator_is_still_available(monkeypatch: pytest.MonkeyPatc
     compiled = compile_task(build_task(example_model("near/candle.yaml", catalog), catalog.get("candle")))
     outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd"])
     assert outcome.status is PlanStatus.SOLVED and len(outcome.actions) == 2
+
+
+def test_a_lost_translator_timeout_is_raised_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The deadline's exception can be lost (raised in a GC callback, or under a broad except):
+    the alarm fires again until the translation stops, instead of letting it run on."""
+    lost: list[bool] = []
+
+    def translator_that_loses_the_first_timeout(domain: str, problem: str) -> tuple[int, str | None]:
+        finish = time.monotonic() + 5.0
+        while time.monotonic() < finish:
+            try:
+                while time.monotonic() < finish:
+                    pass
+            except fast_downward._TranslatorTimeout:
+                if lost:
+                    raise
+                lost.append(True)  # swallowed, as the interpreter does inside a GC callback
+        return 0, "begin_version"  # ran to its end: the deadline did not hold
+
+    monkeypatch.setattr(fast_downward, "_run_translator", translator_that_loses_the_first_timeout)
+    run = fast_downward._translate_here("", "", time.monotonic() + 0.05, 2048)
+    assert lost == [True]
+    assert run.returncode is None

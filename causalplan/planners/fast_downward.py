@@ -267,6 +267,10 @@ class _TranslatorTimeout(Exception):
     """Raised by the alarm inside an in-process translation that reached its deadline."""
 
 
+ALARM_REPEAT_SECONDS = 0.05
+"""After the deadline, the in-process translator is interrupted again this often until it stops."""
+
+
 def _translate_here(domain: str, problem: str, deadline: float, memory_mb: int) -> _Run:
     """Translate in this process (main thread only): no fork, no start-up; limits by alarm and rlimit.
 
@@ -280,6 +284,10 @@ def _translate_here(domain: str, problem: str, deadline: float, memory_mb: int) 
     captured = io.StringIO()
 
     def on_alarm(signum: int, frame: object) -> None:
+        # Armed again before raising: an exception raised inside a garbage-collector callback
+        # (libraries such as Hypothesis install them) or under a broad `except` in the
+        # translator is lost, and the translation would run on past its deadline.
+        signal.setitimer(signal.ITIMER_REAL, ALARM_REPEAT_SECONDS)
         raise _TranslatorTimeout
 
     previous_handler = signal.signal(signal.SIGALRM, on_alarm)
