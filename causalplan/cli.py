@@ -18,10 +18,12 @@ import click
 
 if TYPE_CHECKING:
     from rich.console import Console
+    from rich.progress import Progress
 
     from causalplan.causal.diagnostics import Report
     from causalplan.causal.model import CausalModel, Labelling
     from causalplan.objects.catalog import Catalog
+    from causalplan.pddl.task import PlanningTask
     from causalplan.planners.result import PlanResult
     from causalplan.sim import SimulationReport
     from causalplan.transfer.verdict import TransferVerdict
@@ -94,6 +96,20 @@ def _console(stderr: bool = False) -> Console:
     # Piped output gets a wide page, so tables are not cut to 80 columns in files and CI logs.
     width = None if stream.isatty() else 160
     return Console(stderr=stderr, highlight=False, soft_wrap=True, width=width)
+
+
+def _progress_bar() -> Progress:
+    """Return a progress bar on stderr (description, bar, done/total, time), gone when it ends."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    return Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=_console(stderr=True),
+        transient=True,
+    )
 
 
 def _fail(code: str, message: str) -> NoReturn:
@@ -198,6 +214,15 @@ def _load_valid_mapping(path: Path, objects: Catalog, as_json: bool) -> Labellin
     return loaded.mapping
 
 
+def _load_task(model: Path, mapping: Path | None, objects: Catalog, as_json: bool) -> PlanningTask:
+    """Return the planning task of a valid model (on a valid mapping's object, if given); else exit with 2."""
+    from causalplan.pddl.task import build_task
+
+    causal_model = _load_valid_model(model, objects, as_json)
+    labelling = _load_valid_mapping(mapping, objects, as_json) if mapping else None
+    return build_task(causal_model, objects.get((labelling or causal_model.labelling).object_id), labelling)
+
+
 def _write_pddl(folder: Path, domain: str, problem: str) -> None:
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -261,17 +286,14 @@ def plan(
     plan, 1 without one, 2 for invalid input.
     """
     from causalplan.errors import CausalPlanError
-    from causalplan.pddl.task import build_task
     from causalplan.planners.pipeline import plan_task
 
     _check_planner(planner)
     objects = _catalog(catalog)
-    causal_model = _load_valid_model(model, objects, as_json)
-    labelling = _load_valid_mapping(mapping, objects, as_json) if mapping else None
-    target = objects.get((labelling or causal_model.labelling).object_id)
+    task = _load_task(model, mapping, objects, as_json)
     try:
         result = plan_task(
-            build_task(causal_model, target, labelling),
+            task,
             planner,
             time_limit,
             include_pddl=pddl_out is not None,
@@ -357,14 +379,10 @@ def compile_command(model: Path, out: Path, mapping: Path | None, catalog: tuple
 
     MODEL is the causal model file (YAML or JSON).
     """
-    from causalplan.pddl.task import build_task
     from causalplan.pddl.writer import compile_task
 
     objects = _catalog(catalog)
-    causal_model = _load_valid_model(model, objects, False)
-    labelling = _load_valid_mapping(mapping, objects, False) if mapping else None
-    target = objects.get((labelling or causal_model.labelling).object_id)
-    compiled = compile_task(build_task(causal_model, target, labelling))
+    compiled = compile_task(_load_task(model, mapping, objects, False))
     _write_pddl(out, compiled.domain, compiled.problem)
     _say(f"Wrote {out / 'domain.pddl'} and {out / 'problem.pddl'}")
 
@@ -453,7 +471,6 @@ def compare(
     plan length, time, success probability, valid), and writes CSV, JSON and a plot of time
     against the number of parts. A planner that fails is a row.
     """
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
     from rich.table import Table
 
     from causalplan.comparison import report
@@ -479,14 +496,7 @@ def compare(
     except OSError as exc:
         _fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
     console = _console()
-    with Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
-        console=_console(stderr=True),
-        transient=True,
-    ) as progress:
+    with _progress_bar() as progress:
         bar = progress.add_task("comparing", total=total_runs(selected, chosen, repeat))
 
         def advance(what: str) -> None:
@@ -546,7 +556,6 @@ def batch(
     import csv
     import time
 
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
     from rich.table import Table
 
     from causalplan.transfer.batch import CSV_COLUMNS, read_trials, run_batch
@@ -561,15 +570,8 @@ def batch(
     except OSError as exc:
         _fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
     started = time.perf_counter()
-    with Progress(
-        TextColumn("judging trials"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
-        console=_console(stderr=True),
-        transient=True,
-    ) as progress:
-        bar = progress.add_task("trials", total=len(trials))
+    with _progress_bar() as progress:
+        bar = progress.add_task("judging trials", total=len(trials))
         results = run_batch(trials, objects, planner, time_limit, simulate, lambda: progress.advance(bar))
     seconds = time.perf_counter() - started
     with (out / "verdicts.csv").open("w", newline="", encoding="utf-8") as handle:
@@ -729,15 +731,13 @@ def simulate(
     not decide.
     """
     from causalplan.errors import CausalPlanError
-    from causalplan.pddl.task import build_task
     from causalplan.planners.pipeline import plan_task
     from causalplan.sim import RenderMode, read_plan_steps, simulate_plan
     from causalplan.sim.render import animation, strip
 
     objects = _catalog(catalog)
-    causal_model = _load_valid_model(model, objects, as_json)
-    labelling = _load_valid_mapping(mapping, objects, as_json) if mapping else None
-    target = objects.get((labelling or causal_model.labelling).object_id)
+    task = _load_task(model, mapping, objects, as_json)
+    target = task.obj
     render = RenderMode.FRAMES if frames or gif else RenderMode.FINAL if png else RenderMode.NONE
     try:
         if plan_file is not None:
@@ -749,7 +749,7 @@ def simulate(
                 _fail("invalid_plan", f"{plan_file} is not JSON: {exc}.")
             steps = read_plan_steps(data, target)
         else:
-            result = plan_task(build_task(causal_model, target, labelling))
+            result = plan_task(task)
             if not result.has_plan:
                 if as_json:
                     _print_json({"status": result.status.value, "message": result.message, "simulation": None})

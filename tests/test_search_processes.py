@@ -198,7 +198,7 @@ def test_stop_idle_kills_reaps_and_removes_every_idle_process() -> None:
 def test_the_switch_turns_prestarting_off(catalog: Catalog, monkeypatch: pytest.MonkeyPatch) -> None:
     used: list[str] = []
     monkeypatch.setattr(search_processes, "take", lambda command: used.append("take"))
-    monkeypatch.setattr(search_processes, "prestart", lambda command, keep_warm: used.append("prestart"))
+    monkeypatch.setattr(search_processes, "prestart", lambda command: used.append("prestart"))
     monkeypatch.setenv("CAUSALPLAN_SEARCH_PRESTART", "0")
     fast_downward.prestart(CONFIGS["fd"])
     task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))

@@ -27,7 +27,6 @@ import tempfile
 import threading
 import time
 from collections import OrderedDict
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import cache
 from importlib.util import find_spec
@@ -117,22 +116,18 @@ def translator_available() -> bool:
     return find_spec("fast_downward.translate") is not None
 
 
-def _limits(memory_mb: int) -> Callable[[], None]:
-    def apply() -> None:
-        limit = memory_mb * 1024 * 1024
-        _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-        if hard != resource.RLIM_INFINITY:  # a parent's limit (e.g. a comparison worker's) cannot be raised
-            limit = min(limit, hard)
-        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+def _memory_limit(memory_mb: int) -> int:
+    """Return ``memory_mb`` in bytes, lowered to this process's hard RLIMIT_AS if it has one.
 
-    return apply
+    A parent's limit (e.g. a comparison worker's) cannot be raised, and trying is an error.
+    """
+    _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    limit = memory_mb * 1024 * 1024
+    return limit if hard == resource.RLIM_INFINITY else min(limit, hard)
 
 
 def _limit_process(pid: int, memory_mb: int) -> None:
-    limit = memory_mb * 1024 * 1024
-    _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    if hard != resource.RLIM_INFINITY:
-        limit = min(limit, hard)
+    limit = _memory_limit(memory_mb)
     with contextlib.suppress(ProcessLookupError):  # it has already finished
         resource.prlimit(pid, resource.RLIMIT_AS, (limit, limit))
 
@@ -248,7 +243,8 @@ def _translate_in_child(domain: str, problem: str, work: Path, memory_mb: int) -
     os.dup2(log, 2)
     code = TRANSLATE_CRITICAL_ERROR
     try:
-        _limits(memory_mb)()
+        limit = _memory_limit(memory_mb)
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
         code, sas = _run_translator(domain, problem)
         if sas is not None:
             (work / "task.sas").write_text(sas, encoding="utf-8")
@@ -292,7 +288,7 @@ def _translate_here(domain: str, problem: str, deadline: float, memory_mb: int) 
 
     previous_handler = signal.signal(signal.SIGALRM, on_alarm)
     soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    limit = memory_mb * 1024 * 1024 if hard == resource.RLIM_INFINITY else min(memory_mb * 1024 * 1024, hard)
+    limit = _memory_limit(memory_mb)
     returncode: int | None
     sas: str | None = None
     try:
@@ -475,11 +471,10 @@ def clear_solve_cache() -> None:
         _solved.clear()
 
 
-def prestart(config: SearchConfig = CONFIGS["fd"], keep_warm: bool = True) -> None:
+def prestart(config: SearchConfig = CONFIGS["fd"]) -> None:
     """Start the search process for ``config`` in the background now, so a later solve finds it ready.
 
-    A one-shot CLI command calls it before its slow imports, with ``keep_warm=False``: it solves
-    once, so no replacement is started after it. Does nothing when prestarting is off or FD's
+    A service worker calls it while it starts. Does nothing when prestarting is off or FD's
     binary is missing (the solve reports that).
     """
     if not _prestart_enabled():
@@ -488,4 +483,4 @@ def prestart(config: SearchConfig = CONFIGS["fd"], keep_warm: bool = True) -> No
         binary = search_binary()
     except PlannerUnavailableError:
         return
-    search_processes.prestart(_search_command(binary, config.search), keep_warm)
+    search_processes.prestart(_search_command(binary, config.search))

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 from causalplan.causal.graph import goal_holds
 from causalplan.errors import CausalPlanError
@@ -109,45 +110,36 @@ def _run(task: PlanningTask, planner: str, time_limit: float, include_pddl: bool
     if include_pddl:
         compiled = compile_task(task)
         pddl = {"domain": compiled.domain, "problem": compiled.problem}
-    if not goal_reachable(task):
+
+    def without_plan(
+        status: PlanStatus, planner_used: str, message: str, probability: float | None = None
+    ) -> PlanResult:
         timing["total"] = time.perf_counter() - started
         return PlanResult(
+            status, planner_used, obj.id, timing=timing, pddl=pddl, success_probability=probability, message=message
+        )
+
+    if not goal_reachable(task):
+        return without_plan(
             PlanStatus.UNSOLVABLE,
             PRECHECK,
-            obj.id,
-            timing=timing,
-            pddl=pddl,
-            success_probability=0.0,
-            message=f"Even with every part of the {obj.name} assembled, the model's rules do not "
+            f"Even with every part of the {obj.name} assembled, the model's rules do not "
             f"produce '{task.goal}': no part carries some function the rules need.",
+            probability=0.0,
         )
     outcome = _search(task, planner, time_limit, timing)
     timing.update(outcome.timing)
     timing.pop("total", None)
     if outcome.status is not PlanStatus.SOLVED:
-        timing["total"] = time.perf_counter() - started
-        return PlanResult(
-            outcome.status,
-            planner,
-            obj.id,
-            timing=timing,
-            pddl=pddl,
-            message=outcome.message or _failure_message(outcome.status, task, time_limit),
+        return without_plan(
+            outcome.status, planner, outcome.message or _failure_message(outcome.status, task, time_limit)
         )
     replay_started = time.perf_counter()
     checked = replay(task, outcome.actions)
     timing["replay"] = time.perf_counter() - replay_started
     if not (checked.executable and checked.valid_under_model):
         why = checked.failure or "the goal does not hold under the model after the last step"
-        timing["total"] = time.perf_counter() - started
-        return PlanResult(
-            PlanStatus.ERROR,
-            planner,
-            obj.id,
-            timing=timing,
-            pddl=pddl,
-            message=f"The planner's plan failed replay ({why}); it is not returned.",
-        )
+        return without_plan(PlanStatus.ERROR, planner, f"The planner's plan failed replay ({why}); it is not returned.")
     validated: bool | None = None
     if validate_up or planner.startswith("up:"):
         from causalplan.planners.up_problem import validate_with_up
@@ -190,8 +182,6 @@ def _run(task: PlanningTask, planner: str, time_limit: float, include_pddl: bool
 
 
 def _with_fallback(result: PlanResult, reason: str, started: float, first: PlanResult | None = None) -> PlanResult:
-    from dataclasses import replace
-
     timing = dict(result.timing)
     if first is not None:
         timing.update({f"{first.planner_used}_{stage}": seconds for stage, seconds in first.timing.items()})

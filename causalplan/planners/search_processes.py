@@ -93,7 +93,6 @@ class _Pool:
         self._owner = os.getpid()
         self._idle: dict[Command, Started] = {}
         self._starting: dict[Command, threading.Thread] = {}
-        self.keep_warm = True
 
     def take(self, command: Command) -> Started:
         """Return a started process for ``command`` (the idle one, else a new one); start its replacement."""
@@ -102,8 +101,7 @@ class _Pool:
             discard(ready)
             ready = None
         taken = ready or start(command)
-        if self.keep_warm:
-            self.prestart(command)
+        self.prestart(command)
         return taken
 
     def prestart(self, command: Command) -> None:
@@ -200,13 +198,8 @@ def take(command: Command) -> Started:
     return _POOL.take(command)
 
 
-def prestart(command: Command, keep_warm: bool = True) -> None:
-    """Start a process for ``command`` in the background now, so the next ``take`` finds it ready.
-
-    ``keep_warm=False`` is for a process that solves once (a CLI command): taking a process then
-    starts no replacement that would only be killed at exit.
-    """
-    _POOL.keep_warm = keep_warm
+def prestart(command: Command) -> None:
+    """Start a process for ``command`` in the background now, so the next ``take`` finds it ready."""
     _POOL.prestart(command)
 
 
