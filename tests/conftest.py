@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+from functools import cache
 from pathlib import Path
 
 import pytest
@@ -16,9 +18,22 @@ EXAMPLES = ROOT / "examples"
 pytest_plugins = ["tests.service_fixtures"]  # the HTTP service's apps, databases and PostgreSQL server
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """Keep the catalog's disk cache (``objects.cache``) in pytest's cache folder, not the home folder."""
+    cache = getattr(config, "cache", None)  # absent with -p no:cacheprovider: the default folder then
+    if cache is not None:
+        os.environ.setdefault("CAUSALPLAN_CACHE_DIR", str(cache.mkdir("causalplan-objects")))
+
+
+@cache
+def builtin_catalog() -> Catalog:
+    """Return the built-in catalog, loaded once per run (the ``catalog`` fixture, for module-level use)."""
+    return load_catalog()
+
+
 @pytest.fixture(scope="session")
 def catalog() -> Catalog:
-    return load_catalog()
+    return builtin_catalog()
 
 
 @pytest.fixture(scope="session")

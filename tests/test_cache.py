@@ -36,6 +36,15 @@ def test_an_edited_file_misses_the_cache(folder: Path) -> None:
     assert len(list(folder.glob("object-*.pickle"))) == 2
 
 
+def test_an_edit_to_the_code_that_builds_objects_misses_the_cache(
+    folder: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    parse_object(LAMP, "lamp.yaml")
+    monkeypatch.setattr(cache, "_code_version", lambda: b"edited code, same causalplan version")
+    parse_object(LAMP, "lamp.yaml")
+    assert len(list(folder.glob("object-*.pickle"))) == 2
+
+
 def test_a_damaged_entry_is_remade(folder: Path) -> None:
     parse_object(LAMP, "lamp.yaml")
     (entry,) = folder.glob("object-*.pickle")

@@ -7,6 +7,7 @@ import pytest
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import read_model
 from causalplan.objects.catalog import Catalog
+from causalplan.pddl import canonical
 from causalplan.pddl.canonical import MAX_MINIMAL_SETS, canonical_pddl, minimal_part_sets
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.pddl.writer import compile_task
@@ -60,6 +61,31 @@ def test_cycles_contribute_nothing_and_too_many_sets_give_none(catalog: Catalog)
     many = synthetic_task(40, seed=0)
     assert minimal_part_sets(many) is not None
     assert MAX_MINIMAL_SETS >= 2
+
+
+def test_an_effect_shared_by_many_rules_is_worked_out_once(catalog: Catalog, monkeypatch: pytest.MonkeyPatch) -> None:
+    # A chain of diamonds: each level's two effects both need the level below, so a node is
+    # reached along 2**depth paths; planning must not walk them all.
+    depth = 16
+    rules = [f"x{depth} CAUSES light"]
+    for level in range(depth):
+        rules += [
+            f"x{level} CAUSES a{level}",
+            f"x{level} CAUSES b{level}",
+            f"a{level} AND b{level} CAUSES x{level + 1}",
+        ]
+    task = _task({"light_bulb": ["x0"]}, rules, catalog)
+    calls = 0
+    minimize = canonical._minimize
+
+    def counted(sets: set[frozenset[str]]) -> set[frozenset[str]]:
+        nonlocal calls
+        calls += 1
+        return minimize(sets)
+
+    monkeypatch.setattr(canonical, "_minimize", counted)
+    assert minimal_part_sets(task) == {frozenset({"light_bulb"})}
+    assert calls < 10 * depth
 
 
 @pytest.mark.parametrize("seed", range(6))

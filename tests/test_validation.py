@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-from functools import cache
-from pathlib import Path
-
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -13,14 +10,8 @@ from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import read_labelling, read_model
 from causalplan.causal.validation import ObjectSummary, validate_mapping, validate_model
 from causalplan.inputs import load_mapping, load_model, model_from_data, model_from_text
-from causalplan.objects.catalog import Catalog, load_catalog
-
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-
-
-@cache
-def builtin_catalog() -> Catalog:
-    return load_catalog()
+from causalplan.objects.catalog import load_catalog
+from tests.conftest import EXAMPLES, builtin_catalog
 
 
 def report_of(text: str) -> Report:
@@ -545,10 +536,6 @@ def test_objects_summary_drives_validation() -> None:
 
 
 def test_a_rule_causing_itself_names_that_one_rule() -> None:
-    from causalplan.causal.documents import SourceMap
-    from causalplan.causal.model import read_model
-    from causalplan.causal.validation import validate_model
-
     looped, problems = read_model(
         {
             "object": "desk_lamp",

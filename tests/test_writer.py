@@ -5,9 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from pddl import parse_domain, parse_problem
+from pddl.core import Domain, Problem
 
 from causalplan.causal.documents import SourceMap
-from causalplan.causal.model import read_model
+from causalplan.causal.model import CausalModel, read_model
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import build_task
 from causalplan.pddl.writer import compile_task
@@ -17,7 +18,7 @@ from causalplan.planners.result import PlanStatus
 EVIL = "x) (:action evil :parameters () :precondition () :effect (n-light)) (:derived (n-light) (and)"
 
 
-def _model(functions: dict[str, list[str]], rules: list[str], catalog: Catalog, goal: str = "light"):  # type: ignore[no-untyped-def]
+def _model(functions: dict[str, list[str]], rules: list[str], catalog: Catalog, goal: str = "light") -> CausalModel:
     model, problems = read_model(
         {"object": "desk_lamp", "goal": goal, "functions": functions, "rules": rules}, SourceMap()
     )
@@ -25,7 +26,7 @@ def _model(functions: dict[str, list[str]], rules: list[str], catalog: Catalog, 
     return model
 
 
-def _parse(tmp_path: Path, domain: str, problem: str):  # type: ignore[no-untyped-def]
+def _parse(tmp_path: Path, domain: str, problem: str) -> tuple[Domain, Problem]:
     (tmp_path / "domain.pddl").write_text(domain)
     (tmp_path / "problem.pddl").write_text(problem)
     return parse_domain(tmp_path / "domain.pddl"), parse_problem(tmp_path / "problem.pddl")

@@ -76,15 +76,21 @@ def _looks_like_json(text: str, file_name: str | None) -> bool:
     return suffix == "json" or text.lstrip().startswith(("{", "["))
 
 
-def _too_deep(file_name: str | None) -> list[Diagnostic]:
-    return [
+def _unreadable(file_name: str | None, problem: Diagnostic) -> tuple[object, SourceMap, list[Diagnostic]]:
+    """Return what reading a document gives when ``problem`` stops it: no data, no lines."""
+    return None, SourceMap(file_name), [problem]
+
+
+def _too_deep(file_name: str | None) -> tuple[object, SourceMap, list[Diagnostic]]:
+    return _unreadable(
+        file_name,
         error(
             "syntax_error",
             "The document is nested too deeply to read.",
             Location(file=file_name),
             "A model or mapping needs only a few levels: object, functions, rules.",
-        )
-    ]
+        ),
+    )
 
 
 def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceMap, list[Diagnostic]]:
@@ -94,43 +100,35 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
         try:
             data = json.loads(text)
         except RecursionError:
-            return None, SourceMap(file_name), _too_deep(file_name)
+            return _too_deep(file_name)
         except json.JSONDecodeError as exc:
-            where = Location(file=file_name, line=exc.lineno)
-            return (
-                None,
-                SourceMap(file_name),
-                [
-                    error(
-                        "syntax_error",
-                        f"The JSON is malformed at line {exc.lineno}, column {exc.colno}: {exc.msg}.",
-                        where,
-                        "Check for a missing comma, quote or bracket just before that point.",
-                    )
-                ],
+            return _unreadable(
+                file_name,
+                error(
+                    "syntax_error",
+                    f"The JSON is malformed at line {exc.lineno}, column {exc.colno}: {exc.msg}.",
+                    Location(file=file_name, line=exc.lineno),
+                    "Check for a missing comma, quote or bracket just before that point.",
+                ),
             )
         # JSON allows tabs between tokens (never inside strings); YAML does not.
         return data, SourceMap(file_name, text.replace("\t", " ")), []
     try:
         data = yaml.load(text, Loader=SAFE_LOADER)
     except RecursionError:
-        return None, SourceMap(file_name), _too_deep(file_name)
+        return _too_deep(file_name)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         line = mark.line + 1 if mark is not None else None
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        where = Location(file=file_name, line=line)
-        return (
-            None,
-            SourceMap(file_name),
-            [
-                error(
-                    "syntax_error",
-                    f"The YAML is malformed{f' at line {line}' if line else ''}: {problem}.",
-                    where,
-                    "Check the indentation, and put labels containing ':' or '#' in quotes.",
-                )
-            ],
+        return _unreadable(
+            file_name,
+            error(
+                "syntax_error",
+                f"The YAML is malformed{f' at line {line}' if line else ''}: {problem}.",
+                Location(file=file_name, line=line),
+                "Check the indentation, and put labels containing ':' or '#' in quotes.",
+            ),
         )
     return data, SourceMap(file_name, text), []
 
@@ -138,35 +136,19 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
 def read_document(path: Path) -> tuple[object, SourceMap, list[Diagnostic]]:
     """Read and parse a YAML/JSON file; problems come back as diagnostics, never raised."""
     name = str(path)
+    where = Location(file=name)
     try:
         size = path.stat().st_size
         if size > MAX_DOCUMENT_BYTES:
-            return (
-                None,
-                SourceMap(name),
-                [
-                    error(
-                        "file_too_large",
-                        f"{name} is {size} bytes; the limit is {MAX_DOCUMENT_BYTES} bytes.",
-                        Location(file=name),
-                    )
-                ],
-            )
+            message = f"{name} is {size} bytes; the limit is {MAX_DOCUMENT_BYTES} bytes."
+            return _unreadable(name, error("file_too_large", message, where))
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        return None, SourceMap(name), [error("file_not_found", f"There is no file {name}.", Location(file=name))]
+        return _unreadable(name, error("file_not_found", f"There is no file {name}.", where))
     except IsADirectoryError:
-        return None, SourceMap(name), [error("file_not_found", f"{name} is a folder, not a file.", Location(file=name))]
+        return _unreadable(name, error("file_not_found", f"{name} is a folder, not a file.", where))
     except UnicodeDecodeError as exc:
-        return (
-            None,
-            SourceMap(name),
-            [error("syntax_error", f"{name} is not UTF-8 text (byte {exc.start}).", Location(file=name))],
-        )
+        return _unreadable(name, error("syntax_error", f"{name} is not UTF-8 text (byte {exc.start}).", where))
     except OSError as exc:
-        return (
-            None,
-            SourceMap(name),
-            [error("file_not_readable", f"{name} cannot be read: {exc.strerror}.", Location(file=name))],
-        )
+        return _unreadable(name, error("file_not_readable", f"{name} cannot be read: {exc.strerror}.", where))
     return parse_text(text, name)

@@ -252,56 +252,21 @@ def _read_object_id(data: Mapping[object, object], source: SourceMap, problems: 
     return value.strip()
 
 
-def read_labelling(data: object, source: SourceMap, what: str = "mapping") -> tuple[Labelling | None, list[Diagnostic]]:
-    """Build a step-3 mapping from parsed data; return it (None if unusable) and the problems found."""
-    if not isinstance(data, Mapping):
-        return None, [
-            error(
-                "invalid_type",
-                f"The {what} must be a mapping with the fields: object, functions.",
-                source.locate(),
-                _FIELD_HINTS["object"],
-            )
-        ]
-    problems = _check_fields(data, MAPPING_FIELDS, MAPPING_FIELDS, source, what)
-    object_id = _read_object_id(data, source, problems)
-    functions = _read_functions(data.get("functions", {}), source, problems)
-    return Labelling(object_id, functions, source), problems
-
-
-def read_model(data: object, source: SourceMap) -> tuple[CausalModel | None, list[Diagnostic]]:
-    """Build a causal model from parsed data; return it (None if unusable) and the problems found.
-
-    Only the document's shape and the rules' syntax are checked here; ``validation`` checks
-    the model's meaning against the catalog.
-    """
-    if not isinstance(data, Mapping):
-        return None, [
-            error(
-                "invalid_type",
-                "A model must be a mapping with the fields: " + ", ".join(MODEL_FIELDS),
-                source.locate(),
-                _FIELD_HINTS["object"],
-            )
-        ]
-    problems = _check_fields(data, MODEL_FIELDS, ("object", "functions", "rules"), source, "model")
-    object_id = _read_object_id(data, source, problems)
-    functions = _read_functions(data.get("functions", {}), source, problems)
-    goal_value = data.get("goal", DEFAULT_GOAL)
-    goal = DEFAULT_GOAL
+def _read_goal(data: Mapping[object, object], source: SourceMap, problems: list[Diagnostic]) -> str:
+    value = data.get("goal", DEFAULT_GOAL)
     where = source.locate("goal")
-    if not isinstance(goal_value, str):
+    if not isinstance(value, str):
         problems.append(
             error(
                 "invalid_type",
-                f"'goal' is {type(goal_value).__name__}, not text.",
+                f"'goal' is {type(value).__name__}, not text.",
                 where,
                 "Write the goal as a label, e.g. 'goal: light' (in quotes if it is a number).",
             )
         )
-    elif not goal_value.strip():
+    elif not value.strip():
         problems.append(error("empty_label", "'goal' must be a non-empty label, e.g. 'light'.", where))
-    elif has_control_characters(goal_value):
+    elif has_control_characters(value):
         problems.append(
             error(
                 "invalid_character",
@@ -310,22 +275,24 @@ def read_model(data: object, source: SourceMap) -> tuple[CausalModel | None, lis
                 "Retype it using ordinary letters, digits and punctuation.",
             )
         )
-    elif len(goal_value) > MAX_LABEL_LENGTH:
+    elif len(value) > MAX_LABEL_LENGTH:
         problems.append(
             error(
                 "label_too_long",
-                f"'goal' is {len(goal_value)} characters long; the limit is {MAX_LABEL_LENGTH}.",
+                f"'goal' is {len(value)} characters long; the limit is {MAX_LABEL_LENGTH}.",
                 where,
                 "Say it in fewer words.",
             )
         )
     else:
-        goal = display_label(goal_value)
-    raw_rules = data.get("rules", [])
-    rules: list[Rule] = []
-    if isinstance(raw_rules, str):
-        raw_rules = [line for line in raw_rules.splitlines() if line.strip()]
-    if not isinstance(raw_rules, list):
+        return display_label(value)
+    return DEFAULT_GOAL
+
+
+def _read_rules(value: object, source: SourceMap, problems: list[Diagnostic]) -> tuple[Rule, ...]:
+    if isinstance(value, str):
+        value = [line for line in value.splitlines() if line.strip()]
+    if not isinstance(value, list):
         problems.append(
             error(
                 "invalid_type",
@@ -334,10 +301,10 @@ def read_model(data: object, source: SourceMap) -> tuple[CausalModel | None, lis
                 _FIELD_HINTS["rules"],
             )
         )
-        raw_rules = []
-    for position, raw in enumerate(raw_rules):
-        index = position + 1
-        where = source.locate("rules", position, rule=index)
+        return ()
+    rules: list[Rule] = []
+    for index, raw in enumerate(value, start=1):
+        where = source.locate("rules", index - 1, rule=index)
         if not isinstance(raw, str):
             problems.append(
                 error(
@@ -362,5 +329,44 @@ def read_model(data: object, source: SourceMap) -> tuple[CausalModel | None, lis
         problems.extend(rule_problems)
         if rule is not None:
             rules.append(rule)
-    labelling = Labelling(object_id, functions, source)
-    return CausalModel(labelling, goal, tuple(rules)), problems
+    return tuple(rules)
+
+
+def read_labelling(data: object, source: SourceMap) -> tuple[Labelling | None, list[Diagnostic]]:
+    """Build a step-3 mapping from parsed data; return it (None if unusable) and the problems found."""
+    if not isinstance(data, Mapping):
+        return None, [
+            error(
+                "invalid_type",
+                "The mapping must be a mapping with the fields: object, functions.",
+                source.locate(),
+                _FIELD_HINTS["object"],
+            )
+        ]
+    problems = _check_fields(data, MAPPING_FIELDS, MAPPING_FIELDS, source, "mapping")
+    object_id = _read_object_id(data, source, problems)
+    functions = _read_functions(data.get("functions", {}), source, problems)
+    return Labelling(object_id, functions, source), problems
+
+
+def read_model(data: object, source: SourceMap) -> tuple[CausalModel | None, list[Diagnostic]]:
+    """Build a causal model from parsed data; return it (None if unusable) and the problems found.
+
+    Only the document's shape and the rules' syntax are checked here; ``validation`` checks
+    the model's meaning against the catalog.
+    """
+    if not isinstance(data, Mapping):
+        return None, [
+            error(
+                "invalid_type",
+                "A model must be a mapping with the fields: " + ", ".join(MODEL_FIELDS),
+                source.locate(),
+                _FIELD_HINTS["object"],
+            )
+        ]
+    problems = _check_fields(data, MODEL_FIELDS, ("object", "functions", "rules"), source, "model")
+    object_id = _read_object_id(data, source, problems)
+    functions = _read_functions(data.get("functions", {}), source, problems)
+    goal = _read_goal(data, source, problems)
+    rules = _read_rules(data.get("rules", []), source, problems)
+    return CausalModel(Labelling(object_id, functions, source), goal, rules), problems

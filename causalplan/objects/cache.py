@@ -1,7 +1,8 @@
 """A disk cache of checked catalog objects, so a command does not re-validate unchanged files.
 
 Each entry is the pickled ``AssemblyObject`` of one object file, named by a hash of the file's
-exact text and the causalplan version: an edited file, or a new causalplan, misses the cache.
+exact text, the causalplan version and the code that builds objects: an edited file, a new
+causalplan, or an edit to that code (an editable install keeps its version) misses the cache.
 Only files that passed every check are stored. The folder is ``CAUSALPLAN_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/causalplan``, else ``~/.cache/causalplan``; ``CAUSALPLAN_CACHE_DIR=off``
 turns it off. A cache that cannot be read or written is ignored (it only costs time).
@@ -9,6 +10,7 @@ turns it off. A cache that cannot be read or written is ignored (it only costs t
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import logging
 import os
@@ -34,11 +36,29 @@ def cache_folder() -> Path | None:
     return Path(base) / "causalplan"
 
 
+BUILDING_MODULES = ("catalog.py", "model.py", "schema.py", "shapes.py")
+"""The modules of this package that turn an object file's text into an ``AssemblyObject``."""
+
+
+@functools.cache
+def _code_version() -> bytes | None:
+    """Return a hash of the causalplan version and of the code that builds objects (None if unreadable)."""
+    digest = hashlib.sha256(__version__.encode())
+    try:
+        for name in BUILDING_MODULES:
+            digest.update(Path(__file__).with_name(name).read_bytes())
+    except OSError as exc:
+        logger.debug("catalog cache off: cannot read the code that builds objects: %s", exc)
+        return None
+    return digest.digest()
+
+
 def _entry(text: str) -> Path | None:
     folder = cache_folder()
-    if folder is None:
+    code = _code_version()
+    if folder is None or code is None:
         return None
-    digest = hashlib.sha256(f"{__version__}\0{text}".encode()).hexdigest()[:32]
+    digest = hashlib.sha256(code + text.encode()).hexdigest()[:32]
     return folder / f"object-{digest}.pickle"
 
 

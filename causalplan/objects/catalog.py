@@ -6,8 +6,9 @@ checked before is read back from ``objects.cache`` instead, keyed by its exact t
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -179,9 +180,13 @@ class Catalog:
                 f"There is no object '{object_id}' in the catalog.{hint}", details={"object": object_id}
             ) from None
 
-    def summaries(self) -> dict[str, ObjectSummary]:
-        """Return what model validation needs to know of each object."""
+    @cached_property
+    def _summaries(self) -> Mapping[str, ObjectSummary]:
         return {obj.id: ObjectSummary(obj.id, obj.part_ids, obj.goal, obj.name) for obj in self.objects.values()}
+
+    def summaries(self) -> Mapping[str, ObjectSummary]:
+        """Return what model validation needs to know of each object (worked out once per catalog)."""
+        return self._summaries
 
 
 def load_catalog(extra_folders: Iterable[Path] = ()) -> Catalog:

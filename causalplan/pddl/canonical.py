@@ -40,13 +40,17 @@ def minimal_part_sets(task: PlanningTask) -> frozenset[frozenset[str]] | None:
     for rule in task.rules:
         by_effect.setdefault(rule.effect_key, []).append(rule.cause_keys)
     memo: dict[str, set[frozenset[str]]] = {}
+    cycles_cut = 0
     base = task.obj.base
 
     def sets_of(key: str, path: frozenset[str]) -> set[frozenset[str]]:
+        nonlocal cycles_cut
         if key in memo:
             return memo[key]
         if key in path:  # a cycle contributes nothing (least fixpoint)
+            cycles_cut += 1
             return set()
+        cut_before = cycles_cut
         result = {frozenset() if part == base else frozenset({part}) for part in carriers.get(key, ())}
         for causes in by_effect.get(key, []):
             combined: set[frozenset[str]] = {frozenset()}
@@ -59,7 +63,9 @@ def minimal_part_sets(task: PlanningTask) -> frozenset[frozenset[str]] | None:
         result = _minimize(result)
         if len(result) > MAX_MINIMAL_SETS:
             raise _TooMany
-        if not path:  # only results independent of the path are safe to reuse
+        # Without a cycle below it, a node's sets do not depend on the path that reached it, so
+        # they are worked out once: effects shared by many rules would otherwise cost 2**depth.
+        if cycles_cut == cut_before:
             memo[key] = result
         return result
 
