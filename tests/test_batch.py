@@ -12,27 +12,21 @@ from click.testing import CliRunner
 from causalplan.cli import app
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import build_task
-from causalplan.planners import fast_downward
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.synthetic import synthetic_task
-from causalplan.transfer import verdict as verdict_module
 from causalplan.transfer.batch import evaluate_trial, read_trials, run_batch
+from causalplan.transfer.verdict import clear_caches
 from tests.conftest import EXAMPLES, example_mapping, example_model
 from tests.test_pipeline import PAPER_PLANS
 
 TRIALS = EXAMPLES / "batch" / "trials.jsonl"
 
 
-def _clear_caches() -> None:
-    fast_downward.clear_solve_cache()
-    verdict_module._simulated.cache_clear()
-
-
 def test_the_batch_gives_exactly_the_verdicts_of_one_trial_at_a_time(catalog: Catalog) -> None:
     trials = list(read_trials(TRIALS))
     fast = run_batch(trials, catalog)
     for trial, result in zip(trials, fast, strict=True):
-        _clear_caches()
+        clear_caches()
         plain = evaluate_trial(trial, catalog, "auto", 30.0, True)
         assert result.verdict.as_dict()["verdict"] == plain.verdict.as_dict()["verdict"], trial.id
         assert result.verdict.as_dict()["reasons"] == plain.verdict.as_dict()["reasons"], trial.id
@@ -73,7 +67,7 @@ def test_cached_plans_equal_fresh_plans_on_random_synthetic_tasks(seed: int) -> 
     task = synthetic_task(6 + 7 * seed, seed)
     fresh = plan_task(task, "fd")
     assert plan_task(task, "fd").steps == fresh.steps
-    _clear_caches()
+    clear_caches()
     assert plan_task(task, "fd").steps == fresh.steps
 
 

@@ -6,11 +6,11 @@ import pytest
 
 from causalplan.causal.diagnostics import Severity
 from causalplan.objects.catalog import Catalog
-from causalplan.transfer.verdict import Verdict, evaluate_transfer, generalization, needed_functions
+from causalplan.transfer.verdict import TransferVerdict, Verdict, evaluate_transfer, generalization, needed_functions
 from tests.conftest import example_mapping, example_model
 
 
-def _verdict(model: str, mapping: str, catalog: Catalog):  # type: ignore[no-untyped-def]
+def _verdict(model: str, mapping: str, catalog: Catalog) -> TransferVerdict:
     return evaluate_transfer(example_model(model, catalog), example_mapping(mapping, catalog), catalog)
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from causalplan.causal.documents import read_document
 from causalplan.errors import CausalPlanError, InputFileError
@@ -41,6 +42,18 @@ def _name(model: Path, mapping: Path | None) -> str:
     return short(model) if mapping is None else f"{short(model)} -> {short(mapping)}"
 
 
+def _file_error(path: Path, message: str) -> InputFileError:
+    return InputFileError(f"{path}: {message}", details={"file": str(path)})
+
+
+def _read(path: Path) -> object:
+    """Return the data of a YAML/JSON file; InputFileError when it cannot be read."""
+    data, _source, problems = read_document(path)
+    if problems:
+        raise _file_error(path, problems[0].message)
+    return data
+
+
 def build(spec: dict[str, object]) -> PlanningTask:
     """Rebuild a task from its spec (in a worker process); CausalPlanError says what is wrong."""
     if "synthetic" in spec:
@@ -55,15 +68,13 @@ def build(spec: dict[str, object]) -> PlanningTask:
     model_path = Path(str(spec["model"]))
     loaded = load_model(model_path, catalog)
     if not loaded.is_valid or loaded.model is None:
-        first = loaded.report.errors[0]
-        raise InputFileError(f"{model_path}: {first.message}", details={"file": str(model_path)})
+        raise _file_error(model_path, loaded.report.errors[0].message)
     mapping = None
     if spec.get("mapping"):
         mapping_path = Path(str(spec["mapping"]))
         loaded_mapping = load_mapping(mapping_path, catalog)
         if not loaded_mapping.is_valid or loaded_mapping.mapping is None:
-            first = loaded_mapping.report.errors[0]
-            raise InputFileError(f"{mapping_path}: {first.message}", details={"file": str(mapping_path)})
+            raise _file_error(mapping_path, loaded_mapping.report.errors[0].message)
         mapping = loaded_mapping.mapping
     target = catalog.get(mapping.object_id if mapping else loaded.model.object_id)
     return build_task(loaded.model, target, mapping)
@@ -80,16 +91,8 @@ def from_files(model: Path, mapping: Path | None, catalog_folders: list[Path]) -
     return ComparisonTask(_name(model, mapping), len(task.obj.parts), spec)
 
 
-def from_task_file(path: Path, catalog_folders: list[Path]) -> ComparisonTask:
-    """Return the task of a task file: YAML/JSON with ``model``, optional ``mapping`` and ``catalog``."""
-    data, _source, problems = read_document(path)
-    if problems:
-        raise InputFileError(f"{path}: {problems[0].message}", details={"file": str(path)})
-    if not isinstance(data, dict) or "model" not in data:
-        raise InputFileError(
-            f"{path}: a task file needs a 'model' path (and may give 'mapping' and 'catalog').",
-            details={"file": str(path)},
-        )
+def _from_task_file(path: Path, data: dict[str, Any], catalog_folders: list[Path]) -> ComparisonTask:
+    """Return the task of a task file's ``data``: ``model``, optional ``mapping`` and ``catalog`` (paths from it)."""
     base = path.parent
 
     def resolve(value: object) -> Path:
@@ -103,11 +106,9 @@ def from_task_file(path: Path, catalog_folders: list[Path]) -> ComparisonTask:
 
 def from_argument(path: Path, catalog_folders: list[Path]) -> ComparisonTask:
     """Return the task a command-line argument names: a model file or a task file."""
-    data, _source, problems = read_document(path)
-    if problems:
-        raise InputFileError(f"{path}: {problems[0].message}", details={"file": str(path)})
+    data = _read(path)
     if isinstance(data, dict) and "model" in data and "rules" not in data:
-        return from_task_file(path, catalog_folders)
+        return _from_task_file(path, data, catalog_folders)
     return from_files(path, None, catalog_folders)
 
 

@@ -13,6 +13,7 @@ import math
 
 from causalplan.objects.model import Vector
 from causalplan.sim.checks import REACH_TOLERANCE_MM
+from causalplan.sim.geometry import corners
 from causalplan.sim.poses import Pose, about_axis
 from causalplan.sim.report import Reach
 from causalplan.sim.scene import Scene, SimulatorUnavailableError
@@ -76,16 +77,11 @@ class Arm:
 def grasp_point(scene: Scene, part_id: str, pose: Pose) -> Vector:
     """Return where the gripper holds a part at ``pose``: the middle of the part's top."""
     solid = scene.solids[part_id]
-    corners = [
-        pose.apply((x, y, z))
-        for x in (solid.lower[0], solid.upper[0])
-        for y in (solid.lower[1], solid.upper[1])
-        for z in (solid.lower[2], solid.upper[2])
-    ]
+    placed = [pose.apply(corner) for corner in corners((solid.lower, solid.upper))]
     return (
-        sum(corner[0] for corner in corners) / len(corners),
-        sum(corner[1] for corner in corners) / len(corners),
-        max(corner[2] for corner in corners),
+        sum(corner[0] for corner in placed) / len(placed),
+        sum(corner[1] for corner in placed) / len(placed),
+        max(corner[2] for corner in placed),
     )
 
 

@@ -15,12 +15,12 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
-from causalplan.objects.model import AssemblyObject, Connector, Vector
+from causalplan.objects.model import AssemblyObject, Connector
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.result import PlanStep
 from causalplan.sim import checks
 from causalplan.sim.arm import Arm, reach_step
-from causalplan.sim.geometry import Solid, bounds, mating_pose, solids
+from causalplan.sim.geometry import Box, Solid, bounding_box, bounds, corners, mating_pose, solids
 from causalplan.sim.mechanism import Joint, evaluate, seat_error
 from causalplan.sim.motions import MOTIONS, approach, approach_path, approach_start
 from causalplan.sim.plan_steps import StepRequest, check_steps
@@ -32,6 +32,7 @@ from causalplan.sim.report import (
     Picture,
     Reach,
     RenderMode,
+    RequirementCheck,
     SimulationReport,
     StepReport,
     StepStatus,
@@ -213,7 +214,7 @@ def _specs(obj: AssemblyObject, part_id: str) -> str:
 
 def _layout(
     obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...]
-) -> tuple[dict[str, Pose], tuple[Vector, Vector]]:
+) -> tuple[dict[str, Pose], Box]:
     """Return where each part starts, and the bounds of the assembly the plan means to build.
 
     The base stands at the origin; the other parts wait in a row behind where the assembly
@@ -234,16 +235,11 @@ def _layout(
         relative = mating_pose(parts[request.moving].frames[pair[0].id], parts[request.fixed].frames[pair[1].id])
         design[request.moving] = design[request.fixed] * relative
         joints.append(Joint(0, None, request.moving, pair[0].id, request.fixed, pair[1].id))
-    boxes = [(pose, bounds(parts[part].shapes + parts[part].light)) for part, pose in design.items()]
-    corners = [
-        pose.apply((x, y, z))
-        for pose, (low, high) in boxes
-        for x in (low[0], high[0])
-        for y in (low[1], high[1])
-        for z in (low[2], high[2])
-    ]
-    lower = (min(c[0] for c in corners), min(c[1] for c in corners), min(c[2] for c in corners))
-    upper = (max(c[0] for c in corners), max(c[1] for c in corners), max(c[2] for c in corners))
+    lower, upper = bounding_box(
+        pose.apply(corner)
+        for part, pose in design.items()
+        for corner in corners(bounds(parts[part].shapes + parts[part].light))
+    )
     waiting = [part for part in parts if part != obj.base]
     widths = [parts[part].upper[0] - parts[part].lower[0] for part in waiting]
     left = -(sum(widths) + ROW_GAP * (len(waiting) - 1)) / 2
@@ -291,7 +287,7 @@ def simulate_plan(
                 continue
             reports.append(_step(run, number, request))
             if camera is not None and render is RenderMode.FRAMES:
-                lit = _lit_parts(run)
+                lit = _lit_parts(run, evaluate(obj, scene, run.joints))
                 caption = f"{number}/{len(requests)} {reports[-1].text} {reports[-1].status.value}"
                 frames.append(draw(scene, camera, lit, caption))
         timing["steps"], clock = time.perf_counter() - clock, time.perf_counter()
@@ -305,7 +301,7 @@ def simulate_plan(
         picture = None
         if camera is not None:
             verdict = f"produces {obj.goal}" if produces_goal else f"no {obj.goal}"
-            picture = draw(scene, camera, _lit_parts(run) if produces_goal else (), f"{obj.name}: {verdict}")
+            picture = draw(scene, camera, _lit_parts(run, requirements), f"{obj.name}: {verdict}")
             if render is RenderMode.FRAMES:
                 frames.append(picture)
             timing["render"] = time.perf_counter() - clock
@@ -326,8 +322,8 @@ def simulate_plan(
     )
 
 
-def _lit_parts(run: _Run) -> tuple[str, ...]:
-    """Return the assembled parts whose light shows: all of them, when the true mechanism holds now."""
-    if not all(requirement.met for requirement in evaluate(run.obj, run.scene, run.joints)):
+def _lit_parts(run: _Run, requirements: tuple[RequirementCheck, ...]) -> tuple[str, ...]:
+    """Return the assembled parts whose light shows: all of them when every requirement is met."""
+    if not all(requirement.met for requirement in requirements):
         return ()
     return tuple(sorted(run.assembled))

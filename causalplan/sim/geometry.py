@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 from causalplan.objects.model import AssemblyObject, Part, Shape, Vector
@@ -28,6 +29,9 @@ DEFAULT_COLORS: tuple[tuple[float, float, float, float], ...] = (
     (0.80, 0.75, 0.35, 1.0),
 )
 """Colours of default parts, by the part's position in its object (deterministic)."""
+
+Box = tuple[Vector, Vector]
+"""An axis-aligned box: its lower and upper corners."""
 
 # Faces for connectors without a frame: (outward axis), in the order they are handed out.
 _FACES: tuple[Vector, ...] = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0))
@@ -60,29 +64,32 @@ class Solid:
     @property
     def radius(self) -> float:
         """Return the radius of a sphere around ``center`` that holds the whole part."""
-        return max(math.dist(self.center, corner) for corner in _corners(self.lower, self.upper))
+        return max(math.dist(self.center, corner) for corner in corners((self.lower, self.upper)))
 
 
-def _corners(lower: Vector, upper: Vector) -> tuple[Vector, ...]:
-    return tuple((x, y, z) for x in (lower[0], upper[0]) for y in (lower[1], upper[1]) for z in (lower[2], upper[2]))
+def corners(box: Box) -> tuple[Vector, ...]:
+    """Return the eight corners of ``box``."""
+    (x0, y0, z0), (x1, y1, z1) = box
+    return tuple((x, y, z) for x in (x0, x1) for y in (y0, y1) for z in (z0, z1))
 
 
-def shape_bounds(shape: Shape) -> tuple[Vector, Vector]:
+def bounding_box(points: Iterable[Vector]) -> Box:
+    """Return the smallest axis-aligned box holding every point."""
+    xs, ys, zs = zip(*points, strict=True)
+    return (min(xs), min(ys), min(zs)), (max(xs), max(ys), max(zs))
+
+
+def shape_bounds(shape: Shape) -> Box:
     """Return the axis-aligned bounds of one shape in its part's frame (rotation included)."""
     half = scale(shape.size, 0.5)
     orientation = from_rpy(shape.rotation)
-    points = [rotate(orientation, corner) for corner in _corners(scale(half, -1.0), half)]
-    lower = tuple(shape.position[i] + min(point[i] for point in points) for i in range(3))
-    upper = tuple(shape.position[i] + max(point[i] for point in points) for i in range(3))
-    return (lower[0], lower[1], lower[2]), (upper[0], upper[1], upper[2])
+    turned = (rotate(orientation, corner) for corner in corners((scale(half, -1.0), half)))
+    return bounding_box(add(shape.position, corner) for corner in turned)
 
 
-def bounds(shapes: tuple[Shape, ...]) -> tuple[Vector, Vector]:
+def bounds(shapes: tuple[Shape, ...]) -> Box:
     """Return the axis-aligned bounds of several shapes."""
-    boxes = [shape_bounds(shape) for shape in shapes]
-    lower = tuple(min(box[0][i] for box in boxes) for i in range(3))
-    upper = tuple(max(box[1][i] for box in boxes) for i in range(3))
-    return (lower[0], lower[1], lower[2]), (upper[0], upper[1], upper[2])
+    return bounding_box(corner for shape in shapes for corner in shape_bounds(shape))
 
 
 def _volume(shape: Shape) -> float:

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 from causalplan.objects.model import Vector
 from causalplan.sim.checks import PENETRATION_TOLERANCE_MM
-from causalplan.sim.geometry import Frame, mating_pose
-from causalplan.sim.poses import Pose, scale
+from causalplan.sim.geometry import Box, Frame, bounding_box, mating_pose
+from causalplan.sim.poses import Pose, add, scale
 from causalplan.sim.scene import Scene
 
 
@@ -47,8 +47,6 @@ APPROACH_MARGIN = 0.02
 MIN_APPROACH = 0.03
 MAX_APPROACH = 1.0
 _BISECTIONS = 10
-
-Box = tuple[Vector, Vector]
 
 
 def clearance(moving: Box, obstacle: Box, direction: Vector) -> float:
@@ -100,10 +98,8 @@ def approach(scene: Scene, part_id: str, path: Callable[[float], Pose], start: f
     tolerance = PENETRATION_TOLERANCE_MM / 1000
     solid = scene.solids[part_id]
     reach = solid.radius + SWEEP_STEP
-    centers = [path(start).apply(solid.center), path(0.0).apply(solid.center)]
-    lower = tuple(min(center[i] for center in centers) - reach for i in range(3))
-    upper = tuple(max(center[i] for center in centers) + reach for i in range(3))
-    near = scene.bodies_near((lower[0], lower[1], lower[2]), (upper[0], upper[1], upper[2]))
+    lower, upper = bounding_box([path(start).apply(solid.center), path(0.0).apply(solid.center)])
+    near = scene.bodies_near(add(lower, (-reach, -reach, -reach)), add(upper, (reach, reach, reach)))
     # Only parts and the table count: not the robot arm, not drawn lights, not the part itself.
     candidates = {body for body in near if body in scene.names and body != scene.bodies[part_id]}
     count = max(1, math.ceil(start / SWEEP_STEP))

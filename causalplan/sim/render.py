@@ -140,9 +140,7 @@ def draw(scene: Scene, camera: Camera, lit_parts: Iterable[str], caption: str) -
 
 def animation(pictures: Sequence[Picture], seconds_per_frame: float = 1.0) -> bytes:
     """Return the pictures as an animated GIF that loops."""
-    from PIL import Image
-
-    frames = [Image.frombytes("RGB", (picture.width, picture.height), picture.rgb) for picture in pictures]
+    frames = [picture.image() for picture in pictures]
     buffer = io.BytesIO()
     frames[0].save(
         buffer,
@@ -159,10 +157,10 @@ def strip(pictures: Sequence[Picture], height: int = 240) -> Picture:
     """Return the pictures side by side, scaled to ``height``."""
     from PIL import Image
 
-    scaled = []
-    for picture in pictures:
-        image = Image.frombytes("RGB", (picture.width, picture.height), picture.rgb)
-        scaled.append(image.resize((round(picture.width * height / picture.height), height), Image.Resampling.LANCZOS))
+    scaled = [
+        picture.image().resize((round(picture.width * height / picture.height), height), Image.Resampling.LANCZOS)
+        for picture in pictures
+    ]
     canvas = Image.new("RGB", (sum(image.width for image in scaled), height), (255, 255, 255))
     left = 0
     for image in scaled:

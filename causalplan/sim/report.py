@@ -5,6 +5,10 @@ from __future__ import annotations
 import io
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from PIL import Image
 
 
 class RenderMode(StrEnum):
@@ -122,12 +126,16 @@ class Picture:
     height: int
     rgb: bytes
 
-    def png(self) -> bytes:
-        """Return the picture encoded as PNG."""
+    def image(self) -> Image.Image:
+        """Return the picture as a Pillow image."""
         from PIL import Image
 
+        return Image.frombytes("RGB", (self.width, self.height), self.rgb)
+
+    def png(self) -> bytes:
+        """Return the picture encoded as PNG."""
         buffer = io.BytesIO()
-        Image.frombytes("RGB", (self.width, self.height), self.rgb).save(buffer, format="PNG", optimize=False)
+        self.image().save(buffer, format="PNG", optimize=False)
         return buffer.getvalue()
 
 

@@ -21,7 +21,7 @@ from typing import Any
 
 from causalplan.errors import CausalPlanError
 from causalplan.objects.model import Shape, Vector
-from causalplan.sim.geometry import Solid
+from causalplan.sim.geometry import Box, Solid, bounding_box
 from causalplan.sim.poses import Pose, from_rpy, scale
 
 TIME_STEP = 1.0 / 240.0
@@ -56,16 +56,16 @@ def load_pybullet() -> ModuleType:
         os.close(devnull)
 
 
-def _shape_arrays(pb: ModuleType, shapes: tuple[Shape, ...], center: Vector) -> dict[str, list[Any]]:
-    """Return the arguments PyBullet's shape arrays take, with positions relative to ``center``."""
+def _shape_arrays(pb: ModuleType, shapes: tuple[Shape, ...], center: Vector, role: str) -> dict[str, list[Any]]:
+    """Return the arguments of PyBullet's ``role`` shape arrays ("collision" or "visual"), relative to ``center``."""
     kinds = {"box": pb.GEOM_BOX, "cylinder": pb.GEOM_CYLINDER, "sphere": pb.GEOM_SPHERE}
     return {
         "shapeTypes": [kinds[shape.kind] for shape in shapes],
         "halfExtents": [list(scale(shape.size, 0.5)) for shape in shapes],
         "radii": [shape.size[0] / 2 for shape in shapes],
         "lengths": [shape.size[2] for shape in shapes],
-        "positions": [[shape.position[i] - center[i] for i in range(3)] for shape in shapes],
-        "orientations": [list(from_rpy(shape.rotation)) for shape in shapes],
+        f"{role}FramePositions": [[shape.position[i] - center[i] for i in range(3)] for shape in shapes],
+        f"{role}FrameOrientations": [list(from_rpy(shape.rotation)) for shape in shapes],
     }
 
 
@@ -158,12 +158,14 @@ class Scene:
         without a word, and crashes on a visual one), so shapes come in groups of 16: the first
         group on the body's base, each further group on a massless link welded to it.
         """
-        opaque = tuple(shape for shape in shapes if shape.color[3] >= 1.0 or not solid)
-        glass: dict[tuple[float, float, float, float], tuple[Shape, ...]] = {}
+        opaque: list[Shape] = []
+        glass: dict[tuple[float, float, float, float], list[Shape]] = {}
         for shape in shapes:
-            if shape not in opaque:
-                glass[shape.color] = (*glass.get(shape.color, ()), shape)
-        groups = _groups(opaque) + [group for same_color in glass.values() for group in _groups(same_color)]
+            if solid and shape.color[3] < 1.0:
+                glass.setdefault(shape.color, []).append(shape)
+            else:
+                opaque.append(shape)
+        groups = _groups(tuple(opaque)) + [group for same in glass.values() for group in _groups(tuple(same))]
         collisions = [self._collision(group, center) if solid else -1 for group in groups]
         visuals = [self._visual(group, center) if self.drawn else -1 for group in groups]
         links = len(groups) - 1
@@ -202,27 +204,14 @@ class Scene:
                 self.pb.changeVisualShape(body, link, rgbaColor=[*color[:3], 1.0], physicsClientId=self.client)
 
     def _collision(self, shapes: tuple[Shape, ...], center: Vector) -> int:
-        arrays = _shape_arrays(self.pb, shapes, center)
         collision: int = self.pb.createCollisionShapeArray(
-            shapeTypes=arrays["shapeTypes"],
-            halfExtents=arrays["halfExtents"],
-            radii=arrays["radii"],
-            lengths=arrays["lengths"],
-            collisionFramePositions=arrays["positions"],
-            collisionFrameOrientations=arrays["orientations"],
-            physicsClientId=self.client,
+            **_shape_arrays(self.pb, shapes, center, "collision"), physicsClientId=self.client
         )
         return collision
 
     def _visual(self, shapes: tuple[Shape, ...], center: Vector) -> int:
-        arrays = _shape_arrays(self.pb, shapes, center)
         visual: int = self.pb.createVisualShapeArray(
-            shapeTypes=arrays["shapeTypes"],
-            halfExtents=arrays["halfExtents"],
-            radii=arrays["radii"],
-            lengths=arrays["lengths"],
-            visualFramePositions=arrays["positions"],
-            visualFrameOrientations=arrays["orientations"],
+            **_shape_arrays(self.pb, shapes, center, "visual"),
             # pybullet 3.2.7 crashes on visual shape arrays with lengths or orientations
             # unless the mesh and plane arrays are given too.
             fileNames=["" for _ in shapes],
@@ -298,17 +287,15 @@ class Scene:
 
     # --- measuring -------------------------------------------------------------------------------
 
-    def bounds(self, part_ids: Iterable[str]) -> tuple[Vector, Vector]:
+    def bounds(self, part_ids: Iterable[str]) -> Box:
         """Return the world axis-aligned bounds around the given parts."""
         pb, client = self.pb, self.client
-        boxes = [
-            pb.getAABB(self.bodies[part], link, physicsClientId=client)
+        return bounding_box(
+            corner
             for part in part_ids
             for link in range(-1, pb.getNumJoints(self.bodies[part], physicsClientId=client))
-        ]
-        lower = tuple(min(box[0][i] for box in boxes) for i in range(3))
-        upper = tuple(max(box[1][i] for box in boxes) for i in range(3))
-        return (lower[0], lower[1], lower[2]), (upper[0], upper[1], upper[2])
+            for corner in pb.getAABB(self.bodies[part], link, physicsClientId=client)
+        )
 
     def bodies_near(self, lower: Vector, upper: Vector) -> set[int]:
         """Return the bodies whose bounds overlap the box ``lower``..``upper``."""

@@ -24,7 +24,7 @@ from causalplan.causal.diagnostics import Location, Report, error
 from causalplan.causal.documents import SourceMap, read_document
 from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
-from causalplan.transfer.verdict import TransferVerdict, evaluate_transfer, invalid_verdict
+from causalplan.transfer.verdict import TransferVerdict, invalid_verdict, transfer_verdict
 
 
 @dataclass(frozen=True)
@@ -47,17 +47,16 @@ class TrialResult:
 
     def row(self) -> dict[str, object]:
         """Return one flat CSV row."""
-        data = self.verdict.as_dict()
-        plan = data["plan"]
+        verdict, plan = self.verdict, self.verdict.plan
         return {
             "id": self.trial_id,
-            "verdict": data["verdict"],
-            "training_object": data["training_object"],
-            "test_object": data["test_object"],
-            "generalization": data["generalization"],
-            "decided_by": data["decided_by"],
-            "reasons": ";".join(str(reason["code"]) for reason in data["reasons"]),  # type: ignore[attr-defined]
-            "plan_length": len(plan) if isinstance(plan, list) else "",
+            "verdict": verdict.verdict.value,
+            "training_object": verdict.training_object,
+            "test_object": verdict.test_object,
+            "generalization": verdict.generalization,
+            "decided_by": verdict.decided_by,
+            "reasons": ";".join(reason.code for reason in verdict.reasons),
+            "plan_length": len(plan.steps) if plan and plan.has_plan else "",
             "seconds": round(self.seconds, 6),
         }
 
@@ -121,18 +120,7 @@ def evaluate_trial(trial: Trial, catalog: Catalog, planner: str, time_limit: flo
     else:
         loaded_model = model_from_data(trial.model, SourceMap(where), catalog)
         loaded_mapping = mapping_from_data(trial.mapping, SourceMap(where), catalog)
-        if loaded_model.is_valid and loaded_mapping.is_valid:
-            assert loaded_model.model is not None and loaded_mapping.mapping is not None
-            verdict = evaluate_transfer(
-                loaded_model.model, loaded_mapping.mapping, catalog, planner, time_limit, simulate
-            )
-        else:
-            verdict = invalid_verdict(
-                loaded_model.report,
-                loaded_mapping.report,
-                loaded_model.model.object_id if loaded_model.model else None,
-                loaded_mapping.mapping.object_id if loaded_mapping.mapping else None,
-            )
+        verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit, simulate)
     return TrialResult(trial.id, verdict, time.perf_counter() - started)
 
 

@@ -20,11 +20,13 @@ from causalplan.causal.model import CausalModel, Labelling
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject
 from causalplan.pddl.task import build_task
+from causalplan.planners import fast_downward
 from causalplan.planners.fast_downward import DEFAULT_TIME_LIMIT
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult, PlanStatus, PlanStep
 
 if TYPE_CHECKING:
+    from causalplan.inputs import LoadedMapping, LoadedModel
     from causalplan.sim import SimulationReport
 
 
@@ -172,6 +174,32 @@ def _mapping_reasons(model: CausalModel, mapping: Labelling, test: AssemblyObjec
                 )
             )
     return reasons, reachable
+
+
+def transfer_verdict(
+    loaded_model: LoadedModel,
+    loaded_mapping: LoadedMapping,
+    catalog: Catalog,
+    planner: str = "auto",
+    time_limit: float = DEFAULT_TIME_LIMIT,
+    simulate: bool = True,
+) -> TransferVerdict:
+    """Return the verdict of a model and a mapping as read: ``invalid`` unless both validated."""
+    if loaded_model.is_valid and loaded_mapping.is_valid:
+        assert loaded_model.model is not None and loaded_mapping.mapping is not None
+        return evaluate_transfer(loaded_model.model, loaded_mapping.mapping, catalog, planner, time_limit, simulate)
+    return invalid_verdict(
+        loaded_model.report,
+        loaded_mapping.report,
+        loaded_model.model.object_id if loaded_model.model else None,
+        loaded_mapping.mapping.object_id if loaded_mapping.mapping else None,
+    )
+
+
+def clear_caches() -> None:
+    """Forget the planner's cached answers and the cached simulations, so verdicts are computed afresh."""
+    fast_downward.clear_solve_cache()
+    _simulated.cache_clear()
 
 
 @lru_cache(maxsize=256)
