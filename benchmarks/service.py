@@ -36,21 +36,11 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "service.json"
-MODEL: dict[str, Any] = {
-    "object": "desk_lamp",
-    "goal": "light",
-    "functions": {
-        "base_with_cables": ["provide electricity"],
-        "light_bulb": ["turn electricity into light", "close the circuit"],
-    },
-    "rules": [
-        "provide electricity AND close the circuit CAUSES electricity flows",
-        "electricity flows AND turn electricity into light CAUSES light",
-    ],
-}
+MODEL: dict[str, Any] = yaml.safe_load((ROOT / "examples" / "paper" / "desk_lamp.yaml").read_text())
 CLIENT_COUNTS = (1, 8)
 START_SECONDS = 60.0
 MAX_SECONDS_PER_SCENARIO = 120.0

@@ -344,24 +344,15 @@ def transfer(
     """
     from causalplan.errors import CausalPlanError
     from causalplan.inputs import load_mapping, load_model
-    from causalplan.transfer.verdict import evaluate_transfer, invalid_verdict
+    from causalplan.transfer.verdict import transfer_verdict
 
     _check_planner(planner)
     objects = _catalog(catalog)
     loaded_model, loaded_mapping = load_model(model, objects), load_mapping(mapping, objects)
-    if loaded_model.is_valid and loaded_mapping.is_valid:
-        assert loaded_model.model is not None and loaded_mapping.mapping is not None
-        try:
-            verdict = evaluate_transfer(loaded_model.model, loaded_mapping.mapping, objects, planner, time_limit)
-        except CausalPlanError as exc:
-            _fail(exc.code, exc.message)
-    else:
-        verdict = invalid_verdict(
-            loaded_model.report,
-            loaded_mapping.report,
-            loaded_model.model.object_id if loaded_model.model else None,
-            loaded_mapping.mapping.object_id if loaded_mapping.mapping else None,
-        )
+    try:
+        verdict = transfer_verdict(loaded_model, loaded_mapping, objects, planner, time_limit)
+    except CausalPlanError as exc:
+        _fail(exc.code, exc.message)
     if as_json:
         _print_json(verdict.as_dict())
     else:

@@ -21,33 +21,29 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+import yaml
 from fastapi.testclient import TestClient
 from sqlalchemy.engine import make_url
 
 from causalplan.service.deps import Services
 from causalplan.service.main import create_app
 from causalplan.service.settings import Settings
+from tests.conftest import EXAMPLES
 
 POSTGRES_URL_VARIABLE = "CAUSALPLAN_TEST_POSTGRES_URL"
 RESEARCH_TOKEN = "research-token-for-tests"
 AUTH = {"Authorization": f"Bearer {RESEARCH_TOKEN}"}
 
-DESK_LAMP: dict[str, Any] = {
-    "object": "desk_lamp",
-    "goal": "light",
-    "functions": {
-        "base_with_cables": ["provide electricity"],
-        "light_bulb": ["turn electricity into light", "close the circuit"],
-    },
-    "rules": [
-        "provide electricity AND close the circuit CAUSES electricity flows",
-        "electricity flows AND turn electricity into light CAUSES light",
-    ],
-}
-FLASHLIGHT_MAPPING: dict[str, Any] = {
-    "object": "flashlight",
-    "functions": {"batteries": ["provide electricity"], "head": ["turn electricity into light", "close the circuit"]},
-}
+
+def example_document(relative: str) -> dict[str, Any]:
+    """Return an example file (under ``examples/``) as the JSON document a client would send."""
+    data: dict[str, Any] = yaml.safe_load((EXAMPLES / relative).read_text())
+    return data
+
+
+DESK_LAMP = example_document("paper/desk_lamp.yaml")
+FLASHLIGHT_MAPPING = example_document("paper/flashlight_mapping.yaml")
+
 FAILED_DESK_LAMP: dict[str, Any] = {
     "object": "desk_lamp",
     "goal": "light",

@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-import yaml
 from fastapi.testclient import TestClient
 
 from causalplan.causal.documents import SourceMap
@@ -18,8 +17,15 @@ from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import build_task
 from causalplan.planners.pipeline import plan_task
 from causalplan.service.cache import LruCache, ResultCache, document_key
-from tests.conftest import EXAMPLES
-from tests.service_fixtures import AUTH, DESK_LAMP, FLASHLIGHT_MAPPING, running_client, services_of, settings_for
+from tests.service_fixtures import (
+    AUTH,
+    DESK_LAMP,
+    FLASHLIGHT_MAPPING,
+    example_document,
+    running_client,
+    services_of,
+    settings_for,
+)
 
 TIME_LIMIT = 20.0  # settings_for's default_time_limit
 PER_REQUEST = {"cached", "model_id", "planner_requested", "warnings", "timing"}
@@ -36,12 +42,6 @@ EXAMPLE_REQUESTS = [
     ("near/candle.yaml", "near/kerosene_lamp_mapping.yaml"),
     ("near/candle.yaml", "far/flashlight_mapping_for_candle.yaml"),
 ]
-
-
-def document(relative: str) -> dict[str, Any]:
-    """Return an example file as the JSON document a client would send."""
-    data: dict[str, Any] = yaml.safe_load((EXAMPLES / relative).read_text())
-    return data
 
 
 def plain_answer(catalog: Catalog, body: dict[str, Any]) -> dict[str, Any]:
@@ -97,9 +97,9 @@ def plain_client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClien
 def test_every_example_repeated_gets_exactly_the_plain_answer(
     client: TestClient, plain_client: TestClient, catalog: Catalog, model: str, mapping: str | None
 ) -> None:
-    body: dict[str, Any] = {"model": document(model), "include_pddl": True}
+    body: dict[str, Any] = {"model": example_document(model), "include_pddl": True}
     if mapping is not None:
-        body["mapping"] = document(mapping)
+        body["mapping"] = example_document(mapping)
     plain = plain_answer(catalog, body)
     uncached = post_plan(plain_client, body)
     first, repeat = post_plan(client, body), post_plan(client, body)

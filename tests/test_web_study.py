@@ -7,12 +7,12 @@ import pytest
 from causalplan.causal.documents import SourceMap
 from causalplan.inputs import model_from_data
 from causalplan.objects.catalog import Catalog
+from causalplan.service.responses import csv_bytes
 from causalplan.service.settings import Settings
 from causalplan.service.web.auth import is_valid_cookie, session_cookie
 from causalplan.service.web.design import read_design
 from causalplan.service.web.diagram import diagram_svg
 from causalplan.service.web.errors import InvalidExperimentError
-from causalplan.service.web.results import csv_bytes
 from causalplan.service.web.study import (
     ParticipantModel,
     check_functions,

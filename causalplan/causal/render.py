@@ -7,6 +7,7 @@ reads: causes joined at a junction are all needed; arrows meeting at a node are 
 from __future__ import annotations
 
 import textwrap
+import threading
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -19,6 +20,8 @@ if TYPE_CHECKING:
 
 COLORS = {"function": "#cfe2f3", "effect": "#fde9c8", "goal": "#c9ecc4", "unknown": "#f8c9c4", "rule": "#555555"}
 PICTURE_SUFFIXES = (".png", ".svg", ".pdf")
+DRAW_LOCK = threading.Lock()
+"""Held by a program's threads around any matplotlib drawing: its font cache and text layout are not thread-safe."""
 
 
 def drawing_graph(model: CausalModel) -> nx.DiGraph:

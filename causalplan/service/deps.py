@@ -92,6 +92,12 @@ ClientIdsDep = Annotated[ClientIds, Depends(get_client_ids)]
 _bearer = HTTPBearer(auto_error=False, description="The research token (CAUSALPLAN_RESEARCH_TOKEN).")
 
 
+def is_research_token(candidate: str, settings: Settings) -> bool:
+    """Return whether ``candidate`` is the research token (compared in constant time)."""
+    token = settings.research_token
+    return token is not None and secrets.compare_digest(candidate.encode(), token.get_secret_value().encode())
+
+
 def require_research_token(
     settings: SettingsDep, credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)]
 ) -> None:
@@ -102,8 +108,7 @@ def require_research_token(
         )
     if credentials is None:
         raise NotAuthenticatedError("This endpoint needs 'Authorization: Bearer <research token>'.")
-    expected = settings.research_token.get_secret_value().encode()
-    if not secrets.compare_digest(credentials.credentials.encode(), expected):
+    if not is_research_token(credentials.credentials, settings):
         raise NotAuthenticatedError("The bearer token is not the research token.")
 
 

@@ -1,8 +1,11 @@
-"""The JSON response of every route: Starlette's, but never failing on an unpaired surrogate."""
+"""What routes answer with: JSON that never fails on an unpaired surrogate, and CSV exports."""
 
 from __future__ import annotations
 
+import csv
+import io
 import json
+from collections.abc import Sequence
 from typing import Any
 
 from fastapi.responses import JSONResponse
@@ -14,3 +17,22 @@ class SafeJSONResponse(JSONResponse):
     def render(self, content: Any) -> bytes:
         text = json.dumps(content, ensure_ascii=False, allow_nan=False, indent=None, separators=(",", ":"))
         return text.encode("utf-8", "replace")
+
+
+_FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def _cell(value: object) -> str:
+    text = value if isinstance(value, str) else "" if value is None else json.dumps(value, ensure_ascii=False)
+    # A cell starting like a formula would run in a spreadsheet, and participants type these labels.
+    return "'" + text if text.startswith(_FORMULA_STARTS) else text
+
+
+def csv_bytes(columns: Sequence[str], rows: Sequence[dict[str, Any]]) -> bytes:
+    """Return ``rows`` as CSV (values that are not text as JSON), with a header."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(columns)
+    for row in rows:
+        writer.writerow([_cell(row.get(column)) for column in columns])
+    return buffer.getvalue().encode("utf-8", "replace")

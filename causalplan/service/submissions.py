@@ -8,6 +8,7 @@ from __future__ import annotations
 import hashlib
 import time
 import uuid
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -55,9 +56,10 @@ def resolve_planner(requested: str) -> str:
         # written) still gets a working default: LAMA-first Fast Downward, as `plan` used to.
         return FALLBACK_PLANNER
     if requested not in names:
+        choices = list(dict.fromkeys([DEFAULT_PLANNER, *names]))  # 'auto' once, whether or not the registry has it
         raise pipeline.UnknownPlannerError(
-            f"Unknown planner '{requested}'; choose one of: {', '.join([DEFAULT_PLANNER, *names])}.",
-            details={"planner": requested, "planners": [DEFAULT_PLANNER, *names]},
+            f"Unknown planner '{requested}'; choose one of: {', '.join(choices)}.",
+            details={"planner": requested, "planners": choices},
         )
     return requested
 
@@ -137,13 +139,16 @@ def model_hash(model: CausalModel) -> str:
     return text_hash(model_text(model))
 
 
+def _model_read(document: dict[str, Any], catalog: Catalog) -> ModelRead:
+    # The reader sees the text as sent, so a NUL or a lone surrogate is reported as the CLI would.
+    loaded = model_from_data(document, SourceMap(), catalog)
+    canonical = model_text(loaded.model) if loaded.model is not None and loaded.is_valid else None
+    return ModelRead(loaded.model, loaded.report, loaded.report.as_dict(), canonical)
+
+
 def _read_model_document(document: dict[str, Any], services: Services) -> ModelRead:
     check_model_limits(document, services.settings)
-    # The reader sees the text as sent, so a NUL or a lone surrogate is reported as the CLI would.
-    loaded = model_from_data(document, SourceMap(), services.catalog)
-    model = loaded.model
-    canonical = model_text(model) if model is not None and loaded.is_valid else None
-    return ModelRead(model, loaded.report, loaded.report.as_dict(), canonical)
+    return _model_read(document, services.catalog)
 
 
 def read_model(document: dict[str, Any], services: Services, client: ClientIds) -> ModelSubmission:
@@ -169,11 +174,14 @@ def read_model(document: dict[str, Any], services: Services, client: ClientIds) 
     return ModelSubmission(model, read.report, record, is_new=True, canonical=read.canonical)
 
 
-def stored_model(session_model: ModelRecord, catalog: Catalog) -> ModelSubmission:
-    """Re-read a stored model against the catalog the server has now."""
-    loaded = model_from_data(session_model.document, SourceMap(), catalog)
-    canonical = model_text(loaded.model) if loaded.model is not None and loaded.is_valid else None
-    return ModelSubmission(loaded.model, loaded.report, session_model, is_new=False, canonical=canonical)
+def stored_model(record: ModelRecord, services: Services) -> ModelSubmission:
+    """Re-read a stored model against the catalog the server has now (a document read before is not read again)."""
+    key, size = document_key("stored model", record.document)
+    read = services.reads.get(key)
+    if not isinstance(read, ModelRead):
+        read = _model_read(record.document, services.catalog)
+        services.reads.put(key, read, size)
+    return ModelSubmission(read.model, read.report, record, is_new=False, canonical=read.canonical)
 
 
 def _read_mapping_document(document: dict[str, Any], services: Services) -> MappingRead:
@@ -205,30 +213,30 @@ def model_for_request(
     if document is not None:
         return read_model(document, services, client)
     assert model_id is not None  # the request schema allows exactly one of the two
-    return stored_model(get_model(session, model_id), services.catalog)
+    return stored_model(get_model(session, model_id), services)
+
+
+def first_errors(report: Report) -> str:
+    """Return the report's first three errors with their codes, for an error message."""
+    return "; ".join(f"[{d.code}] {d.message}" for d in report.errors[:3])
 
 
 def invalid_input_error(
     submission: ModelSubmission, mapping_report: Report | None
 ) -> InvalidModelError | InvalidMappingError | None:
     """Return the 422 error for an invalid model or mapping (None when both are valid)."""
+    if submission.is_valid and (mapping_report is None or mapping_report.is_valid):
+        return None  # the common case: no report is turned into JSON
     details: dict[str, object] = {
         "model": submission.report.as_dict(),
         "mapping": mapping_report.as_dict() if mapping_report is not None else None,
         "model_id": str(submission.record.id),
     }
-    if not submission.is_valid:
-        return InvalidModelError(
-            "The model is invalid, so there is nothing to plan: "
-            + "; ".join(f"[{d.code}] {d.message}" for d in submission.report.errors[:3]),
-            details=details,
-        )
-    if mapping_report is not None and not mapping_report.is_valid:
-        return InvalidMappingError(
-            "The step-3 mapping is invalid: " + "; ".join(f"[{d.code}] {d.message}" for d in mapping_report.errors[:3]),
-            details=details,
-        )
-    return None
+    if submission.is_valid and mapping_report is not None:
+        return InvalidMappingError("The step-3 mapping is invalid: " + first_errors(mapping_report), details=details)
+    return InvalidModelError(
+        "The model is invalid, so there is nothing to plan: " + first_errors(submission.report), details=details
+    )
 
 
 @dataclass(frozen=True)
@@ -240,10 +248,40 @@ class Answer:
     seconds: float
 
 
+SIMULATION_SECONDS = 30.0
+"""Time a worker gets for the simulation and its picture, beyond the planner's limit."""
+
+
 def _key(
     services: Services, kind: str, model: CausalModel, mapping: Labelling | None, planner: str, limit: float
 ) -> str:
     return request_key(kind, model, mapping, planner, limit, services.catalog_key)
+
+
+def _answer(
+    services: Services,
+    key: str,
+    job: Callable[..., dict[str, Any]],
+    args: tuple[Any, ...],
+    seconds: float,
+    is_final: Callable[[dict[str, Any]], bool],
+) -> Answer:
+    """Return the answer kept for ``key``, or run ``job(*args)`` in a worker for at most ``seconds``.
+
+    A new answer is kept only when ``is_final``: a timeout may go otherwise next time.
+    """
+    started = time.perf_counter()
+    cached = services.cache.get(key)
+    if cached is not None:
+        return Answer(cached, True, time.perf_counter() - started)
+    data = services.pool.run(job, args, seconds)
+    if is_final(data):
+        services.cache.put(key, data)
+    return Answer(data, False, time.perf_counter() - started)
+
+
+def _is_final_plan(data: dict[str, Any]) -> bool:
+    return PlanStatus(str(data["status"])).is_final()
 
 
 def plan(
@@ -258,30 +296,30 @@ def plan(
 
     ``key``: the request's answer key (``PlanInputs.key``), when the caller has it already.
     """
-    started = time.perf_counter()
     key = key or _key(services, "plan", model, mapping, planner, time_limit)
-    cached = services.cache.get(key)
-    if cached is not None:
-        return Answer(cached, True, time.perf_counter() - started)
     args = (model, mapping, planner, time_limit, tuple(services.settings.catalog_folders))
-    data = services.pool.run(worker.plan_job, args, time_limit + services.settings.solve_grace_seconds)
-    if PlanStatus(str(data["status"])).is_final():  # a timeout may go otherwise next time
-        services.cache.put(key, data)
-    return Answer(data, False, time.perf_counter() - started)
+    seconds = time_limit + services.settings.solve_grace_seconds
+    return _answer(services, key, worker.plan_job, args, seconds, _is_final_plan)
 
 
-def transfer(services: Services, model: CausalModel, mapping: Labelling, planner: str, time_limit: float) -> Answer:
-    """Return the transfer verdict of ``model`` through ``mapping``, from the cache or a worker."""
-    started = time.perf_counter()
-    key = _key(services, "transfer", model, mapping, planner, time_limit)
-    cached = services.cache.get(key)
-    if cached is not None:
-        return Answer(cached, True, time.perf_counter() - started)
+def transfer(
+    services: Services,
+    model: CausalModel,
+    mapping: Labelling,
+    planner: str,
+    time_limit: float,
+    key: str | None = None,
+) -> Answer:
+    """Return the transfer verdict of ``model`` through ``mapping``, from the cache or a worker.
+
+    ``key``: the request's answer key, when the caller has it already.
+    """
+    key = key or _key(services, "transfer", model, mapping, planner, time_limit)
     args = (model, mapping, planner, time_limit, tuple(services.settings.catalog_folders))
-    data = services.pool.run(worker.transfer_job, args, time_limit + services.settings.solve_grace_seconds)
-    if data["verdict"] != Verdict.UNDECIDED.value:
-        services.cache.put(key, data)
-    return Answer(data, False, time.perf_counter() - started)
+    seconds = time_limit + services.settings.solve_grace_seconds
+    return _answer(
+        services, key, worker.transfer_job, args, seconds, lambda data: data["verdict"] != Verdict.UNDECIDED.value
+    )
 
 
 def simulate(
@@ -294,18 +332,17 @@ def simulate(
     key: str | None = None,
 ) -> Answer:
     """Return the plan and its simulation report (and picture), from the cache or a worker."""
-    started = time.perf_counter()
     key = key or _key(services, f"simulate:{picture}", model, mapping, planner, time_limit)
-    cached = services.cache.get(key)
-    if cached is not None:
-        return Answer(cached, True, time.perf_counter() - started)
     args = (model, mapping, planner, time_limit, tuple(services.settings.catalog_folders), picture)
-    grace = services.settings.solve_grace_seconds + SIMULATION_SECONDS
-    data = services.pool.run(worker.simulate_job, args, time_limit + grace)
-    planning = data["planning"]
-    if isinstance(planning, dict) and PlanStatus(str(planning["status"])).is_final():
-        services.cache.put(key, data)
-    return Answer(data, False, time.perf_counter() - started)
+    seconds = time_limit + services.settings.solve_grace_seconds + SIMULATION_SECONDS
+    return _answer(
+        services,
+        key,
+        worker.simulate_job,
+        args,
+        seconds,
+        lambda data: isinstance(data["planning"], dict) and _is_final_plan(data["planning"]),
+    )
 
 
 def compiled_pddl(services: Services, model: CausalModel, mapping: Labelling | None) -> dict[str, str]:
@@ -313,10 +350,6 @@ def compiled_pddl(services: Services, model: CausalModel, mapping: Labelling | N
     target = services.catalog.get((mapping or model.labelling).object_id)
     compiled = compile_task(build_task(model, target, mapping))
     return {"domain": compiled.domain, "problem": compiled.problem}
-
-
-SIMULATION_SECONDS = 30.0
-"""Time a worker gets for the simulation and its picture, beyond the planner's limit."""
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,7 @@ from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import Catalog, load_catalog
 from causalplan.pddl.task import build_task
 from causalplan.planners import fast_downward, pipeline
+from causalplan.service.errors import PlannerOutOfMemoryError
 from causalplan.transfer.verdict import evaluate_transfer
 
 Job = tuple[Callable[..., Any], tuple[Any, ...]]
@@ -65,7 +66,7 @@ def serve(connection: Connection, memory_mb: int) -> None:
         except CausalPlanError as exc:
             reply = ("error", exc.code, exc.message, exc.details)
         except MemoryError:
-            reply = ("error", "planner_out_of_memory", "The planner worker ran out of memory.", {})
+            reply = ("error", PlannerOutOfMemoryError.code, "The planner worker ran out of memory.", {})
         except Exception:  # noqa: BLE001 - reported to the service, which logs it and answers clearly
             reply = ("crash", traceback.format_exc())
         try:
@@ -84,11 +85,12 @@ def warm_up() -> None:
         importlib.import_module("fast_downward.translate.main")
     fast_downward.prestart()  # the default search, waiting for its first task
     with suppress(CausalPlanError):
-        _catalog(())
+        worker_catalog(())
 
 
 @cache
-def _catalog(folders: tuple[Path, ...]) -> Catalog:
+def worker_catalog(folders: tuple[Path, ...]) -> Catalog:
+    """Return the catalog with the objects in ``folders``, read once per worker process."""
     return load_catalog(folders)
 
 
@@ -103,7 +105,7 @@ def plan_job(
 
     Without the PDDL: the service compiles that itself when a request asks for it.
     """
-    catalog = _catalog(catalog_folders)
+    catalog = worker_catalog(catalog_folders)
     target = catalog.get((mapping or model.labelling).object_id)
     result = pipeline.plan_task(build_task(model, target, mapping), planner, time_limit)
     return result.as_dict()
@@ -117,7 +119,7 @@ def transfer_job(
     catalog_folders: tuple[Path, ...],
 ) -> dict[str, object]:
     """Return the transfer verdict of ``model`` through ``mapping``, as ``causalplan transfer --json``."""
-    return evaluate_transfer(model, mapping, _catalog(catalog_folders), planner, time_limit).as_dict()
+    return evaluate_transfer(model, mapping, worker_catalog(catalog_folders), planner, time_limit).as_dict()
 
 
 def _version(distribution: str) -> str | None:
@@ -143,10 +145,9 @@ def probe_job() -> dict[str, object]:
             __import__(module)
         except Exception as exc:  # noqa: BLE001 - any import failure is what /health reports
             failed[module] = f"{exc.__class__.__name__}: {exc}"
-    # The registry's own availability check, where it has one (it imports unified-planning's
-    # engines, which is why the probe runs in a throwaway process).
-    availability = getattr(pipeline, "planner_availability", None)
-    problems: dict[str, str | None] = availability() if availability else dict.fromkeys(pipeline.PLANNERS)
+    # The registry's own availability check imports unified-planning's engines, which is why
+    # the probe runs in a throwaway process.
+    problems = pipeline.planner_availability()
     return {
         "planners": [
             {"name": name, "available": problems.get(name) is None, "problem": problems.get(name)}
@@ -183,7 +184,7 @@ def simulate_job(
 
     from causalplan.sim import RenderMode, simulate_plan
 
-    catalog = _catalog(catalog_folders)
+    catalog = worker_catalog(catalog_folders)
     target = catalog.get((mapping or model.labelling).object_id)
     result = pipeline.plan_task(build_task(model, target, mapping), planner, time_limit)
     data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "image": None}

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import tempfile
-import threading
 import uuid
 from collections import OrderedDict
 from pathlib import Path
@@ -13,6 +12,7 @@ from fastapi import APIRouter, Body, Query, Request, Response
 
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import CausalModel
+from causalplan.causal.render import DRAW_LOCK
 from causalplan.inputs import model_from_data
 from causalplan.service import crud
 from causalplan.service.db.models import ModelRecord
@@ -20,11 +20,10 @@ from causalplan.service.deps import CatalogDep, ClientIdsDep, ServicesDep, Sessi
 from causalplan.service.errors import InvalidModelError
 from causalplan.service.responses import SafeJSONResponse
 from causalplan.service.schemas import GraphOut, ModelDocument, ModelLinks, ModelOut, error_responses
-from causalplan.service.submissions import read_model
+from causalplan.service.submissions import first_errors, read_model
 
 router = APIRouter(prefix="/v1/models", tags=["models"], responses=error_responses(404, 503))
 
-_draw_lock = threading.Lock()  # matplotlib's font cache and text layout are not thread-safe
 _svg_cache: OrderedDict[uuid.UUID, bytes] = OrderedDict()  # stored models never change
 SVG_CACHE_SIZE = 128
 
@@ -72,7 +71,7 @@ def create_model(
     if not submission.is_valid:
         raise InvalidModelError(
             "The model is invalid: "
-            + "; ".join(f"[{d.code}] {d.message}" for d in submission.report.errors[:3])
+            + first_errors(submission.report)
             + (" (and more)" if len(submission.report.errors) > 3 else ""),
             details={"model": submission.report.as_dict(), "model_id": str(submission.record.id)},
         )
@@ -99,7 +98,7 @@ def _svg(model_id: uuid.UUID, model: CausalModel) -> bytes:
 
     from causalplan.causal.render import draw
 
-    with _draw_lock:
+    with DRAW_LOCK:
         if model_id in _svg_cache:
             _svg_cache.move_to_end(model_id)
             return _svg_cache[model_id]

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
-import json
 from datetime import UTC, datetime
 from typing import Annotated, Any, Literal
 
@@ -14,14 +11,13 @@ from fastapi.responses import Response
 from causalplan.service import crud
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH, ModelRecord, TrialRecord
 from causalplan.service.deps import ResearchAccessDep, SessionDep
-from causalplan.service.responses import SafeJSONResponse
+from causalplan.service.responses import SafeJSONResponse, csv_bytes
 from causalplan.service.schemas import ExportOut, StoredModelOut, TrialOut, TrialsOut, error_responses
 
 router = APIRouter(prefix="/v1", tags=["research"], responses=error_responses(401, 403, 503))
 
 MAX_PAGE = 1000
 CSV_TABLES = ("trials", "models")
-_FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
 
 
 @router.get("/trials", response_model=TrialsOut, summary="List transfer trials")
@@ -36,21 +32,6 @@ def list_trials(
     """Return stored trials, newest first, optionally of one participant or session."""
     trials, count = crud.list_trials(session, offset, limit, participant_id, session_id)
     return TrialsOut(data=[TrialOut.model_validate(trial) for trial in trials], count=count)
-
-
-def _cell(value: object) -> str:
-    text = value if isinstance(value, str) else json.dumps(value, ensure_ascii=False) if value is not None else ""
-    # A cell starting like a formula would run in a spreadsheet; participants write these labels.
-    return "'" + text if text.startswith(_FORMULA_STARTS) else text
-
-
-def _csv(columns: list[str], rows: list[dict[str, Any]]) -> bytes:
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    writer.writerow(columns)
-    for row in rows:
-        writer.writerow([_cell(row[column]) for column in columns])
-    return buffer.getvalue().encode("utf-8", "replace")
 
 
 def _trial_row(trial: TrialRecord) -> dict[str, Any]:
@@ -86,9 +67,9 @@ def export(
             data, headers={"Content-Disposition": f'attachment; filename="causalplan-{stamp:%Y%m%dT%H%M%SZ}.json"'}
         )
     if table == "trials":
-        body = _csv(list(TrialOut.model_fields), [_trial_row(trial) for trial in trials])
+        body = csv_bytes(list(TrialOut.model_fields), [_trial_row(trial) for trial in trials])
     else:
-        body = _csv(list(StoredModelOut.model_fields), [_model_row(model) for model in models])
+        body = csv_bytes(list(StoredModelOut.model_fields), [_model_row(model) for model in models])
     return Response(
         body,
         media_type="text/csv; charset=utf-8",

@@ -5,6 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from causalplan.service import crud, submissions
+from causalplan.service.cache import answer_key
 from causalplan.service.deps import ClientIdsDep, ServicesDep, SessionDep
 from causalplan.service.schemas import TransferIn, TransferOut, error_responses
 from causalplan.transfer.verdict import invalid_verdict
@@ -38,8 +39,13 @@ def create_transfer(body: TransferIn, services: ServicesDep, session: SessionDep
         problem.details.update({"verdict": verdict, "trial_id": str(trial.id)})
         raise problem
     mapping = mapping_read.mapping
-    assert submission.model is not None and mapping is not None
-    answer = submissions.transfer(services, submission.model, mapping, planner, time_limit)
+    assert submission.model is not None and submission.canonical is not None
+    assert mapping is not None and mapping_read.canonical is not None
+    # The canonical texts are in hand: the key need not make them again.
+    key = answer_key(
+        "transfer", submission.canonical, mapping_read.canonical, planner, time_limit, services.catalog_key
+    )
+    answer = submissions.transfer(services, submission.model, mapping, planner, time_limit, key)
     trial = crud.new_trial_record(
         submission.record.id, mapping_document, planner, answer.data, answer.cached, answer.seconds, client
     )

@@ -15,7 +15,7 @@ from typing import Annotated
 
 from fastapi import Depends, Request, Response
 
-from causalplan.service.deps import SettingsDep
+from causalplan.service.deps import SettingsDep, is_research_token
 from causalplan.service.errors import ResearchDisabledError
 from causalplan.service.settings import Settings
 from causalplan.service.web.errors import CrossSiteRequestError, LoginRequiredError
@@ -45,13 +45,6 @@ def is_valid_cookie(value: str, token: str, now: float | None = None) -> bool:
     if expires < (now if now is not None else time.time()):
         return False
     return secrets.compare_digest(signature.encode(), _signature(token, expires).encode())
-
-
-def is_token(candidate: str, settings: Settings) -> bool:
-    """Return whether ``candidate`` is the research token (compared in constant time)."""
-    if settings.research_token is None:
-        return False
-    return secrets.compare_digest(candidate.encode(), settings.research_token.get_secret_value().encode())
 
 
 def sign_in(response: Response, request: Request, settings: Settings) -> None:
@@ -87,7 +80,7 @@ def require_research_page(request: Request, settings: SettingsDep) -> None:
             "The research pages are disabled: start the service with CAUSALPLAN_RESEARCH_TOKEN set."
         )
     scheme, _, credentials = request.headers.get("authorization", "").partition(" ")
-    if scheme.lower() == "bearer" and is_token(credentials.strip(), settings):
+    if scheme.lower() == "bearer" and is_research_token(credentials.strip(), settings):
         return
     cookie = request.cookies.get(COOKIE_NAME)
     if cookie is None or not is_valid_cookie(cookie, settings.research_token.get_secret_value()):

@@ -9,10 +9,11 @@ from collections.abc import Hashable, Sequence
 from typing import Any
 
 from causalplan.causal.model import CausalModel
+from causalplan.causal.render import DRAW_LOCK
 from causalplan.errors import CausalPlanError
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.deps import Services
-from causalplan.service.routes.models import _draw_lock  # one lock for every matplotlib drawing in the app
+from causalplan.service.routes.models import SVG_SECURITY_HEADERS
 from causalplan.service.web import pictures
 from causalplan.service.web.diagram import diagram_svg
 from causalplan.service.web.pictures import PictureCache
@@ -22,10 +23,7 @@ logger = logging.getLogger(__name__)
 
 PICTURE_SECONDS = 20.0
 """Longest a worker may take to draw an object's parts or a plan's result."""
-SVG_HEADERS = {
-    "Content-Security-Policy": "default-src 'none'; style-src 'unsafe-inline'",
-    "X-Content-Type-Options": "nosniff",
-}
+SVG_HEADERS = {**SVG_SECURITY_HEADERS, "X-Content-Type-Options": "nosniff"}
 
 _graphs = PictureCache(256)
 _part_pictures = PictureCache(512)
@@ -47,7 +45,7 @@ def graph_svg(model: CausalModel, key: str) -> bytes:
 
 def rates_chart(rates: Sequence[Rate]) -> bytes:
     """Return the bar chart of an experiment's transfer rates (SVG)."""
-    with _draw_lock:
+    with DRAW_LOCK:  # one lock for every matplotlib drawing in the app
         return chart_svg(rates)
 
 

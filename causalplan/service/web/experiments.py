@@ -14,7 +14,7 @@ from sqlalchemy.orm import Session
 from causalplan.errors import UnknownObjectError
 from causalplan.objects.catalog import Catalog
 from causalplan.service.db.models import ExperimentRecord, ParticipantRecord
-from causalplan.service.responses import SafeJSONResponse
+from causalplan.service.responses import SafeJSONResponse, csv_bytes
 from causalplan.service.web import store
 from causalplan.service.web.design import Design, read_design
 from causalplan.service.web.journey import Journey
@@ -22,7 +22,6 @@ from causalplan.service.web.results import (
     PARTICIPANT_COLUMNS,
     TRIAL_COLUMNS,
     Rate,
-    csv_bytes,
     experiment_dict,
     participant_dict,
     transfer_rates,

@@ -12,6 +12,7 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
+from causalplan.inputs import LoadedModel
 from causalplan.service import crud, submissions
 from causalplan.service.crud import ClientIds
 from causalplan.service.db.models import ParticipantTrialRecord, utc_now
@@ -20,7 +21,7 @@ from causalplan.service.errors import InvalidModelError
 from causalplan.service.web import store
 from causalplan.service.web.errors import StepLockedError
 from causalplan.service.web.journey import Journey
-from causalplan.service.web.study import MappingCheck, ModelCheck, ParticipantModel, Stage, model_on
+from causalplan.service.web.study import MappingCheck, ParticipantModel, Stage, model_on
 
 
 def client_ids(journey: Journey) -> ClientIds:
@@ -28,12 +29,18 @@ def client_ids(journey: Journey) -> ClientIds:
     return ClientIds(str(journey.participant.id), f"experiment:{journey.participant.experiment_id}")
 
 
-def invalid_model_error(check: ModelCheck) -> InvalidModelError:
+def invalid_model_error(check: LoadedModel) -> InvalidModelError:
     """Return the 422 error of an invalid draft model (details: the report, with `check`'s codes)."""
     return InvalidModelError(
-        "The model is not valid yet: " + "; ".join(f"[{d.code}] {d.message}" for d in check.report.errors[:3]),
+        "The model is not valid yet: " + submissions.first_errors(check.report),
         details={"model": check.report.as_dict()},
     )
+
+
+def picture_url(code: str, object_id: str, steps: list[dict[str, Any]] | None) -> str | None:
+    """Return where the simulator's picture of the object after a plan's ``steps`` is (None without a plan)."""
+    fits = [str(step.get("fit") or "") for step in steps or []]
+    return f"/p/{code}/pictures/{object_id}.png?fits={','.join(fits)}" if fits and all(fits) else None
 
 
 def plans(services: Services, journey: Journey, participant_model: ParticipantModel) -> list[dict[str, Any]]:
@@ -45,10 +52,6 @@ def plans(services: Services, journey: Journey, participant_model: ParticipantMo
             services, model_on(participant_model, obj.id), None, planner, services.settings.default_time_limit
         )
         steps = answer.data.get("plan") or []
-        fits = [str(step.get("fit") or "") for step in steps]
-        picture = None
-        if steps and all(fits):
-            picture = f"/p/{journey.participant.code}/pictures/{obj.id}.png?fits={','.join(fits)}"
         found.append(
             {
                 "object": obj.id,
@@ -57,13 +60,13 @@ def plans(services: Services, journey: Journey, participant_model: ParticipantMo
                 "steps": [str(step["text"]) for step in steps],
                 "message": str(answer.data.get("message", "")),
                 "works": bool(answer.data.get("valid_under_true_mechanism")),
-                "picture_url": picture,
+                "picture_url": picture_url(journey.participant.code, obj.id, steps),
             }
         )
     return found
 
 
-def submit_model(session: Session, journey: Journey, participant_model: ParticipantModel, check: ModelCheck) -> None:
+def submit_model(session: Session, journey: Journey, participant_model: ParticipantModel, check: LoadedModel) -> None:
     """Store the valid model (as the first training object's model file), freeze it, and begin step 3."""
     journey.require_open(Stage.STEP2)
     if not check.is_valid or check.model is None:

@@ -11,19 +11,13 @@ from __future__ import annotations
 import threading
 from collections import OrderedDict
 from collections.abc import Callable, Hashable
-from functools import cache
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-from causalplan.objects.catalog import Catalog, load_catalog
+from causalplan.service.worker import worker_catalog
 
 PART_PICTURE_SIZE = (320, 240)
 PLAN_PICTURE_SIZE = (480, 360)
-
-
-@cache
-def _catalog(folders: tuple[Path, ...]) -> Catalog:
-    return load_catalog(folders)
 
 
 def part_pictures_job(object_id: str, catalog_folders: tuple[Path, ...]) -> dict[str, bytes]:
@@ -33,7 +27,7 @@ def part_pictures_job(object_id: str, catalog_folders: tuple[Path, ...]) -> dict
     from causalplan.sim.render import Camera, draw
     from causalplan.sim.scene import Scene
 
-    obj = _catalog(catalog_folders).get(object_id)
+    obj = worker_catalog(catalog_folders).get(object_id)
     pictures: dict[str, bytes] = {}
     for part_id, solid in solids(obj).items():
         with Scene({part_id: solid}) as scene:
@@ -51,7 +45,7 @@ def assembly_picture_job(object_id: str, fit_ids: tuple[str, ...], catalog_folde
     """Return a PNG of the object after the plan that makes ``fit_ids`` in order (runs in a worker)."""
     from causalplan.sim import RenderMode, StepRequest, simulate_plan
 
-    obj = _catalog(catalog_folders).get(object_id)
+    obj = worker_catalog(catalog_folders).get(object_id)
     steps = [StepRequest(fit.primitive, fit.moving_part, fit.fixed_part, fit.id) for fit in map(obj.fit, fit_ids)]
     report = simulate_plan(obj, steps, render=RenderMode.FINAL, size=PLAN_PICTURE_SIZE)
     assert report.picture is not None, "RenderMode.FINAL always draws the final picture"

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import csv
 import io
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
@@ -15,8 +13,6 @@ from causalplan.objects.catalog import Catalog
 from causalplan.service.db.models import ExperimentRecord, ParticipantRecord
 from causalplan.service.web.design import Design, generalization
 from causalplan.service.web.store import StoredTrial
-
-_FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
 
 
 @dataclass(frozen=True)
@@ -220,19 +216,3 @@ PARTICIPANT_COLUMNS = [
     "model",
     "work",
 ]
-
-
-def _cell(value: object) -> str:
-    text = value if isinstance(value, str) else "" if value is None else json.dumps(value, ensure_ascii=False)
-    # A cell starting like a formula would run in a spreadsheet, and participants type these labels.
-    return "'" + text if text.startswith(_FORMULA_STARTS) else text
-
-
-def csv_bytes(columns: Sequence[str], rows: Sequence[dict[str, Any]]) -> bytes:
-    """Return ``rows`` as CSV (values that are not text as JSON), with a header."""
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    writer.writerow(columns)
-    for row in rows:
-        writer.writerow([_cell(row.get(column)) for column in columns])
-    return buffer.getvalue().encode("utf-8", "replace")

@@ -9,7 +9,7 @@ import uuid
 from collections import Counter
 from dataclasses import dataclass
 
-from sqlalchemy import func, select
+from sqlalchemy import Select, func, select
 from sqlalchemy.orm import Session
 
 from causalplan.service.crud import storage_errors
@@ -197,13 +197,19 @@ class StoredTrial:
     model: ModelRecord
 
 
-def trials_of(session: Session, experiment_id: uuid.UUID) -> list[StoredTrial]:
-    """Return every step-3 trial of an experiment, oldest first."""
-    query = (
+def _stored_trials() -> Select[ParticipantTrialRecord, ParticipantRecord, TrialRecord, ModelRecord]:
+    return (
         select(ParticipantTrialRecord, ParticipantRecord, TrialRecord, ModelRecord)
         .join(ParticipantRecord, ParticipantTrialRecord.participant_id == ParticipantRecord.id)
         .join(TrialRecord, ParticipantTrialRecord.trial_id == TrialRecord.id)
         .join(ModelRecord, TrialRecord.model_id == ModelRecord.id)
+    )
+
+
+def trials_of(session: Session, experiment_id: uuid.UUID) -> list[StoredTrial]:
+    """Return every step-3 trial of an experiment, oldest first."""
+    query = (
+        _stored_trials()
         .where(ParticipantRecord.experiment_id == experiment_id)
         .order_by(ParticipantTrialRecord.created_at, ParticipantTrialRecord.id)
     )
@@ -214,10 +220,7 @@ def trials_of(session: Session, experiment_id: uuid.UUID) -> list[StoredTrial]:
 def trial_of(session: Session, participant: ParticipantRecord, test_object: str) -> StoredTrial | None:
     """Return the participant's trial on ``test_object`` (None before they submitted it)."""
     query = (
-        select(ParticipantTrialRecord, ParticipantRecord, TrialRecord, ModelRecord)
-        .join(ParticipantRecord, ParticipantTrialRecord.participant_id == ParticipantRecord.id)
-        .join(TrialRecord, ParticipantTrialRecord.trial_id == TrialRecord.id)
-        .join(ModelRecord, TrialRecord.model_id == ModelRecord.id)
+        _stored_trials()
         .where(ParticipantTrialRecord.participant_id == participant.id)
         .where(ParticipantTrialRecord.test_object == test_object)
     )

@@ -22,7 +22,7 @@ from causalplan.causal.graph import goal_holds
 from causalplan.causal.labels import display_label, normalize_label
 from causalplan.causal.model import CausalModel, Labelling, read_model
 from causalplan.causal.validation import ObjectSummary, validate_model
-from causalplan.inputs import mapping_from_data, model_from_data
+from causalplan.inputs import LoadedModel, mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.errors import LimitExceededError
@@ -124,18 +124,6 @@ class ParticipantModel:
         return cls(str(data["goal"]), data["functions"], tuple(data["rules"]))
 
 
-@dataclass(frozen=True)
-class ModelCheck:
-    """A participant model as read (None when unreadable), to draw, and its validation report."""
-
-    model: CausalModel | None
-    report: Report
-
-    @property
-    def is_valid(self) -> bool:
-        return self.model is not None and self.report.is_valid
-
-
 def _limits_report(document: Mapping[str, Any], settings: Settings) -> Report | None:
     try:
         check_model_limits(document, settings)
@@ -144,18 +132,17 @@ def _limits_report(document: Mapping[str, Any], settings: Settings) -> Report | 
     return None
 
 
-def check_model(participant_model: ParticipantModel, catalog: Catalog, settings: Settings) -> ModelCheck:
-    """Validate a participant's model (the service's limits first); return it with the report."""
+def check_model(participant_model: ParticipantModel, catalog: Catalog, settings: Settings) -> LoadedModel:
+    """Validate a participant's model (the service's limits first); return it (to draw) with the report."""
     document = participant_model.merged_document()
     over = _limits_report(document, settings)
     if over is not None:
-        return ModelCheck(None, over)
+        return LoadedModel(None, over)
     if len(participant_model.object_ids) == 1:
-        loaded = model_from_data(document, SourceMap(), catalog)
-        return ModelCheck(loaded.model, loaded.report)
+        return model_from_data(document, SourceMap(), catalog)
     model, problems = read_model(document, SourceMap())
     if model is None:
-        return ModelCheck(None, Report(tuple(problems)))
+        return LoadedModel(None, Report(tuple(problems)))
     objects = [catalog.get(object_id) for object_id in participant_model.object_ids]
     summary = ObjectSummary(
         participant_model.merged_id,
@@ -166,7 +153,7 @@ def check_model(participant_model: ParticipantModel, catalog: Catalog, settings:
     report = validate_model(model, {summary.id: summary}, problems)
     if report.is_valid:
         report = report.merged(Report(tuple(_unexplained(participant_model, model, objects))))
-    return ModelCheck(model, report)
+    return LoadedModel(model, report)
 
 
 def _unexplained(

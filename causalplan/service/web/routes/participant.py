@@ -12,6 +12,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, Path, Request, Response
 
 from causalplan.causal.diagnostics import Report
+from causalplan.inputs import LoadedModel
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep
 from causalplan.service.web import store
@@ -19,10 +20,9 @@ from causalplan.service.web.drawings import document_key
 from causalplan.service.web.errors import InvalidFormError
 from causalplan.service.web.forms import Form, read_form
 from causalplan.service.web.journey import Journey
-from causalplan.service.web.participation import run_trial, submit_model
+from causalplan.service.web.participation import picture_url, run_trial, submit_model
 from causalplan.service.web.schemas import MAX_PART_TEXT, MAX_RULES_TEXT
 from causalplan.service.web.study import (
-    ModelCheck,
     Stage,
     check_functions,
     check_mapping,
@@ -76,7 +76,8 @@ def _common(journey: Journey) -> dict[str, Any]:
     }
 
 
-def _check_view(check: ModelCheck, rules_text: str) -> dict[str, Any]:
+def check_view(check: LoadedModel, rules_text: str) -> dict[str, Any]:
+    """Return a model check as the pages show it: valid, and its errors and warnings with their lines."""
     _, lines = rules_from_text(rules_text)
     diagnostics = rule_lines(check.report, lines)
     return {
@@ -86,7 +87,8 @@ def _check_view(check: ModelCheck, rules_text: str) -> dict[str, Any]:
     }
 
 
-def _graph_url(code: str, check: ModelCheck, document: dict[str, Any], practice: bool = False) -> str | None:
+def graph_url(code: str, check: LoadedModel, document: dict[str, Any], practice: bool = False) -> str | None:
+    """Return where the checked model's graph is (None when there is nothing to draw)."""
     if check.model is None:
         return None
     return f"/p/{code}/graph.svg?{'practice=1&' if practice else ''}v={document_key(document)}"
@@ -129,10 +131,8 @@ def _tutorial_page(
         answers=answers,
         wrong={question.id for question in wrong_answers(answers)} if feedback else set(),
         rules_text=rules_text,
-        check=_check_view(check, rules_text) if rules_text.strip() else None,
-        graph_url=_graph_url(journey.participant.code, check, model.merged_document(), practice=True)
-        if rules
-        else None,
+        check=check_view(check, rules_text) if rules_text.strip() else None,
+        graph_url=graph_url(journey.participant.code, check, model.merged_document(), practice=True) if rules else None,
         feedback=feedback,
     )
 
@@ -242,8 +242,8 @@ def _step2_page(
         ],
         labels=model.function_labels(),
         rules_text=rules_text,
-        check=_check_view(check, rules_text),
-        graph_url=_graph_url(journey.participant.code, check, model.merged_document()),
+        check=check_view(check, rules_text),
+        graph_url=graph_url(journey.participant.code, check, model.merged_document()),
     )
 
 
@@ -305,16 +305,9 @@ def _step3_page(
         problems=[d.as_dict() for d in report.diagnostics] if report is not None else [],
         result=result,
         show_verdict=journey.design.show_verdict,
-        picture_url=_result_picture(code, obj, result),
+        picture_url=picture_url(code, obj.id, result.get("plan") if result else None),
         is_last=index + 1 == len(journey.tests),
     )
-
-
-def _result_picture(code: str, obj: AssemblyObject, result: dict[str, Any] | None) -> str | None:
-    if not result or not result.get("plan"):
-        return None
-    fits = [str(step.get("fit") or "") for step in result["plan"]]
-    return f"/p/{code}/pictures/{obj.id}.png?fits={','.join(fits)}" if all(fits) else None
 
 
 @router.get("/step3/{number}")

@@ -17,7 +17,7 @@ from causalplan.service.web.drawings import SVG_HEADERS, document_key, graph_svg
 from causalplan.service.web.errors import StepLockedError
 from causalplan.service.web.journey import Journey
 from causalplan.service.web.participation import invalid_model_error, plans
-from causalplan.service.web.routes.participant import JourneyDep
+from causalplan.service.web.routes.participant import JourneyDep, check_view, graph_url
 from causalplan.service.web.schemas import (
     CheckIn,
     CheckOut,
@@ -29,7 +29,7 @@ from causalplan.service.web.schemas import (
     SavedOut,
     TutorialDraftIn,
 )
-from causalplan.service.web.study import ParticipantModel, Stage, check_model, rule_lines, rules_from_text
+from causalplan.service.web.study import ParticipantModel, Stage, check_model, rules_from_text
 from causalplan.service.web.tutorial import QUESTIONS, practice_model
 
 router = APIRouter(prefix="/p/{code}", include_in_schema=False)
@@ -83,7 +83,7 @@ def check_rules(
     body: CheckIn, journey: JourneyDep, session: SessionDep, catalog: CatalogDep, settings: SettingsDep
 ) -> CheckOut:
     """Save the rule box and check the model as `causalplan check` does; say where its graph is."""
-    rules, lines = rules_from_text(body.rules)
+    rules, _ = rules_from_text(body.rules)
     model: ParticipantModel
     if body.practice:
         journey.require_open(Stage.TUTORIAL)
@@ -95,18 +95,11 @@ def check_rules(
         model = journey.draft_model()
     store.save(session, journey.participant)
     check = check_model(model, catalog, settings)
-    diagnostics = rule_lines(check.report, lines)
-    code = journey.participant.code
-    graph = None
-    if check.model is not None:
-        graph = f"/p/{code}/graph.svg?{'practice=1&' if body.practice else ''}v={document_key(model.merged_document())}"
     assert journey.participant.updated_at is not None
     return CheckOut.model_validate(
         {
-            "valid": check.is_valid,
-            "errors": [item for item in diagnostics if item["severity"] == "error"],
-            "warnings": [item for item in diagnostics if item["severity"] == "warning"],
-            "graph_url": graph,
+            **check_view(check, body.rules),
+            "graph_url": graph_url(journey.participant.code, check, model.merged_document(), body.practice),
             "saved_at": journey.participant.updated_at,
         }
     )

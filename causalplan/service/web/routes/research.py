@@ -12,9 +12,9 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Query, Request, Response
 from pydantic import ValidationError
 
-from causalplan.service.deps import CatalogDep, SessionDep, SettingsDep
+from causalplan.service.deps import CatalogDep, SessionDep, SettingsDep, is_research_token
 from causalplan.service.web import experiments, store
-from causalplan.service.web.auth import ResearchPageDep, is_token, sign_in, sign_out
+from causalplan.service.web.auth import ResearchPageDep, sign_in, sign_out
 from causalplan.service.web.drawings import SVG_HEADERS, rates_chart
 from causalplan.service.web.errors import InvalidExperimentError
 from causalplan.service.web.forms import Form, read_form
@@ -48,7 +48,7 @@ async def login(request: Request, settings: SettingsDep) -> Response:
     form = await read_form(request)
     token = form.text("token", "", max_length=1000)
     target = _local_next(form.text("next", "/research", max_length=500))
-    if not is_token(token, settings):
+    if not is_research_token(token, settings):
         return render(
             request,
             "login.html",
