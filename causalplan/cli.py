@@ -628,7 +628,12 @@ def planners(as_json: bool) -> None:
     help="SQLAlchemy URL, e.g. postgresql://user:password@host/db (default: CAUSALPLAN_DATABASE_URL, "
     "else a SQLite file in ~/.local/share/causalplan, created on first start).",
 )
-def serve(host: str, port: int, workers: int | None, database_url: str | None) -> None:
+@click.option(
+    "--access-log/--no-access-log",
+    default=None,
+    help="Log one line per request (default: CAUSALPLAN_ACCESS_LOG, else on). Errors are logged either way.",
+)
+def serve(host: str, port: int, workers: int | None, database_url: str | None, access_log: bool | None) -> None:
     """Run the HTTP planning service: JSON API under /v1, OpenAPI docs at /docs, /health.
 
     Other settings come from CAUSALPLAN_* environment variables (see causalplan/service/settings.py).
@@ -644,6 +649,8 @@ def serve(host: str, port: int, workers: int | None, database_url: str | None) -
         overrides["planning_workers"] = workers
     if database_url is not None:
         overrides["database_url"] = database_url
+    if access_log is not None:
+        overrides["access_log"] = access_log
     try:
         settings = Settings(**overrides)  # type: ignore[arg-type]  # the rest from the environment
     except ValidationError as exc:

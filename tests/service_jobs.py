@@ -30,3 +30,12 @@ def sleep_forever(*_: Any) -> dict[str, object]:
 def allocate_too_much(*_: Any) -> dict[str, object]:
     """Ask for more memory than the worker's address-space limit allows."""
     return {"size": len(bytearray(64 * 1024**3))}
+
+
+def timed_sleep(seconds: float) -> tuple[float, float, int]:
+    """Sleep ``seconds``; return when the job began and ended (the system-wide monotonic clock) and the worker's pid."""
+    import os
+
+    began = time.monotonic()
+    time.sleep(seconds)
+    return began, time.monotonic(), os.getpid()

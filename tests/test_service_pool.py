@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import signal
 import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -18,6 +19,8 @@ from causalplan.inputs import model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.service import main, worker
 from causalplan.service.cache import ResultCache, request_key
+from causalplan.service.errors import QueueFullError, StorageError
+from causalplan.service.planning import PlannerPool
 from tests.service_fixtures import (
     DESK_LAMP,
     error_of,
@@ -27,7 +30,7 @@ from tests.service_fixtures import (
     wait_until,
     with_unique_effect,
 )
-from tests.service_jobs import allocate_too_much, crash_with_exception, sleep_forever, sleep_then_plan
+from tests.service_jobs import allocate_too_much, crash_with_exception, sleep_forever, sleep_then_plan, timed_sleep
 
 
 @pytest.fixture(scope="module")
@@ -181,3 +184,53 @@ def test_canonical_keys_ignore_layout_but_not_meaning(catalog: Catalog) -> None:
     assert key != request_key("plan", other, None, "fd", 30.0, "catalog")  # answers quote it
     assert key != request_key("plan", base, None, "fd", 5.0, "catalog")
     assert key != request_key("plan", base, None, "fd", 30.0, "another catalog")
+
+
+@pytest.fixture(scope="module")
+def two_workers() -> Iterator[PlannerPool]:
+    """A bare pool of two workers and no waiting line."""
+    pool = PlannerPool(2, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
+    pool.start()
+    yield pool
+    pool.close()
+
+
+def test_meanwhile_runs_while_the_worker_works(two_workers: PlannerPool) -> None:
+    ran: list[float] = []
+    began, ended, _ = two_workers.run(timed_sleep, (0.5,), 30, meanwhile=lambda: ran.append(time.monotonic()))
+    [at] = ran
+    assert began <= at <= ended  # after the worker had the job, before it answered
+
+
+def test_what_meanwhile_raises_comes_after_the_answer_and_the_worker_stays_in_step(two_workers: PlannerPool) -> None:
+    def broken() -> None:
+        raise StorageError("the database is gone")
+
+    with pytest.raises(StorageError, match="the database is gone"):
+        two_workers.run(timed_sleep, (0.1,), 30, meanwhile=broken)
+    assert two_workers.stats().busy == 0
+    # The failed request's reply was read: the next job gets its own answer, not that one.
+    began, ended, _ = two_workers.run(timed_sleep, (0.2,), 30)
+    assert ended - began >= 0.2
+
+
+def test_a_refused_request_runs_nothing_meanwhile(tmp_path: Path) -> None:
+    pool = PlannerPool(1, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
+    pool.start()
+    try:
+        busy = threading.Thread(target=pool.run, args=(timed_sleep, (1.0,), 30))
+        busy.start()
+        wait_until(lambda: pool.stats().busy == 1)
+        ran: list[bool] = []
+        with pytest.raises(QueueFullError):
+            pool.run(timed_sleep, (0.0,), 30, meanwhile=lambda: ran.append(True))
+        busy.join()
+        assert ran == []
+    finally:
+        pool.close()
+
+
+def test_the_worker_that_finished_last_takes_the_next_job(two_workers: PlannerPool) -> None:
+    pids = [two_workers.run(timed_sleep, (0.0,), 30)[2] for _ in range(4)]
+    assert len(set(pids)) == 1  # first in, first out would alternate between the two
+    assert sorted(two_workers.worker_pids()) != [pids[0]]  # both workers are there

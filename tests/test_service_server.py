@@ -87,9 +87,23 @@ def test_the_real_server_plans_stores_and_stops_cleanly(tmp_path: Path) -> None:
     assert process.returncode == 0, output
     assert "Application shutdown complete" in output
     assert "Traceback" not in output
+    assert '"POST /v1/plans HTTP/1.1" 200' in output  # the access log is on by default
     assert not [pid for pid in workers if is_running(pid)]
     # The default database: a SQLite file in the data folder, created on first start.
     assert (tmp_path / "data" / "causalplan" / "causalplan.sqlite3").exists()
+
+
+def test_the_access_log_can_be_turned_off(tmp_path: Path) -> None:
+    process, base = serve(tmp_path, "--workers", "1", "--no-access-log")
+    try:
+        assert httpx.post(f"{base}/v1/plans", json={"model": DESK_LAMP}, timeout=30).status_code == 200
+        assert httpx.get(f"{base}/v1/nothing", timeout=30).status_code == 404
+    finally:
+        process.send_signal(signal.SIGINT)
+        output = process.communicate(timeout=30)[0]
+    assert process.returncode == 0, output
+    assert "Application startup complete" in output  # the rest of the log still comes
+    assert "POST /v1/plans" not in output and "/v1/nothing" not in output
 
 
 def test_bad_settings_are_a_clear_error_not_a_traceback(tmp_path: Path) -> None:

@@ -276,4 +276,11 @@ def serve(settings: Settings, host: str, port: int, log_level: str = "info") -> 
     """Run the service with uvicorn until interrupted (what ``causalplan serve`` does)."""
     import uvicorn
 
-    uvicorn.run(create_app(settings), host=host, port=port, log_level=log_level, timeout_graceful_shutdown=10)
+    uvicorn.run(
+        create_app(settings),
+        host=host,
+        port=port,
+        log_level=log_level,
+        access_log=settings.access_log,
+        timeout_graceful_shutdown=10,
+    )

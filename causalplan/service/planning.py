@@ -89,14 +89,24 @@ class _Worker:
         self.connection.recv()
         self.is_ready = True
 
-    def call(self, function: Callable[..., Any], args: tuple[Any, ...], timeout: float) -> tuple[Any, ...]:
+    def call(
+        self,
+        function: Callable[..., Any],
+        args: tuple[Any, ...],
+        timeout: float,
+        meanwhile: Callable[[], None] | None = None,
+    ) -> tuple[Any, ...]:
         """Send one job and return the worker's reply; TimeoutError or EOFError when there is none.
 
         A worker that has just been started is waited for first, within the same ``timeout``.
+        ``meanwhile`` (which must not raise) runs in this thread once the job is sent, while the
+        worker works on it.
         """
         deadline = time.monotonic() + timeout
         self.wait_ready(timeout)
         self.connection.send((function, args))
+        if meanwhile is not None:
+            meanwhile()
         if not self.connection.poll(max(0.0, deadline - time.monotonic())):
             raise TimeoutError
         reply: tuple[Any, ...] = self.connection.recv()  # EOFError when the worker died
@@ -154,7 +164,9 @@ class PlannerPool:
         self.max_in_flight = size + queue_size
         self.memory_mb = memory_mb
         self.queue_wait_seconds = queue_wait_seconds
-        self._idle: queue.SimpleQueue[_Worker] = queue.SimpleQueue()
+        # Last in, first out: the worker that finished last (its caches and its started search
+        # process still warm) takes the next job; the others wait for a busier moment.
+        self._idle: queue.LifoQueue[_Worker] = queue.LifoQueue()
         self._lock = threading.Lock()
         self._in_flight = 0
         self._busy = 0
@@ -245,19 +257,40 @@ class PlannerPool:
             worker = self._spawn()
         return worker
 
-    def run(self, function: Callable[..., T], args: tuple[Any, ...], timeout: float) -> T:
+    def run(
+        self,
+        function: Callable[..., T],
+        args: tuple[Any, ...],
+        timeout: float,
+        meanwhile: Callable[[], None] | None = None,
+    ) -> T:
         """Run ``function(*args)`` in a worker; kill it after ``timeout`` seconds.
+
+        ``meanwhile`` runs in the calling thread while the worker works (e.g. storing the request's
+        record): only once a worker has the job, so a refused request (429) runs nothing. What it
+        raises is raised once the worker has answered, in place of the job's own answer or error
+        (a worker that timed out or crashed is reported as such instead).
 
         Raises QueueFullError (429), PlanningTimeoutError (504), WorkerCrashedError (503), the
         ``CausalPlanError`` the job raised, or InternalError for a bug in the job.
         """
+        failure: Exception | None = None
+
+        def guarded() -> None:
+            nonlocal failure
+            assert meanwhile is not None
+            try:
+                meanwhile()
+            except Exception as exc:  # noqa: BLE001 - raised once the worker has answered
+                failure = exc
+
         with self._admitted():
             worker = self._take_worker()
             with self._lock:
                 self._busy += 1
             started = time.perf_counter()
             try:
-                reply = worker.call(function, args, timeout)
+                reply = worker.call(function, args, timeout, guarded if meanwhile is not None else None)
             except TimeoutError:
                 self._replace(worker)
                 raise PlanningTimeoutError(
@@ -281,6 +314,8 @@ class PlannerPool:
                 self._completed += 1
                 self._seconds_per_job = 0.8 * self._seconds_per_job + 0.2 * seconds
             self._idle.put(worker)
+        if failure is not None:
+            raise failure
         result: T = _unwrap(reply)
         return result
 

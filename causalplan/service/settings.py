@@ -46,6 +46,9 @@ class Settings(BaseSettings):
         description="Address-space limit of each worker process (its planner children get less).",
     )
     cache_size: int = Field(default=512, ge=0, description="Answers kept for identical requests (0: no cache).")
+    access_log: bool = Field(
+        default=True, description="Log one line per request (method, path, status); ~0.1-0.3 ms per request."
+    )
 
     max_body_bytes: int = Field(default=262_144, ge=1024, description="Largest request body.")
     max_label_length: int = Field(default=MAX_LABEL_LENGTH, ge=1, le=MAX_LABEL_LENGTH)

@@ -10,6 +10,7 @@ import time
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 from sqlalchemy.orm import Session
@@ -216,6 +217,13 @@ def model_for_request(
     return stored_model(get_model(session, model_id), services)
 
 
+def storing(services: Services, submission: ModelSubmission) -> Callable[[], None] | None:
+    """Return what stores an inline model's record (None for a stored model): to run while a worker solves."""
+    if not submission.is_new:
+        return None
+    return partial(save, services.engine, [submission.record])
+
+
 def first_errors(report: Report) -> str:
     """Return the report's first three errors with their codes, for an error message."""
     return "; ".join(f"[{d.code}] {d.message}" for d in report.errors[:3])
@@ -265,16 +273,21 @@ def _answer(
     args: tuple[Any, ...],
     seconds: float,
     is_final: Callable[[dict[str, Any]], bool],
+    meanwhile: Callable[[], None] | None = None,
 ) -> Answer:
     """Return the answer kept for ``key``, or run ``job(*args)`` in a worker for at most ``seconds``.
 
     A new answer is kept only when ``is_final``: a timeout may go otherwise next time.
+    ``meanwhile`` (e.g. storing the request's record) runs while the worker solves, or first
+    when the answer is kept; it runs unless the request is refused before a worker takes it.
     """
     started = time.perf_counter()
     cached = services.cache.get(key)
     if cached is not None:
+        if meanwhile is not None:
+            meanwhile()
         return Answer(cached, True, time.perf_counter() - started)
-    data = services.pool.run(job, args, seconds)
+    data = services.pool.run(job, args, seconds, meanwhile)
     if is_final(data):
         services.cache.put(key, data)
     return Answer(data, False, time.perf_counter() - started)
@@ -291,15 +304,17 @@ def plan(
     planner: str,
     time_limit: float,
     key: str | None = None,
+    meanwhile: Callable[[], None] | None = None,
 ) -> Answer:
     """Return the plan of ``model`` (on ``mapping``'s object), from the cache or a worker.
 
     ``key``: the request's answer key (``PlanInputs.key``), when the caller has it already.
+    ``meanwhile``: work to do while a worker solves (see ``_answer``).
     """
     key = key or _key(services, "plan", model, mapping, planner, time_limit)
     args = (model, mapping, planner, time_limit, tuple(services.settings.catalog_folders))
     seconds = time_limit + services.settings.solve_grace_seconds
-    return _answer(services, key, worker.plan_job, args, seconds, _is_final_plan)
+    return _answer(services, key, worker.plan_job, args, seconds, _is_final_plan, meanwhile)
 
 
 def transfer(
@@ -330,8 +345,12 @@ def simulate(
     time_limit: float,
     picture: bool,
     key: str | None = None,
+    meanwhile: Callable[[], None] | None = None,
 ) -> Answer:
-    """Return the plan and its simulation report (and picture), from the cache or a worker."""
+    """Return the plan and its simulation report (and picture), from the cache or a worker.
+
+    ``meanwhile``: work to do while a worker solves (see ``_answer``).
+    """
     key = key or _key(services, f"simulate:{picture}", model, mapping, planner, time_limit)
     args = (model, mapping, planner, time_limit, tuple(services.settings.catalog_folders), picture)
     seconds = time_limit + services.settings.solve_grace_seconds + SIMULATION_SECONDS
@@ -342,6 +361,7 @@ def simulate(
         args,
         seconds,
         lambda data: isinstance(data["planning"], dict) and _is_final_plan(data["planning"]),
+        meanwhile,
     )
 
 

@@ -7,7 +7,7 @@ from typing import Any
 from fastapi import APIRouter
 from pydantic import Field
 
-from causalplan.service import crud, submissions
+from causalplan.service import submissions
 from causalplan.service.deps import ClientIdsDep, ServicesDep, SessionDep
 from causalplan.service.schemas import PlanIn, error_responses
 
@@ -32,9 +32,8 @@ def create_simulation(
     """
     inputs = submissions.plan_inputs(body, services, session, client)
     key = inputs.key(f"simulate:{body.picture}")
+    store = submissions.storing(services, inputs.submission)
     answer = submissions.simulate(
-        services, inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, body.picture, key
+        services, inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, body.picture, key, store
     )
-    if inputs.submission.is_new:
-        crud.save(services.engine, [inputs.submission.record])
     return {**answer.data, "cached": answer.cached, "model_id": str(inputs.submission.record.id)}
