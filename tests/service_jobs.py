@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 from typing import Any
 
@@ -34,8 +35,36 @@ def allocate_too_much(*_: Any) -> dict[str, object]:
 
 def timed_sleep(seconds: float) -> tuple[float, float, int]:
     """Sleep ``seconds``; return when the job began and ended (the system-wide monotonic clock) and the worker's pid."""
-    import os
 
     began = time.monotonic()
     time.sleep(seconds)
     return began, time.monotonic(), os.getpid()
+
+
+def temp_folders() -> tuple[str, list[str]]:
+    """Return the worker's temp folder and the search folders in it, once its prestarted search is there.
+
+    The worker prestarts its search on a background thread while it starts, so this waits
+    (up to 20 s) for it rather than racing it.
+    """
+    import tempfile
+    from pathlib import Path
+
+    from causalplan.planners import search_processes
+
+    deadline = time.monotonic() + 20
+    while not search_processes.idle_pids() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    folder = tempfile.gettempdir()
+    return folder, sorted(str(path) for path in Path(folder).glob("causalplan-fd-*"))
+
+
+def start_a_session_then_hang(pid_file: str) -> dict[str, object]:
+    """Start a long-lived child in a session of its own (as search processes are), write its pid, hang."""
+    import subprocess
+
+    child = subprocess.Popen(["sleep", "600"], start_new_session=True)
+    with open(pid_file, "w", encoding="utf-8") as handle:
+        handle.write(str(child.pid))
+    time.sleep(3600)
+    return {}

@@ -19,7 +19,7 @@ from causalplan.inputs import model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.service import main, worker
 from causalplan.service.cache import ResultCache, request_key
-from causalplan.service.errors import QueueFullError, StorageError
+from causalplan.service.errors import PlanningTimeoutError, QueueFullError, StorageError
 from causalplan.service.planning import PlannerPool
 from tests.service_fixtures import (
     DESK_LAMP,
@@ -30,7 +30,15 @@ from tests.service_fixtures import (
     wait_until,
     with_unique_effect,
 )
-from tests.service_jobs import allocate_too_much, crash_with_exception, sleep_forever, sleep_then_plan, timed_sleep
+from tests.service_jobs import (
+    allocate_too_much,
+    crash_with_exception,
+    sleep_forever,
+    sleep_then_plan,
+    start_a_session_then_hang,
+    temp_folders,
+    timed_sleep,
+)
 
 
 @pytest.fixture(scope="module")
@@ -196,10 +204,12 @@ def two_workers() -> Iterator[PlannerPool]:
 
 
 def test_meanwhile_runs_while_the_worker_works(two_workers: PlannerPool) -> None:
-    ran: list[float] = []
-    began, ended, _ = two_workers.run(timed_sleep, (0.5,), 30, meanwhile=lambda: ran.append(time.monotonic()))
-    [at] = ran
-    assert began <= at <= ended  # after the worker had the job, before it answered
+    ran: list[tuple[float, int]] = []
+    _, ended, _ = two_workers.run(
+        timed_sleep, (0.5,), 30, meanwhile=lambda: ran.append((time.monotonic(), two_workers.stats().busy))
+    )
+    [(at, busy)] = ran
+    assert busy == 1 and at < ended  # once a worker had the job, before it had done it
 
 
 def test_what_meanwhile_raises_comes_after_the_answer_and_the_worker_stays_in_step(two_workers: PlannerPool) -> None:
@@ -234,3 +244,87 @@ def test_the_worker_that_finished_last_takes_the_next_job(two_workers: PlannerPo
     pids = [two_workers.run(timed_sleep, (0.0,), 30)[2] for _ in range(4)]
     assert len(set(pids)) == 1  # first in, first out would alternate between the two
     assert sorted(two_workers.worker_pids()) != [pids[0]]  # both workers are there
+
+
+def test_a_killed_worker_leaves_no_temp_folders_behind() -> None:
+    pool = PlannerPool(1, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
+    pool.start()
+    try:
+        first, searches = pool.run(temp_folders, (), 30)
+        assert Path(first).name.startswith("causalplan-worker-") and Path(first).is_dir()
+        assert searches and all(Path(search).parent == Path(first) for search in searches)
+        with pytest.raises(PlanningTimeoutError):
+            pool.run(sleep_forever, (), 0.5)  # the pool SIGKILLs the worker: its atexit never runs
+        assert not Path(first).exists()
+        second, _ = pool.run(temp_folders, (), 30)  # the replacement has a folder of its own
+        assert second != first and Path(second).is_dir()
+    finally:
+        pool.close()
+    assert not Path(second).exists()
+
+
+def _temp_folder_of(pid: int) -> Path:
+    """Return the TMPDIR a worker process was started with (from its environment in /proc)."""
+    variables = dict(item.split(b"=", 1) for item in Path(f"/proc/{pid}/environ").read_bytes().split(b"\0") if item)
+    return Path(os.fsdecode(variables[b"TMPDIR"]))
+
+
+def test_closing_a_pool_removes_its_workers_temp_folders() -> None:
+    pool = PlannerPool(2, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
+    pool.start()
+    errors: list[BaseException] = []
+
+    def run_stuck_job() -> None:
+        try:
+            pool.run(sleep_forever, (), 30)
+        except Exception as exc:  # noqa: BLE001 - checked below: the closing pool kills this worker
+            errors.append(exc)
+
+    busy = threading.Thread(target=run_stuck_job)
+    try:
+        folders = [_temp_folder_of(pid) for pid in pool.worker_pids()]
+        assert len(folders) == 2 and all(folder.name.startswith("causalplan-worker-") for folder in folders)
+        assert all(folder.is_dir() for folder in folders)
+        busy.start()
+        wait_until(lambda: pool.stats().busy == 1)
+    finally:
+        pool.close()  # stops the idle worker, kills the busy one
+    busy.join()
+    assert len(errors) == 1  # the stuck job did not answer: its worker was killed
+    assert not any(folder.exists() for folder in folders)
+
+
+def test_a_killed_worker_takes_its_own_sessions_children_with_it(tmp_path: Path) -> None:
+    pool = PlannerPool(1, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
+    pool.start()
+    pid_file = tmp_path / "child.pid"
+    try:
+        with pytest.raises(PlanningTimeoutError):
+            pool.run(start_a_session_then_hang, (str(pid_file),), 2.0)
+    finally:
+        pool.close()
+    child = int(pid_file.read_text())
+    wait_until(lambda: not is_alive(child))  # an orphan, reaped by init once it is killed
+
+
+def is_alive(pid: int) -> bool:
+    """Return whether ``pid`` runs (a zombie does not)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().split(") ", 1)[1][0] != "Z"
+    except (OSError, IndexError):
+        return False
+
+
+def test_a_job_that_cannot_be_sent_fails_alone_and_the_pool_keeps_its_workers(two_workers: PlannerPool) -> None:
+    with pytest.raises(Exception, match="pickle"):
+        two_workers.run(timed_sleep, (lambda: None,), 30)  # a lambda cannot be pickled
+    assert len(two_workers.worker_pids()) == 2
+    answers: list[tuple[float, float, int]] = []
+    both = [threading.Thread(target=lambda: answers.append(two_workers.run(timed_sleep, (0.5,), 30))) for _ in range(2)]
+    for thread in both:
+        thread.start()
+    for thread in both:
+        thread.join()
+    # Two jobs at once, each on its own worker: neither worker was lost (a lost one leaves the second waiting, refused).
+    assert len({pid for _, _, pid in answers}) == 2
+    assert two_workers.stats().busy == 0

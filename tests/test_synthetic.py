@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from causalplan.causal.graph import goal_holds
@@ -128,14 +126,12 @@ def test_a_model_plan_without_a_required_part_fails_the_true_mechanism() -> None
 @pytest.mark.parametrize("size", [10, 40, 80])
 def test_fast_downward_solves_and_the_plan_replays_valid(size: int) -> None:
     task = synthetic_task(size)
-    started = time.perf_counter()
     result = plan_task(task, "fd")
-    elapsed = time.perf_counter() - started
     assert result.status is PlanStatus.SOLVED, result.message
     assert result.valid_under_model and result.valid_under_true_mechanism
     assert len(result.steps) >= len(task.obj.mechanism)
-    if size == 80:
-        assert elapsed < 2.0, f"80 parts took {elapsed:.2f} s"
+    # No timed assert here (shared, noisy machines): benchmarks/run.py always times 80 parts
+    # against its 2 s target (TARGET_PARTS, TARGET_SECONDS) and exits non-zero when missed.
 
 
 def test_small_objects_always_solve_over_several_seeds() -> None:

@@ -15,16 +15,19 @@ import logging
 import math
 import os
 import queue
+import shutil
 import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
+from pathlib import Path
 from typing import Any, TypeVar
 
 from causalplan.errors import CausalPlanError
@@ -45,10 +48,26 @@ _START_SECONDS = 60.0
 _WORKER_MAIN = "from causalplan.service.worker import main; main()"
 
 
-def _worker_environment() -> dict[str, str]:
+def _worker_environment(temp_folder: Path) -> dict[str, str]:
     # Jobs are pickled by reference (module and name), so a worker must import what the app
     # can: it gets the app's import path, not just the interpreter's default one.
-    return {**os.environ, "PYTHONPATH": os.pathsep.join(path for path in sys.path if path)}
+    # TMPDIR: ``tempfile`` (and FD's processes, which inherit it) put their folders under the
+    # worker's own temp folder, which the app removes however the worker ends (see ``_Worker``).
+    return {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join(path for path in sys.path if path),
+        "TMPDIR": str(temp_folder),
+    }
+
+
+def _children_of(pid: int) -> list[int]:
+    """Return the pids of the children of process ``pid`` (empty when /proc does not list them)."""
+    children: list[int] = []
+    with suppress(OSError):
+        for task in Path(f"/proc/{pid}/task").iterdir():
+            with suppress(OSError, ValueError):
+                children.extend(int(child) for child in (task / "children").read_text().split())
+    return children
 
 
 class _Worker:
@@ -56,20 +75,33 @@ class _Worker:
 
     It is a fresh interpreter, not a fork of the app (which runs uvicorn's and anyio's threads),
     in a process group of its own, and talks to the app over a private socket pair.
+
+    It also gets a temp folder of its own (its TMPDIR), made and removed here, by the app:
+    a worker removes its search processes' folders when it exits cleanly, but one that is
+    killed (a timeout, a crash) cannot, and they would stay in the system temp folder forever.
+    ``kill`` and ``stop``, which every way of ending a worker goes through, remove it.
     """
 
     def __init__(self, memory_mb: int, quiet: bool = False) -> None:
+        self.temp_folder = Path(tempfile.mkdtemp(prefix="causalplan-worker-"))
+        self._temp_folder_lock = threading.Lock()
+        self._temp_folder_removed = False
         parent_end, child_end = socket.socketpair()
-        with child_end:
-            self.process = subprocess.Popen(
-                [sys.executable, "-c", _WORKER_MAIN, str(child_end.fileno()), str(memory_mb)],
-                pass_fds=[child_end.fileno()],
-                stdin=subprocess.DEVNULL,
-                stdout=subprocess.DEVNULL,  # C extensions print banners; errors still reach stderr
-                stderr=subprocess.DEVNULL if quiet else None,
-                process_group=0,
-                env=_worker_environment(),
-            )
+        try:
+            with child_end:
+                self.process = subprocess.Popen(
+                    [sys.executable, "-c", _WORKER_MAIN, str(child_end.fileno()), str(memory_mb)],
+                    pass_fds=[child_end.fileno()],
+                    stdin=subprocess.DEVNULL,
+                    stdout=subprocess.DEVNULL,  # C extensions print banners; errors still reach stderr
+                    stderr=subprocess.DEVNULL if quiet else None,
+                    process_group=0,
+                    env=_worker_environment(self.temp_folder),
+                )
+        except BaseException:  # no worker, so no ``kill`` or ``stop`` will come to clean up
+            parent_end.close()
+            self._remove_temp_folder()
+            raise
         self.connection = Connection(parent_end.detach())
         self.is_ready = False
 
@@ -120,16 +152,29 @@ class _Worker:
             return None
 
     def kill(self) -> None:
-        """Kill the worker and what it started in its process group (the translator)."""
-        with suppress(ProcessLookupError, PermissionError):
-            os.killpg(self.process.pid, signal.SIGKILL)
-        with suppress(ProcessLookupError):
-            self.process.kill()
-        self.process.wait()
-        self.connection.close()
+        """Kill the worker and what it started in its process group (the translator); remove its temp folder.
+
+        Safe to call more than once, and from two threads at once (a closing pool and the
+        request that timed out may both kill a busy worker).
+        """
+        try:
+            # Its search processes run in sessions of their own (so a timed-out search can be
+            # killed without its worker): found before the worker dies, killed with it.
+            children = _children_of(self.process.pid)
+            with suppress(ProcessLookupError, PermissionError):
+                os.killpg(self.process.pid, signal.SIGKILL)
+            for child in children:
+                with suppress(ProcessLookupError, PermissionError):
+                    os.killpg(child, signal.SIGKILL)
+            with suppress(ProcessLookupError):
+                self.process.kill()
+            self.process.wait()
+            self.connection.close()
+        finally:
+            self._remove_temp_folder()
 
     def stop(self) -> None:
-        """Ask the worker to finish, and kill it if it does not."""
+        """Ask the worker to finish, and kill it if it does not; remove its temp folder."""
         with suppress(BrokenPipeError, OSError):
             self.connection.send(None)
         try:
@@ -137,7 +182,21 @@ class _Worker:
         except subprocess.TimeoutExpired:
             self.kill()
         else:
-            self.connection.close()
+            try:
+                self.connection.close()
+            finally:
+                self._remove_temp_folder()
+
+    def _remove_temp_folder(self) -> None:
+        """Remove the worker's temp folder and all in it, once; never raise.
+
+        A killed worker's search processes are killed with it (``kill``), so none writes here afterwards.
+        """
+        with self._temp_folder_lock:
+            if self._temp_folder_removed:
+                return
+            self._temp_folder_removed = True
+        shutil.rmtree(self.temp_folder, ignore_errors=True)
 
 
 @dataclass(frozen=True)
@@ -306,6 +365,9 @@ class PlannerPool:
                     "or crashed). It has been replaced; sending the request again should work.",
                     details={"exit_code": exit_code},
                 ) from None
+            except BaseException:  # e.g. a job that cannot be pickled: its worker's state is unknown
+                self._replace(worker)
+                raise
             finally:
                 with self._lock:
                     self._busy -= 1
@@ -337,6 +399,9 @@ class PlannerPool:
         except (EOFError, OSError):
             worker.kill()
             raise WorkerCrashedError("The probe process stopped unexpectedly.") from None
+        except BaseException:  # e.g. a job that cannot be pickled: the process and its folder go too
+            worker.kill()
+            raise
         worker.stop()
         result: T = _unwrap(reply)
         return result
