@@ -37,10 +37,13 @@ from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import httpx
 import yaml
+
+if TYPE_CHECKING:
+    from causalplan.pddl.task import PlanningTask
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "service.json"
@@ -84,19 +87,25 @@ def unique_model() -> dict[str, Any]:
     return {**MODEL, "rules": [rule.replace("electricity flows", effect) for rule in MODEL["rules"]]}
 
 
-def in_process_latencies(requests: int, planner: str) -> tuple[list[float], float]:
-    """Solve the desk-lamp task ``requests`` times with ``plan_task`` (after a warm-up); return times and wall."""
+def desk_lamp_task() -> PlanningTask:
+    """Return the planning task of MODEL (the paper's desk lamp) on its own object."""
     from causalplan.causal.documents import SourceMap
     from causalplan.inputs import model_from_data
     from causalplan.objects.catalog import load_catalog
     from causalplan.pddl.task import build_task
-    from causalplan.planners import fast_downward
-    from causalplan.planners.pipeline import plan_task
 
     catalog = load_catalog()
     loaded = model_from_data(MODEL, SourceMap(), catalog)
     assert loaded.model is not None and loaded.is_valid
-    task = build_task(loaded.model, catalog.get("desk_lamp"))
+    return build_task(loaded.model, catalog.get("desk_lamp"))
+
+
+def in_process_latencies(requests: int, planner: str) -> tuple[list[float], float]:
+    """Solve the desk-lamp task ``requests`` times with ``plan_task`` (after a warm-up); return times and wall."""
+    from causalplan.planners import fast_downward
+    from causalplan.planners.pipeline import plan_task
+
+    task = desk_lamp_task()
     assert plan_task(task, planner).has_plan  # warm-up
     seconds = []
     started = time.perf_counter()
@@ -111,16 +120,9 @@ def in_process_latencies(requests: int, planner: str) -> tuple[list[float], floa
 
 def up_latencies(requests: int) -> tuple[list[float], float]:
     """Solve the same task through unified-planning's OneshotPlanner("fast-downward"); return times and wall."""
-    from causalplan.causal.documents import SourceMap
-    from causalplan.inputs import model_from_data
-    from causalplan.objects.catalog import load_catalog
-    from causalplan.pddl.task import build_task
     from causalplan.planners.up_problem import solve_with_up
 
-    catalog = load_catalog()
-    loaded = model_from_data(MODEL, SourceMap(), catalog)
-    assert loaded.model is not None
-    task = build_task(loaded.model, catalog.get("desk_lamp"))
+    task = desk_lamp_task()
     solve_with_up(task, "fast-downward")  # warm-up: imports
     seconds = []
     started = time.perf_counter()

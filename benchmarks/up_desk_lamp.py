@@ -24,29 +24,20 @@ for fluent in (in_assembly, detached, available, provide, turn, close):
 base, bulb, shade = Object("base", Part), Object("bulb", Part), Object("shade", Part)
 f1, f2 = Object("bulb_into_socket", Fit), Object("shade_onto_ring", Fit)
 problem.add_objects([base, bulb, shade, f1, f2])
-screw = InstantaneousAction("screw_bulb")
-screw.add_precondition(available(f1))
-screw.add_precondition(in_assembly(base))
-screw.add_precondition(detached(bulb))
-for effect, value in (
-    (in_assembly(bulb), True),
-    (detached(bulb), False),
-    (turn(), True),
-    (close(), True),
-    (available(f1), False),
-):
-    screw.add_effect(effect, value)
-clip = InstantaneousAction("clip_shade")
-clip.add_precondition(available(f2))
-clip.add_precondition(in_assembly(base))
-clip.add_precondition(detached(shade))
-for effect, value in (
-    (in_assembly(shade), True),
-    (detached(shade), False),
-    (available(f1), False),
-    (available(f2), False),
-):
-    clip.add_effect(effect, value)
+
+
+def attach(name, fit, part, *effects):  # type: ignore[no-untyped-def]
+    """Return the action attaching ``part`` to the base through ``fit``, with its further ``effects``."""
+    action = InstantaneousAction(name)
+    for precondition in (available(fit), in_assembly(base), detached(part)):
+        action.add_precondition(precondition)
+    for effect, value in ((in_assembly(part), True), (detached(part), False), *effects):
+        action.add_effect(effect, value)
+    return action
+
+
+screw = attach("screw_bulb", f1, bulb, (turn(), True), (close(), True), (available(f1), False))
+clip = attach("clip_shade", f2, shade, (available(f1), False), (available(f2), False))
 problem.add_actions([screw, clip])
 problem.set_initial_value(in_assembly(base), True)
 problem.set_initial_value(provide(), True)

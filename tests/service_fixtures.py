@@ -87,6 +87,19 @@ def free_port() -> int:
         return port
 
 
+def sqlite_url(folder: Path) -> str:
+    """Return the URL of a SQLite database file in ``folder``."""
+    return f"sqlite:///{folder / 'causalplan.sqlite3'}"
+
+
+def is_running(pid: int) -> bool:
+    """Return whether process ``pid`` runs (a zombie does not)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        return False
+
+
 def settings_for(database_url: str, **overrides: Any) -> Settings:
     """Return test settings: few workers, the research token, and ``overrides``."""
     values: dict[str, Any] = {
@@ -195,7 +208,7 @@ def postgres_database(admin_url: str) -> Iterator[str]:
 def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
     """An empty database: a SQLite file, then a real PostgreSQL database (each test runs on both)."""
     if request.param == "sqlite":
-        yield f"sqlite:///{tmp_path / 'causalplan.sqlite3'}"
+        yield sqlite_url(tmp_path)
         return
     with postgres_database(request.getfixturevalue("postgres_admin_url")) as url:
         yield url
@@ -205,7 +218,7 @@ def database_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str
 def storage_client(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
     """A running app per database kind (SQLite, PostgreSQL), shared by a module's tests."""
     if request.param == "sqlite":
-        url = f"sqlite:///{tmp_path_factory.mktemp('db') / 'causalplan.sqlite3'}"
+        url = sqlite_url(tmp_path_factory.mktemp("db"))
         with running_client(settings_for(url)) as client:
             yield client
         return
@@ -223,7 +236,7 @@ def live_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
 
     import uvicorn
 
-    url = f"sqlite:///{tmp_path_factory.mktemp('db') / 'causalplan.sqlite3'}"
+    url = sqlite_url(tmp_path_factory.mktemp("db"))
     settings = settings_for(url, default_time_limit=5.0, max_time_limit=10.0)
     server = uvicorn.Server(
         uvicorn.Config(create_app(settings), host="127.0.0.1", port=free_port(), log_level="warning")
@@ -242,7 +255,7 @@ def live_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
 @pytest.fixture(scope="module")
 def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
     """A running app on SQLite, shared by a module's tests."""
-    url = f"sqlite:///{tmp_path_factory.mktemp('db') / 'causalplan.sqlite3'}"
+    url = sqlite_url(tmp_path_factory.mktemp("db"))
     with running_client(settings_for(url)) as running:
         yield running
 

@@ -14,7 +14,7 @@ from causalplan.pddl.writer import compile_task
 from causalplan.planners import fast_downward
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanStatus
-from causalplan.planners.synthetic import synthetic_task
+from causalplan.planners.synthetic import synthetic_object, synthetic_task
 from tests.conftest import example_mapping, example_model
 
 
@@ -61,6 +61,21 @@ def test_cycles_contribute_nothing_and_too_many_sets_give_none(catalog: Catalog)
     many = synthetic_task(40, seed=0)
     assert minimal_part_sets(many) is not None
     assert MAX_MINIMAL_SETS >= 2
+    assert minimal_part_sets(_choices(6)) is not None  # 2**6 = 64 sets: at the limit
+    assert minimal_part_sets(_choices(7)) is None  # 2**7 = 128 sets: too many
+    assert canonical_pddl(_choices(7)) is None
+
+
+def _choices(count: int) -> PlanningTask:
+    """Return a task whose goal needs one of two parts for each of ``count`` causes: 2**count minimal sets."""
+    obj = synthetic_object(2 * count + 1, seed=0)
+    parts = [part for part in obj.part_ids if part != obj.base]
+    functions = {part: [f"f{index}"] for index, part in enumerate(parts)}
+    rules = [f"f{index} CAUSES c{index // 2}" for index in range(len(parts))]
+    rules.append(" AND ".join(f"c{cause}" for cause in range(count)) + " CAUSES light")
+    model, problems = read_model({"object": obj.id, "functions": functions, "rules": rules}, SourceMap())
+    assert model is not None and problems == []
+    return build_task(model, obj)
 
 
 def test_an_effect_shared_by_many_rules_is_worked_out_once(catalog: Catalog, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -25,7 +25,7 @@ from causalplan.planners.fast_downward import CONFIGS, SearchConfig
 from causalplan.planners.result import PlanStatus, SearchOutcome
 from causalplan.planners.synthetic import synthetic_task
 from tests.conftest import EXAMPLES, example_model
-from tests.test_fast_downward import star_task
+from tests.test_fast_downward import _children, star_task
 
 
 @pytest.fixture(autouse=True)
@@ -34,10 +34,6 @@ def _no_idle_processes_left() -> Iterator[None]:
     search_processes.stop_idle()
     yield
     search_processes.stop_idle()
-
-
-def _children() -> set[int]:
-    return {int(pid) for pid in Path(f"/proc/{os.getpid()}/task/{os.getpid()}/children").read_text().split()}
 
 
 def _is_gone(pid: int) -> bool:

@@ -25,6 +25,7 @@ from tests.service_fixtures import (
     running_client,
     services_of,
     settings_for,
+    sqlite_url,
 )
 
 TIME_LIMIT = 20.0  # settings_for's default_time_limit
@@ -88,7 +89,7 @@ def stored_fields(stored: dict[str, Any]) -> dict[str, Any]:
 @pytest.fixture(scope="module")
 def plain_client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
     """An app with no caches at all (``cache_size`` 0): every request is read, planned and stored anew."""
-    url = f"sqlite:///{tmp_path_factory.mktemp('db') / 'causalplan.sqlite3'}"
+    url = sqlite_url(tmp_path_factory.mktemp("db"))
     with running_client(settings_for(url, cache_size=0, planning_workers=1)) as client:
         yield client
 
@@ -203,7 +204,7 @@ def variants() -> dict[str, dict[str, Any]]:
 
 
 def test_changed_inputs_never_get_another_requests_answer(tmp_path: Path, catalog: Catalog) -> None:
-    url = f"sqlite:///{tmp_path / 'causalplan.sqlite3'}"
+    url = sqlite_url(tmp_path)
     with running_client(settings_for(url, planning_workers=1)) as client:
         answers = {}
         for name, body in variants().items():
@@ -220,7 +221,7 @@ def test_changed_inputs_never_get_another_requests_answer(tmp_path: Path, catalo
 
 
 def test_the_caches_stay_bounded(tmp_path: Path) -> None:
-    url = f"sqlite:///{tmp_path / 'causalplan.sqlite3'}"
+    url = sqlite_url(tmp_path)
     with running_client(settings_for(url, cache_size=2, planning_workers=1)) as client:
         services = services_of(client)
         bodies = [

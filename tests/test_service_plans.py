@@ -168,9 +168,12 @@ def test_a_planner_timeout_is_an_answer_and_is_not_cached(client: TestClient) ->
         "functions": {"wind_up_motor": ["store energy"], "wheels": ["roll"], "sticker": ["look nice"]},
         "rules": ["store energy AND roll AND look nice CAUSES motion"],
     }
-    body = client.post("/v1/plans", json={"model": model, "time_limit": 0.001, "planner": "fd"}).json()
+    timed_out = {"model": model, "time_limit": 0.001, "planner": "fd"}
+    body = client.post("/v1/plans", json=timed_out).json()
     assert body["status"] == "timeout"
     assert "did not finish" in body["message"]
+    # The very same request (same key): a kept timeout would come back cached.
+    assert client.post("/v1/plans", json=timed_out).json()["cached"] is False
     again = client.post("/v1/plans", json={"model": model, "planner": "fd"}).json()
     assert again["status"] == "solved" and again["cached"] is False
     assert services_of(client).cache.stats()["entries"] >= 1

@@ -7,6 +7,7 @@ import signal
 import threading
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -24,9 +25,11 @@ from causalplan.service.planning import PlannerPool
 from tests.service_fixtures import (
     DESK_LAMP,
     error_of,
+    is_running,
     running_client,
     services_of,
     settings_for,
+    sqlite_url,
     wait_until,
     with_unique_effect,
 )
@@ -44,8 +47,9 @@ from tests.service_jobs import (
 @pytest.fixture(scope="module")
 def one_worker(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
     """An app with one planner worker and no queue: a second solve at once is refused."""
-    url = f"sqlite:///{tmp_path_factory.mktemp('db') / 'causalplan.sqlite3'}"
-    settings = settings_for(url, planning_workers=1, queue_size=0, solve_grace_seconds=1.0)
+    settings = settings_for(
+        sqlite_url(tmp_path_factory.mktemp("db")), planning_workers=1, queue_size=0, solve_grace_seconds=1.0
+    )
     with running_client(settings) as client:
         yield client
 
@@ -194,13 +198,22 @@ def test_canonical_keys_ignore_layout_but_not_meaning(catalog: Catalog) -> None:
     assert key != request_key("plan", base, None, "fd", 30.0, "another catalog")
 
 
+@contextmanager
+def bare_pool(size: int) -> Iterator[PlannerPool]:
+    """Start a bare pool of ``size`` workers and no waiting line; close it afterwards."""
+    pool = PlannerPool(size, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
+    pool.start()
+    try:
+        yield pool
+    finally:
+        pool.close()
+
+
 @pytest.fixture(scope="module")
 def two_workers() -> Iterator[PlannerPool]:
     """A bare pool of two workers and no waiting line."""
-    pool = PlannerPool(2, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
-    pool.start()
-    yield pool
-    pool.close()
+    with bare_pool(2) as pool:
+        yield pool
 
 
 def test_meanwhile_runs_while_the_worker_works(two_workers: PlannerPool) -> None:
@@ -224,10 +237,8 @@ def test_what_meanwhile_raises_comes_after_the_answer_and_the_worker_stays_in_st
     assert ended - began >= 0.2
 
 
-def test_a_refused_request_runs_nothing_meanwhile(tmp_path: Path) -> None:
-    pool = PlannerPool(1, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
-    pool.start()
-    try:
+def test_a_refused_request_runs_nothing_meanwhile() -> None:
+    with bare_pool(1) as pool:
         busy = threading.Thread(target=pool.run, args=(timed_sleep, (1.0,), 30))
         busy.start()
         wait_until(lambda: pool.stats().busy == 1)
@@ -236,8 +247,6 @@ def test_a_refused_request_runs_nothing_meanwhile(tmp_path: Path) -> None:
             pool.run(timed_sleep, (0.0,), 30, meanwhile=lambda: ran.append(True))
         busy.join()
         assert ran == []
-    finally:
-        pool.close()
 
 
 def test_the_worker_that_finished_last_takes_the_next_job(two_workers: PlannerPool) -> None:
@@ -247,9 +256,7 @@ def test_the_worker_that_finished_last_takes_the_next_job(two_workers: PlannerPo
 
 
 def test_a_killed_worker_leaves_no_temp_folders_behind() -> None:
-    pool = PlannerPool(1, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
-    pool.start()
-    try:
+    with bare_pool(1) as pool:
         first, searches = pool.run(temp_folders, (), 30)
         assert Path(first).name.startswith("causalplan-worker-") and Path(first).is_dir()
         assert searches and all(Path(search).parent == Path(first) for search in searches)
@@ -258,8 +265,6 @@ def test_a_killed_worker_leaves_no_temp_folders_behind() -> None:
         assert not Path(first).exists()
         second, _ = pool.run(temp_folders, (), 30)  # the replacement has a folder of its own
         assert second != first and Path(second).is_dir()
-    finally:
-        pool.close()
     assert not Path(second).exists()
 
 
@@ -270,8 +275,6 @@ def _temp_folder_of(pid: int) -> Path:
 
 
 def test_closing_a_pool_removes_its_workers_temp_folders() -> None:
-    pool = PlannerPool(2, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
-    pool.start()
     errors: list[BaseException] = []
 
     def run_stuck_job() -> None:
@@ -281,38 +284,23 @@ def test_closing_a_pool_removes_its_workers_temp_folders() -> None:
             errors.append(exc)
 
     busy = threading.Thread(target=run_stuck_job)
-    try:
+    with bare_pool(2) as pool:  # closing it stops the idle worker and kills the busy one
         folders = [_temp_folder_of(pid) for pid in pool.worker_pids()]
         assert len(folders) == 2 and all(folder.name.startswith("causalplan-worker-") for folder in folders)
         assert all(folder.is_dir() for folder in folders)
         busy.start()
         wait_until(lambda: pool.stats().busy == 1)
-    finally:
-        pool.close()  # stops the idle worker, kills the busy one
     busy.join()
     assert len(errors) == 1  # the stuck job did not answer: its worker was killed
     assert not any(folder.exists() for folder in folders)
 
 
 def test_a_killed_worker_takes_its_own_sessions_children_with_it(tmp_path: Path) -> None:
-    pool = PlannerPool(1, 0, settings_for("sqlite://").worker_memory_mb, queue_wait_seconds=5.0)
-    pool.start()
     pid_file = tmp_path / "child.pid"
-    try:
-        with pytest.raises(PlanningTimeoutError):
-            pool.run(start_a_session_then_hang, (str(pid_file),), 2.0)
-    finally:
-        pool.close()
+    with bare_pool(1) as pool, pytest.raises(PlanningTimeoutError):
+        pool.run(start_a_session_then_hang, (str(pid_file),), 2.0)
     child = int(pid_file.read_text())
-    wait_until(lambda: not is_alive(child))  # an orphan, reaped by init once it is killed
-
-
-def is_alive(pid: int) -> bool:
-    """Return whether ``pid`` runs (a zombie does not)."""
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().split(") ", 1)[1][0] != "Z"
-    except (OSError, IndexError):
-        return False
+    wait_until(lambda: not is_running(child))  # an orphan, reaped by init once it is killed
 
 
 def test_a_job_that_cannot_be_sent_fails_alone_and_the_pool_keeps_its_workers(two_workers: PlannerPool) -> None:

@@ -12,7 +12,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from tests.service_fixtures import DESK_LAMP, FLASHLIGHT_MAPPING, free_port
+from tests.service_fixtures import DESK_LAMP, FLASHLIGHT_MAPPING, free_port, is_running
 
 START_SECONDS = 60.0
 
@@ -28,14 +28,6 @@ def children_of(pid: int) -> set[int]:
         if int(fields[1]) == pid:
             children.add(int(stat.parent.name))
     return children
-
-
-def is_running(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return False
-    return state != "Z"
 
 
 def serve(tmp_path: Path, *options: str) -> tuple[subprocess.Popen[str], str]:

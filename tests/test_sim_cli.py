@@ -9,9 +9,8 @@ from typing import Any
 from click.testing import CliRunner, Result
 
 from causalplan.cli import app
+from tests.conftest import EXAMPLES
 
-ROOT = Path(__file__).resolve().parent.parent
-EXAMPLES = ROOT / "examples"
 DESK_LAMP = EXAMPLES / "paper" / "desk_lamp.yaml"
 FLASHLIGHT_MAPPING = EXAMPLES / "paper" / "flashlight_mapping.yaml"
 FAILED_DESK_LAMP = EXAMPLES / "paper" / "failed_desk_lamp.yaml"

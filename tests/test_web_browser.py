@@ -16,7 +16,8 @@ import httpx
 import pytest
 from playwright.sync_api import Browser, Page, Playwright, ViewportSize, expect, sync_playwright
 
-from tests.service_fixtures import AUTH, RESEARCH_TOKEN
+from tests.service_fixtures import RESEARCH_TOKEN
+from tests.web_flows import LAMP_RULES, TUTORIAL_ANSWERS, TUTORIAL_RULES, experiment, links
 
 ROOT = Path(__file__).resolve().parent.parent
 SCREENSHOTS = ROOT / "out" / "screenshots"
@@ -30,13 +31,6 @@ CHROMIUM_ARGS = [
     "--no-first-run",
 ]
 LAPTOP: ViewportSize = {"width": 1366, "height": 900}
-TUTORIAL_RULES = (
-    "store energy AND turn the axle CAUSES the axle spins\nthe axle spins AND roll on the ground CAUSES motion"
-)
-RULES = (
-    "provide electricity AND close the circuit CAUSES electricity flows\n"
-    "electricity flows AND turn electricity into light CAUSES light"
-)
 
 
 @pytest.fixture(scope="module")
@@ -74,21 +68,11 @@ def shoot(page: Page, name: str) -> None:
     page.evaluate("document.activeElement && document.activeElement.blur()")
 
 
-def new_link(base: str, tutorial: bool = True, name: str = "desk lamp to flashlight") -> str:
+def new_link(base: str, tutorial: bool = True) -> str:
     """Define a one-condition experiment (desk lamp, then flashlight) through the API; return a participant link."""
-    with httpx.Client(base_url=base, headers=AUTH, timeout=30) as client:
-        experiment = client.post(
-            "/v1/experiments",
-            json={
-                "name": name,
-                "tutorial": tutorial,
-                "conditions": [{"name": "near", "training": ["desk_lamp"], "tests": ["flashlight"]}],
-            },
-        )
-        assert experiment.status_code == 201, experiment.text
-        links = client.post(f"/v1/experiments/{experiment.json()['id']}/participants", json={"count": 1})
-        assert links.status_code == 201, links.text
-        url: str = links.json()["data"][0]["url"]
+    with httpx.Client(base_url=base, timeout=30) as client:
+        (participant,) = links(client, experiment(client, tutorial=tutorial)["id"])
+        url: str = participant["url"]
         return url
 
 
@@ -126,7 +110,7 @@ def test_a_participant_does_the_tutorial_and_the_three_steps_and_sees_the_verdic
 
     expect(page).to_have_url(re.compile(r"/step2$"))
     rules = page.get_by_label("Your rules, one per line")
-    rules.fill(RULES)
+    rules.fill(LAMP_RULES)
     expect(page.locator("#problems")).to_have_class(re.compile(r"\bok\b"))
     expect(page.get_by_role("button", name="Submit my model")).to_be_enabled()
     page.get_by_role("button", name="Show the robot's plan").click()
@@ -229,8 +213,7 @@ def complete_by_http(link: str) -> None:
         base = link.rsplit("/p/", 1)[0]
         code = link.rsplit("/", 1)[1]
         if page.url.path.endswith("/tutorial"):
-            answers = {"answer:sticker": "no", "answer:diffuse": "no", "answer:and": "and"}
-            client.post(f"{base}/p/{code}/tutorial", data={**answers, "rules": TUTORIAL_RULES})
+            client.post(f"{base}/p/{code}/tutorial", data={**TUTORIAL_ANSWERS, "rules": TUTORIAL_RULES})
         client.post(
             f"{base}/p/{code}/step1/1",
             data={"part:base_with_cables": "provide electricity", "part:light_bulb": "turn electricity into light"},

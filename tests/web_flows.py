@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import httpx
 from fastapi.testclient import TestClient
 
 from tests.service_fixtures import AUTH
@@ -26,8 +27,11 @@ FLASHLIGHT_CHOICES: dict[str, Any] = {
 }
 
 
-def experiment(client: TestClient, tutorial: bool = False, **fields: Any) -> dict[str, Any]:
-    """Define an experiment through the API (desk lamp, then flashlight, unless ``fields`` say otherwise)."""
+def experiment(client: httpx.Client, tutorial: bool = False, **fields: Any) -> dict[str, Any]:
+    """Define an experiment through the API (desk lamp, then flashlight, unless ``fields`` say otherwise).
+
+    ``client``: the tests' ``TestClient``, or an ``httpx.Client`` of a live server.
+    """
     body = {
         "name": "desk lamp to flashlight",
         "tutorial": tutorial,
@@ -40,7 +44,9 @@ def experiment(client: TestClient, tutorial: bool = False, **fields: Any) -> dic
     return created
 
 
-def links(client: TestClient, experiment_id: str, count: int = 1, condition: str | None = None) -> list[dict[str, Any]]:
+def links(
+    client: httpx.Client, experiment_id: str, count: int = 1, condition: str | None = None
+) -> list[dict[str, Any]]:
     """Make participant links through the API; return the participants."""
     response = client.post(
         f"/v1/experiments/{experiment_id}/participants", json={"count": count, "condition": condition}, headers=AUTH

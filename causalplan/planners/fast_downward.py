@@ -376,6 +376,19 @@ def _tail(output: str, lines: int = 8) -> str:
     return "\n".join(output.strip().splitlines()[-lines:])
 
 
+def _failure(stage: str, run: _Run, time_limit: float, timing: dict[str, float]) -> SearchOutcome:
+    """Return the outcome of a ``stage`` ("translator" or "search") stopped at the deadline or ended without a plan."""
+    if run.returncode is None:
+        return SearchOutcome(
+            PlanStatus.TIMEOUT, timing=timing, message=f"The {stage} did not finish within {time_limit:g} s."
+        )
+    status = status_of_exit_code(run.returncode)
+    message = (
+        f"{stage.capitalize()} exit code {run.returncode}: {_tail(run.output)}" if status is PlanStatus.ERROR else ""
+    )
+    return SearchOutcome(status, timing=timing, message=message)
+
+
 SOLVE_CACHE_SIZE = int(os.environ.get("CAUSALPLAN_SOLVE_CACHE_SIZE", "512"))
 """Answers kept in memory (``CAUSALPLAN_SOLVE_CACHE_SIZE``; 0 turns the cache off)."""
 _solved: OrderedDict[tuple[str, str, str], SearchOutcome] = OrderedDict()
@@ -398,19 +411,8 @@ def _solve_uncached(
     timing: dict[str, float] = {}
     translate = _translate(domain, problem, deadline, memory_limit_mb)
     timing["translate"] = translate.seconds
-    if translate.returncode is None:
-        return SearchOutcome(
-            PlanStatus.TIMEOUT, timing=timing, message=f"The translator did not finish within {time_limit:g} s."
-        )
     if translate.returncode != 0:
-        status = status_of_exit_code(translate.returncode)
-        return SearchOutcome(
-            status,
-            timing=timing,
-            message=f"Translator exit code {translate.returncode}: {_tail(translate.output)}"
-            if status is PlanStatus.ERROR
-            else "",
-        )
+        return _failure("translator", translate, time_limit, timing)
     if translate.product is None:
         return SearchOutcome(
             PlanStatus.ERROR, timing=timing, message="The translator reported success but wrote no task."
@@ -422,14 +424,8 @@ def _solve_uncached(
         # The search gave up without proof (its heuristics may prune); a blind A* proves it.
         search = _search(_search_command(binary, COMPLETE), sas, deadline, memory_limit_mb)
         timing["confirm"] = search.seconds
-    if search.returncode is None:
-        return SearchOutcome(
-            PlanStatus.TIMEOUT, timing=timing, message=f"The search did not finish within {time_limit:g} s."
-        )
-    status = status_of_exit_code(search.returncode)
-    if status is not PlanStatus.SOLVED:
-        message = f"Search exit code {search.returncode}: {_tail(search.output)}" if status is PlanStatus.ERROR else ""
-        return SearchOutcome(status, timing=timing, message=message)
+    if search.returncode is None or status_of_exit_code(search.returncode) is not PlanStatus.SOLVED:
+        return _failure("search", search, time_limit, timing)
     if search.product is None:
         return SearchOutcome(PlanStatus.ERROR, timing=timing, message="FD reported success but wrote no plan.")
     return SearchOutcome(PlanStatus.SOLVED, parse_plan(search.product), timing)

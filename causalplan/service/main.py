@@ -158,8 +158,7 @@ class BodyLimitMiddleware:
         error = BodyTooLargeError(
             f"The request body is over the limit of {self.max_bytes} bytes.", details={"limit": self.max_bytes}
         )
-        response = SafeJSONResponse(error_body(error.code, error.message, error.details), status_code=413)
-        await response(scope, receive, send)
+        await _error_response(error.code, error.message, error.status_code, error.details)(scope, receive, send)
 
 
 def _error_response(

@@ -13,12 +13,10 @@ from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
-from sqlalchemy.orm import Session
-
 from causalplan.causal.diagnostics import Diagnostic, Report
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import CausalModel, Labelling
-from causalplan.inputs import mapping_from_data, model_from_data
+from causalplan.inputs import LoadedModel, mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import build_task
 from causalplan.pddl.writer import compile_task
@@ -35,7 +33,7 @@ from causalplan.service.cache import (
 )
 from causalplan.service.crud import ClientIds, get_model, new_model_record, save
 from causalplan.service.db.models import ModelRecord
-from causalplan.service.deps import Services
+from causalplan.service.deps import Services, open_session
 from causalplan.service.errors import InvalidMappingError, InvalidModelError, LimitExceededError
 from causalplan.service.limits import check_labelling_limits, check_model_limits, clean_json
 from causalplan.service.schemas import PlanIn
@@ -84,18 +82,12 @@ def resolve_time_limit(requested: float | None, settings: Settings) -> float:
 
 
 @dataclass(frozen=True)
-class ModelRead:
+class ModelRead(LoadedModel):
     """What reading and validating a model document gave: the same for every request that sends it."""
 
-    model: CausalModel | None
-    report: Report
     report_data: dict[str, Any]
     canonical: str | None
     """The canonical text of a valid model (its hash is stored; answers are keyed by it)."""
-
-    @property
-    def is_valid(self) -> bool:
-        return self.model is not None and self.report.is_valid
 
 
 @dataclass(frozen=True)
@@ -208,13 +200,18 @@ def read_mapping(document: dict[str, Any], services: Services) -> tuple[MappingR
 
 
 def model_for_request(
-    document: dict[str, Any] | None, model_id: uuid.UUID | None, services: Services, session: Session, client: ClientIds
+    document: dict[str, Any] | None, model_id: uuid.UUID | None, services: Services, client: ClientIds
 ) -> ModelSubmission:
-    """Return the request's model: the inline one, or the stored one ``model_id`` names."""
+    """Return the request's model: the inline one, or the stored one ``model_id`` names.
+
+    A session is opened only to read a stored model (~0.04 ms that an inline model does not need).
+    """
     if document is not None:
         return read_model(document, services, client)
     assert model_id is not None  # the request schema allows exactly one of the two
-    return stored_model(get_model(session, model_id), services)
+    with open_session(services) as session:
+        record = get_model(session, model_id)
+    return stored_model(record, services)
 
 
 def storing(services: Services, submission: ModelSubmission) -> Callable[[], None] | None:
@@ -396,14 +393,14 @@ class PlanInputs:
         return [*self.submission.report.warnings, *(self.mapping_report.warnings if self.mapping_report else [])]
 
 
-def plan_inputs(body: PlanIn, services: Services, session: Session, client: ClientIds) -> PlanInputs:
+def plan_inputs(body: PlanIn, services: Services, client: ClientIds) -> PlanInputs:
     """Read a plan-like request: its model, mapping, planner and time limit.
 
     An invalid model or mapping raises the 422 error (an inline model is stored first).
     """
     planner = resolve_planner(body.planner)
     time_limit = resolve_time_limit(body.time_limit, services.settings)
-    submission = model_for_request(body.model, body.model_id, services, session, client)
+    submission = model_for_request(body.model, body.model_id, services, client)
     mapping_read = read_mapping(body.mapping, services)[0] if body.mapping is not None else None
     mapping_report = mapping_read.report if mapping_read is not None else None
     problem = invalid_input_error(submission, mapping_report)

@@ -20,7 +20,7 @@ from causalplan.pddl.task import PlanningTask
 from causalplan.planners.result import PlanStep
 from causalplan.sim import checks
 from causalplan.sim.arm import Arm, reach_step
-from causalplan.sim.geometry import Box, Solid, bounding_box, bounds, corners, mating_pose, solids
+from causalplan.sim.geometry import Box, Solid, bounding_box, corners, mating_pose, solids
 from causalplan.sim.mechanism import Joint, evaluate, seat_error
 from causalplan.sim.motions import MOTIONS, approach, approach_path, approach_start
 from causalplan.sim.plan_steps import StepRequest, check_steps
@@ -236,9 +236,7 @@ def _layout(
         design[request.moving] = design[request.fixed] * relative
         joints.append(Joint(0, None, request.moving, pair[0].id, request.fixed, pair[1].id))
     lower, upper = bounding_box(
-        pose.apply(corner)
-        for part, pose in design.items()
-        for corner in corners(bounds(parts[part].shapes + parts[part].light))
+        pose.apply(corner) for part, pose in design.items() for corner in corners(parts[part].drawn_bounds)
     )
     waiting = [part for part in parts if part != obj.base]
     widths = [parts[part].upper[0] - parts[part].lower[0] for part in waiting]

@@ -61,6 +61,11 @@ class Solid:
     center: Vector
     has_own_geometry: bool
 
+    @functools.cached_property
+    def drawn_bounds(self) -> Box:
+        """Return the bounds of the part's shapes and its light (worked out once per solid)."""
+        return bounds(self.shapes + self.light)
+
     @property
     def radius(self) -> float:
         """Return the radius of a sphere around ``center`` that holds the whole part."""

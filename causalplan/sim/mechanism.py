@@ -49,9 +49,8 @@ def seat_error(scene: Scene, joint: Joint) -> tuple[float, float]:
     return offset * 1000, math.degrees(tilt)
 
 
-def is_seated(scene: Scene, joint: Joint) -> bool:
-    """Return whether a joint's connectors still meet within the alignment tolerances."""
-    offset_mm, tilt_deg = seat_error(scene, joint)
+def is_seated(offset_mm: float, tilt_deg: float) -> bool:
+    """Return whether a joint's seat error (``seat_error``) is within the alignment tolerances."""
     return offset_mm <= ALIGNMENT_TOLERANCE_MM and tilt_deg <= ALIGNMENT_TOLERANCE_DEG
 
 
@@ -68,8 +67,10 @@ def joined_to_base(base: str, holding: list[Joint]) -> set[str]:
     return joined
 
 
-def _judge(obj: AssemblyObject, scene: Scene, fit: Fit, joints: list[Joint], joined: set[str]) -> tuple[bool, str]:
-    """Return whether ``fit`` holds in the simulated assembly, and what was seen."""
+def _judge(
+    obj: AssemblyObject, fit: Fit, joints: list[Joint], errors: dict[Joint, tuple[float, float]], joined: set[str]
+) -> tuple[bool, str]:
+    """Return whether ``fit`` holds in the simulated assembly, and what was seen (``errors``: joints' seat errors)."""
     made = [joint for joint in joints if joint.matches(fit)]
     moving, fixed = obj.part(fit.moving_part).name, obj.part(fit.fixed_part).name
     base = obj.part(obj.base).name
@@ -80,9 +81,9 @@ def _judge(obj: AssemblyObject, scene: Scene, fit: Fit, joints: list[Joint], joi
         if fit.fixed_part in joined:
             return True, f"the {fixed} lit at step {joint.step}, and joined to the {base}"
         return False, f"the {fixed} lit at step {joint.step}, but not joined to the {base}"
-    offset_mm, tilt_deg = seat_error(scene, joint)
+    offset_mm, tilt_deg = errors[joint]
     where = f"{offset_mm:.1f} mm and {tilt_deg:.1f}° from the seat"
-    if offset_mm > ALIGNMENT_TOLERANCE_MM or tilt_deg > ALIGNMENT_TOLERANCE_DEG:
+    if not is_seated(offset_mm, tilt_deg):
         return False, f"the {moving} off the {fixed}: {where}"
     if fit.moving_part not in joined:
         return False, f"the {moving} on the {fixed} ({where}), but not joined to the {base}"
@@ -91,13 +92,13 @@ def _judge(obj: AssemblyObject, scene: Scene, fit: Fit, joints: list[Joint], joi
 
 def evaluate(obj: AssemblyObject, scene: Scene, joints: list[Joint]) -> tuple[RequirementCheck, ...]:
     """Return each requirement of the true mechanism, judged on the simulated assembly now."""
-    holding = [joint for joint in joints if not joint.touch_only and is_seated(scene, joint)]
-    joined = joined_to_base(obj.base, holding)
+    errors = {joint: seat_error(scene, joint) for joint in joints if not joint.touch_only}
+    joined = joined_to_base(obj.base, [joint for joint, error in errors.items() if is_seated(*error)])
     checks = []
     for requirement in obj.mechanism:
         seen = []
         for fit_id in requirement.any_of:
-            met, detail = _judge(obj, scene, obj.fit(fit_id), joints, joined)
+            met, detail = _judge(obj, obj.fit(fit_id), joints, errors, joined)
             if met:
                 checks.append(RequirementCheck(requirement.says, True, fit_id, detail))
                 break

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import tempfile
 import uuid
-from collections import OrderedDict
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -15,6 +14,7 @@ from causalplan.causal.model import CausalModel
 from causalplan.causal.render import DRAW_LOCK
 from causalplan.inputs import model_from_data
 from causalplan.service import crud
+from causalplan.service.cache import LruCache
 from causalplan.service.db.models import ModelRecord
 from causalplan.service.deps import CatalogDep, ClientIdsDep, ServicesDep, SessionDep
 from causalplan.service.errors import InvalidModelError
@@ -24,8 +24,8 @@ from causalplan.service.submissions import first_errors, read_model
 
 router = APIRouter(prefix="/v1/models", tags=["models"], responses=error_responses(404, 503))
 
-_svg_cache: OrderedDict[uuid.UUID, bytes] = OrderedDict()  # stored models never change
 SVG_CACHE_SIZE = 128
+_svg_cache: LruCache[bytes] = LruCache(SVG_CACHE_SIZE)  # by model id: stored models never change
 
 SVG_SECURITY_HEADERS = {"Content-Security-Policy": "default-src 'none'; style-src 'unsafe-inline'"}
 
@@ -99,18 +99,16 @@ def _svg(model_id: uuid.UUID, model: CausalModel) -> bytes:
     from causalplan.causal.render import draw
 
     with DRAW_LOCK:
-        if model_id in _svg_cache:
-            _svg_cache.move_to_end(model_id)
-            return _svg_cache[model_id]
+        cached = _svg_cache.get(str(model_id))
+        if cached is not None:
+            return cached
         with tempfile.TemporaryDirectory(prefix="causalplan-graph-") as folder:
             path = Path(folder) / "graph.svg"
             # Keep labels as text: searchable, selectable, readable by screen readers, and smaller.
             with matplotlib.rc_context({"svg.fonttype": "none"}):
                 draw(model, path)
             svg = path.read_bytes()
-        _svg_cache[model_id] = svg
-        while len(_svg_cache) > SVG_CACHE_SIZE:
-            _svg_cache.popitem(last=False)
+        _svg_cache.put(str(model_id), svg, len(svg))
         return svg
 
 

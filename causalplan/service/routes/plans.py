@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from causalplan.service import submissions
-from causalplan.service.deps import ClientIdsDep, ServicesDep, open_session
+from causalplan.service.deps import ClientIdsDep, ServicesDep
 from causalplan.service.responses import SafeJSONResponse
 from causalplan.service.schemas import PlanIn, PlanOut, error_responses
 
@@ -21,11 +21,10 @@ def create_plan(body: PlanIn, services: ServicesDep, client: ClientIdsDep) -> Sa
     model or mapping is answered with 422 and the CLI's codes.
     """
     # One hop to a worker thread per request (~0.2 ms each, on a path that answers a repeat in
-    # ~1 ms): the dependencies are `async def`, the session is opened here rather than by
-    # SessionDep (its start and its end would each hop), and the response is checked here and
-    # sent as it is (FastAPI would hop again to check a returned model).
-    with open_session(services) as session:
-        inputs = submissions.plan_inputs(body, services, session, client)
+    # ~1 ms): the dependencies are `async def`, no SessionDep (its start and its end would each
+    # hop; a stored model's session is opened where it is read), and the response is checked
+    # here and sent as it is (FastAPI would hop again to check a returned model).
+    inputs = submissions.plan_inputs(body, services, client)
     key = inputs.key("plan")
     # An inline model's record is stored while the worker solves (the two take ~0.3 ms and
     # ~8 ms), or at once for a kept answer; a request refused before a worker took it stores nothing.

@@ -8,7 +8,7 @@ from fastapi import APIRouter
 from pydantic import Field
 
 from causalplan.service import submissions
-from causalplan.service.deps import ClientIdsDep, ServicesDep, SessionDep
+from causalplan.service.deps import ClientIdsDep, ServicesDep
 from causalplan.service.schemas import PlanIn, error_responses
 
 router = APIRouter(prefix="/v1/simulations", tags=["simulations"], responses=error_responses(404, 429, 503, 504))
@@ -21,16 +21,14 @@ class SimulationIn(PlanIn):
 
 
 @router.post("", summary="Plan a model and simulate the plan")
-def create_simulation(
-    body: SimulationIn, services: ServicesDep, session: SessionDep, client: ClientIdsDep
-) -> dict[str, Any]:
+def create_simulation(body: SimulationIn, services: ServicesDep, client: ClientIdsDep) -> dict[str, Any]:
     """Plan as POST /v1/plans does, then run the plan in headless PyBullet and check every step.
 
     Returns `planning` (the plan request's JSON), `simulation` (per-step checks with measured
     figures, stability, the true mechanism on the simulated assembly, `produces_goal`) and
     `image` (a PNG data URL of the final assembly, when `picture` is true), plus `cached`.
     """
-    inputs = submissions.plan_inputs(body, services, session, client)
+    inputs = submissions.plan_inputs(body, services, client)
     key = inputs.key(f"simulate:{body.picture}")
     store = submissions.storing(services, inputs.submission)
     answer = submissions.simulate(

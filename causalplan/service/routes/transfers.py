@@ -6,7 +6,7 @@ from fastapi import APIRouter
 
 from causalplan.service import crud, submissions
 from causalplan.service.cache import answer_key
-from causalplan.service.deps import ClientIdsDep, ServicesDep, SessionDep
+from causalplan.service.deps import ClientIdsDep, ServicesDep
 from causalplan.service.schemas import TransferIn, TransferOut, error_responses
 from causalplan.transfer.verdict import invalid_verdict
 
@@ -14,7 +14,7 @@ router = APIRouter(prefix="/v1/transfers", tags=["transfers"], responses=error_r
 
 
 @router.post("", response_model=TransferOut, summary="Test whether a model transfers")
-def create_transfer(body: TransferIn, services: ServicesDep, session: SessionDep, client: ClientIdsDep) -> TransferOut:
+def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDep) -> TransferOut:
     """Plan the model on the mapping's object and say whether it transfers, and why or why not.
 
     The same JSON as `causalplan transfer --json`, plus `cached`, `trial_id` and `model_id`.
@@ -23,7 +23,7 @@ def create_transfer(body: TransferIn, services: ServicesDep, session: SessionDep
     """
     planner = submissions.resolve_planner(body.planner)
     time_limit = submissions.resolve_time_limit(body.time_limit, services.settings)
-    submission = submissions.model_for_request(body.model, body.model_id, services, session, client)
+    submission = submissions.model_for_request(body.model, body.model_id, services, client)
     mapping_read, mapping_document = submissions.read_mapping(body.mapping, services)
     new_records = [submission.record] if submission.is_new else []
     problem = submissions.invalid_input_error(submission, mapping_read.report)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-from collections.abc import Hashable, Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from causalplan.causal.model import CausalModel
@@ -36,11 +36,17 @@ def document_key(document: dict[str, Any]) -> str:
     return hashlib.sha256(text.encode("utf-8", "replace")).hexdigest()[:16]
 
 
-def graph_svg(model: CausalModel, key: str) -> bytes:
-    """Return the model's causal graph as the pages' SVG, drawn once per ``key``."""
-    svg = _graphs.get(key, lambda: {key: diagram_svg(model)})
-    assert svg is not None
-    return svg
+def graph_svg(key: str, read: Callable[[], CausalModel | None]) -> bytes | None:
+    """Return the causal graph of the model ``read`` gives as the pages' SVG (None when it gives none).
+
+    Drawn once per ``key`` (see ``document_key``): a graph kept already needs no reading.
+    """
+
+    def draw() -> dict[str, bytes]:
+        model = read()
+        return {key: diagram_svg(model)} if model is not None else {}
+
+    return _graphs.get(key, draw)
 
 
 def rates_chart(rates: Sequence[Rate]) -> bytes:
@@ -49,16 +55,21 @@ def rates_chart(rates: Sequence[Rate]) -> bytes:
         return chart_svg(rates)
 
 
+def _picture_key(services: Services, *names: str) -> str:
+    # The catalog's fingerprint first: a picture is of the catalog the server has now.
+    return json.dumps([services.catalog_key, *names])
+
+
 def part_picture(services: Services, obj: AssemblyObject, part_id: str) -> tuple[bytes, str]:
     """Return the simulator's picture of one part (PNG), or a plain drawing (SVG) when it cannot draw now."""
     folders = tuple(services.settings.catalog_folders)
 
-    def draw() -> dict[Hashable, bytes]:
+    def draw() -> dict[str, bytes]:
         drawn = services.pool.run(pictures.part_pictures_job, (obj.id, folders), PICTURE_SECONDS)
-        return {(folders, obj.id, part): png for part, png in drawn.items()}
+        return {_picture_key(services, obj.id, part): png for part, png in drawn.items()}
 
     try:
-        png = _part_pictures.get((folders, obj.id, part_id), draw)
+        png = _part_pictures.get(_picture_key(services, obj.id, part_id), draw)
     except CausalPlanError as exc:  # busy, crashed, or no simulator: a drawing now, the picture next time
         logger.info("no picture of %s.%s: %s", obj.id, part_id, exc.message)
         png = None
@@ -70,9 +81,9 @@ def part_picture(services: Services, obj: AssemblyObject, part_id: str) -> tuple
 def plan_picture(services: Services, obj: AssemblyObject, fit_ids: tuple[str, ...]) -> bytes:
     """Return the simulator's picture of the object after the plan that makes ``fit_ids`` (PNG)."""
     folders = tuple(services.settings.catalog_folders)
-    key = (folders, obj.id, fit_ids)
+    key = _picture_key(services, obj.id, *fit_ids)
 
-    def draw() -> dict[Hashable, bytes]:
+    def draw() -> dict[str, bytes]:
         return {key: services.pool.run(pictures.assembly_picture_job, (obj.id, fit_ids, folders), PICTURE_SECONDS)}
 
     png = _plan_pictures.get(key, draw)

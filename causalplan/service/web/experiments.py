@@ -32,23 +32,13 @@ from causalplan.service.web.schemas import ExperimentIn, ExperimentOut, Particip
 
 def create(session: Session, catalog: Catalog, body: ExperimentIn) -> ExperimentRecord:
     """Check a definition against the catalog and store the experiment (InvalidExperimentError lists problems)."""
-    name, design = read_design(
-        body.name,
-        [condition.model_dump() for condition in body.conditions],
-        {
-            "counterbalance_training": body.counterbalance_training,
-            "counterbalance_tests": body.counterbalance_tests,
-            "show_verdict": body.show_verdict,
-            "tutorial": body.tutorial,
-        },
-        catalog,
-    )
+    options = body.model_dump(include={"counterbalance_training", "counterbalance_tests", "show_verdict", "tutorial"})
+    name, design = read_design(body.name, [condition.model_dump() for condition in body.conditions], options, catalog)
     return store.create_experiment(session, name, body.description.strip(), design)
 
 
 def experiment_out(record: ExperimentRecord, participants: int) -> ExperimentOut:
     """Return the API view of an experiment."""
-    design = Design.from_dict(record.design)
     api = f"/v1/experiments/{record.id}"
     return ExperimentOut.model_validate(
         {
@@ -56,11 +46,7 @@ def experiment_out(record: ExperimentRecord, participants: int) -> ExperimentOut
             "created_at": record.created_at,
             "name": record.name,
             "description": record.description,
-            "conditions": [condition.as_dict() for condition in design.conditions],
-            "counterbalance_training": design.counterbalance_training,
-            "counterbalance_tests": design.counterbalance_tests,
-            "show_verdict": design.show_verdict,
-            "tutorial": design.tutorial,
+            **Design.from_dict(record.design).as_dict(),  # the conditions and the options
             "is_demo": record.is_demo,
             "participants": participants,
             "links": {

@@ -56,9 +56,6 @@ class Form:
         """Return whether a checkbox was ticked."""
         return bool(self.fields.get(name))
 
-    def names(self) -> list[str]:
-        return list(self.fields)
-
 
 async def read_form(request: Request) -> Form:
     """Return the request's form; InvalidFormError for another content type or text that is not UTF-8."""

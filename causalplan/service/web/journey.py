@@ -94,19 +94,27 @@ class Journey:
 
     # -- their work ---------------------------------------------------------------------------------
 
+    def _saved(self) -> dict[str, Any]:
+        """Return the saved work to read (never changed in place: see ``_work``)."""
+        return self.participant.work or {}
+
     def _work(self) -> dict[str, Any]:
-        return copy.deepcopy(self.participant.work or {})
+        """Return a copy of the saved work to change and ``_save``."""
+        return copy.deepcopy(self._saved())
 
     def _save(self, work: dict[str, Any]) -> None:
         # A new dict, so SQLAlchemy sees the JSON column change.
-        now = utc_now()
         self.participant.work = work
+        self._touch()
+
+    def _touch(self) -> None:
+        now = utc_now()
         self.participant.updated_at = now
         if self.participant.started_at is None:
             self.participant.started_at = now
 
     def tutorial_work(self) -> dict[str, Any]:
-        tutorial: dict[str, Any] = self._work().get("tutorial", {})
+        tutorial: dict[str, Any] = self._saved().get("tutorial", {})
         return tutorial
 
     def save_tutorial(self, rules: str | None = None, answers: dict[str, str] | None = None) -> None:
@@ -120,7 +128,7 @@ class Journey:
 
     def function_texts(self, object_id: str) -> dict[str, str]:
         """Return the step-1 boxes of a training object as typed (part id -> text)."""
-        texts: dict[str, str] = self._work().get("functions", {}).get(object_id, {})
+        texts: dict[str, str] = self._saved().get("functions", {}).get(object_id, {})
         return texts
 
     def save_functions(self, object_id: str, texts: dict[str, str]) -> None:
@@ -129,7 +137,7 @@ class Journey:
         self._save(work)
 
     def rules_text(self) -> str:
-        return str(self._work().get("rules", ""))
+        return str(self._saved().get("rules", ""))
 
     def save_rules(self, text: str) -> None:
         work = self._work()
@@ -140,9 +148,9 @@ class Journey:
         """Return the model as it stands in the step-1 and step-2 boxes."""
         functions = {
             obj.id: {
-                part: labels_from_text(text)
+                part: labels
                 for part, text in self.function_texts(obj.id).items()
-                if part in obj.part_ids and labels_from_text(text)
+                if part in obj.part_ids and (labels := labels_from_text(text))
             }
             for obj in self.training
         }
@@ -151,12 +159,12 @@ class Journey:
 
     def submitted_model(self) -> ParticipantModel | None:
         """Return the model submitted in step 2 (None before)."""
-        data = self._work().get("model")
+        data = self._saved().get("model")
         return ParticipantModel.from_dict(data) if data else None
 
     def mapping_entries(self, object_id: str) -> dict[str, dict[str, Any]]:
         """Return the step-3 choices for a test object as saved (part id -> chosen labels and new lines)."""
-        entries: dict[str, dict[str, Any]] = self._work().get("mappings", {}).get(object_id, {})
+        entries: dict[str, dict[str, Any]] = self._saved().get("mappings", {}).get(object_id, {})
         return entries
 
     def save_mapping(self, object_id: str, entries: dict[str, dict[str, Any]]) -> None:
@@ -209,4 +217,4 @@ class Journey:
     def _move(self, stage: Stage, position: int) -> None:
         self.participant.stage = stage.value
         self.participant.position = position
-        self._save(self._work())
+        self._touch()

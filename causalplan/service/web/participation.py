@@ -18,7 +18,6 @@ from causalplan.service.crud import ClientIds
 from causalplan.service.db.models import ParticipantTrialRecord, utc_now
 from causalplan.service.deps import Services
 from causalplan.service.errors import InvalidModelError
-from causalplan.service.web import store
 from causalplan.service.web.errors import StepLockedError
 from causalplan.service.web.journey import Journey
 from causalplan.service.web.study import MappingCheck, ParticipantModel, Stage, model_on
@@ -89,15 +88,17 @@ def submit_model(session: Session, journey: Journey, participant_model: Particip
 
 
 def run_trial(services: Services, session: Session, journey: Journey, index: int, mapping: MappingCheck) -> None:
-    """Try the participant's model on test object ``index`` through their mapping; store the trial."""
+    """Try the participant's model on test object ``index`` through their mapping; store the trial.
+
+    The caller has checked that the participant has no trial on this object yet (a second one
+    would break the link table's unique constraint).
+    """
     journey.require_open(Stage.STEP3, index)
     participant_model = journey.submitted_model()
     model_id = journey.participant.model_id
     if participant_model is None or model_id is None or mapping.mapping is None:
         raise StepLockedError("There is no submitted model or valid mapping to try.")
     test = journey.tests[index]
-    if store.trial_of(session, journey.participant, test.id) is not None:
-        raise StepLockedError(f"Your answer for the {test.name} is already recorded.")
     planner = submissions.default_planner()
     model = model_on(participant_model, journey.training[0].id)
     answer = submissions.transfer(services, model, mapping.mapping, planner, services.settings.default_time_limit)

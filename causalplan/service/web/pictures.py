@@ -9,11 +9,11 @@ same pictures are asked for again and again. When the simulator cannot draw (bus
 from __future__ import annotations
 
 import threading
-from collections import OrderedDict
-from collections.abc import Callable, Hashable
+from collections.abc import Callable
 from pathlib import Path
 from xml.sax.saxutils import escape
 
+from causalplan.service.cache import LruCache
 from causalplan.service.worker import worker_catalog
 
 PART_PICTURE_SIZE = (320, 240)
@@ -64,38 +64,33 @@ def drawing(name: str, width: int = PART_PICTURE_SIZE[0], height: int = PART_PIC
 
 
 class PictureCache:
-    """A bounded map of drawn pictures; one drawing per key at a time (others wait for it)."""
+    """A bounded map of drawn pictures (the service's ``LruCache``); one drawing per key at a time (others wait)."""
 
     def __init__(self, size: int) -> None:
-        self.size = size
-        self._pictures: OrderedDict[Hashable, bytes] = OrderedDict()
+        self._pictures: LruCache[bytes] = LruCache(size)
         self._lock = threading.Lock()
-        self._drawing: dict[Hashable, threading.Lock] = {}
+        self._drawing: dict[str, threading.Lock] = {}
 
-    def get(self, key: Hashable, draw: Callable[[], dict[Hashable, bytes]]) -> bytes | None:
+    def get(self, key: str, draw: Callable[[], dict[str, bytes]]) -> bytes | None:
         """Return the picture of ``key``; ``draw`` makes it (and maybe others) when it is not kept yet.
 
         Returns None when ``draw`` did not make ``key``. Errors of ``draw`` go to the caller,
         and nothing is kept, so the next request tries again.
         """
+        picture = self._pictures.get(key)
+        if picture is not None:
+            return picture
         with self._lock:
-            if key in self._pictures:
-                self._pictures.move_to_end(key)
-                return self._pictures[key]
             drawing_lock = self._drawing.setdefault(key, threading.Lock())
         with drawing_lock:
-            with self._lock:
-                if key in self._pictures:
-                    return self._pictures[key]
+            picture = self._pictures.get(key)
+            if picture is not None:  # drawn while this request waited
+                return picture
             try:
                 drawn = draw()
+                for new_key, new_picture in drawn.items():
+                    self._pictures.put(new_key, new_picture, len(new_picture))
             finally:
                 with self._lock:
                     self._drawing.pop(key, None)
-            with self._lock:
-                for new_key, picture in drawn.items():
-                    self._pictures[new_key] = picture
-                    self._pictures.move_to_end(new_key)
-                while len(self._pictures) > self.size:
-                    self._pictures.popitem(last=False)
-                return drawn.get(key)
+            return drawn.get(key)

@@ -15,7 +15,6 @@ from sqlalchemy.orm import Session
 from causalplan.service.crud import storage_errors
 from causalplan.service.db.models import (
     ExperimentRecord,
-    ModelRecord,
     ParticipantRecord,
     ParticipantTrialRecord,
     TrialRecord,
@@ -189,20 +188,18 @@ def participants_of(session: Session, experiment_id: uuid.UUID) -> list[Particip
 
 @dataclass(frozen=True)
 class StoredTrial:
-    """One step-3 trial of an experiment, with its participant and the stored trial and model."""
+    """One step-3 trial of an experiment, with its participant and the stored trial."""
 
     link: ParticipantTrialRecord
     participant: ParticipantRecord
     trial: TrialRecord
-    model: ModelRecord
 
 
-def _stored_trials() -> Select[ParticipantTrialRecord, ParticipantRecord, TrialRecord, ModelRecord]:
+def _stored_trials() -> Select[ParticipantTrialRecord, ParticipantRecord, TrialRecord]:
     return (
-        select(ParticipantTrialRecord, ParticipantRecord, TrialRecord, ModelRecord)
+        select(ParticipantTrialRecord, ParticipantRecord, TrialRecord)
         .join(ParticipantRecord, ParticipantTrialRecord.participant_id == ParticipantRecord.id)
         .join(TrialRecord, ParticipantTrialRecord.trial_id == TrialRecord.id)
-        .join(ModelRecord, TrialRecord.model_id == ModelRecord.id)
     )
 
 
@@ -215,6 +212,13 @@ def trials_of(session: Session, experiment_id: uuid.UUID) -> list[StoredTrial]:
     )
     with storage_errors(session):
         return [StoredTrial(*row) for row in session.execute(query).all()]
+
+
+def trials_by_test(session: Session, participant: ParticipantRecord) -> dict[str, StoredTrial]:
+    """Return the participant's trials by test object (one query for all of them)."""
+    query = _stored_trials().where(ParticipantTrialRecord.participant_id == participant.id)
+    with storage_errors(session):
+        return {row[0].test_object: StoredTrial(*row) for row in session.execute(query).all()}
 
 
 def trial_of(session: Session, participant: ParticipantRecord, test_object: str) -> StoredTrial | None:

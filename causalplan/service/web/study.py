@@ -11,7 +11,7 @@ Everything here takes and returns values; storing them is ``store``'s job.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
@@ -20,9 +20,9 @@ from causalplan.causal.diagnostics import Diagnostic, Report, error
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.graph import goal_holds
 from causalplan.causal.labels import display_label, normalize_label
-from causalplan.causal.model import CausalModel, Labelling, read_model
+from causalplan.causal.model import CausalModel, read_model
 from causalplan.causal.validation import ObjectSummary, validate_model
-from causalplan.inputs import LoadedModel, mapping_from_data, model_from_data
+from causalplan.inputs import LoadedMapping, LoadedModel, mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.errors import LimitExceededError
@@ -124,9 +124,10 @@ class ParticipantModel:
         return cls(str(data["goal"]), data["functions"], tuple(data["rules"]))
 
 
-def _limits_report(document: Mapping[str, Any], settings: Settings) -> Report | None:
+def _limits_report(check_limits: Callable[[], None]) -> Report | None:
+    """Return the report of a document over the service's limits (None when within them)."""
     try:
-        check_model_limits(document, settings)
+        check_limits()
     except LimitExceededError as exc:
         return Report((error(exc.code, exc.message),))
     return None
@@ -135,7 +136,7 @@ def _limits_report(document: Mapping[str, Any], settings: Settings) -> Report | 
 def check_model(participant_model: ParticipantModel, catalog: Catalog, settings: Settings) -> LoadedModel:
     """Validate a participant's model (the service's limits first); return it (to draw) with the report."""
     document = participant_model.merged_document()
-    over = _limits_report(document, settings)
+    over = _limits_report(lambda: check_model_limits(document, settings))
     if over is not None:
         return LoadedModel(None, over)
     if len(participant_model.object_ids) == 1:
@@ -196,16 +197,10 @@ def rule_lines(report: Report, lines: Sequence[int]) -> list[dict[str, object]]:
 
 
 @dataclass(frozen=True)
-class MappingCheck:
-    """A step-3 mapping document, the mapping read from it (None when unreadable), and its report."""
+class MappingCheck(LoadedMapping):
+    """A step-3 mapping read and validated (``LoadedMapping``), with the document it was read from."""
 
     document: dict[str, Any]
-    mapping: Labelling | None
-    report: Report
-
-    @property
-    def is_valid(self) -> bool:
-        return self.mapping is not None and self.report.is_valid
 
 
 def mapping_document(obj: AssemblyObject, entries: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
@@ -221,10 +216,9 @@ def mapping_document(obj: AssemblyObject, entries: Mapping[str, Mapping[str, Any
 
 def check_mapping(document: dict[str, Any], catalog: Catalog, settings: Settings) -> MappingCheck:
     """Validate a step-3 mapping (limits, the reader, and at least one function given)."""
-    try:
-        check_labelling_limits(document, settings, "mapping")
-    except LimitExceededError as exc:
-        return MappingCheck(document, None, Report((error(exc.code, exc.message),)))
+    over = _limits_report(lambda: check_labelling_limits(document, settings, "mapping"))
+    if over is not None:
+        return MappingCheck(None, over, document)
     loaded = mapping_from_data(document, SourceMap(), catalog)
     report = loaded.report
     if not document["functions"]:
@@ -239,7 +233,7 @@ def check_mapping(document: dict[str, Any], catalog: Catalog, settings: Settings
                 )
             )
         )
-    return MappingCheck(document, loaded.mapping, report)
+    return MappingCheck(loaded.mapping, report, document)
 
 
 def check_functions(obj: AssemblyObject, texts: Mapping[str, str], catalog: Catalog, settings: Settings) -> Report:

@@ -374,12 +374,12 @@ def next_test(journey: JourneyDep, number: Number, session: SessionDep) -> Respo
 def done(request: Request, journey: JourneyDep, session: SessionDep) -> Response:
     if not journey.may_open(Stage.DONE):
         return _here(journey)
-    results = [(obj, store.trial_of(session, journey.participant, obj.id)) for obj in journey.tests]
+    stored = store.trials_by_test(session, journey.participant)
     return render(
         request,
         "done.html",
         secret_url=True,
         **_common(journey),
-        results=[(obj, stored.trial.verdict if stored else None) for obj, stored in results],
+        results=[(obj, stored[obj.id].trial.verdict if obj.id in stored else None) for obj in journey.tests],
         show_verdict=journey.design.show_verdict,
     )

@@ -154,12 +154,12 @@ def graph(
         model = journey.submitted_model()
     else:
         model = journey.draft_model()
-    check = check_model(model, catalog, settings) if model is not None else None
-    if model is None or check is None or check.model is None:
-        svg = _nothing_to_draw()
-    else:
-        svg = graph_svg(check.model, document_key(model.merged_document()))
-    return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
+    svg = None
+    if model is not None:
+        svg = graph_svg(document_key(model.merged_document()), lambda: check_model(model, catalog, settings).model)
+    return Response(
+        svg or _nothing_to_draw(), media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"}
+    )
 
 
 @router.get("/pictures/{object_id}.png")
