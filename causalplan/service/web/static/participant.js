@@ -14,18 +14,10 @@
 
   function debounce(action, milliseconds) {
     let timer = null;
-    const wrapped = function () {
+    return function () {
       clearTimeout(timer);
       timer = setTimeout(action, milliseconds);
     };
-    wrapped.flush = function () {
-      if (timer !== null) {
-        clearTimeout(timer);
-        timer = null;
-        action();
-      }
-    };
-    return wrapped;
   }
 
   async function postJson(url, body) {
@@ -185,9 +177,10 @@
 
     async function check() {
       const number = ++sent;
+      const text = rules.value;
       say("Checking…");
       try {
-        const report = await postJson(rules.dataset.checkUrl, { rules: rules.value, practice: practice });
+        const report = await postJson(rules.dataset.checkUrl, { rules: text, practice: practice });
         if (number < shown) return; // an older answer arriving late
         shown = number;
         showProblems(problems, report);
@@ -202,7 +195,8 @@
             graph.hidden = true;
           }
         }
-        say(savedAt(report.saved_at));
+        // Typed on while this was checked: that text is saved by the next check, not this one.
+        say(rules.value === text ? savedAt(report.saved_at) : "Changes not saved yet…");
       } catch (error) {
         say("Not checked or saved: " + error.message, true);
       }
