@@ -540,9 +540,9 @@ def batch(
     """Judge many transfer trials (e.g. a study's participants) and write their verdicts and reasons.
 
     TRIALS is a JSON Lines file, one {"id", "model", "mapping"} per line (or a JSON/YAML list).
-    What can be decided without the planner is (invalid input, a function no part carries);
-    equal planning problems are solved once. The verdicts are those `causalplan transfer`
-    gives one trial at a time.
+    What can be decided without the planner is (a line that cannot be read, an invalid model
+    or mapping, a function no part carries); equal planning problems are solved once. The
+    verdicts are those `causalplan transfer` gives one trial at a time.
     """
     import csv
     import time

@@ -5,17 +5,20 @@ from __future__ import annotations
 import csv
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 from click.testing import CliRunner
 
 from causalplan.cli import app
 from causalplan.objects.catalog import Catalog
-from causalplan.pddl.task import build_task
+from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners.pipeline import plan_task
+from causalplan.planners.result import PlanResult
 from causalplan.planners.synthetic import synthetic_task
+from causalplan.transfer import verdict as verdict_module
 from causalplan.transfer.batch import evaluate_trial, read_trials, run_batch
-from causalplan.transfer.verdict import clear_caches
+from causalplan.transfer.verdict import Verdict, clear_caches
 from tests.conftest import EXAMPLES, example_mapping, example_model
 from tests.test_pipeline import PAPER_PLANS
 
@@ -31,18 +34,77 @@ def test_the_batch_gives_exactly_the_verdicts_of_one_trial_at_a_time(catalog: Ca
         assert result.verdict.as_dict()["verdict"] == plain.verdict.as_dict()["verdict"], trial.id
         assert result.verdict.as_dict()["reasons"] == plain.verdict.as_dict()["reasons"], trial.id
         assert result.verdict.as_dict()["plan"] == plain.verdict.as_dict()["plan"], trial.id
-    assert {result.verdict.decided_by for result in fast} == {"validation", "precheck", "planner"}
+    assert {result.verdict.decided_by for result in fast} == {"input", "validation", "precheck", "planner"}
 
 
-def test_unreadable_lines_become_invalid_trials_naming_their_line(tmp_path: Path, catalog: Catalog) -> None:
-    results = {result.trial_id: result for result in run_batch(list(read_trials(TRIALS)), catalog)}
-    broken = results["line-41"].verdict.as_dict()
-    assert broken["verdict"] == "invalid" and "line 41" in broken["reasons"][0]["message"]  # type: ignore[index]
-    assert results["entry-42"].verdict.as_dict()["verdict"] == "invalid"
+def test_unreadable_lines_become_invalid_trials_naming_their_line_and_problem(tmp_path: Path, catalog: Catalog) -> None:
+    trials = {trial.id: trial for trial in read_trials(TRIALS)}
+    broken, no_mapping = trials["line-41"], trials["no-mapping"]
+    assert (broken.line, broken.model, broken.mapping) == (41, None, None)
+    assert broken.problem == "Line 41 could not be read: it is not JSON (Expecting ',' delimiter, column 49)."
+    assert (no_mapping.line, no_mapping.problem) == (42, "Line 42 could not be read: it has no 'mapping'.")
+    assert trials["p0000"].problem is None
+    results = {result.trial_id: result for result in run_batch(list(trials.values()), catalog)}
+    for trial_id, problem in (("line-41", broken.problem), ("no-mapping", no_mapping.problem)):
+        verdict = results[trial_id].verdict
+        assert (verdict.verdict, verdict.decided_by) == (Verdict.INVALID, "input")
+        assert [(reason.code, reason.message) for reason in verdict.reasons] == [("unreadable_trial", problem)]
+    assert results["line-41"].verdict.as_dict()["diagnostics"] == {
+        "input": {
+            "valid": False,
+            "errors": [
+                {"code": "unreadable_trial", "severity": "error", "message": broken.problem, "location": {"line": 41}}
+            ],
+            "warnings": [],
+        }
+    }
     listing = tmp_path / "trials.json"
     listing.write_text(json.dumps({"not": "a list"}))
     (only,) = read_trials(listing)
-    assert "list of trials" in str(only.model)
+    assert only.problem is not None and "is not a list of trials" in only.problem
+    listing.write_text(json.dumps([[], {"model": {}}]))
+    assert [trial.problem for trial in read_trials(listing)] == [
+        "Entry 1 could not be read: it is not an object with 'model' and 'mapping'.",
+        "Entry 2 could not be read: it has no 'mapping'.",
+    ]
+
+
+def test_a_line_that_is_not_utf8_or_too_deep_is_unreadable_and_the_others_are_read(tmp_path: Path) -> None:
+    first, second = TRIALS.read_text(encoding="utf-8").splitlines()[:2]
+    lines = tmp_path / "trials.jsonl"
+    lines.write_bytes(b"\n".join([first.encode(), b'{"id": "\xff"}', b"[" * 100_000, second.encode()]) + b"\n")
+    trials = list(read_trials(lines))
+    assert [trial.id for trial in trials] == ["p0000", "line-2", "line-3", "p0001"]
+    assert trials[1].problem == "Line 2 could not be read: it is not UTF-8 text (byte 8)."
+    assert trials[2].problem == "Line 3 could not be read: it is nested too deeply."
+    assert trials[3].problem is None and trials[3].line == 4
+
+
+def test_an_unreadable_line_never_reaches_the_planner_and_the_other_lines_are_judged(
+    tmp_path: Path, catalog: Catalog, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    first, second = TRIALS.read_text(encoding="utf-8").splitlines()[:2]
+    lines = tmp_path / "trials.jsonl"
+    lines.write_text("\n".join([first, '{"id": "broken", "model": {', '["not", "a", "trial"]', second]) + "\n")
+    planned: list[PlanningTask] = []
+    real_plan_task = verdict_module.plan_task
+
+    def spy(task: PlanningTask, *args: Any, **kwargs: Any) -> PlanResult:
+        planned.append(task)
+        return real_plan_task(task, *args, **kwargs)
+
+    monkeypatch.setattr(verdict_module, "plan_task", spy)
+    planned_so_far: list[int] = []
+    results = run_batch(
+        list(read_trials(lines)), catalog, simulate=False, progress=lambda: planned_so_far.append(len(planned))
+    )
+    assert planned_so_far == [1, 1, 1, 2]  # the planner ran for the first and the last line only
+    assert [(result.trial_id, result.verdict.decided_by) for result in results] == [
+        ("p0000", "planner"),
+        ("line-2", "input"),
+        ("entry-3", "input"),
+        ("p0001", "planner"),
+    ]
 
 
 @pytest.mark.parametrize(("model_file", "mapping_file"), sorted(PAPER_PLANS, key=str))
@@ -74,9 +136,14 @@ def test_cached_plans_equal_fresh_plans_on_random_synthetic_tasks(seed: int) -> 
 def test_batch_command_writes_csv_and_json(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["batch", str(TRIALS), "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
-    assert "trials/s" in result.stdout
+    assert "trials/s" in result.stdout and "input 2" in result.stdout
     rows = list(csv.DictReader((tmp_path / "verdicts.csv").open()))
     assert len(rows) == 42 and {row["verdict"] for row in rows} == {"transfers", "fails", "invalid"}
+    unreadable = [row for row in rows if row["decided_by"] == "input"]
+    assert [(row["id"], row["verdict"], row["reasons"]) for row in unreadable] == [
+        ("line-41", "invalid", "unreadable_trial"),
+        ("no-mapping", "invalid", "unreadable_trial"),
+    ]
     assert len(json.loads((tmp_path / "verdicts.json").read_text())) == 42
     missing = CliRunner().invoke(app, ["batch", str(tmp_path / "none.jsonl")])
     assert missing.exit_code == 2 and "There is no file" in missing.stderr

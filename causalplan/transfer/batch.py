@@ -2,14 +2,16 @@
 
 A batch file holds one trial per line (JSON Lines: ``{"id": ..., "model": {...},
 "mapping": {...}}``, the same schemas as the model and mapping files), or a JSON/YAML list of
-such trials. A line that cannot be read becomes an ``invalid`` trial that names its line; it
-never stops the batch.
+such trials. An entry that cannot be read becomes a trial with a ``problem`` (where it is and
+why it cannot be read) and no model or mapping; it is judged ``invalid`` and never stops the
+batch.
 
-Each trial is decided as cheaply as it can be, and says how (``decided_by``): ``validation``
-(an invalid model or mapping), ``precheck`` (a function the goal needs is carried by no part),
-``planner``/``simulator`` otherwise. Equal planning problems are solved once: Fast Downward
-runs on the label-free canonical form and its answers are cached, and a plan's simulation is
-cached too, so the verdicts are exactly those of ``causalplan transfer`` one trial at a time.
+Each trial is decided as cheaply as it can be, and says how (``decided_by``): ``input`` (the
+entry could not be read), ``validation`` (an invalid model or mapping), ``precheck`` (a
+function the goal needs is carried by no part), ``planner``/``simulator`` otherwise. Equal
+planning problems are solved once: Fast Downward runs on the label-free canonical form and its
+answers are cached, and a plan's simulation is cached too, so the verdicts are exactly those of
+``causalplan transfer`` one trial at a time.
 """
 
 from __future__ import annotations
@@ -20,21 +22,26 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from causalplan.causal.diagnostics import Location, Report, error
+from causalplan.causal.diagnostics import Location, Report, Severity, error
 from causalplan.causal.documents import SourceMap, read_document
 from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
-from causalplan.transfer.verdict import TransferVerdict, invalid_verdict, transfer_verdict
+from causalplan.transfer.verdict import Reason, TransferVerdict, Verdict, transfer_verdict
+
+TRIAL_FIELDS = ("model", "mapping")
+"""The fields every trial must have (``id`` is optional)."""
 
 
 @dataclass(frozen=True)
 class Trial:
-    """One (model, mapping) pair to judge, with where it came from."""
+    """One (model, mapping) pair to judge and where it came from, or why its entry could not be read."""
 
     id: str
     model: object
     mapping: object
     line: int | None
+    problem: str | None = None
+    """Why the entry could not be read, naming where; then there is no model or mapping to judge."""
 
 
 @dataclass(frozen=True)
@@ -74,52 +81,107 @@ CSV_COLUMNS = (
 )
 
 
-def _unreadable(trial_id: str, line: int | None, message: str) -> Trial:
-    return Trial(trial_id, {"__unreadable__": message}, None, line)
+def _unreadable_trial(trial_id: str, line: int | None, problem: str) -> Trial:
+    return Trial(trial_id, None, None, line, problem)
 
 
 def read_trials(path: Path) -> Iterator[Trial]:
-    """Yield the trials of a batch file; unreadable entries become trials that will be invalid."""
+    """Yield the trials of a batch file; an entry that cannot be read is a trial with a ``problem``."""
     if path.suffix.lower() == ".jsonl":
-        with path.open(encoding="utf-8") as handle:
-            for number, text in enumerate(handle, start=1):
-                if not text.strip():
-                    continue
-                try:
-                    entry = json.loads(text)
-                except json.JSONDecodeError as exc:
-                    yield _unreadable(f"line-{number}", number, f"line {number} is not JSON: {exc.msg}")
-                    continue
-                yield _trial(entry, number, number)
+        yield from _read_json_lines(path)
         return
     data, _source, problems = read_document(path)
     if problems:
-        yield _unreadable("file", problems[0].location.line, problems[0].message)
+        yield _unreadable_trial(
+            "file", problems[0].location.line, f"The batch file could not be read. {problems[0].message}"
+        )
         return
     if not isinstance(data, list):
-        yield _unreadable("file", 1, "a batch file is a list of trials (or JSON Lines, one trial per line)")
+        yield _unreadable_trial(
+            "file",
+            1,
+            "The batch file could not be read: it is not a list of trials "
+            "(a JSON Lines file, one trial per line, is named *.jsonl).",
+        )
         return
     for index, entry in enumerate(data, start=1):
-        yield _trial(entry, index, None)
+        yield _trial(entry, f"entry-{index}", f"Entry {index}", None)
 
 
-def _trial(entry: object, position: int, line: int | None) -> Trial:
-    if not isinstance(entry, dict) or "model" not in entry or "mapping" not in entry:
-        where = f"line {line}" if line else f"entry {position}"
-        return _unreadable(f"entry-{position}", line, f"{where} needs 'model' and 'mapping' (and may have 'id')")
-    return Trial(str(entry.get("id", f"entry-{position}")), entry["model"], entry["mapping"], line)
+def _read_json_lines(path: Path) -> Iterator[Trial]:
+    """Yield the trials of a JSON Lines file, one a line; blank lines are skipped."""
+    # Bytes, decoded line by line: one line that is not UTF-8 must not stop the others.
+    try:
+        handle = path.open("rb")
+    except OSError as exc:
+        yield _unreadable_trial("file", None, f"The batch file could not be read: {exc.strerror}.")
+        return
+    with handle:
+        for number, raw in enumerate(handle, start=1):
+            where = f"Line {number}"
+            try:
+                text = raw.decode("utf-8-sig").rstrip("\r\n")
+            except UnicodeDecodeError as exc:
+                yield _unreadable_trial(
+                    f"line-{number}", number, f"{where} could not be read: it is not UTF-8 text (byte {exc.start})."
+                )
+                continue
+            if not text.strip():
+                continue
+            try:
+                entry = json.loads(text)
+            except json.JSONDecodeError as exc:
+                yield _unreadable_trial(
+                    f"line-{number}",
+                    number,
+                    f"{where} could not be read: it is not JSON ({exc.msg}, column {exc.colno}).",
+                )
+                continue
+            except RecursionError:
+                yield _unreadable_trial(
+                    f"line-{number}", number, f"{where} could not be read: it is nested too deeply."
+                )
+                continue
+            yield _trial(entry, f"entry-{number}", where, number)
+
+
+def _trial(entry: object, default_id: str, where: str, line: int | None) -> Trial:
+    """Return the trial of one parsed entry, or an unreadable trial saying what the entry lacks."""
+    if not isinstance(entry, dict):
+        return _unreadable_trial(
+            default_id, line, f"{where} could not be read: it is not an object with 'model' and 'mapping'."
+        )
+    trial_id = str(entry.get("id", default_id))
+    missing = [name for name in TRIAL_FIELDS if name not in entry]
+    if missing:
+        lacks = " and no ".join(f"'{name}'" for name in missing)
+        return _unreadable_trial(trial_id, line, f"{where} could not be read: it has no {lacks}.")
+    return Trial(trial_id, entry["model"], entry["mapping"], line)
+
+
+def _unreadable_verdict(problem: str, line: int | None) -> TransferVerdict:
+    """Return the verdict of an entry that could not be read: ``invalid``, decided by the input alone."""
+    report = Report((error("unreadable_trial", problem, Location(line=line)),))
+    return TransferVerdict(
+        Verdict.INVALID,
+        None,
+        None,
+        None,
+        "input",
+        (Reason("unreadable_trial", Severity.ERROR, problem),),
+        diagnostics={"input": report.as_dict()},
+    )
 
 
 def evaluate_trial(trial: Trial, catalog: Catalog, planner: str, time_limit: float, simulate: bool) -> TrialResult:
     """Return the verdict of one trial (never raises for bad input)."""
     started = time.perf_counter()
-    where = f"line {trial.line}" if trial.line else None
-    if isinstance(trial.model, dict) and "__unreadable__" in trial.model:
-        report = Report((error("invalid_input", str(trial.model["__unreadable__"]), Location(file=where)),))
-        verdict = invalid_verdict(report, Report(), None, None)
+    if trial.problem is not None:
+        verdict = _unreadable_verdict(trial.problem, trial.line)
     else:
-        loaded_model = model_from_data(trial.model, SourceMap(where), catalog)
-        loaded_mapping = mapping_from_data(trial.mapping, SourceMap(where), catalog)
+        source = SourceMap(f"line {trial.line}" if trial.line else None)
+        loaded_model = model_from_data(trial.model, source, catalog)
+        loaded_mapping = mapping_from_data(trial.mapping, source, catalog)
         verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit, simulate)
     return TrialResult(trial.id, verdict, time.perf_counter() - started)
 
