@@ -14,6 +14,7 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import Session
 
 from causalplan.objects.catalog import Catalog
+from causalplan.service.attempts import FailedAttempts
 from causalplan.service.cache import LruCache, ResultCache
 from causalplan.service.crud import ClientIds
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH
@@ -36,6 +37,8 @@ class Services:
     """What reading model and mapping documents gave, by the document's exact JSON."""
     catalog_key: str
     """The catalog's fingerprint, part of every answer's cache key."""
+    failed_attempts: FailedAttempts
+    """Wrong research tokens by client address, to refuse guessing at full speed."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
 
@@ -98,17 +101,34 @@ def is_research_token(candidate: str, settings: Settings) -> bool:
     return token is not None and secrets.compare_digest(candidate.encode(), token.get_secret_value().encode())
 
 
+def client_address(request: Request) -> str:
+    """Return the client's address as the server saw it (empty when unknown, e.g. a Unix socket)."""
+    return request.client.host if request.client is not None else ""
+
+
+def check_research_token(candidate: str, request: Request, services: Services) -> bool:
+    """Return whether ``candidate`` is the research token, counting a wrong one against the client's address.
+
+    Raises ``TooManyAttemptsError`` without comparing while that address has too many recent failures.
+    """
+    return services.failed_attempts.check(
+        client_address(request), lambda: is_research_token(candidate, services.settings)
+    )
+
+
 def require_research_token(
-    settings: SettingsDep, credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)]
+    request: Request,
+    services: ServicesDep,
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
 ) -> None:
     """Let the request through only with ``Authorization: Bearer <research token>``."""
-    if settings.research_token is None:
+    if services.settings.research_token is None:
         raise ResearchDisabledError(
             "The research endpoints are disabled: start the service with CAUSALPLAN_RESEARCH_TOKEN set."
         )
     if credentials is None:
         raise NotAuthenticatedError("This endpoint needs 'Authorization: Bearer <research token>'.")
-    if not is_research_token(credentials.credentials, settings):
+    if not check_research_token(credentials.credentials, request, services):
         raise NotAuthenticatedError("The bearer token is not the research token.")
 
 

@@ -102,6 +102,17 @@ class QueueFullError(ServiceError):
         super().__init__(message, details={"retry_after": retry_after}, headers={"Retry-After": str(retry_after)})
 
 
+class TooManyAttemptsError(ServiceError):
+    """Too many wrong research tokens came from this client address; ``Retry-After`` says when to try again."""
+
+    code = "too_many_attempts"
+    status_code = 429
+
+    def __init__(self, message: str, retry_after: int) -> None:
+        super().__init__(message, details={"retry_after": retry_after}, headers={"Retry-After": str(retry_after)})
+        self.retry_after = retry_after
+
+
 class PlanningTimeoutError(ServiceError):
     """A worker was still busy well after the solve's time limit, so it was killed."""
 

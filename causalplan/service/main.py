@@ -22,6 +22,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 import causalplan
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import load_catalog
+from causalplan.service.attempts import FailedAttempts
 from causalplan.service.cache import LruCache, ResultCache, catalog_key
 from causalplan.service.db.migrate import upgrade
 from causalplan.service.db.session import create_database_engine
@@ -69,6 +70,7 @@ def start_services(settings: Settings) -> Services:
         revision,
         reads=LruCache(settings.cache_size),
         catalog_key=catalog_key(catalog),
+        failed_attempts=FailedAttempts(settings.research_max_failures, settings.research_failure_window_seconds),
     )
     threading.Thread(target=_probe, args=(services,), name="causalplan-probe", daemon=True).start()
     return services

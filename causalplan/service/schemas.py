@@ -429,3 +429,10 @@ _ERROR_DESCRIPTIONS = {
 def error_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
     """Return the OpenAPI ``responses`` entries for these error statuses (all in the one shape)."""
     return {status: {"model": ErrorOut, "description": _ERROR_DESCRIPTIONS[status]} for status in statuses}
+
+
+RESEARCH_ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
+    **error_responses(401, 403, 503),
+    429: {"model": ErrorOut, "description": "Too many wrong research tokens from this address; see Retry-After."},
+}
+"""The OpenAPI error responses of every route behind the research token."""

@@ -30,6 +30,16 @@ class Settings(BaseSettings):
     research_token: SecretStr | None = Field(
         default=None, description="Bearer token for GET /v1/trials and /v1/export; unset, they are disabled."
     )
+    research_max_failures: int = Field(
+        default=10,
+        ge=1,
+        le=1000,
+        description="Wrong research tokens one client address may send within research_failure_window_seconds; "
+        "its further attempts get 429 until the oldest failure leaves the window.",
+    )
+    research_failure_window_seconds: float = Field(
+        default=60.0, gt=0, le=86_400, description="The window, in seconds, in which research_max_failures counts."
+    )
     catalog_folders: list[Path] = Field(default_factory=list, description="Folders of extra object files.")
 
     planning_workers: int = Field(default=2, ge=1, le=64, description="Planner worker processes.")

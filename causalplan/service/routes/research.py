@@ -12,9 +12,9 @@ from causalplan.service import crud
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH, ModelRecord, TrialRecord
 from causalplan.service.deps import ResearchAccessDep, SessionDep
 from causalplan.service.responses import SafeJSONResponse, csv_bytes
-from causalplan.service.schemas import ExportOut, StoredModelOut, TrialOut, TrialsOut, error_responses
+from causalplan.service.schemas import RESEARCH_ERROR_RESPONSES, ExportOut, StoredModelOut, TrialOut, TrialsOut
 
-router = APIRouter(prefix="/v1", tags=["research"], responses=error_responses(401, 403, 503))
+router = APIRouter(prefix="/v1", tags=["research"], responses=RESEARCH_ERROR_RESPONSES)
 
 MAX_PAGE = 1000
 CSV_TABLES = ("trials", "models")

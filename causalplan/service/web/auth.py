@@ -15,7 +15,7 @@ from typing import Annotated
 
 from fastapi import Depends, Request, Response
 
-from causalplan.service.deps import SettingsDep, is_research_token
+from causalplan.service.deps import ServicesDep, check_research_token
 from causalplan.service.errors import ResearchDisabledError
 from causalplan.service.settings import Settings
 from causalplan.service.web.errors import CrossSiteRequestError, LoginRequiredError
@@ -73,14 +73,19 @@ def _same_origin(request: Request) -> bool:
     return origin == f"{request.url.scheme}://{request.url.netloc}"
 
 
-def require_research_page(request: Request, settings: SettingsDep) -> None:
-    """Let a research page through with the bearer token or a valid session cookie."""
+def require_research_page(request: Request, services: ServicesDep) -> None:
+    """Let a research page through with the bearer token or a valid session cookie.
+
+    A bearer token counts against the client's failed attempts (``TooManyAttemptsError``); a cookie
+    does not: it is an HMAC that cannot be guessed, and a lockout must not sign out researchers.
+    """
+    settings = services.settings
     if settings.research_token is None:
         raise ResearchDisabledError(
             "The research pages are disabled: start the service with CAUSALPLAN_RESEARCH_TOKEN set."
         )
     scheme, _, credentials = request.headers.get("authorization", "").partition(" ")
-    if scheme.lower() == "bearer" and is_research_token(credentials.strip(), settings):
+    if scheme.lower() == "bearer" and check_research_token(credentials.strip(), request, services):
         return
     cookie = request.cookies.get(COOKIE_NAME)
     if cookie is None or not is_valid_cookie(cookie, settings.research_token.get_secret_value()):

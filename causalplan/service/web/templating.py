@@ -75,7 +75,14 @@ def error_page(request: Request, status: int, title: str, message: str) -> HTMLR
     return render(request, "error.html", status_code=status, secret_url=True, title=title, message=message)
 
 
-_TITLES = {401: "Please sign in", 403: "Not allowed", 404: "Not found", 409: "This step is closed", 422: "Please check"}
+_TITLES = {
+    401: "Please sign in",
+    403: "Not allowed",
+    404: "Not found",
+    409: "This step is closed",
+    422: "Please check",
+    429: "Please try again shortly",
+}
 
 
 class PageRoute(APIRoute):
@@ -96,7 +103,9 @@ class PageRoute(APIRoute):
                 status = http_status(exc)
                 if status >= 500:
                     logger.warning("%s: %s", exc.code, exc.message)
-                return error_page(request, status, _TITLES.get(status, "Something went wrong"), exc.message)
+                page = error_page(request, status, _TITLES.get(status, "Something went wrong"), exc.message)
+                page.headers.update(getattr(exc, "headers", {}))  # e.g. Retry-After, as the JSON handler sends
+                return page
             except RequestValidationError as exc:
                 where = "; ".join(
                     " > ".join(str(piece) for piece in error.get("loc", ())) + ": " + str(error.get("msg", ""))

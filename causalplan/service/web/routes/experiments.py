@@ -11,11 +11,11 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, Query, Request, Response
 
 from causalplan.service.deps import CatalogDep, ResearchAccessDep, SessionDep
-from causalplan.service.schemas import error_responses
+from causalplan.service.schemas import RESEARCH_ERROR_RESPONSES, error_responses
 from causalplan.service.web import experiments, store
 from causalplan.service.web.schemas import ExperimentIn, ExperimentOut, LinksIn, ParticipantsOut, ResultsOut
 
-router = APIRouter(prefix="/v1/experiments", tags=["experiments"], responses=error_responses(401, 403, 503))
+router = APIRouter(prefix="/v1/experiments", tags=["experiments"], responses=RESEARCH_ERROR_RESPONSES)
 
 
 @router.post(

@@ -12,7 +12,9 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Query, Request, Response
 from pydantic import ValidationError
 
-from causalplan.service.deps import CatalogDep, SessionDep, SettingsDep, is_research_token
+from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep, check_research_token
+from causalplan.service.errors import TooManyAttemptsError
+from causalplan.service.settings import Settings
 from causalplan.service.web import experiments, store
 from causalplan.service.web.auth import ResearchPageDep, sign_in, sign_out
 from causalplan.service.web.drawings import SVG_HEADERS, rates_chart
@@ -34,29 +36,44 @@ def _local_next(target: str) -> str:
     )
 
 
+def _login_page(
+    request: Request, settings: Settings, target: str, *, failed: bool = False, retry_after: int | None = None
+) -> Response:
+    """Return the sign-in form: after a wrong token (401), or refused without a check until ``retry_after`` (429)."""
+    response = render(
+        request,
+        "login.html",
+        status_code=429 if retry_after is not None else 401 if failed else 200,
+        enabled=settings.research_token is not None,
+        next=target,
+        failed=failed,
+        retry_after=retry_after,
+    )
+    if retry_after is not None:
+        response.headers["Retry-After"] = str(retry_after)
+    return response
+
+
 @router.get("/login")
 def login_form(
     request: Request, settings: SettingsDep, target: Annotated[str, Query(alias="next", max_length=500)] = "/research"
 ) -> Response:
-    return render(
-        request, "login.html", enabled=settings.research_token is not None, next=_local_next(target), failed=False
-    )
+    return _login_page(request, settings, _local_next(target))
 
 
 @router.post("/login")
-async def login(request: Request, settings: SettingsDep) -> Response:
+async def login(request: Request, services: ServicesDep) -> Response:
+    settings = services.settings
     form = await read_form(request)
     token = form.text("token", "", max_length=1000)
     target = _local_next(form.text("next", "/research", max_length=500))
-    if not is_research_token(token, settings):
-        return render(
-            request,
-            "login.html",
-            status_code=401,
-            enabled=settings.research_token is not None,
-            next=target,
-            failed=True,
-        )
+    try:
+        # Disabled, there is no token to guess: nothing is compared or counted.
+        accepted = settings.research_token is not None and check_research_token(token, request, services)
+    except TooManyAttemptsError as exc:
+        return _login_page(request, settings, target, retry_after=exc.retry_after)
+    if not accepted:
+        return _login_page(request, settings, target, failed=True)
     response = redirect(target)
     sign_in(response, request, settings)
     return response
