@@ -144,6 +144,20 @@ def test_a_solve_uses_the_process_started_ahead_and_starts_its_replacement_in_th
     assert starts == ["causalplan-prestart"]  # none on the solving thread
 
 
+def test_taking_a_process_starts_no_replacement_until_its_search_has_ended() -> None:
+    """On two cores the replacement's start-up would compete with the search that took the process."""
+    fast_downward.prestart(CONFIGS["fd"])
+    [ready] = _wait_for_idle(1)
+    command = fast_downward._search_command(fast_downward.search_binary(), CONFIGS["fd"].search)
+    taken = search_processes.take(command)
+    try:
+        assert taken.process.pid == ready
+        assert search_processes.idle_pids() == []
+        assert not any(thread.name == "causalplan-prestart" for thread in threading.enumerate())
+    finally:
+        search_processes.discard(taken)
+
+
 def test_the_time_limit_kills_a_process_started_ahead(monkeypatch: pytest.MonkeyPatch) -> None:
     fast_downward.prestart(CONFIGS["fd-opt"])
     [ready] = _wait_for_idle(1)

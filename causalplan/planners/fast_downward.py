@@ -163,6 +163,8 @@ def _search(command: search_processes.Command, sas: bytes, deadline: float, memo
         plan = plan_file.read_text(encoding="utf-8") if plan_file.exists() else None
     finally:
         search_processes.discard(search)
+        if _prestart_enabled():  # the next search's process, started now that this one is over
+            search_processes.prestart(command)
     return _Run(returncode, time.perf_counter() - began, output.decode("utf-8", "replace"), plan)
 
 
