@@ -141,7 +141,7 @@ def test_a_solve_uses_the_process_started_ahead_and_starts_its_replacement_in_th
     assert _solve(task, CONFIGS["fd"], True, monkeypatch).status is PlanStatus.SOLVED
     [replacement] = _wait_for_idle(1)
     assert _is_gone(ready) and replacement != ready
-    assert starts == ["causalplan-prestart"]  # none on the solving thread
+    assert starts == ["causalplan-retire"]  # none on the solving thread
 
 
 def test_taking_a_process_starts_no_replacement_until_its_search_has_ended() -> None:
@@ -156,6 +156,29 @@ def test_taking_a_process_starts_no_replacement_until_its_search_has_ended() -> 
         assert not any(thread.name == "causalplan-prestart" for thread in threading.enumerate())
     finally:
         search_processes.discard(taken)
+
+
+def test_a_used_process_is_reaped_and_its_folder_removed_off_the_solving_thread(
+    catalog: Catalog, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Removing the folder alone takes ~0.6 ms, which the answer need not wait for."""
+    fast_downward.prestart(CONFIGS["fd"])
+    [ready] = _wait_for_idle(1)
+    folder = Path(os.readlink(f"/proc/{ready}/cwd"))
+    discarded: dict[int, str] = {}
+    real_discard = search_processes.discard
+
+    def recording_discard(started: search_processes.Started) -> None:
+        discarded[started.process.pid] = threading.current_thread().name
+        real_discard(started)
+
+    monkeypatch.setattr(search_processes, "discard", recording_discard)
+    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+    assert _solve(task, CONFIGS["fd"], True, monkeypatch).status is PlanStatus.SOLVED
+    search_processes.stop_idle()  # waits for the retirement, then ends the replacement
+    assert discarded[ready] == "causalplan-retire"
+    assert _is_gone(ready) and not folder.exists()
+    assert _children() == set()
 
 
 def test_the_time_limit_kills_a_process_started_ahead(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -156,16 +156,21 @@ def _prestart_enabled() -> bool:
 def _search(command: search_processes.Command, sas: bytes, deadline: float, memory_mb: int) -> _Run:
     """Run one search on ``sas`` in a started search process; return its exit code, output and plan."""
     began = time.perf_counter()
-    search = search_processes.take(command) if _prestart_enabled() else search_processes.start(command)
+    prestarted = _prestart_enabled()
+    search = search_processes.take(command) if prestarted else search_processes.start(command)
     try:
         returncode, output = _hand_over(search, command, sas, deadline, memory_mb)
-        plan_file = search.folder / PLAN_FILE
-        plan = plan_file.read_text(encoding="utf-8") if plan_file.exists() else None
+        try:
+            plan: str | None = (search.folder / PLAN_FILE).read_text(encoding="utf-8")
+        except FileNotFoundError:
+            plan = None
     finally:
-        search_processes.discard(search)
-        if _prestart_enabled():  # the next search's process, started now that this one is over
-            search_processes.prestart(command)
-    return _Run(returncode, time.perf_counter() - began, output.decode("utf-8", "replace"), plan)
+        if prestarted:  # cleaned up and replaced off this thread, now that the search is over
+            search_processes.retire(search, command)
+        else:
+            search_processes.discard(search)
+    seconds = time.perf_counter() - began
+    return _Run(returncode, seconds, output.decode("utf-8", "replace"), plan)
 
 
 def _hand_over(
