@@ -169,8 +169,7 @@ def _search(command: search_processes.Command, sas: bytes, deadline: float, memo
             search_processes.retire(search, command)
         else:
             search_processes.discard(search)
-    seconds = time.perf_counter() - began
-    return _Run(returncode, seconds, output.decode("utf-8", "replace"), plan)
+    return _Run(returncode, time.perf_counter() - began, output.decode("utf-8", "replace"), plan)
 
 
 def _hand_over(

@@ -118,31 +118,32 @@ def _read_json_lines(path: Path) -> Iterator[Trial]:
         return
     with handle:
         for number, raw in enumerate(handle, start=1):
+            entry, why = _parse_line(raw)
             where = f"Line {number}"
-            try:
-                text = raw.decode("utf-8-sig").rstrip("\r\n")
-            except UnicodeDecodeError as exc:
-                yield _unreadable_trial(
-                    f"line-{number}", number, f"{where} could not be read: it is not UTF-8 text (byte {exc.start})."
-                )
-                continue
-            if not text.strip():
-                continue
-            try:
-                entry = json.loads(text)
-            except json.JSONDecodeError as exc:
-                yield _unreadable_trial(
-                    f"line-{number}",
-                    number,
-                    f"{where} could not be read: it is not JSON ({exc.msg}, column {exc.colno}).",
-                )
-                continue
-            except RecursionError:
-                yield _unreadable_trial(
-                    f"line-{number}", number, f"{where} could not be read: it is nested too deeply."
-                )
-                continue
-            yield _trial(entry, f"entry-{number}", where, number)
+            if why is not None:
+                yield _unreadable_trial(f"line-{number}", number, f"{where} could not be read: {why}.")
+            elif entry is not _BLANK:
+                yield _trial(entry, f"entry-{number}", where, number)
+
+
+_BLANK = object()
+"""What a blank line parses to: it is skipped."""
+
+
+def _parse_line(raw: bytes) -> tuple[object, str | None]:
+    """Return a JSON Lines line's entry (``_BLANK`` for a blank line), or why it cannot be read."""
+    try:
+        text = raw.decode("utf-8-sig").rstrip("\r\n")
+    except UnicodeDecodeError as exc:
+        return None, f"it is not UTF-8 text (byte {exc.start})"
+    if not text.strip():
+        return _BLANK, None
+    try:
+        return json.loads(text), None
+    except json.JSONDecodeError as exc:
+        return None, f"it is not JSON ({exc.msg}, column {exc.colno})"
+    except RecursionError:
+        return None, "it is nested too deeply"
 
 
 def _trial(entry: object, default_id: str, where: str, line: int | None) -> Trial:
