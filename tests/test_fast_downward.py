@@ -235,6 +235,25 @@ def test_the_forked_translator_is_still_available(monkeypatch: pytest.MonkeyPatc
     assert outcome.status is PlanStatus.SOLVED and len(outcome.actions) == 2
 
 
+def test_solves_work_when_the_process_has_more_than_1024_open_files(
+    monkeypatch: pytest.MonkeyPatch, catalog: Catalog
+) -> None:
+    """A busy server holds many sockets: waiting for a translator or a search must not use select()."""
+    monkeypatch.setenv("CAUSALPLAN_TRANSLATOR", "fork")
+    monkeypatch.setenv("CAUSALPLAN_SEARCH_PRESTART", "0")
+    fast_downward.clear_solve_cache()
+    compiled = compile_task(build_task(example_model("near/candle.yaml", catalog), catalog.get("candle")))
+    held: list[int] = []
+    try:
+        while not held or held[-1] <= 1100:
+            held.append(os.open(os.devnull, os.O_RDONLY))
+        outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd"])
+    finally:
+        for descriptor in held:
+            os.close(descriptor)
+    assert outcome.status is PlanStatus.SOLVED, outcome.message
+
+
 def test_a_lost_translator_timeout_is_raised_again(monkeypatch: pytest.MonkeyPatch) -> None:
     """The deadline's exception can be lost (raised in a GC callback, or under a broad except):
     the alarm fires again until the translation stops, instead of letting it run on."""

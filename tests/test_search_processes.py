@@ -181,6 +181,66 @@ def test_a_used_process_is_reaped_and_its_folder_removed_off_the_solving_thread(
     assert _children() == set()
 
 
+def test_a_search_writes_its_output_to_a_file_and_no_pipe_is_read_while_it_runs(catalog: Catalog) -> None:
+    """FD logs a line at a time: a reader of its stdout would wake up for each line (~1.3 ms per search)."""
+    fast_downward.prestart(CONFIGS["fd"])
+    [ready] = _wait_for_idle(1)
+    command = fast_downward._search_command(fast_downward.search_binary(), CONFIGS["fd"].search)
+    taken = search_processes.take(command)
+    try:
+        assert taken.process.pid == ready and taken.process.stdout is None
+        task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+        compiled = canonical_pddl(task) or compile_task(task)
+        translated = fast_downward._translate(compiled.domain, compiled.problem, time.monotonic() + 30, 2048)
+        assert translated.product is not None
+        deadline = time.monotonic() + 30
+        code, output = fast_downward._hand_over(taken, command, translated.product.encode(), deadline, 2048)
+        assert code == 0
+        assert b"Solution found" in output
+        assert output == (taken.folder / search_processes.OUTPUT_FILE).read_bytes()
+    finally:
+        search_processes.discard(taken)
+
+
+def _python_process(code: str) -> tuple[search_processes.Started, search_processes.Command]:
+    command = (sys.executable, "-c", code)
+    return search_processes.start(command), command
+
+
+def test_a_task_larger_than_the_pipe_buffer_is_written_whole() -> None:
+    """A big task (hundreds of parts) does not fit in the pipe: it is written as the process reads it."""
+    started, command = _python_process("import sys; print(len(sys.stdin.buffer.read()))")
+    task = b"x" * (4 * 1024 * 1024)  # 64 times a Linux pipe's buffer
+    try:
+        code, output = fast_downward._hand_over(started, command, task, time.monotonic() + 60, 2048)
+    finally:
+        search_processes.discard(started)
+    assert code == 0
+    assert output.strip() == str(len(task)).encode()
+
+
+def test_a_process_that_ends_without_reading_its_task_gives_its_exit_code_and_output() -> None:
+    started, command = _python_process("import sys; print('bad task'); sys.exit(3)")
+    try:
+        code, output = fast_downward._hand_over(started, command, b"x" * (1024 * 1024), time.monotonic() + 60, 2048)
+    finally:
+        search_processes.discard(started)
+    assert code == 3
+    assert output.strip() == b"bad task"
+
+
+def test_a_process_that_stops_reading_is_killed_at_the_deadline() -> None:
+    started, command = _python_process("import time; time.sleep(60)")
+    began = time.monotonic()
+    try:
+        code, _ = fast_downward._hand_over(started, command, b"x" * (1024 * 1024), began + 1.0, 2048)
+        assert code is None
+        assert time.monotonic() - began < 30  # it did not wait for the process's own minute
+        assert started.process.returncode == -signal.SIGKILL
+    finally:
+        search_processes.discard(started)
+
+
 def test_the_time_limit_kills_a_process_started_ahead(monkeypatch: pytest.MonkeyPatch) -> None:
     fast_downward.prestart(CONFIGS["fd-opt"])
     [ready] = _wait_for_idle(1)

@@ -15,6 +15,7 @@ import contextlib
 import gc
 import io
 import logging
+import math
 import os
 import re
 import resource
@@ -175,22 +176,79 @@ def _search(command: search_processes.Command, sas: bytes, deadline: float, memo
 def _hand_over(
     search: search_processes.Started, command: search_processes.Command, sas: bytes, deadline: float, memory_mb: int
 ) -> tuple[int | None, bytes]:
-    """Write the task to the search's stdin and collect its output; kill its group at ``deadline``.
+    """Write the task to the search's stdin and wait for it to end; kill its group at ``deadline``.
 
-    Returns the exit code (None when killed at the time limit) and the output.
+    Returns the exit code (None when killed at the time limit) and its output. The output is read
+    from its file once the process has ended: nothing wakes this thread while the search runs.
     """
     logger.debug("searching (cwd %s): %s", search.folder, shlex.join(command))
     process = search.process
     # Limited now, for this solve, rather than when started: each solve may have its own limit,
     # and a preexec_fn would stop Python from using vfork (~10 ms more from a large process).
     _limit_process(process.pid, memory_mb)
+    pidfd = os.pidfd_open(process.pid)  # readable once the process has ended
     try:
-        output, _ = process.communicate(sas, timeout=max(0.0, deadline - time.monotonic()))
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
-        output, _ = process.communicate()
-        return None, output
-    return process.returncode, output
+        ended = _write_task(process, pidfd, sas, deadline) and _ends_by(pidfd, deadline)
+    finally:
+        os.close(pidfd)
+    if not ended:
+        with contextlib.suppress(ProcessLookupError):  # not reaped yet, so the group is still its own
+            os.killpg(process.pid, signal.SIGKILL)
+    returncode = process.wait()
+    try:
+        output = (search.folder / search_processes.OUTPUT_FILE).read_bytes()
+    except FileNotFoundError:
+        output = b""
+    return (returncode if ended else None), output
+
+
+def _write_task(process: subprocess.Popen[bytes], pidfd: int, sas: bytes, deadline: float) -> bool:
+    """Write ``sas`` to the process's stdin, then close it; return False if ``deadline`` came first.
+
+    Most tasks fit in the pipe's buffer (one write); a larger one is written as the process
+    reads it. A process that ends before reading it all (a task it rejects) stops the writing:
+    its exit code says why.
+    """
+    stdin = process.stdin
+    assert stdin is not None  # started with stdin piped
+    descriptor = stdin.fileno()
+    os.set_blocking(descriptor, False)
+    rest = memoryview(sas)
+    try:
+        while rest:
+            with contextlib.suppress(BlockingIOError):  # the pipe is full: wait until it is not
+                rest = rest[os.write(descriptor, rest) :]
+            if not rest:
+                break
+            ended, writable = _wait_for(pidfd, deadline, descriptor)
+            if ended:
+                break
+            if not writable:
+                return False
+    except BrokenPipeError:
+        pass  # it ended before reading the whole task
+    finally:
+        stdin.close()
+    return True
+
+
+def _wait_for(pidfd: int, deadline: float, writing: int | None = None) -> tuple[bool, bool]:
+    """Wait until the process behind ``pidfd`` ends, the pipe ``writing`` takes more, or ``deadline``.
+
+    Returns whether it ended and whether the pipe can be written (poll, not select: a server
+    may have more than 1024 open files).
+    """
+    poller = select.poll()
+    poller.register(pidfd, select.POLLIN)
+    if writing is not None:
+        poller.register(writing, select.POLLOUT)
+    events = dict(poller.poll(max(0, math.ceil((deadline - time.monotonic()) * 1000))))
+    return pidfd in events, writing is not None and writing in events
+
+
+def _ends_by(pidfd: int, deadline: float) -> bool:
+    """Return whether the process behind ``pidfd`` ends before ``deadline``."""
+    return _wait_for(pidfd, deadline)[0]
 
 
 TRANSLATE_OUT_OF_MEMORY = 20
@@ -327,7 +385,7 @@ def _wait(pid: int, deadline: float) -> int | None:
     """Wait for child ``pid`` until ``deadline``; return its exit code, or None after killing it."""
     pidfd = os.pidfd_open(pid)
     try:
-        ready, _, _ = select.select([pidfd], [], [], max(0.0, deadline - time.monotonic()))
+        ready = _ends_by(pidfd, deadline)
     finally:
         os.close(pidfd)
     if not ready:

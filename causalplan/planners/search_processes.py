@@ -8,8 +8,9 @@ stdin; a solve then writes the task, closes stdin and waits for the plan.
 
 The pool keeps at most one idle process per command (a command fixes the search
 configuration). Every started process has its own process group and its own private folder as
-working directory (where ``--internal-plan-file`` puts the plan). The caller of ``take`` owns
-the process from then on and ends it with ``retire`` (or ``discard``, on its own thread).
+working directory, where ``--internal-plan-file`` puts the plan and its output goes to
+``OUTPUT_FILE``. The caller of ``take`` owns the process from then on and ends it with
+``retire`` (or ``discard``, on its own thread).
 ``retire`` does on a background thread what the answer need not wait for: reaping the used
 process and removing its folder (~0.6 ms), then starting the replacement. The replacement
 starts once the search has ended, not when its predecessor was taken: on two cores its start-up
@@ -49,22 +50,35 @@ class Started:
 
 
 _live: dict[int, Started] = {}
-"""Every started process not yet discarded, by pid: a forked child closes its copies of their pipes."""
+"""Every started process not yet discarded, by pid: a forked child closes its copies of their stdin."""
+
+
+OUTPUT_FILE = "output"
+"""Where a started process's stdout and stderr go: a file in its private folder."""
 
 
 def start(command: Command) -> Started:
-    """Start ``command`` in a new private folder and process group, stdin and stdout piped."""
+    """Start ``command`` in a new private folder and process group: stdin piped, output to ``OUTPUT_FILE``.
+
+    The output goes to a file, not a pipe: Fast Downward writes its log a line at a time, and a
+    reader of a pipe would wake up for each of its ~25 lines while the search runs (measured:
+    the search 1.2-1.4 ms slower end to end, on two cores).
+    """
     folder = Path(tempfile.mkdtemp(prefix="causalplan-fd-"))
     try:
-        process = subprocess.Popen(
-            command,
-            cwd=folder,
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,
-            bufsize=0,  # unbuffered: a forked child's copy of stdin holds no data it could flush
-        )
+        output = os.open(folder / OUTPUT_FILE, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        try:
+            process = subprocess.Popen(
+                command,
+                cwd=folder,
+                stdin=subprocess.PIPE,
+                stdout=output,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
+                bufsize=0,  # unbuffered: a forked child's copy of stdin holds no data it could flush
+            )
+        finally:
+            os.close(output)
     except BaseException:
         shutil.rmtree(folder, ignore_errors=True)
         raise
@@ -84,7 +98,7 @@ def discard(started: Started) -> None:
     if process.poll() is None:  # not reaped yet, so its pid (= group id) cannot have been reused
         with contextlib.suppress(ProcessLookupError):
             os.killpg(process.pid, signal.SIGKILL)
-    process.communicate()  # closes the pipes and reaps it
+    process.communicate()  # closes its stdin and reaps it
     _live.pop(process.pid, None)
     shutil.rmtree(started.folder, ignore_errors=True)
 
@@ -159,7 +173,7 @@ class _Pool:
             discard(started)
 
     def forget_after_fork(self) -> None:
-        """In a forked child: forget the parent's processes without touching them; close its pipe copies."""
+        """In a forked child: forget the parent's processes without touching them; close its copies of their stdin."""
         self._lock = threading.Lock()  # the parent's may be held by a thread that does not exist here
         self._forget()
 
@@ -213,10 +227,9 @@ class _Pool:
         inherited = [started for started in list(_live.values()) if started.owner != self._owner]
         for started in inherited:
             del _live[started.process.pid]
-            for pipe in (started.process.stdin, started.process.stdout):
-                if pipe is not None:
-                    with contextlib.suppress(OSError):
-                        pipe.close()
+            if started.process.stdin is not None:
+                with contextlib.suppress(OSError):
+                    started.process.stdin.close()
         # Kept, never discarded: they are the parent's children, so this process must not reap them.
         _inherited.extend(inherited)
 
