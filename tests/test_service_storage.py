@@ -10,7 +10,7 @@ import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.runtime.migration import MigrationContext
 from fastapi.testclient import TestClient
-from sqlalchemy import func, inspect, select
+from sqlalchemy import func, insert, inspect, select
 from sqlalchemy.orm import Session
 
 from causalplan.service import crud
@@ -61,6 +61,68 @@ def test_a_sqlite_file_and_its_folder_are_created_on_first_start(tmp_path: Any) 
 def test_the_database_url_accepts_plain_postgresql_urls() -> None:
     url = settings_for("postgresql://user:secret@db.example/causalplan").database_url
     assert url == "postgresql+psycopg://user:secret@db.example/causalplan"
+
+
+def _records(participant: str) -> tuple[ModelRecord, TrialRecord]:
+    client = crud.ClientIds(participant, "séance ☃")
+    document = {"name": "lamp 💡", "rules": ["a causes b"], "nested": {"n": [1, 2.5, None, True]}}
+    model = crud.new_model_record(document, "desk_lamp", True, {"errors": [], "score": 0.5}, "ab" * 32, client)
+    verdict = {"verdict": "works", "decided_by": "planner", "training_object": "desk_lamp", "test_object": "candle"}
+    trial = crud.new_trial_record(model.id, {"parts": {"wick": "emitter"}}, "fd", verdict, True, 0.0125, client)
+    return model, trial
+
+
+def _stored_rows(engine: Any, model_id: uuid.UUID) -> list[tuple[Any, ...]]:
+    """The model's and its trials' rows as the driver returns them, without the ids the two inserts differ in."""
+    with engine.connect() as connection:
+        model = connection.execute(select(*ModelRecord.__table__.c).where(ModelRecord.id == model_id)).one()
+        trial = connection.execute(select(*TrialRecord.__table__.c).where(TrialRecord.model_id == model_id)).one()
+    return [tuple(model)[1:], tuple(trial)[1:4] + tuple(trial)[5:]]
+
+
+def test_saved_records_are_stored_exactly_as_core_stores_them(database_url: str) -> None:
+    """save() runs its INSERTs on the driver's connection, with the columns' own bind processors."""
+    engine = create_database_engine(database_url)
+    upgrade(engine)
+    fast_model, fast_trial = _records("fast")
+    crud.save(engine, [fast_model, fast_trial])
+    core_model, core_trial = _records("core")
+    core_model.created_at, core_trial.created_at = fast_model.created_at, fast_trial.created_at
+    with engine.begin() as connection:
+        connection.execute(insert(ModelRecord), [crud._row(core_model)])
+        connection.execute(insert(TrialRecord), [crud._row(core_trial)])
+    fast_rows, core_rows = _stored_rows(engine, fast_model.id), _stored_rows(engine, core_model.id)
+    participant = 1  # the column after created_at
+    assert fast_rows[0][participant] == "fast" and core_rows[0][participant] == "core"
+    for fast_row, core_row in zip(fast_rows, core_rows, strict=True):
+        assert (
+            fast_row[:participant] + fast_row[participant + 1 :] == core_row[:participant] + core_row[participant + 1 :]
+        )
+    differing = {"id", "participant_id", "model_id"}
+    with Session(engine) as session:
+        for fast, core in ((fast_model, core_model), (fast_trial, core_trial)):
+            fast_stored, core_stored = session.get(type(fast), fast.id), session.get(type(core), core.id)
+            assert fast_stored is not None and core_stored is not None
+            for column in fast.__table__.columns:
+                if column.key not in differing:
+                    assert getattr(fast_stored, column.key) == getattr(core_stored, column.key), column.key
+    engine.dispose()
+
+
+def test_a_failed_save_stores_nothing_and_keeps_the_connection_usable(database_url: str) -> None:
+    engine = create_database_engine(database_url)
+    upgrade(engine)
+    model, trial = _records("failed")
+    trial.verdict = None  # type: ignore[assignment]  # NOT NULL: the driver refuses the second INSERT
+    with pytest.raises(StorageError, match="nothing was stored"):
+        crud.save(engine, [model, trial])
+    with Session(engine) as session:
+        assert session.get(ModelRecord, model.id) is None
+    model, trial = _records("after")
+    crud.save(engine, [model, trial])
+    with Session(engine) as session:
+        assert session.get(TrialRecord, trial.id) is not None
+    engine.dispose()
 
 
 def test_a_trial_and_its_inline_model_are_stored_together_or_not_at_all(

@@ -7,12 +7,13 @@ together or not at all.
 from __future__ import annotations
 
 import uuid
-from collections.abc import Iterator, Sequence
+import weakref
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
-from sqlalchemy import Engine, func, insert, select
+from sqlalchemy import Dialect, Engine, Table, func, insert, select
 from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session
 
@@ -32,11 +33,15 @@ class ClientIds:
 
 
 @contextmanager
-def storage_errors(session: Session | None = None) -> Iterator[None]:
-    """Turn database failures into StorageError, rolling back whatever ``session`` had begun."""
+def storage_errors(session: Session | None = None, driver_errors: tuple[type[Exception], ...] = ()) -> Iterator[None]:
+    """Turn database failures into StorageError, rolling back whatever ``session`` had begun.
+
+    ``driver_errors``: the database driver's own errors too, for work done on its connection.
+    """
+    caught: tuple[type[Exception], ...] = (SQLAlchemyError, *driver_errors)
     try:
         yield
-    except SQLAlchemyError as exc:
+    except caught as exc:
         if session is not None:
             session.rollback()
         reason = str(getattr(exc, "orig", None) or exc).strip().splitlines()[0]
@@ -105,18 +110,73 @@ def _row(record: ModelRecord | TrialRecord) -> dict[str, Any]:
     return {column.key: getattr(record, column.key) for column in record.__table__.columns}
 
 
+class _CompiledInsert:
+    """A table's INSERT compiled once for a dialect, with each column's own bind processor.
+
+    ``connection.execute(insert(table), rows)`` builds an execution context and runs its events
+    on every call: ~0.15 ms of the ~0.3 ms that storing a request's record took in SQLite, on
+    the path that answers a repeated plan in ~1.5 ms. The values go through the processors Core
+    uses, so they are stored exactly as Core stores them (tests read them back through the ORM).
+    """
+
+    def __init__(self, table: Table, dialect: Dialect) -> None:
+        compiled = insert(table).compile(dialect=dialect)
+        self.statement = str(compiled)
+        self.positional = compiled.positional
+        self.names = list(compiled.positiontup or ()) if compiled.positional else list(compiled.params)
+        self.processors: list[Callable[[Any], Any] | None] = [
+            table.columns[name].type.dialect_impl(dialect).bind_processor(dialect) for name in self.names
+        ]
+
+    def parameters(self, rows: list[dict[str, Any]]) -> list[list[Any]] | list[dict[str, Any]]:
+        """Return the driver's parameters for ``rows``: value lists or dicts, as its paramstyle wants."""
+        values = [
+            [
+                row[name] if processor is None else processor(row[name])
+                for name, processor in zip(self.names, self.processors, strict=True)
+            ]
+            for row in rows
+        ]
+        return values if self.positional else [dict(zip(self.names, row, strict=True)) for row in values]
+
+
+_inserts: weakref.WeakKeyDictionary[Engine, dict[str, _CompiledInsert]] = weakref.WeakKeyDictionary()
+
+
+def _compiled_insert(engine: Engine, table: Table) -> _CompiledInsert:
+    by_table = _inserts.setdefault(engine, {})
+    compiled = by_table.get(table.name)
+    if compiled is None:
+        compiled = by_table[table.name] = _CompiledInsert(table, engine.dialect)
+    return compiled
+
+
 def save(engine: Engine, records: Sequence[ModelRecord | TrialRecord]) -> None:
     """Store new ``records`` (as ``new_model_record`` and ``new_trial_record`` make them) in one transaction.
 
-    Plain INSERTs in a transaction of their own, rather than a session's unit of work: that
-    costs ~0.15 ms more per request, on the path that answers a repeated plan in about 1 ms.
-    The records stay as they were built (not attached to any session).
+    Plain INSERTs on a pooled driver connection, compiled once (see ``_CompiledInsert``), rather
+    than a session's unit of work. The records stay as they were built (not attached to any session).
     """
-    with storage_errors(), engine.begin() as connection:
-        for kind in (ModelRecord, TrialRecord):  # models first: trials refer to them
-            rows = [_row(record) for record in records if isinstance(record, kind)]
-            if rows:
-                connection.execute(insert(kind), rows)
+    with storage_errors(driver_errors=(engine.dialect.loaded_dbapi.Error,)):
+        connection = engine.raw_connection()
+        try:
+            cursor = connection.cursor()
+            for kind in (ModelRecord, TrialRecord):  # models first: trials refer to them
+                rows = [_row(record) for record in records if isinstance(record, kind)]
+                if not rows:
+                    continue
+                table = kind.__table__
+                assert isinstance(table, Table)
+                compiled = _compiled_insert(engine, table)
+                parameters = compiled.parameters(rows)
+                if len(parameters) == 1:
+                    cursor.execute(compiled.statement, parameters[0])
+                else:
+                    cursor.executemany(compiled.statement, parameters)
+            cursor.close()
+            connection.commit()
+        finally:
+            connection.close()  # back to the pool, which rolls back what was not committed
 
 
 def get_model(session: Session, model_id: uuid.UUID) -> ModelRecord:
