@@ -74,11 +74,15 @@ ModelDocument = Annotated[dict[str, Any], WithJsonSchema(MODEL_DOCUMENT_SCHEMA)]
 MappingDocument = Annotated[dict[str, Any], WithJsonSchema(MAPPING_DOCUMENT_SCHEMA)]
 
 
-class _In(BaseModel):
+class InputModel(BaseModel):
+    """The base of request bodies: an unknown field is an error, not silently dropped."""
+
     model_config = ConfigDict(extra="forbid")
 
 
-class _Out(BaseModel):
+class OutputModel(BaseModel):
+    """The base of answers: built from records and dataclasses as well as dicts."""
+
     model_config = ConfigDict(from_attributes=True)
 
 
@@ -90,7 +94,7 @@ def _as_utc(value: datetime) -> datetime:
 UtcDatetime = Annotated[datetime, AfterValidator(_as_utc)]
 
 
-class _Solve(_In):
+class _Solve(InputModel):
     model: ModelDocument | None = Field(default=None, description="The model inline (or give model_id).")
     model_id: uuid.UUID | None = Field(default=None, description="A model stored by POST /v1/models.")
     planner: str = Field(
@@ -126,14 +130,14 @@ class TransferIn(_Solve):
     mapping: MappingDocument = Field(description="The step-3 mapping of the new object's parts.")
 
 
-class LocationOut(_Out):
+class LocationOut(OutputModel):
     file: str | None = None
     line: int | None = None
     rule: int | None = None
     part: str | None = None
 
 
-class DiagnosticOut(_Out):
+class DiagnosticOut(OutputModel):
     """One finding of validation, with the same code as ``causalplan check``."""
 
     code: str
@@ -143,7 +147,7 @@ class DiagnosticOut(_Out):
     hint: str | None = None
 
 
-class ReportOut(_Out):
+class ReportOut(OutputModel):
     """A validation report: ``causalplan check --json`` without the file name."""
 
     valid: bool
@@ -151,14 +155,14 @@ class ReportOut(_Out):
     warnings: list[DiagnosticOut]
 
 
-class ModelLinks(_Out):
+class ModelLinks(OutputModel):
     self: str
     graph_svg: str
     graph_dot: str
     graph_json: str
 
 
-class ModelOut(_Out):
+class ModelOut(OutputModel):
     """A stored model, its validation report, and where its graph is."""
 
     id: uuid.UUID
@@ -172,19 +176,19 @@ class ModelOut(_Out):
     links: ModelLinks
 
 
-class PlanStepOut(_Out):
+class PlanStepOut(OutputModel):
     action: str
     args: list[str]
     fit: str
     text: str
 
 
-class PddlOut(_Out):
+class PddlOut(OutputModel):
     domain: str
     problem: str
 
 
-class PlanOut(_Out):
+class PlanOut(OutputModel):
     """A replayed plan (``causalplan plan --json``), and where the answer came from."""
 
     model_config = ConfigDict(extra="allow")  # planners may add fields, e.g. success_probability
@@ -206,14 +210,14 @@ class PlanOut(_Out):
     warnings: list[DiagnosticOut] = Field(description="Validation warnings of the model and mapping.")
 
 
-class ReasonOut(_Out):
+class ReasonOut(OutputModel):
     code: str
     severity: Literal["error", "warning"]
     message: str
     labels: list[str]
 
 
-class TransferOut(_Out):
+class TransferOut(OutputModel):
     """A transfer verdict (``causalplan transfer --json``), and the stored trial."""
 
     model_config = ConfigDict(extra="allow")
@@ -233,12 +237,12 @@ class TransferOut(_Out):
     model_id: uuid.UUID
 
 
-class ObjectPartOut(_Out):
+class ObjectPartOut(OutputModel):
     id: str
     name: str
 
 
-class ObjectSummaryOut(_Out):
+class ObjectSummaryOut(OutputModel):
     """One catalog object in the list."""
 
     id: str
@@ -249,19 +253,19 @@ class ObjectSummaryOut(_Out):
     parts: list[ObjectPartOut]
 
 
-class ConnectorOut(_Out):
+class ConnectorOut(OutputModel):
     id: str
     kind: str
     spec: str
 
 
-class PartOut(_Out):
+class PartOut(OutputModel):
     id: str
     name: str
     connectors: list[ConnectorOut]
 
 
-class FitOut(_Out):
+class FitOut(OutputModel):
     id: str
     primitive: str
     moving: str = Field(description="part.connector of the part being attached")
@@ -271,17 +275,17 @@ class FitOut(_Out):
     text: str = Field(description="The step in words.")
 
 
-class RequirementOut(_Out):
+class RequirementOut(OutputModel):
     any_of: list[str]
     says: str
 
 
-class MechanismOut(_Out):
+class MechanismOut(OutputModel):
     explanation: str
     requires: list[RequirementOut]
 
 
-class ObjectOut(_Out):
+class ObjectOut(OutputModel):
     """A catalog object in full: parts, connectors, fits and true mechanism."""
 
     id: str
@@ -295,24 +299,24 @@ class ObjectOut(_Out):
     mechanism: MechanismOut
 
 
-class GraphNodeOut(_Out):
+class GraphNodeOut(OutputModel):
     id: str
     label: str
     kind: Literal["function", "effect", "goal", "unknown", "rule"]
     column: int
 
 
-class GraphEdgeOut(_Out):
+class GraphEdgeOut(OutputModel):
     source: str
     target: str
 
 
-class GraphOut(_Out):
+class GraphOut(OutputModel):
     nodes: list[GraphNodeOut]
     edges: list[GraphEdgeOut]
 
 
-class TrialOut(_Out):
+class TrialOut(OutputModel):
     """One stored transfer trial."""
 
     id: uuid.UUID
@@ -332,14 +336,14 @@ class TrialOut(_Out):
     result: dict[str, Any]
 
 
-class TrialsOut(_Out):
+class TrialsOut(OutputModel):
     """A page of trials, newest first, and how many match in all."""
 
     data: list[TrialOut]
     count: int
 
 
-class StoredModelOut(_Out):
+class StoredModelOut(OutputModel):
     """One stored model in an export."""
 
     id: uuid.UUID
@@ -353,7 +357,7 @@ class StoredModelOut(_Out):
     report: dict[str, Any]
 
 
-class ExportOut(_Out):
+class ExportOut(OutputModel):
     """Everything stored: every model and every trial."""
 
     exported_at: datetime
@@ -361,7 +365,7 @@ class ExportOut(_Out):
     trials: list[TrialOut]
 
 
-class DatabaseHealthOut(_Out):
+class DatabaseHealthOut(OutputModel):
     reachable: bool
     backend: str
     revision: str | None
@@ -369,7 +373,7 @@ class DatabaseHealthOut(_Out):
     problem: str | None = None
 
 
-class FastDownwardHealthOut(_Out):
+class FastDownwardHealthOut(OutputModel):
     search_binary: str | None
     search_binary_found: bool
     translator_found: bool
@@ -377,13 +381,13 @@ class FastDownwardHealthOut(_Out):
     problem: str | None = None
 
 
-class PlannerHealthOut(_Out):
+class PlannerHealthOut(OutputModel):
     name: str
     available: bool
     problem: str | None = Field(description="Why it cannot run here (null when it can).")
 
 
-class HealthOut(_Out):
+class HealthOut(OutputModel):
     """Whether the service can plan and store, and what it runs with."""
 
     status: Literal["ok", "degraded"]

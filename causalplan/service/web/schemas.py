@@ -5,27 +5,19 @@ from __future__ import annotations
 import uuid
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import ConfigDict, Field
 
-from causalplan.service.schemas import DiagnosticOut, UtcDatetime
+from causalplan.service.schemas import DiagnosticOut, InputModel, OutputModel, UtcDatetime
 
 ObjectId = Annotated[str, Field(min_length=1, max_length=200)]
 MAX_RULES_TEXT = 200_000
 MAX_PART_TEXT = 10_000
 
 
-class _In(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-
-
-class _Out(BaseModel):
-    model_config = ConfigDict(from_attributes=True)
-
-
 # -- experiments (researchers, bearer token) --------------------------------------------------------
 
 
-class ConditionIn(_In):
+class ConditionIn(InputModel):
     name: str = Field(min_length=1, max_length=100, description="e.g. 'near' or 'far'.", examples=["near"])
     training: list[ObjectId] = Field(
         min_length=1, max_length=2, description="Catalog ids of the training objects: one, or two one model explains."
@@ -33,7 +25,7 @@ class ConditionIn(_In):
     tests: list[ObjectId] = Field(min_length=1, max_length=8, description="Catalog ids of the test objects (new ones).")
 
 
-class ExperimentIn(_In):
+class ExperimentIn(InputModel):
     """POST /v1/experiments: a new experiment."""
 
     name: str = Field(min_length=1, max_length=200)
@@ -60,13 +52,13 @@ class ExperimentIn(_In):
     )
 
 
-class ConditionOut(_Out):
+class ConditionOut(OutputModel):
     name: str
     training: list[str]
     tests: list[str]
 
 
-class ExperimentLinks(_Out):
+class ExperimentLinks(OutputModel):
     page: str
     results: str
     participants: str
@@ -74,7 +66,7 @@ class ExperimentLinks(_Out):
     export_csv: str
 
 
-class ExperimentOut(_Out):
+class ExperimentOut(OutputModel):
     """A stored experiment."""
 
     id: uuid.UUID
@@ -91,7 +83,7 @@ class ExperimentOut(_Out):
     links: ExperimentLinks
 
 
-class LinksIn(_In):
+class LinksIn(InputModel):
     """POST /v1/experiments/{id}/participants: make participant links."""
 
     count: int = Field(ge=1, le=500, description="How many links to make.")
@@ -100,7 +92,7 @@ class LinksIn(_In):
     )
 
 
-class ParticipantOut(_Out):
+class ParticipantOut(OutputModel):
     """One participant link and how far its participant got."""
 
     id: uuid.UUID
@@ -118,11 +110,11 @@ class ParticipantOut(_Out):
     finished_at: UtcDatetime | None
 
 
-class ParticipantsOut(_Out):
+class ParticipantsOut(OutputModel):
     data: list[ParticipantOut]
 
 
-class RateOut(_Out):
+class RateOut(OutputModel):
     condition: str
     test_object: str
     generalization: str | None
@@ -133,7 +125,7 @@ class RateOut(_Out):
     rate: float | None = Field(description="transfers / trials (null without trials).")
 
 
-class TrialRowOut(_Out):
+class TrialRowOut(OutputModel):
     """One step-3 trial: the participant's model, mapping, verdict and reasons."""
 
     model_config = ConfigDict(extra="allow")
@@ -152,7 +144,7 @@ class TrialRowOut(_Out):
     mapping: dict[str, Any]
 
 
-class ResultsOut(_Out):
+class ResultsOut(OutputModel):
     """An experiment's results: participants, transfer rates, and every trial."""
 
     experiment: ExperimentOut
@@ -164,12 +156,12 @@ class ResultsOut(_Out):
 # -- the participant pages' endpoints -----------------------------------------------------------------
 
 
-class TutorialDraftIn(_In):
+class TutorialDraftIn(InputModel):
     step: Literal["tutorial"]
     answers: dict[Annotated[str, Field(max_length=40)], Annotated[str, Field(max_length=40)]] = Field(max_length=10)
 
 
-class FunctionsDraftIn(_In):
+class FunctionsDraftIn(InputModel):
     step: Literal["step1"]
     object: ObjectId
     functions: dict[Annotated[str, Field(max_length=200)], Annotated[str, Field(max_length=MAX_PART_TEXT)]] = Field(
@@ -177,12 +169,12 @@ class FunctionsDraftIn(_In):
     )
 
 
-class MappingEntryIn(_In):
+class MappingEntryIn(InputModel):
     chosen: list[Annotated[str, Field(max_length=200)]] = Field(default_factory=list, max_length=64)
     added: str = Field(default="", max_length=MAX_PART_TEXT)
 
 
-class MappingDraftIn(_In):
+class MappingDraftIn(InputModel):
     step: Literal["step3"]
     object: ObjectId
     mapping: dict[Annotated[str, Field(max_length=200)], MappingEntryIn] = Field(max_length=64)
@@ -191,19 +183,19 @@ class MappingDraftIn(_In):
 DraftIn = Annotated[TutorialDraftIn | FunctionsDraftIn | MappingDraftIn, Field(discriminator="step")]
 
 
-class SavedOut(_Out):
+class SavedOut(OutputModel):
     saved: bool
     saved_at: UtcDatetime
 
 
-class CheckIn(_In):
+class CheckIn(InputModel):
     """The rule box as typed: checked like `causalplan check` and saved."""
 
     rules: str = Field(max_length=MAX_RULES_TEXT)
     practice: bool = Field(default=False, description="The tutorial's practice box (the toy car).")
 
 
-class PlanIn(_In):
+class PlanIn(InputModel):
     """The rule box as typed: saved, then planned on each training object."""
 
     rules: str = Field(max_length=MAX_RULES_TEXT)
@@ -213,7 +205,7 @@ class LineDiagnosticOut(DiagnosticOut):
     line: int | None = Field(description="The line of the rule box it is about (null: the whole model).")
 
 
-class CheckOut(_Out):
+class CheckOut(OutputModel):
     valid: bool
     errors: list[LineDiagnosticOut]
     warnings: list[LineDiagnosticOut]
@@ -221,7 +213,7 @@ class CheckOut(_Out):
     saved_at: UtcDatetime
 
 
-class PlanForObjectOut(_Out):
+class PlanForObjectOut(OutputModel):
     object: str
     name: str
     status: str
@@ -231,5 +223,5 @@ class PlanForObjectOut(_Out):
     picture_url: str | None
 
 
-class PlansOut(_Out):
+class PlansOut(OutputModel):
     plans: list[PlanForObjectOut]
