@@ -6,6 +6,7 @@ together or not at all.
 
 from __future__ import annotations
 
+import threading
 import uuid
 import weakref
 from collections.abc import Callable, Iterator, Sequence
@@ -141,14 +142,17 @@ class _CompiledInsert:
 
 
 _inserts: weakref.WeakKeyDictionary[Engine, dict[str, _CompiledInsert]] = weakref.WeakKeyDictionary()
+_inserts_lock = threading.Lock()
 
 
 def _compiled_insert(engine: Engine, table: Table) -> _CompiledInsert:
-    by_table = _inserts.setdefault(engine, {})
-    compiled = by_table.get(table.name)
-    if compiled is None:
-        compiled = by_table[table.name] = _CompiledInsert(table, engine.dialect)
-    return compiled
+    """Return ``table``'s compiled INSERT for ``engine`` (compiled on first use; forgotten with the engine)."""
+    with _inserts_lock:
+        by_table = _inserts.setdefault(engine, {})
+        compiled = by_table.get(table.name)
+        if compiled is None:
+            compiled = by_table[table.name] = _CompiledInsert(table, engine.dialect)
+        return compiled
 
 
 def save(engine: Engine, records: Sequence[ModelRecord | TrialRecord]) -> None:
