@@ -109,6 +109,20 @@ def test_saved_records_are_stored_exactly_as_core_stores_them(database_url: str)
     engine.dispose()
 
 
+def test_several_records_of_a_kind_are_stored_in_one_save(database_url: str) -> None:
+    engine = create_database_engine(database_url)
+    upgrade(engine)
+    first, first_trial = _records("many")
+    second, second_trial = _records("many")
+    crud.save(engine, [first_trial, first, second_trial, second])  # trials listed first: models still go in first
+    with Session(engine) as session:
+        models = session.scalars(select(ModelRecord.id).where(ModelRecord.participant_id == "many")).all()
+        trials = session.scalars(select(TrialRecord.model_id).where(TrialRecord.participant_id == "many")).all()
+    assert set(models) == {first.id, second.id}
+    assert sorted(trials) == sorted([first.id, second.id])
+    engine.dispose()
+
+
 def test_a_failed_save_stores_nothing_and_keeps_the_connection_usable(database_url: str) -> None:
     engine = create_database_engine(database_url)
     upgrade(engine)
