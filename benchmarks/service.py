@@ -4,7 +4,7 @@
 
 Starts ``causalplan serve`` on a free loopback port (a temporary SQLite database), then sends
 bounded loops of requests over kept-alive connections of the standard library's http.client
-(the lightest client here; one row per kind repeats it with httpx, which adds its own ~0.5 ms
+(the lightest client here; one row per kind repeats it with httpx, which adds its own ~0.6 ms
 per request): each "new" request is a model the server has not seen
 (its intermediate effect renamed), so it is read, planned and stored; "cached" requests repeat
 one model (still stored each time). The reference is ``plan_task`` on the same desk-lamp task,

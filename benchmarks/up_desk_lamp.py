@@ -1,5 +1,9 @@
 """Reference: the same desk-lamp solve through unified-planning, as a whole process."""
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 from unified_planning.shortcuts import (
     And,
     BoolType,
@@ -11,6 +15,9 @@ from unified_planning.shortcuts import (
     UserType,
     get_environment,
 )
+
+if TYPE_CHECKING:
+    from unified_planning.model import FNode
 
 get_environment().credits_stream = None
 Part, Fit = UserType("part"), UserType("fit")
@@ -26,7 +33,7 @@ f1, f2 = Object("bulb_into_socket", Fit), Object("shade_onto_ring", Fit)
 problem.add_objects([base, bulb, shade, f1, f2])
 
 
-def attach(name, fit, part, *effects):  # type: ignore[no-untyped-def]
+def attach(name: str, fit: Object, part: Object, *effects: tuple[FNode, bool]) -> InstantaneousAction:
     """Return the action attaching ``part`` to the base through ``fit``, with its further ``effects``."""
     action = InstantaneousAction(name)
     for precondition in (available(fit), in_assembly(base), detached(part)):

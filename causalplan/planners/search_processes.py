@@ -3,7 +3,7 @@
 Fast Downward's search binary reads its whole task from stdin before it even parses its
 options (planner.cc: ``tasks::read_root_task(cin)`` comes first), and it needs the end of
 stdin to finish reading. So it can be started ahead of time (process creation, loading the
-224 MB binary, dynamic linking, static initialisation: ~2-3 ms here) and left blocking on
+224 MB binary, dynamic linking, static initialisation: ~3.7 ms of CPU here) and left blocking on
 stdin; a solve then writes the task, closes stdin and waits for the plan.
 
 The pool keeps at most one idle process per command (a command fixes the search
@@ -14,7 +14,7 @@ working directory, where ``--internal-plan-file`` puts the plan and its output g
 ``retire`` does on a background thread what the answer need not wait for: reaping the used
 process and removing its folder (~0.6 ms), then starting the replacement. The replacement
 starts once the search has ended, not when its predecessor was taken: on two cores its start-up
-(~3 ms of CPU) would compete with that very search (measured through the app, interleaved:
+(~3.7 ms of CPU) would compete with that very search (measured through the app, interleaved:
 the search 0.5-1.4 ms faster); now it overlaps the answer going back and the next translation.
 
 Forks and exit: a forked child forgets the parent's idle processes and closes its copies of

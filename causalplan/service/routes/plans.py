@@ -26,7 +26,7 @@ def create_plan(body: PlanIn, services: ServicesDep, client: ClientIdsDep) -> Sa
     # here and sent as it is (FastAPI would hop again to check a returned model).
     inputs = submissions.plan_inputs(body, services, client)
     key = inputs.key("plan")
-    # An inline model's record is stored while the worker solves (the two take ~0.3 ms and
+    # An inline model's record is stored while the worker solves (the two take ~0.16 ms and
     # ~8 ms), or at once for a kept answer; a request refused before a worker took it stores nothing.
     store = submissions.storing(services, inputs.submission)
     answer = submissions.plan(services, inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, key, store)
