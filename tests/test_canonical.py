@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from causalplan.causal.documents import SourceMap
@@ -10,12 +12,13 @@ from causalplan.objects.catalog import Catalog
 from causalplan.pddl import canonical
 from causalplan.pddl.canonical import MAX_MINIMAL_SETS, canonical_pddl, minimal_part_sets
 from causalplan.pddl.task import PlanningTask, build_task
-from causalplan.pddl.writer import compile_task
+from causalplan.pddl.writer import actions_text, compile_task, problem_text, requirements_line
 from causalplan.planners import fast_downward
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanStatus
 from causalplan.planners.synthetic import synthetic_object, synthetic_task
 from tests.conftest import example_mapping, example_model
+from tests.test_search_processes import _example_tasks
 
 
 def _task(functions: dict[str, list[str]], rules: list[str], catalog: Catalog) -> PlanningTask:
@@ -132,3 +135,101 @@ def test_timeouts_are_not_cached() -> None:
     config = fast_downward.CONFIGS["fd"]
     assert fast_downward.solve(big.domain, big.problem, config, time_limit=0.05).status is PlanStatus.TIMEOUT
     assert fast_downward.solve(big.domain, big.problem, config, time_limit=60).status is PlanStatus.SOLVED
+
+
+def _per_primitive_form(task: PlanningTask) -> tuple[str, str]:
+    """Return the canonical form as the readable form writes its steps: one action schema per primitive."""
+    compiled = canonical_pddl(task)
+    assert compiled is not None
+    primitives = sorted({fit.primitive for fit in task.obj.fits})
+    clauses = [line for line in compiled.domain.splitlines() if line.startswith("  (:derived")]
+    lines = [
+        f"(define (domain causalplan-{task.obj.id})",
+        requirements_line(),
+        "  (:types part fit)",
+        f"  (:constants {' '.join(task.obj.part_ids)} - part)",
+        "  (:predicates (in-assembly ?p - part) (available ?f - fit) (moves ?f - fit ?p - part)",
+        "               (attaches-to ?f - fit ?p - part) (excludes ?f - fit ?g - fit)",
+        *(f"               ({primitive}-fit ?f - fit)" for primitive in primitives),
+        "               (goal))",
+        *clauses,
+        actions_text(primitives),
+        ")",
+    ]
+    return "\n".join(lines) + "\n", problem_text(task.obj, "goal", comments=False)
+
+
+def _sas(domain: str, problem: str) -> str:
+    code, sas = fast_downward._run_translator(domain, problem)
+    assert code == 0 and sas is not None
+    return sas
+
+
+def _per_primitive_names(sas: str) -> str:
+    """Rename the one-schema form's operators as the per-primitive form names them; check every one is renamed."""
+    lines = sas.split("\n")
+    for index, line in enumerate(lines[:-1]):
+        if line == "begin_operator":
+            name = lines[index + 1]
+            assert name.startswith(f"{canonical.ASSEMBLE} {canonical.KIND_PREFIX}"), name
+            lines[index + 1] = name.removeprefix(f"{canonical.ASSEMBLE} {canonical.KIND_PREFIX}")
+    return "\n".join(lines)
+
+
+def _tasks_to_compare(user_catalog: Catalog) -> dict[str, PlanningTask]:
+    tasks = _example_tasks(user_catalog)
+    for seed in range(4):
+        for size in (3, 8, 21, 40):
+            tasks[f"synthetic {size} parts, seed {seed}"] = synthetic_task(size, seed=seed)
+    return tasks
+
+
+def test_one_schema_translates_to_the_per_primitive_task_but_for_operator_names(
+    user_catalog: Catalog, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The same SAS task, operator for operator and in the same order: FD's searches cannot differ."""
+    tasks = _tasks_to_compare(user_catalog)
+    several_primitives = 0
+    for name, task in tasks.items():
+        compiled = canonical_pddl(task)
+        assert compiled is not None, name
+        renamed = _per_primitive_names(_sas(compiled.domain, compiled.problem))
+        assert renamed == _sas(*_per_primitive_form(task)), name
+        several_primitives += len({fit.primitive for fit in task.obj.fits}) > 1
+    assert several_primitives >= 10  # a mixed-up order of schemas would have shown
+    capsys.readouterr()  # the translator's log
+
+
+@pytest.mark.parametrize("config", sorted(fast_downward.CONFIGS))
+def test_plans_of_one_schema_are_those_of_the_per_primitive_form(config: str, user_catalog: Catalog) -> None:
+    tasks = _tasks_to_compare(user_catalog)
+    statuses = set()
+    for name, task in tasks.items():
+        compiled = canonical_pddl(task)
+        assert compiled is not None
+        fast_downward.clear_solve_cache()
+        one = fast_downward.solve(compiled.domain, compiled.problem, fast_downward.CONFIGS[config])
+        per_primitive = fast_downward.solve(*_per_primitive_form(task), fast_downward.CONFIGS[config])
+        assert one.status is per_primitive.status, name
+        assert all(action == canonical.ASSEMBLE for action, _ in one.actions)
+        assert canonical.plan_actions(one.actions) == per_primitive.actions, name
+        statuses.add(one.status)
+    assert statuses == {PlanStatus.SOLVED, PlanStatus.UNSOLVABLE}
+
+
+def test_plan_actions_renames_only_the_assemble_steps() -> None:
+    plan = (("assemble", ("kind-screw", "light_bulb", "base", "bulb_into_socket")), ("clip", ("shade", "base", "f")))
+    assert canonical.plan_actions(plan) == (
+        ("screw", ("light_bulb", "base", "bulb_into_socket")),
+        ("clip", ("shade", "base", "f")),
+    )
+
+
+def test_an_object_without_fits_has_no_kinds_and_its_goal_is_unsolvable_or_holds(catalog: Catalog) -> None:
+    lamp = catalog.get("desk_lamp")
+    bare = replace(lamp, fits=())
+    task = build_task(example_model("paper/desk_lamp.yaml", catalog), bare)
+    compiled = canonical_pddl(task)
+    assert compiled is not None and "- kind" not in compiled.domain.split("(:predicates")[0]
+    outcome = fast_downward.solve(compiled.domain, compiled.problem, fast_downward.CONFIGS["fd"])
+    assert outcome.status is PlanStatus.UNSOLVABLE

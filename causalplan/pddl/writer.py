@@ -9,10 +9,11 @@ alternatives, exactly the semantics of the rule language. The goal is the goal n
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from causalplan import __version__
-from causalplan.objects.model import AssemblyObject
+from causalplan.objects.model import AssemblyObject, Fit
 from causalplan.pddl.identifiers import comment, node_identifiers
 from causalplan.pddl.task import PlanningTask
 
@@ -94,18 +95,31 @@ def actions_text(primitives: list[str]) -> str:
     return "\n".join(_action(primitive) for primitive in primitives)
 
 
-def problem_text(obj: AssemblyObject, goal: str, goal_comment: str | None = None, comments: bool = True) -> str:
-    """Return the problem: the fits as objects, the starting assembly, the goal predicate ``goal``."""
+def fit_facts(fit: Fit) -> list[str]:
+    """Return the static facts of ``fit`` that the per-primitive actions read: its kind, what it moves onto what."""
+    return [
+        f"({_fit_predicate(fit.primitive)} {fit.id})",
+        f"(moves {fit.id} {fit.moving_part})",
+        f"(attaches-to {fit.id} {fit.fixed_part})",
+    ]
+
+
+def problem_text(
+    obj: AssemblyObject,
+    goal: str,
+    goal_comment: str | None = None,
+    comments: bool = True,
+    static_facts: Callable[[Fit], list[str]] = fit_facts,
+) -> str:
+    """Return the problem: the fits as objects, the starting assembly, the goal predicate ``goal``.
+
+    ``static_facts`` writes what the domain's actions read of a fit, besides ``available`` and ``excludes``.
+    """
     init = [f"    (in-assembly {obj.base})"]
     for fit in obj.fits:
         if comments:
             init.append(f"    ;; {fit.id}: {comment(obj.step_text(fit))}")
-        facts = [
-            f"(available {fit.id})",
-            f"({_fit_predicate(fit.primitive)} {fit.id})",
-            f"(moves {fit.id} {fit.moving_part})",
-            f"(attaches-to {fit.id} {fit.fixed_part})",
-        ]
+        facts = [f"(available {fit.id})", *static_facts(fit)]
         facts += [f"(excludes {fit.id} {other})" for other in obj.excluded_fits(fit)]
         init.append("    " + " ".join(facts))
     fits = [fit.id for fit in obj.fits]

@@ -16,7 +16,7 @@ from dataclasses import replace
 
 from causalplan.causal.graph import goal_holds
 from causalplan.errors import CausalPlanError
-from causalplan.pddl.canonical import canonical_pddl
+from causalplan.pddl.canonical import canonical_pddl, plan_actions
 from causalplan.pddl.task import PlanningTask
 from causalplan.pddl.writer import compile_task
 from causalplan.planners import fast_downward
@@ -78,9 +78,11 @@ def _search(task: PlanningTask, planner: str, time_limit: float, timing: dict[st
         started = time.perf_counter()
         # FD solves the label-free canonical form: equal problems give identical runs and plans,
         # and one cached solve serves them all. Too big a goal function: the readable form.
-        compiled = canonical_pddl(task) or compile_task(task)
+        canonical = canonical_pddl(task)
+        compiled = canonical or compile_task(task)
         timing["compile"] = time.perf_counter() - started
-        return fast_downward.solve(compiled.domain, compiled.problem, fast_downward.CONFIGS[planner], time_limit)
+        outcome = fast_downward.solve(compiled.domain, compiled.problem, fast_downward.CONFIGS[planner], time_limit)
+        return replace(outcome, actions=plan_actions(outcome.actions)) if canonical is not None else outcome
     if planner == "mdp":
         from causalplan.planners.mdp import search_outcome, solve_mdp
 
