@@ -5,13 +5,15 @@
 Starts ``causalplan serve`` on a free loopback port (a temporary SQLite database), then sends
 bounded loops of requests over kept-alive connections of the standard library's http.client
 (the lightest client here; one row per kind repeats it with httpx, which adds its own ~0.6 ms
-per request): each "new" request is a model the server has not seen
+per request). Requests go to the paper's four objects in turn (PAPER_CASES: the desk-lamp
+model on the desk lamp and, through its step-3 mapping, on the flashlight; the candle model on
+the candle and on the kerosene lamp). Each "new" request is a model the server has not seen
 (its intermediate effect renamed), so it is read, planned and stored; "cached" requests repeat
-one model (still stored each time). The reference is ``plan_task`` on the same desk-lamp task,
-in a freshly spawned process as the CLI runs it, measured in the same run; so is the same solve
-through unified-planning's OneshotPlanner. Ratios are service / in-process; "beside solve" is
-what a planned request cost beyond the solve the answer reports (HTTP, reading, storing, the hop
-to a worker). The last lines check issue 8's targets. Results also go to
+the four models (still stored each time). The reference is ``plan_task`` on the same four tasks
+in turn, in a freshly spawned process as the CLI runs it, measured in the same run; so is the
+same solve through unified-planning's OneshotPlanner. Ratios are service / in-process; "beside
+solve" is what a planned request cost beyond the solve the answer reports (HTTP, reading,
+storing, the hop to a worker). The last lines check issue 8's targets. Results also go to
 ``benchmarks/results/service.json``. See benchmarks/README.md.
 """
 
@@ -47,7 +49,14 @@ if TYPE_CHECKING:
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "service.json"
-MODEL: dict[str, Any] = yaml.safe_load((ROOT / "examples" / "paper" / "desk_lamp.yaml").read_text())
+EXAMPLES = ROOT / "examples"
+PAPER_CASES: tuple[tuple[str, str, str | None, str], ...] = (
+    ("desk lamp", "paper/desk_lamp.yaml", None, "electricity flows"),
+    ("flashlight", "paper/desk_lamp.yaml", "paper/flashlight_mapping.yaml", "electricity flows"),
+    ("candle", "near/candle.yaml", None, "fuel at the tip"),
+    ("kerosene lamp", "near/candle.yaml", "near/kerosene_lamp_mapping.yaml", "fuel at the tip"),
+)
+"""The paper's four objects, planned in turn: (object, model, step-3 mapping or None, an intermediate effect)."""
 CLIENT_COUNTS = (1, 8)
 START_SECONDS = 60.0
 MAX_SECONDS_PER_SCENARIO = 120.0
@@ -81,23 +90,38 @@ class Scenario:
         return len(self.seconds) / self.wall
 
 
-def unique_model() -> dict[str, Any]:
-    """Return the desk-lamp model with its intermediate effect renamed: a request the cache has not seen."""
-    effect = f"electricity flows {uuid.uuid4().hex[:10]}"
-    return {**MODEL, "rules": [rule.replace("electricity flows", effect) for rule in MODEL["rules"]]}
+def _document(relative: str) -> dict[str, Any]:
+    document: dict[str, Any] = yaml.safe_load((EXAMPLES / relative).read_text())
+    return document
 
 
-def desk_lamp_task() -> PlanningTask:
-    """Return the planning task of MODEL (the paper's desk lamp) on its own object."""
-    from causalplan.causal.documents import SourceMap
-    from causalplan.inputs import model_from_data
+def paper_body(index: int, renamed: bool = True) -> dict[str, Any]:
+    """Return the request body of paper case ``index % 4``, its intermediate effect renamed when ``renamed``.
+
+    Renamed: a model the server has not seen (the canonical planning problem is still the case's own).
+    """
+    _, model_path, mapping_path, effect = PAPER_CASES[index % len(PAPER_CASES)]
+    model = _document(model_path)
+    if renamed:
+        new_effect = f"{effect} {uuid.uuid4().hex[:10]}"
+        model["rules"] = [rule.replace(effect, new_effect) for rule in model["rules"]]
+    return {"model": model} | ({"mapping": _document(mapping_path)} if mapping_path else {})
+
+
+def paper_tasks() -> list[PlanningTask]:
+    """Return the planning tasks of PAPER_CASES, in their order."""
+    from causalplan.inputs import load_mapping, load_model
     from causalplan.objects.catalog import load_catalog
     from causalplan.pddl.task import build_task
 
     catalog = load_catalog()
-    loaded = model_from_data(MODEL, SourceMap(), catalog)
-    assert loaded.model is not None and loaded.is_valid
-    return build_task(loaded.model, catalog.get("desk_lamp"))
+    tasks = []
+    for _, model_path, mapping_path, _ in PAPER_CASES:
+        model = load_model(EXAMPLES / model_path, catalog).model
+        mapping = load_mapping(EXAMPLES / mapping_path, catalog).mapping if mapping_path else None
+        assert model is not None and (mapping_path is None or mapping is not None)
+        tasks.append(build_task(model, catalog.get((mapping or model.labelling).object_id), mapping))
+    return tasks
 
 
 def in_process_latencies(requests: int, planner: str) -> tuple[list[float], float]:
@@ -105,30 +129,31 @@ def in_process_latencies(requests: int, planner: str) -> tuple[list[float], floa
     from causalplan.planners import fast_downward
     from causalplan.planners.pipeline import plan_task
 
-    task = desk_lamp_task()
-    assert plan_task(task, planner).has_plan  # warm-up
+    tasks = paper_tasks()
+    assert all(plan_task(task, planner).has_plan for task in tasks)  # warm-up
     seconds = []
     started = time.perf_counter()
-    for _ in range(requests):
+    for index in range(requests):
         fast_downward.clear_solve_cache()  # every solve a real one, as for a model never seen
         solve_started = time.perf_counter()
-        result = plan_task(task, planner)
+        result = plan_task(tasks[index % len(tasks)], planner)
         seconds.append(time.perf_counter() - solve_started)
         assert result.has_plan, result.message
     return seconds, time.perf_counter() - started
 
 
 def up_latencies(requests: int) -> tuple[list[float], float]:
-    """Solve the same task through unified-planning's OneshotPlanner("fast-downward"); return times and wall."""
+    """Solve the same tasks through unified-planning's OneshotPlanner("fast-downward"); return times and wall."""
     from causalplan.planners.up_problem import solve_with_up
 
-    task = desk_lamp_task()
-    solve_with_up(task, "fast-downward")  # warm-up: imports
+    tasks = paper_tasks()
+    for task in tasks:  # warm-up: imports
+        solve_with_up(task, "fast-downward")
     seconds = []
     started = time.perf_counter()
-    for _ in range(requests):
+    for index in range(requests):
         solve_started = time.perf_counter()
-        outcome = solve_with_up(task, "fast-downward")
+        outcome = solve_with_up(tasks[index % len(tasks)], "fast-downward")
         seconds.append(time.perf_counter() - solve_started)
         assert outcome.actions, outcome.message
     return seconds, time.perf_counter() - started
@@ -220,7 +245,7 @@ def run_clients(
 
     ``client``: "http.client" (the standard library's, the lightest here) or "httpx".
     """
-    fixed = unique_model()
+    fixed = [paper_body(index) for index in range(len(PAPER_CASES))]
     lock = threading.Lock()
     seconds: list[float] = []
     outside_solve: list[float] = []
@@ -230,10 +255,10 @@ def run_clients(
     def client_loop(count: int) -> None:
         post = HttpxClient(base) if client == "httpx" else KeepAliveClient(base)
         with post:
-            for _ in range(count):
+            for index in range(count):
                 if time.monotonic() > deadline:
                     return
-                body = {"model": fixed if cached else unique_model(), "planner": planner}
+                body = {**(fixed[index % len(fixed)] if cached else paper_body(index)), "planner": planner}
                 started = time.perf_counter()
                 status, data = post("/v1/plans", body)
                 elapsed = time.perf_counter() - started
@@ -245,8 +270,9 @@ def run_clients(
                     if not data.get("cached", True) and isinstance(solve, float):  # a cached answer's timing is old
                         outside_solve.append(elapsed - solve)
 
-    if cached:  # the first answer fills the cache
-        httpx.post(f"{base}/v1/plans", json={"model": fixed, "planner": planner}, timeout=120)
+    if cached:  # the first answers fill the cache
+        for body in fixed:
+            httpx.post(f"{base}/v1/plans", json={**body, "planner": planner}, timeout=120).raise_for_status()
     shares = [requests // clients + (1 if index < requests % clients else 0) for index in range(clients)]
     started = time.perf_counter()
     with ThreadPoolExecutor(clients) as pool:
@@ -293,9 +319,9 @@ def main() -> None:
         with tempfile.TemporaryDirectory(prefix="causalplan-bench-") as folder:
             server, base = start_server(Path(folder), args.workers, cold)
             try:
-                for _ in range(2 * args.workers):  # warm-up: every worker has planned once
-                    body = {"model": unique_model(), "planner": args.planner}
-                    httpx.post(f"{base}/v1/plans", json=body, timeout=120)
+                for index in range(2 * args.workers * len(PAPER_CASES)):  # warm-up: every worker, every case
+                    body = {**paper_body(index), "planner": args.planner}
+                    httpx.post(f"{base}/v1/plans", json=body, timeout=120).raise_for_status()
                 for cached in (False, True) if not cold else (False,):
                     for clients in CLIENT_COUNTS:
                         name = "POST /v1/plans, " + (
@@ -316,7 +342,8 @@ def main() -> None:
     )
     print(
         f"causalplan service benchmark: planner {args.planner}, {args.workers} worker(s), "
-        f"{os.cpu_count()} core(s), Python {platform.python_version()}"
+        f"{os.cpu_count()} core(s), Python {platform.python_version()}; requests rotate over the "
+        f"{', '.join(case[0] for case in PAPER_CASES)}"
     )
     print(header)
     print("-" * len(header))

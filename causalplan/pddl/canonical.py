@@ -48,7 +48,10 @@ def _fit_facts(fit: Fit) -> list[str]:
 
 
 def plan_actions(actions: tuple[Action, ...]) -> tuple[Action, ...]:
-    """Return a plan of the canonical form as per-primitive actions: ``(assemble kind-screw a b f)`` -> ``(screw a b f)``."""
+    """Return a plan of the canonical form in per-primitive actions.
+
+    ``(assemble kind-screw a b f)`` becomes ``(screw a b f)``; other actions stay as they are.
+    """
     return tuple(
         (args[0].removeprefix(KIND_PREFIX), args[1:])
         if name == ASSEMBLE and args and args[0].startswith(KIND_PREFIX)
