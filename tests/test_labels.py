@@ -2,6 +2,12 @@
 
 from __future__ import annotations
 
+import unicodedata
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
 from causalplan.causal.labels import closest, display_label, has_control_characters, normalize_label
 
 
@@ -48,6 +54,24 @@ def test_display_of_only_whitespace_is_empty() -> None:
 def test_control_characters_are_detected() -> None:
     assert has_control_characters("light\x00")
     assert has_control_characters("li\u200bght")  # zero-width space (format character)
+
+
+def _has_control_characters_by_category(label: str) -> bool:
+    return any(unicodedata.category(char) in {"Cc", "Cf", "Cs", "Co"} and not char.isspace() for char in label)
+
+
+@given(st.text(alphabet=st.characters(codec=None), max_size=12))
+def test_the_printable_shortcut_agrees_with_the_categories(label: str) -> None:
+    """``isprintable`` answers most labels in C; whatever it lets through is checked character by character."""
+    assert has_control_characters(label) == _has_control_characters_by_category(label)
+
+
+@pytest.mark.parametrize(
+    "label",
+    ["a\u200db", "a\ud800", "a\ue000", "a\u2028b", "a\u00a0b", "a\u0378", "a\x7f", "a\u00adb", "a\U000e0001"],
+)
+def test_every_kind_of_unprintable_character_is_judged_by_its_category(label: str) -> None:
+    assert has_control_characters(label) == _has_control_characters_by_category(label)
 
 
 def test_whitespace_and_accents_are_not_control_characters() -> None:

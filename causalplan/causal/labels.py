@@ -18,6 +18,8 @@ def display_label(label: str) -> str:
 
 def has_control_characters(label: str) -> bool:
     """Return whether the label holds characters that are neither printable nor whitespace."""
+    if label.isprintable():  # in C: no character of the categories below is printable
+        return False
     return any(unicodedata.category(char) in {"Cc", "Cf", "Cs", "Co"} and not char.isspace() for char in label)
 
 
