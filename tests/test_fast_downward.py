@@ -275,3 +275,32 @@ def test_a_lost_translator_timeout_is_raised_again(monkeypatch: pytest.MonkeyPat
     run = fast_downward._translate_here("", "", time.monotonic() + 0.05, 2048)
     assert lost == [True]
     assert run.returncode is None
+
+
+def test_without_invariant_synthesis_every_example_and_synthetic_task_translates_the_same(
+    user_catalog: Catalog, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Skipping invariant synthesis (TRANSLATOR_ARGUMENTS) changes nothing in causalplan's tasks: all binary."""
+    from fast_downward.translate import options
+
+    from causalplan.pddl.canonical import canonical_pddl
+    from causalplan.planners.synthetic import synthetic_task
+    from tests.test_search_processes import _example_tasks
+
+    assert "--invariant-generation-max-candidates" in fast_downward.TRANSLATOR_ARGUMENTS
+    tasks = _example_tasks(user_catalog)
+    for seed in range(3):
+        tasks |= {f"synthetic {size}, seed {seed}": synthetic_task(size, seed=seed) for size in (5, 21, 60)}
+    compared = 0
+    for name, task in tasks.items():
+        for compiled in (canonical_pddl(task), compile_task(task)):
+            if compiled is None:
+                continue
+            ours = fast_downward._run_translator(compiled.domain, compiled.problem)
+            monkeypatch.setattr(fast_downward, "_translator_options", lambda: options.parse_args(["d.pddl", "p.pddl"]))
+            defaults = fast_downward._run_translator(compiled.domain, compiled.problem)
+            monkeypatch.undo()
+            assert ours == defaults and ours[0] == 0, name
+            compared += 1
+    assert compared >= 90
+    capsys.readouterr()  # the translator's log
