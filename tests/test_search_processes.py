@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import stat
 import subprocess
 import sys
 import threading
@@ -181,7 +182,7 @@ def test_a_used_process_is_reaped_and_its_folder_removed_off_the_solving_thread(
     assert _children() == set()
 
 
-def test_a_search_writes_its_output_to_a_file_and_no_pipe_is_read_while_it_runs(catalog: Catalog) -> None:
+def test_a_search_writes_its_output_to_a_file_and_its_plan_to_a_fifo_and_no_pipe_is_read(catalog: Catalog) -> None:
     """FD logs a line at a time: a reader of its stdout would wake up for each line (~1.3 ms per search)."""
     fast_downward.prestart(CONFIGS["fd"])
     [ready] = _wait_for_idle(1)
@@ -194,10 +195,13 @@ def test_a_search_writes_its_output_to_a_file_and_no_pipe_is_read_while_it_runs(
         translated = fast_downward._translate(compiled.domain, compiled.problem, time.monotonic() + 30, 2048)
         assert translated.product is not None
         deadline = time.monotonic() + 30
-        code, output = fast_downward._hand_over(taken, command, translated.product.encode(), deadline, 2048)
-        assert code == 0
-        assert b"Solution found" in output
-        assert output == (taken.folder / search_processes.OUTPUT_FILE).read_bytes()
+        handed = fast_downward._hand_over(taken, command, translated.product.encode(), deadline, 2048)
+        assert handed.returncode == 0
+        step = b"(assemble kind-screw light_bulb base_with_cables bulb_into_socket)\n"
+        assert handed.plan == step + b"; cost = 1 (unit cost)\n"
+        assert stat.S_ISFIFO((taken.folder / fast_downward.PLAN_FILE).stat().st_mode)
+        taken.process.wait(30)  # it may still have been printing its statistics
+        assert b"Solution found" in (taken.folder / search_processes.OUTPUT_FILE).read_bytes()
     finally:
         search_processes.discard(taken)
 
@@ -212,33 +216,81 @@ def test_a_task_larger_than_the_pipe_buffer_is_written_whole() -> None:
     started, command = _python_process("import sys; print(len(sys.stdin.buffer.read()))")
     task = b"x" * (4 * 1024 * 1024)  # 64 times a Linux pipe's buffer
     try:
-        code, output = fast_downward._hand_over(started, command, task, time.monotonic() + 60, 2048)
+        handed = fast_downward._hand_over(started, command, task, time.monotonic() + 60, 2048)
     finally:
         search_processes.discard(started)
-    assert code == 0
-    assert output.strip() == str(len(task)).encode()
+    assert handed.returncode == 0 and handed.plan is None
+    assert handed.output.strip() == str(len(task)).encode()
 
 
 def test_a_process_that_ends_without_reading_its_task_gives_its_exit_code_and_output() -> None:
     started, command = _python_process("import sys; print('bad task'); sys.exit(3)")
     try:
-        code, output = fast_downward._hand_over(started, command, b"x" * (1024 * 1024), time.monotonic() + 60, 2048)
+        handed = fast_downward._hand_over(started, command, b"x" * (1024 * 1024), time.monotonic() + 60, 2048)
     finally:
         search_processes.discard(started)
-    assert code == 3
-    assert output.strip() == b"bad task"
+    assert (handed.returncode, handed.plan) == (3, None)
+    assert handed.output.strip() == b"bad task"
 
 
 def test_a_process_that_stops_reading_is_killed_at_the_deadline() -> None:
     started, command = _python_process("import time; time.sleep(60)")
     began = time.monotonic()
     try:
-        code, _ = fast_downward._hand_over(started, command, b"x" * (1024 * 1024), began + 1.0, 2048)
-        assert code is None
+        handed = fast_downward._hand_over(started, command, b"x" * (1024 * 1024), began + 1.0, 2048)
+        assert handed.returncode is None
         assert time.monotonic() - began < 30  # it did not wait for the process's own minute
-        assert started.process.returncode == -signal.SIGKILL
+        assert started.process.wait(30) == -signal.SIGKILL
     finally:
         search_processes.discard(started)
+
+
+def _planner(plan: str, then: str, tmp_path: Path) -> tuple[search_processes.Started, search_processes.Command]:
+    """Start a process that reads its task, writes ``plan`` to the plan file as FD does, then runs ``then``."""
+    source = tmp_path / "plan.txt"
+    source.write_text(plan)
+    return _python_process(
+        "import sys, time\n"
+        "sys.stdin.buffer.read()\n"
+        f"with open({str(source)!r}) as source, open({fast_downward.PLAN_FILE!r}, 'w') as plan:\n"
+        "    for line in source:\n"
+        "        plan.write(line); plan.flush()\n"
+        f"{then}\n"
+    )
+
+
+def test_a_complete_plan_is_taken_as_soon_as_it_is_closed_and_the_process_killed_afterwards(tmp_path: Path) -> None:
+    """FD prints its statistics and exits ~1.3 ms after closing its plan; the answer need not wait for that."""
+    plan = "(screw bulb base fit)\n(clip shade base ring)\n; cost = 2 (unit cost)\n"
+    started, command = _planner(plan, "time.sleep(60)", tmp_path)
+    try:
+        handed = fast_downward._hand_over(started, command, b"task", time.monotonic() + 30, 2048)
+        assert started.process.poll() is None  # still "printing": the plan did not wait for its exit
+    finally:
+        search_processes.discard(started)  # what retire does on its thread: kills it
+    assert (handed.returncode, handed.plan) == (0, plan.encode())
+    assert started.process.returncode == -signal.SIGKILL
+
+
+def test_a_plan_larger_than_the_fifo_buffer_is_read_whole(tmp_path: Path) -> None:
+    plan = "".join(f"(screw part{index} base fit{index})\n" for index in range(20000)) + "; cost = 20000 (unit cost)\n"
+    assert len(plan) > 4 * 65536
+    started, command = _planner(plan, "sys.exit(0)", tmp_path)
+    try:
+        handed = fast_downward._hand_over(started, command, b"task", time.monotonic() + 60, 2048)
+    finally:
+        search_processes.discard(started)
+    assert handed.returncode == 0 and handed.plan == plan.encode()
+
+
+def test_an_incomplete_plan_is_no_plan_and_the_exit_code_says_why(tmp_path: Path) -> None:
+    """A plan file without FD's closing cost line (a crash while writing it) is not an answer."""
+    started, command = _planner("(screw bulb base fit)\n", "sys.exit(5)", tmp_path)
+    try:
+        handed = fast_downward._hand_over(started, command, b"task", time.monotonic() + 60, 2048)
+    finally:
+        search_processes.discard(started)
+    assert (handed.returncode, handed.plan) == (5, None)
 
 
 def test_the_time_limit_kills_a_process_started_ahead(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -330,8 +382,8 @@ def test_a_forked_child_neither_uses_nor_kills_the_parents_idle_processes(
         compiled = canonical_pddl(task) or compile_task(task)
         outcome = fast_downward.solve(compiled.domain, compiled.problem, CONFIGS["fd"], time_limit=20)
         assert outcome.status is PlanStatus.SOLVED
+        [replacement] = _wait_for_idle(1)  # started once the used process was discarded
         assert _is_gone(ready)
-        [replacement] = _wait_for_idle(1)
     finally:
         os.write(go_write, b"x")
         _, status = os.waitpid(child, 0)

@@ -8,11 +8,12 @@ stdin; a solve then writes the task, closes stdin and waits for the plan.
 
 The pool keeps at most one idle process per command (a command fixes the search
 configuration). Every started process has its own process group and its own private folder as
-working directory, where ``--internal-plan-file`` puts the plan and its output goes to
-``OUTPUT_FILE``. The caller of ``take`` owns the process from then on and ends it with
-``retire`` (or ``discard``, on its own thread).
-``retire`` does on a background thread what the answer need not wait for: reaping the used
-process and removing its folder (~0.6 ms), then starting the replacement. The replacement
+working directory, where ``--internal-plan-file`` puts the plan (``fast_downward`` makes it a
+FIFO, read as it is written) and its output goes to ``OUTPUT_FILE``. The caller of ``take``
+owns the process from then on and ends it with ``retire`` (or ``discard``, on its own thread).
+``retire`` does on a background thread what the answer need not wait for: killing the used
+process if it still runs (a search that gave its plan is still printing its statistics),
+reaping it and removing its folder (~0.6 ms), then starting the replacement. The replacement
 starts once the search has ended, not when its predecessor was taken: on two cores its start-up
 (~3.7 ms of CPU) would compete with that very search (measured through the app, interleaved:
 the search 0.5-1.4 ms faster); now it overlaps the answer going back and the next translation.
