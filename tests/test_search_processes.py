@@ -293,6 +293,28 @@ def test_an_incomplete_plan_is_no_plan_and_the_exit_code_says_why(tmp_path: Path
     assert (handed.returncode, handed.plan) == (5, None)
 
 
+def test_a_plan_written_without_end_is_stopped_at_the_deadline(tmp_path: Path) -> None:
+    """Its lines keep the plan readable, so only the clock can end the reading."""
+    source = tmp_path / "line.txt"
+    source.write_text("(screw bulb base fit)\n")
+    started, command = _python_process(
+        "import sys\n"
+        "sys.stdin.buffer.read()\n"
+        f"line = open({str(source)!r}).read()\n"
+        f"with open({fast_downward.PLAN_FILE!r}, 'w') as plan:\n"
+        "    while True:\n"
+        "        plan.write(line); plan.flush()\n"
+    )
+    began = time.monotonic()
+    try:
+        handed = fast_downward._hand_over(started, command, b"task", began + 1.0, 2048)
+        assert time.monotonic() - began < 30
+        assert (handed.returncode, handed.plan) == (None, None)
+        assert started.process.wait(30) == -signal.SIGKILL
+    finally:
+        search_processes.discard(started)
+
+
 def test_the_time_limit_kills_a_process_started_ahead(monkeypatch: pytest.MonkeyPatch) -> None:
     fast_downward.prestart(CONFIGS["fd-opt"])
     [ready] = _wait_for_idle(1)

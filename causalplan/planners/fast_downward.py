@@ -257,9 +257,9 @@ def _follow(
                     poller.unregister(writing)
                     stdin.close()
                     writing = None
-            timeout = max(0, math.ceil((deadline - time.monotonic()) * 1000))
-            events = dict(poller.poll(timeout))
-            if not events:
+            remaining = deadline - time.monotonic()
+            events = dict(poller.poll(max(0, math.ceil(remaining * 1000)))) if remaining > 0 else {}
+            if not events:  # also when events kept coming past the deadline (a plan written forever)
                 return "deadline", None
             if plan_reader in events:
                 plan += _read_available(plan_reader)
