@@ -38,6 +38,7 @@ import uuid
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
+from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -90,22 +91,23 @@ class Scenario:
         return len(self.seconds) / self.wall
 
 
+@cache
 def _document(relative: str) -> dict[str, Any]:
+    """Return an example's document, read once (callers must not change it)."""
     document: dict[str, Any] = yaml.safe_load((EXAMPLES / relative).read_text())
     return document
 
 
-def paper_body(index: int, renamed: bool = True) -> dict[str, Any]:
-    """Return the request body of paper case ``index % 4``, its intermediate effect renamed when ``renamed``.
+def paper_body(index: int) -> dict[str, Any]:
+    """Return the request body of paper case ``index % 4``, its intermediate effect renamed.
 
     Renamed: a model the server has not seen (the canonical planning problem is still the case's own).
     """
     _, model_path, mapping_path, effect = PAPER_CASES[index % len(PAPER_CASES)]
     model = _document(model_path)
-    if renamed:
-        new_effect = f"{effect} {uuid.uuid4().hex[:10]}"
-        model["rules"] = [rule.replace(effect, new_effect) for rule in model["rules"]]
-    return {"model": model} | ({"mapping": _document(mapping_path)} if mapping_path else {})
+    new_effect = f"{effect} {uuid.uuid4().hex[:10]}"
+    renamed = {**model, "rules": [rule.replace(effect, new_effect) for rule in model["rules"]]}
+    return {"model": renamed} | ({"mapping": _document(mapping_path)} if mapping_path else {})
 
 
 def paper_tasks() -> list[PlanningTask]:

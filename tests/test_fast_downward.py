@@ -297,9 +297,9 @@ def test_without_invariant_synthesis_every_example_and_synthetic_task_translates
             if compiled is None:
                 continue
             ours = fast_downward._run_translator(compiled.domain, compiled.problem)
-            monkeypatch.setattr(fast_downward, "_translator_options", lambda: options.parse_args(["d.pddl", "p.pddl"]))
-            defaults = fast_downward._run_translator(compiled.domain, compiled.problem)
-            monkeypatch.undo()
+            with monkeypatch.context() as patch:
+                patch.setattr(fast_downward, "_translator_options", lambda: options.parse_args(["d.pddl", "p.pddl"]))
+                defaults = fast_downward._run_translator(compiled.domain, compiled.problem)
             assert ours == defaults and ours[0] == 0, name
             compared += 1
     assert compared >= 90

@@ -33,13 +33,26 @@ def _fit_predicate(primitive: str) -> str:
     return f"{primitive}-fit"
 
 
-def _action(primitive: str) -> str:
-    return f"""  (:action {primitive}
-    :parameters (?moving - part ?fixed - part ?fit - fit)
-    :precondition (and ({_fit_predicate(primitive)} ?fit) (moves ?fit ?moving) (attaches-to ?fit ?fixed)
+def assembly_action(name: str, parameters: str, fit_conditions: str) -> str:
+    """Return an action schema that attaches ``?moving`` to ``?fixed`` through a free ``?fit``.
+
+    ``fit_conditions``: the static facts that say the fit joins them (and how); the rest, the
+    assembly's state and the fits it uses up, is the same in every form.
+    """
+    return f"""  (:action {name}
+    :parameters ({parameters})
+    :precondition (and {fit_conditions}
                        (available ?fit) (in-assembly ?fixed) (not (in-assembly ?moving)))
     :effect (and (in-assembly ?moving)
                  (forall (?other - fit) (when (excludes ?fit ?other) (not (available ?other))))))"""
+
+
+def _action(primitive: str) -> str:
+    return assembly_action(
+        primitive,
+        "?moving - part ?fixed - part ?fit - fit",
+        f"({_fit_predicate(primitive)} ?fit) (moves ?fit ?moving) (attaches-to ?fit ?fixed)",
+    )
 
 
 def _names(names: list[str], indent: str, per_line: int = 6) -> str:
