@@ -11,6 +11,7 @@ import glob
 import os
 import shutil
 import socket
+import sqlite3
 import subprocess
 import tempfile
 import time
@@ -117,6 +118,20 @@ def running_client(settings: Settings) -> Iterator[TestClient]:
     """Start an app with ``settings`` (workers, migrations) and yield a client; stop it afterwards."""
     with TestClient(create_app(settings), raise_server_exceptions=False) as client:
         yield client
+
+
+@contextmanager
+def sqlite_write_lock(url: str) -> Iterator[None]:
+    """Hold SQLite's write lock from another connection (as another process writing would)."""
+    path = make_url(url).database
+    assert path is not None
+    holder = sqlite3.connect(path, isolation_level=None)
+    try:
+        holder.execute("BEGIN IMMEDIATE")
+        yield
+        holder.execute("ROLLBACK")
+    finally:
+        holder.close()
 
 
 def services_of(client: TestClient) -> Services:

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import json
+import threading
+import time
 import uuid
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -27,6 +30,8 @@ from tests.service_fixtures import (
     running_client,
     services_of,
     settings_for,
+    sqlite_url,
+    sqlite_write_lock,
 )
 
 
@@ -138,6 +143,75 @@ def test_a_failed_save_stores_nothing_and_keeps_the_connection_usable(database_u
     with Session(engine) as session:
         assert session.get(TrialRecord, trial.id) is not None
     engine.dispose()
+
+
+def _count(engine: Any, participant: str) -> tuple[int, int]:
+    with Session(engine) as session:
+        models = session.scalar(select(func.count()).where(ModelRecord.participant_id == participant))
+        trials = session.scalar(select(func.count()).where(TrialRecord.participant_id == participant))
+    return models or 0, trials or 0
+
+
+def test_saving_without_waiting_stores_on_sqlite_and_only_there(database_url: str) -> None:
+    engine = create_database_engine(database_url, background_checkpoints=True)
+    upgrade(engine)
+    model, trial = _records("at-once")
+    stored = crud.save_without_waiting(engine, [model, trial])
+    assert stored is (engine.dialect.name == "sqlite")  # a database server's round trips are never made at once
+    assert _count(engine, "at-once") == ((1, 1) if stored else (0, 0))
+    engine.dispose()
+
+
+def test_saving_without_waiting_gives_way_to_a_held_write_lock(tmp_path: Path) -> None:
+    url = sqlite_url(tmp_path)
+    engine = create_database_engine(url, background_checkpoints=True)
+    upgrade(engine)
+    with sqlite_write_lock(url):
+        model, _ = _records("locked")
+        assert crud.save_without_waiting(engine, [model]) is False  # at once, not after the 10 s busy timeout
+    assert _count(engine, "locked") == (0, 0)
+    # The pooled connection waits again for a lock (its busy timeout is back): a save made while
+    # another connection holds the lock for a moment succeeds once the lock is free.
+    locked = threading.Event()
+
+    def hold_briefly() -> None:
+        with sqlite_write_lock(url):
+            locked.set()
+            time.sleep(0.3)
+
+    holder = threading.Thread(target=hold_briefly)
+    holder.start()
+    assert locked.wait(10)
+    model, _ = _records("waited")
+    crud.save(engine, [model])
+    holder.join()
+    assert _count(engine, "waited") == (1, 0)
+    with engine.connect() as connection:
+        assert connection.exec_driver_sql("PRAGMA busy_timeout").scalar() == 10_000
+    engine.dispose()
+
+
+def test_the_service_checkpoints_sqlite_off_the_requests(tmp_path: Path) -> None:
+    """Its commits never checkpoint the log (autocheckpoint 0); its checkpointer does, in the background."""
+    url = sqlite_url(tmp_path)
+    with running_client(settings_for(url)) as client:
+        services = services_of(client)
+        with services.engine.connect() as connection:
+            assert connection.exec_driver_sql("PRAGMA wal_autocheckpoint").scalar() == 0
+        assert client.post("/v1/plans", json={"model": DESK_LAMP}).status_code == 200
+        checkpointer = services.checkpointer
+        assert checkpointer is not None
+        busy, frames, done = checkpointer.checkpoint()
+        assert busy == 0 and frames > 0 and done == frames  # the model's record was in the log, now in the file
+        ran = checkpointer.checkpoints
+        deadline = time.monotonic() + 10
+        while checkpointer.checkpoints == ran and time.monotonic() < deadline:  # its thread, once a second
+            time.sleep(0.05)
+        assert checkpointer.checkpoints > ran
+    plain = create_database_engine(url)  # other users of the database keep SQLite's own checkpoints
+    with plain.connect() as connection:
+        assert connection.exec_driver_sql("PRAGMA wal_autocheckpoint").scalar() == 1000
+    plain.dispose()
 
 
 def test_a_trial_and_its_inline_model_are_stored_together_or_not_at_all(

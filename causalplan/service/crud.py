@@ -6,6 +6,7 @@ together or not at all.
 
 from __future__ import annotations
 
+import sqlite3
 import threading
 import uuid
 import weakref
@@ -155,6 +156,21 @@ def _compiled_insert(engine: Engine, table: Table) -> _CompiledInsert:
         return compiled
 
 
+def _insert(cursor: Any, engine: Engine, records: Sequence[ModelRecord | TrialRecord]) -> None:
+    for kind in (ModelRecord, TrialRecord):  # models first: trials refer to them
+        rows = [_row(record) for record in records if isinstance(record, kind)]
+        if not rows:
+            continue
+        table = kind.__table__
+        assert isinstance(table, Table)
+        compiled = _compiled_insert(engine, table)
+        parameters = compiled.parameters(rows)
+        if len(parameters) == 1:
+            cursor.execute(compiled.statement, parameters[0])
+        else:
+            cursor.executemany(compiled.statement, parameters)
+
+
 def save(engine: Engine, records: Sequence[ModelRecord | TrialRecord]) -> None:
     """Store new ``records`` (as ``new_model_record`` and ``new_trial_record`` make them) in one transaction.
 
@@ -165,20 +181,48 @@ def save(engine: Engine, records: Sequence[ModelRecord | TrialRecord]) -> None:
         connection = engine.raw_connection()
         try:
             cursor = connection.cursor()
-            for kind in (ModelRecord, TrialRecord):  # models first: trials refer to them
-                rows = [_row(record) for record in records if isinstance(record, kind)]
-                if not rows:
-                    continue
-                table = kind.__table__
-                assert isinstance(table, Table)
-                compiled = _compiled_insert(engine, table)
-                parameters = compiled.parameters(rows)
-                if len(parameters) == 1:
-                    cursor.execute(compiled.statement, parameters[0])
-                else:
-                    cursor.executemany(compiled.statement, parameters)
+            _insert(cursor, engine, records)
             cursor.close()
             connection.commit()
+        finally:
+            connection.close()  # back to the pool, which rolls back what was not committed
+
+
+def _is_busy(error: sqlite3.OperationalError) -> bool:
+    code = getattr(error, "sqlite_errorcode", None)
+    return code is not None and code & 0xFF in (sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED)
+
+
+def save_without_waiting(engine: Engine, records: Sequence[ModelRecord | TrialRecord]) -> bool:
+    """Store ``records`` as ``save`` does, if that needs no waiting; return whether they were stored.
+
+    For the event loop, which must never wait for a database. Only SQLite qualifies: its writes
+    are local (~0.1 ms, as the service runs it: WAL, no sync per commit, checkpoints in the
+    background), and this transaction runs with a busy timeout of 0, so a write lock held by
+    another connection answers False at once instead of after up to 10 s. Other databases
+    answer False without trying: their writes are round trips to a server. False means that
+    nothing was stored; ``save`` (in a thread) is the way then.
+    """
+    if engine.dialect.name != "sqlite":
+        return False
+    with storage_errors(driver_errors=(sqlite3.Error,)):
+        connection = engine.raw_connection()
+        try:
+            cursor = connection.cursor()
+            waiting_ms = cursor.execute("PRAGMA busy_timeout").fetchone()[0]
+            cursor.execute("PRAGMA busy_timeout=0")
+            try:
+                _insert(cursor, engine, records)
+                connection.commit()
+            except sqlite3.OperationalError as exc:
+                if not _is_busy(exc):
+                    raise
+                connection.rollback()
+                return False
+            finally:
+                cursor.execute(f"PRAGMA busy_timeout={int(waiting_ms)}")
+                cursor.close()
+            return True
         finally:
             connection.close()  # back to the pool, which rolls back what was not committed
 

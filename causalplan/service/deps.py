@@ -17,6 +17,7 @@ from causalplan.objects.catalog import Catalog
 from causalplan.service.attempts import FailedAttempts
 from causalplan.service.cache import LruCache, ResultCache
 from causalplan.service.crud import ClientIds
+from causalplan.service.db.checkpoints import WalCheckpointer
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH
 from causalplan.service.errors import NotAuthenticatedError, ResearchDisabledError
 from causalplan.service.planning import PlannerPool
@@ -39,6 +40,8 @@ class Services:
     """The catalog's fingerprint, part of every answer's cache key."""
     failed_attempts: FailedAttempts
     """Wrong research tokens by client address, to refuse guessing at full speed."""
+    checkpointer: WalCheckpointer | None = None
+    """SQLite's log checkpoints, off the requests (None for other databases)."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
 

@@ -24,6 +24,7 @@ from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.attempts import FailedAttempts
 from causalplan.service.cache import LruCache, ResultCache, catalog_key
+from causalplan.service.db.checkpoints import WalCheckpointer
 from causalplan.service.db.migrate import upgrade
 from causalplan.service.db.session import create_database_engine
 from causalplan.service.deps import Services
@@ -51,7 +52,7 @@ _HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 413: "body_too_large
 def start_services(settings: Settings) -> Services:
     """Prepare the database (migrations), load the catalog and start the planner pool."""
     catalog = load_catalog(settings.catalog_folders)
-    engine = create_database_engine(settings.database_url)
+    engine = create_database_engine(settings.database_url, background_checkpoints=True)
     try:
         revision = upgrade(engine)
         pool = PlannerPool(
@@ -71,7 +72,10 @@ def start_services(settings: Settings) -> Services:
         reads=LruCache(settings.cache_size),
         catalog_key=catalog_key(catalog),
         failed_attempts=FailedAttempts(settings.research_max_failures, settings.research_failure_window_seconds),
+        checkpointer=WalCheckpointer(engine) if engine.dialect.name == "sqlite" else None,
     )
+    if services.checkpointer is not None:
+        services.checkpointer.start()
     threading.Thread(target=_probe, args=(services,), name="causalplan-probe", daemon=True).start()
     return services
 
@@ -112,6 +116,8 @@ def _probe(services: Services) -> None:
 def stop_services(services: Services) -> None:
     """Stop the workers and close the database connections."""
     services.pool.close()
+    if services.checkpointer is not None:
+        services.checkpointer.stop()
     services.engine.dispose()
 
 

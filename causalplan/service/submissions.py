@@ -31,7 +31,7 @@ from causalplan.service.cache import (
     document_key,
     request_key,
 )
-from causalplan.service.crud import ClientIds, get_model, new_model_record, save
+from causalplan.service.crud import ClientIds, get_model, new_model_record, save, save_without_waiting
 from causalplan.service.db.models import ModelRecord
 from causalplan.service.deps import Services, open_session
 from causalplan.service.errors import InvalidMappingError, InvalidModelError, LimitExceededError
@@ -155,6 +155,11 @@ def read_model(document: dict[str, Any], services: Services, client: ClientIds) 
     if not isinstance(read, ModelRead):
         read = _read_model_document(document, services)
         services.reads.put(key, read, size)
+    return _inline_submission(storable, read, client)
+
+
+def _inline_submission(storable: dict[str, Any], read: ModelRead, client: ClientIds) -> ModelSubmission:
+    """Return an inline model's submission: what reading it gave, and its record to store."""
     model = read.model
     record = new_model_record(
         storable,
@@ -408,6 +413,12 @@ def plan_inputs(body: PlanIn, services: Services, client: ClientIds) -> PlanInpu
         if submission.is_new:
             save(services.engine, [submission.record])
         raise problem
+    return _valid_inputs(submission, mapping_read, planner, time_limit, services)
+
+
+def _valid_inputs(
+    submission: ModelSubmission, mapping_read: MappingRead | None, planner: str, time_limit: float, services: Services
+) -> PlanInputs:
     assert submission.model is not None and submission.canonical is not None
     mapping, mapping_text = None, canonical_text(None)
     if mapping_read is not None and mapping_read.canonical is not None:
@@ -416,10 +427,41 @@ def plan_inputs(body: PlanIn, services: Services, client: ClientIds) -> PlanInpu
         submission,
         submission.model,
         mapping,
-        mapping_report,
+        mapping_read.report if mapping_read is not None else None,
         planner,
         time_limit,
         submission.canonical,
         mapping_text,
         services.catalog_key,
     )
+
+
+def kept_answer(body: PlanIn, services: Services, client: ClientIds, kind: str) -> tuple[PlanInputs, Answer] | None:
+    """Answer a plan-like request without waiting for anything, when it can be: its inputs and kept answer.
+
+    It can be when the model is inline, it and the mapping were read before (their reads are
+    kept) and are valid, the answer (``kind``: 'plan', 'simulate:True', ...) is kept, and the
+    model's record is stored without waiting (``save_without_waiting``: SQLite, write lock free).
+    So the event loop can answer it itself, without a hop to a thread and back. None otherwise,
+    with nothing stored: the request then goes the usual way, in a thread.
+    """
+    if body.model is None:  # a stored model is read from the database
+        return None
+    started = time.perf_counter()
+    model_read = services.reads.get(document_key("model", body.model)[0])
+    if not isinstance(model_read, ModelRead) or model_read.canonical is None:
+        return None
+    mapping_read: MappingRead | None = None
+    if body.mapping is not None:
+        kept = services.reads.get(document_key("mapping", body.mapping)[0])
+        if not isinstance(kept, MappingRead) or kept.canonical is None:
+            return None
+        mapping_read = kept
+    planner = resolve_planner(body.planner)
+    time_limit = resolve_time_limit(body.time_limit, services.settings)
+    submission = _inline_submission(clean_json(body.model, "the model"), model_read, client)
+    inputs = _valid_inputs(submission, mapping_read, planner, time_limit, services)
+    data = services.cache.get(inputs.key(kind))
+    if data is None or not save_without_waiting(services.engine, [submission.record]):
+        return None
+    return inputs, Answer(data, True, time.perf_counter() - started)

@@ -19,7 +19,7 @@ def sqlite_path(url: str) -> Path | None:
     return Path(parsed.database)
 
 
-def _tune_sqlite(dbapi_connection: Any, _record: object) -> None:
+def _tune_sqlite(dbapi_connection: Any, _record: object, background_checkpoints: bool = False) -> None:
     cursor = dbapi_connection.cursor()
     # WAL lets readers work while one thread writes; the busy timeout makes writers queue up
     # instead of failing with "database is locked"; foreign keys are off by default in SQLite.
@@ -31,11 +31,17 @@ def _tune_sqlite(dbapi_connection: Any, _record: object) -> None:
     cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.execute("PRAGMA busy_timeout=10000")
     cursor.execute("PRAGMA foreign_keys=ON")
+    if background_checkpoints:  # a WalCheckpointer checkpoints instead of the commits (see its module)
+        cursor.execute("PRAGMA wal_autocheckpoint=0")
     cursor.close()
 
 
-def create_database_engine(url: str) -> Engine:
-    """Return an engine for ``url``; a SQLite file's folder is created if it is missing."""
+def create_database_engine(url: str, background_checkpoints: bool = False) -> Engine:
+    """Return an engine for ``url``; a SQLite file's folder is created if it is missing.
+
+    ``background_checkpoints``: SQLite's commits never checkpoint its log; the caller runs a
+    ``WalCheckpointer`` (as the service does). Ignored for other databases.
+    """
     try:
         parsed = make_url(url)
     except Exception as exc:  # noqa: BLE001 - SQLAlchemy raises several types for a bad URL
@@ -51,7 +57,11 @@ def create_database_engine(url: str) -> Engine:
     try:
         if parsed.get_backend_name() == "sqlite":
             engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 10})
-            event.listen(engine, "connect", _tune_sqlite)
+
+            def tune(dbapi_connection: Any, record: object) -> None:
+                _tune_sqlite(dbapi_connection, record, background_checkpoints)
+
+            event.listen(engine, "connect", tune)
         else:
             engine = create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20)
     except Exception as exc:  # noqa: BLE001 - a missing driver or a bad option, reported as such
