@@ -182,6 +182,46 @@ def test_a_used_process_is_reaped_and_its_folder_removed_off_the_solving_thread(
     assert _children() == set()
 
 
+def test_held_retirements_wait_for_the_end_of_the_block(catalog: Catalog, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A worker holds them while it answers: the used process is neither killed nor replaced before."""
+    fast_downward.prestart(CONFIGS["fd"])
+    [ready] = _wait_for_idle(1)
+    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+    with search_processes.retirements_held():
+        assert _solve(task, CONFIGS["fd"], True, monkeypatch).status is PlanStatus.SOLVED
+        assert not any(thread.name == "causalplan-retire" for thread in threading.enumerate())
+        assert search_processes.idle_pids() == [] and not _is_gone(ready)  # still there, maybe still printing
+    [replacement] = _wait_for_idle(1)
+    assert replacement != ready
+    search_processes.stop_idle()
+    assert _is_gone(ready) and _children() == set()
+
+
+def test_a_second_solve_in_a_held_block_starts_its_replacement_first(
+    catalog: Catalog, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """As without the block, it takes the replacement of the first solve's process, not one started for it."""
+    fast_downward.prestart(CONFIGS["fd"])
+    [ready] = _wait_for_idle(1)
+    starts: list[str] = []
+    real_start = search_processes.start
+
+    def recording_start(command: search_processes.Command) -> search_processes.Started:
+        starts.append(threading.current_thread().name)
+        return real_start(command)
+
+    monkeypatch.setattr(search_processes, "start", recording_start)
+    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+    with search_processes.retirements_held():
+        first = _solve(task, CONFIGS["fd"], True, monkeypatch)
+        second = _solve(task, CONFIGS["fd"], True, monkeypatch)
+    assert first.status is second.status is PlanStatus.SOLVED and first.actions == second.actions
+    _wait_for_idle(1)
+    assert starts == ["causalplan-retire", "causalplan-retire"]  # none on the solving thread
+    search_processes.stop_idle()
+    assert _is_gone(ready) and _children() == set()
+
+
 def test_a_search_writes_its_output_to_a_file_and_its_plan_to_a_fifo_and_no_pipe_is_read(catalog: Catalog) -> None:
     """FD logs a line at a time: a reader of its stdout would wake up for each line (~1.3 ms per search)."""
     fast_downward.prestart(CONFIGS["fd"])

@@ -29,7 +29,7 @@ from causalplan.causal.model import CausalModel, Labelling
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import Catalog, load_catalog
 from causalplan.pddl.task import build_task
-from causalplan.planners import fast_downward, pipeline
+from causalplan.planners import fast_downward, pipeline, search_processes
 from causalplan.service.errors import PlannerOutOfMemoryError
 from causalplan.transfer.verdict import evaluate_transfer
 
@@ -61,18 +61,20 @@ def serve(connection: Connection, memory_mb: int) -> None:
         if job is None:
             return
         function, args = job
-        try:
-            reply: tuple[Any, ...] = ("ok", function(*args))
-        except CausalPlanError as exc:
-            reply = ("error", exc.code, exc.message, exc.details)
-        except MemoryError:
-            reply = ("error", PlannerOutOfMemoryError.code, "The planner worker ran out of memory.", {})
-        except Exception:  # noqa: BLE001 - reported to the service, which logs it and answers clearly
-            reply = ("crash", traceback.format_exc())
-        try:
-            connection.send(reply)
-        except (BrokenPipeError, OSError):
-            return
+        # What a used search process leaves to do waits until the answer is sent (see retirements_held).
+        with search_processes.retirements_held():
+            try:
+                reply: tuple[Any, ...] = ("ok", function(*args))
+            except CausalPlanError as exc:
+                reply = ("error", exc.code, exc.message, exc.details)
+            except MemoryError:
+                reply = ("error", PlannerOutOfMemoryError.code, "The planner worker ran out of memory.", {})
+            except Exception:  # noqa: BLE001 - reported to the service, which logs it and answers clearly
+                reply = ("crash", traceback.format_exc())
+            try:
+                connection.send(reply)
+            except (BrokenPipeError, OSError):
+                return
 
 
 def warm_up() -> None:
