@@ -270,6 +270,27 @@ def test_text_no_database_column_takes_is_stored_cleaned(storage_client: TestCli
     assert trial["mapping"]["functions"] == {"he\ufffdad": ["nul \ufffd label"]}
 
 
+def test_a_models_document_and_report_are_stored_cleaned_when_read_and_when_repeated(
+    storage_client: TestClient,
+) -> None:
+    """The second request reuses the document's read (its report cleaned once): both records are cleaned."""
+    model = {**DESK_LAMP, "functions": {**DESK_LAMP["functions"], "shade": [f"nul \\u0000 label {uuid.uuid4().hex}"]}}
+    body = json.dumps({"model": model}).replace("\\\\u0000", "\\u0000")  # a real escape in the JSON text
+    ids = []
+    for _ in range(2):
+        response = storage_client.post("/v1/plans", content=body.encode(), headers={"Content-Type": "application/json"})
+        error = error_of(response, 422)
+        assert error["code"] == "invalid_model"
+        ids.append(error["details"]["model_id"])
+    assert ids[0] != ids[1]
+    for model_id in ids:
+        stored = storage_client.get(f"/v1/models/{model_id}").json()
+        [label] = stored["model"]["functions"]["shade"]
+        assert label.startswith("nul \ufffd label")
+        assert [problem["code"] for problem in stored["report"]["errors"]] == ["invalid_character"]
+        assert "\\u0000" not in json.dumps(stored)  # no NUL in the document or the report
+
+
 def test_an_unreachable_database_is_503_and_health_says_so(postgres_admin_url: str) -> None:
     import psycopg
     from sqlalchemy.engine import make_url

@@ -64,8 +64,13 @@ def new_model_record(
     report: dict[str, Any],
     canonical_hash: str | None,
     client: ClientIds,
+    cleaned: bool = False,
 ) -> ModelRecord:
-    """Return an unsaved record of a submitted model."""
+    """Return an unsaved record of a submitted model.
+
+    ``cleaned``: ``document`` and ``report`` are ``clean_json``'s copies already (a request's
+    document is cleaned as it is checked, and a report once per document read): not cleaned again.
+    """
     return ModelRecord(
         id=uuid.uuid4(),
         created_at=utc_now(),
@@ -74,8 +79,8 @@ def new_model_record(
         object_id=_short(object_id) or "",
         is_valid=is_valid,
         canonical_hash=canonical_hash,
-        document=clean_json(document),
-        report=clean_json(report),
+        document=document if cleaned else clean_json(document),
+        report=report if cleaned else clean_json(report),
     )
 
 

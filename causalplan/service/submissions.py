@@ -86,6 +86,7 @@ class ModelRead(LoadedModel):
     """What reading and validating a model document gave: the same for every request that sends it."""
 
     report_data: dict[str, Any]
+    """The report as JSON, cleaned (``clean_json``): ready to store."""
     canonical: str | None
     """The canonical text of a valid model (its hash is stored; answers are keyed by it)."""
 
@@ -136,7 +137,7 @@ def _model_read(document: dict[str, Any], catalog: Catalog) -> ModelRead:
     # The reader sees the text as sent, so a NUL or a lone surrogate is reported as the CLI would.
     loaded = model_from_data(document, SourceMap(), catalog)
     canonical = model_text(loaded.model) if loaded.model is not None and loaded.is_valid else None
-    return ModelRead(loaded.model, loaded.report, loaded.report.as_dict(), canonical)
+    return ModelRead(loaded.model, loaded.report, clean_json(loaded.report.as_dict()), canonical)
 
 
 def _read_model_document(document: dict[str, Any], services: Services) -> ModelRead:
@@ -159,7 +160,10 @@ def read_model(document: dict[str, Any], services: Services, client: ClientIds) 
 
 
 def _inline_submission(storable: dict[str, Any], read: ModelRead, client: ClientIds) -> ModelSubmission:
-    """Return an inline model's submission: what reading it gave, and its record to store."""
+    """Return an inline model's submission: what reading it gave, and its record to store.
+
+    ``storable``: the document, cleaned (``clean_json``).
+    """
     model = read.model
     record = new_model_record(
         storable,
@@ -168,6 +172,7 @@ def _inline_submission(storable: dict[str, Any], read: ModelRead, client: Client
         read.report_data,
         text_hash(read.canonical) if read.canonical is not None else None,
         client,
+        cleaned=True,
     )
     return ModelSubmission(model, read.report, record, is_new=True, canonical=read.canonical)
 
