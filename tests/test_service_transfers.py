@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+from typing import Any
+
+import pytest
 from fastapi.testclient import TestClient
 
+from causalplan.service import submissions
+from causalplan.service.routes import transfers
 from tests.service_fixtures import (
     AUTH,
     DESK_LAMP,
@@ -76,6 +81,39 @@ def test_a_repeated_trial_is_cached_and_stored_again(client: TestClient) -> None
     assert second["plan"] == first["plan"] and second["trial_id"] != first["trial_id"]
     cached_flags = sorted(trial["cached"] for trial in trials_of(client, "transfer-cache"))  # type: ignore[type-var]
     assert cached_flags == [False, True]
+
+
+def test_a_repeated_trial_is_answered_on_the_event_loop_as_a_thread_answers_it(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    hops = 0
+    real = transfers.run_in_threadpool
+
+    async def counted(*args: Any, **kwargs: Any) -> Any:
+        nonlocal hops
+        hops += 1
+        return await real(*args, **kwargs)
+
+    monkeypatch.setattr(transfers, "run_in_threadpool", counted)
+    request = {"model": with_unique_effect(DESK_LAMP), "mapping": FLASHLIGHT_MAPPING}
+    headers = {"X-Participant-Id": "transfer-loop"}
+    first = client.post("/v1/transfers", json=request, headers=headers).json()
+    assert first["cached"] is False and hops == 1  # new documents: read and solved in a thread
+    again = client.post("/v1/transfers", json=request, headers=headers).json()
+    assert again["cached"] is True and hops == 1  # read before, answer kept: no hop
+    with monkeypatch.context() as without:
+        without.setattr(submissions, "kept_transfer", lambda *_: None)
+        threaded = client.post("/v1/transfers", json=request, headers=headers).json()
+    assert hops == 2
+    ids = {"model_id": None, "trial_id": None}
+    assert {**again, **ids} == {**threaded, **ids}
+    assert {**again, **ids, "cached": False} == {**first, **ids}
+    trials = trials_of(client, "transfer-loop")
+    assert len(trials) == 3 and len({trial["model_id"] for trial in trials}) == 3  # each with its own model record
+    stored = next(trial for trial in trials if trial["id"] == again["trial_id"])
+    assert stored["cached"] is True and stored["model_id"] == again["model_id"]
+    assert stored["mapping"] == FLASHLIGHT_MAPPING and stored["verdict"] == again["verdict"]
+    assert client.get(f"/v1/models/{again['model_id']}").json()["model"] == request["model"]
 
 
 def test_a_stored_model_by_id(client: TestClient) -> None:

@@ -31,12 +31,19 @@ from causalplan.service.cache import (
     document_key,
     request_key,
 )
-from causalplan.service.crud import ClientIds, get_model, new_model_record, save, save_without_waiting
-from causalplan.service.db.models import ModelRecord
+from causalplan.service.crud import (
+    ClientIds,
+    get_model,
+    new_model_record,
+    new_trial_record,
+    save,
+    save_without_waiting,
+)
+from causalplan.service.db.models import ModelRecord, TrialRecord
 from causalplan.service.deps import Services, open_session
 from causalplan.service.errors import InvalidMappingError, InvalidModelError, LimitExceededError
 from causalplan.service.limits import check_labelling_limits, check_model_limits, clean_json
-from causalplan.service.schemas import PlanIn
+from causalplan.service.schemas import PlanIn, TransferIn
 from causalplan.service.settings import Settings
 from causalplan.transfer.verdict import Verdict
 
@@ -441,6 +448,23 @@ def _valid_inputs(
     )
 
 
+def _kept_reads(
+    model: dict[str, Any] | None, mapping: dict[str, Any] | None, services: Services
+) -> tuple[ModelRead, MappingRead | None] | None:
+    """Return the kept reads of an inline model and its mapping, when both are kept and valid (else None)."""
+    if model is None:  # a stored model is read from the database
+        return None
+    model_read = services.reads.get(document_key("model", model)[0])
+    if not isinstance(model_read, ModelRead) or model_read.canonical is None:
+        return None
+    if mapping is None:
+        return model_read, None
+    mapping_read = services.reads.get(document_key("mapping", mapping)[0])
+    if not isinstance(mapping_read, MappingRead) or mapping_read.canonical is None:
+        return None
+    return model_read, mapping_read
+
+
 def kept_answer(body: PlanIn, services: Services, client: ClientIds, kind: str) -> tuple[PlanInputs, Answer] | None:
     """Answer a plan-like request without waiting for anything, when it can be: its inputs and kept answer.
 
@@ -450,18 +474,11 @@ def kept_answer(body: PlanIn, services: Services, client: ClientIds, kind: str) 
     So the event loop can answer it itself, without a hop to a thread and back. None otherwise,
     with nothing stored: the request then goes the usual way, in a thread.
     """
-    if body.model is None:  # a stored model is read from the database
-        return None
     started = time.perf_counter()
-    model_read = services.reads.get(document_key("model", body.model)[0])
-    if not isinstance(model_read, ModelRead) or model_read.canonical is None:
+    reads = _kept_reads(body.model, body.mapping, services)
+    if reads is None or body.model is None:
         return None
-    mapping_read: MappingRead | None = None
-    if body.mapping is not None:
-        kept = services.reads.get(document_key("mapping", body.mapping)[0])
-        if not isinstance(kept, MappingRead) or kept.canonical is None:
-            return None
-        mapping_read = kept
+    model_read, mapping_read = reads
     planner = resolve_planner(body.planner)
     time_limit = resolve_time_limit(body.time_limit, services.settings)
     submission = _inline_submission(clean_json(body.model, "the model"), model_read, client)
@@ -470,3 +487,40 @@ def kept_answer(body: PlanIn, services: Services, client: ClientIds, kind: str) 
     if data is None or not save_without_waiting(services.engine, [submission.record]):
         return None
     return inputs, Answer(data, True, time.perf_counter() - started)
+
+
+@dataclass(frozen=True)
+class KeptTransfer:
+    """A transfer answered from what was kept: the answer and the two records stored with it."""
+
+    answer: Answer
+    model: ModelRecord
+    trial: TrialRecord
+
+
+def kept_transfer(body: TransferIn, services: Services, client: ClientIds) -> KeptTransfer | None:
+    """Answer a transfer request without waiting for anything, when it can be (as ``kept_answer``).
+
+    Its model and its trial are stored together, without waiting; None otherwise, with nothing stored.
+    """
+    started = time.perf_counter()
+    reads = _kept_reads(body.model, body.mapping, services)
+    if reads is None or body.model is None:
+        return None
+    model_read, mapping_read = reads
+    if model_read.canonical is None or mapping_read is None or mapping_read.canonical is None:
+        return None
+    planner = resolve_planner(body.planner)
+    time_limit = resolve_time_limit(body.time_limit, services.settings)
+    texts = (model_read.canonical, mapping_read.canonical)
+    key = answer_key("transfer", *texts, planner, time_limit, services.catalog_key)
+    data = services.cache.get(key)
+    if data is None:
+        return None
+    submission = _inline_submission(clean_json(body.model, "the model"), model_read, client)
+    seconds = time.perf_counter() - started
+    mapping_document = clean_json(body.mapping, "the mapping")
+    trial = new_trial_record(submission.record.id, mapping_document, planner, data, True, seconds, client)
+    if not save_without_waiting(services.engine, [submission.record, trial]):
+        return None
+    return KeptTransfer(Answer(data, True, seconds), submission.record, trial)

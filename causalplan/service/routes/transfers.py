@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import uuid
+
 from fastapi import APIRouter
+from starlette.concurrency import run_in_threadpool
 
 from causalplan.service import crud, submissions
 from causalplan.service.cache import answer_key
-from causalplan.service.deps import ClientIdsDep, ServicesDep
+from causalplan.service.crud import ClientIds
+from causalplan.service.deps import ClientIdsDep, Services, ServicesDep
 from causalplan.service.schemas import TransferIn, TransferOut, error_responses
 from causalplan.transfer.verdict import invalid_verdict
 
@@ -14,13 +18,21 @@ router = APIRouter(prefix="/v1/transfers", tags=["transfers"], responses=error_r
 
 
 @router.post("", response_model=TransferOut, summary="Test whether a model transfers")
-def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDep) -> TransferOut:
+async def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDep) -> TransferOut:
     """Plan the model on the mapping's object and say whether it transfers, and why or why not.
 
     The same JSON as `causalplan transfer --json`, plus `cached`, `trial_id` and `model_id`.
     Every trial is stored with the inline model (if any) in one transaction. An invalid model
     or mapping is answered with 422 and the CLI's codes; that trial is stored too, as 'invalid'.
     """
+    # A repeated trial is answered on the event loop, as a repeated plan is (see routes/plans.py).
+    kept = submissions.kept_transfer(body, services, client)
+    if kept is not None:
+        return _response(body, kept.answer, kept.trial.id, kept.model.id)
+    return await run_in_threadpool(_transfer, body, services, client)
+
+
+def _transfer(body: TransferIn, services: Services, client: ClientIds) -> TransferOut:
     planner = submissions.resolve_planner(body.planner)
     time_limit = submissions.resolve_time_limit(body.time_limit, services.settings)
     submission = submissions.model_for_request(body.model, body.model_id, services, client)
@@ -50,12 +62,16 @@ def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDe
         submission.record.id, mapping_document, planner, answer.data, answer.cached, answer.seconds, client
     )
     crud.save(services.engine, [*new_records, trial])
+    return _response(body, answer, trial.id, submission.record.id)
+
+
+def _response(body: TransferIn, answer: submissions.Answer, trial_id: uuid.UUID, model_id: uuid.UUID) -> TransferOut:
     return TransferOut.model_validate(
         {
             **answer.data,
             "planner_requested": body.planner,
             "cached": answer.cached,
-            "trial_id": trial.id,
-            "model_id": submission.record.id,
+            "trial_id": trial_id,
+            "model_id": model_id,
         }
     )
