@@ -125,11 +125,8 @@ def test_concurrent_solves_share_the_pool_safely(monkeypatch: pytest.MonkeyPatch
     assert _children() == set()
 
 
-def test_a_solve_uses_the_process_started_ahead_and_starts_its_replacement_in_the_background(
-    catalog: Catalog, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    fast_downward.prestart(CONFIGS["fd"])
-    [ready] = _wait_for_idle(1)
+def _record_starts(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """Record the name of the thread of every process start from now on."""
     starts: list[str] = []
     real_start = search_processes.start
 
@@ -138,6 +135,15 @@ def test_a_solve_uses_the_process_started_ahead_and_starts_its_replacement_in_th
         return real_start(command)
 
     monkeypatch.setattr(search_processes, "start", recording_start)
+    return starts
+
+
+def test_a_solve_uses_the_process_started_ahead_and_starts_its_replacement_in_the_background(
+    catalog: Catalog, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    fast_downward.prestart(CONFIGS["fd"])
+    [ready] = _wait_for_idle(1)
+    starts = _record_starts(monkeypatch)
     task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
     assert _solve(task, CONFIGS["fd"], True, monkeypatch).status is PlanStatus.SOLVED
     [replacement] = _wait_for_idle(1)
@@ -203,14 +209,7 @@ def test_a_second_solve_in_a_held_block_starts_its_replacement_first(
     """As without the block, it takes the replacement of the first solve's process, not one started for it."""
     fast_downward.prestart(CONFIGS["fd"])
     [ready] = _wait_for_idle(1)
-    starts: list[str] = []
-    real_start = search_processes.start
-
-    def recording_start(command: search_processes.Command) -> search_processes.Started:
-        starts.append(threading.current_thread().name)
-        return real_start(command)
-
-    monkeypatch.setattr(search_processes, "start", recording_start)
+    starts = _record_starts(monkeypatch)
     task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
     with search_processes.retirements_held():
         first = _solve(task, CONFIGS["fd"], True, monkeypatch)
