@@ -14,6 +14,7 @@ import socket
 import sqlite3
 import subprocess
 import tempfile
+import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator
@@ -132,6 +133,42 @@ def sqlite_write_lock(url: str) -> Iterator[None]:
         holder.execute("ROLLBACK")
     finally:
         holder.close()
+
+
+@contextmanager
+def sqlite_write_lock_for_a_moment(url: str, seconds: float = 0.3) -> Iterator[None]:
+    """Run the block while another thread holds SQLite's write lock; it lets go after ``seconds``.
+
+    The block starts once the lock is held, and the thread is waited for at its end.
+    """
+    locked = threading.Event()
+
+    def hold() -> None:
+        with sqlite_write_lock(url):
+            locked.set()
+            time.sleep(seconds)
+
+    holder = threading.Thread(target=hold)
+    holder.start()
+    try:
+        assert locked.wait(10), "the write lock was never taken"
+        yield
+    finally:
+        holder.join()
+
+
+class ThreadHops:
+    """Counts a route module's hops to a worker thread (``run_in_threadpool``); it runs on the event loop otherwise."""
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch, route_module: Any) -> None:
+        self.count = 0
+        real = route_module.run_in_threadpool
+
+        async def counted(*args: Any, **kwargs: Any) -> Any:
+            self.count += 1
+            return await real(*args, **kwargs)
+
+        monkeypatch.setattr(route_module, "run_in_threadpool", counted)
 
 
 def services_of(client: TestClient) -> Services:

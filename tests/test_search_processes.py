@@ -51,6 +51,17 @@ def _wait_for_idle(count: int) -> list[int]:
     return pids
 
 
+def _ready_process() -> int:
+    """Start the default search's idle process; return its pid once it is there."""
+    fast_downward.prestart(CONFIGS["fd"])
+    [ready] = _wait_for_idle(1)
+    return ready
+
+
+def _desk_lamp_task(catalog: Catalog) -> PlanningTask:
+    return build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+
+
 def _solve(task: PlanningTask, config: SearchConfig, prestart: bool, monkeypatch: pytest.MonkeyPatch) -> SearchOutcome:
     """Solve ``task`` as the pipeline does (canonical PDDL), for real: the answer cache is emptied first."""
     monkeypatch.setenv("CAUSALPLAN_SEARCH_PRESTART", "1" if prestart else "0")
@@ -141,10 +152,9 @@ def _record_starts(monkeypatch: pytest.MonkeyPatch) -> list[str]:
 def test_a_solve_uses_the_process_started_ahead_and_starts_its_replacement_in_the_background(
     catalog: Catalog, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    fast_downward.prestart(CONFIGS["fd"])
-    [ready] = _wait_for_idle(1)
+    ready = _ready_process()
     starts = _record_starts(monkeypatch)
-    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+    task = _desk_lamp_task(catalog)
     assert _solve(task, CONFIGS["fd"], True, monkeypatch).status is PlanStatus.SOLVED
     [replacement] = _wait_for_idle(1)
     assert _is_gone(ready) and replacement != ready
@@ -153,8 +163,7 @@ def test_a_solve_uses_the_process_started_ahead_and_starts_its_replacement_in_th
 
 def test_taking_a_process_starts_no_replacement_until_its_search_has_ended() -> None:
     """On two cores the replacement's start-up would compete with the search that took the process."""
-    fast_downward.prestart(CONFIGS["fd"])
-    [ready] = _wait_for_idle(1)
+    ready = _ready_process()
     command = fast_downward._search_command(fast_downward.search_binary(), CONFIGS["fd"].search)
     taken = search_processes.take(command)
     try:
@@ -169,8 +178,7 @@ def test_a_used_process_is_reaped_and_its_folder_removed_off_the_solving_thread(
     catalog: Catalog, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Removing the folder alone takes ~0.6 ms, which the answer need not wait for."""
-    fast_downward.prestart(CONFIGS["fd"])
-    [ready] = _wait_for_idle(1)
+    ready = _ready_process()
     folder = Path(os.readlink(f"/proc/{ready}/cwd"))
     discarded: dict[int, str] = {}
     real_discard = search_processes.discard
@@ -180,7 +188,7 @@ def test_a_used_process_is_reaped_and_its_folder_removed_off_the_solving_thread(
         real_discard(started)
 
     monkeypatch.setattr(search_processes, "discard", recording_discard)
-    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+    task = _desk_lamp_task(catalog)
     assert _solve(task, CONFIGS["fd"], True, monkeypatch).status is PlanStatus.SOLVED
     search_processes.stop_idle()  # waits for the retirement, then ends the replacement
     assert discarded[ready] == "causalplan-retire"
@@ -190,9 +198,8 @@ def test_a_used_process_is_reaped_and_its_folder_removed_off_the_solving_thread(
 
 def test_held_retirements_wait_for_the_end_of_the_block(catalog: Catalog, monkeypatch: pytest.MonkeyPatch) -> None:
     """A worker holds them while it answers: the used process is neither killed nor replaced before."""
-    fast_downward.prestart(CONFIGS["fd"])
-    [ready] = _wait_for_idle(1)
-    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+    ready = _ready_process()
+    task = _desk_lamp_task(catalog)
     with search_processes.retirements_held():
         assert _solve(task, CONFIGS["fd"], True, monkeypatch).status is PlanStatus.SOLVED
         assert not any(thread.name == "causalplan-retire" for thread in threading.enumerate())
@@ -207,10 +214,9 @@ def test_a_second_solve_in_a_held_block_starts_its_replacement_first(
     catalog: Catalog, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """As without the block, it takes the replacement of the first solve's process, not one started for it."""
-    fast_downward.prestart(CONFIGS["fd"])
-    [ready] = _wait_for_idle(1)
+    ready = _ready_process()
     starts = _record_starts(monkeypatch)
-    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+    task = _desk_lamp_task(catalog)
     with search_processes.retirements_held():
         first = _solve(task, CONFIGS["fd"], True, monkeypatch)
         second = _solve(task, CONFIGS["fd"], True, monkeypatch)
@@ -223,13 +229,12 @@ def test_a_second_solve_in_a_held_block_starts_its_replacement_first(
 
 def test_a_search_writes_its_output_to_a_file_and_its_plan_to_a_fifo_and_no_pipe_is_read(catalog: Catalog) -> None:
     """FD logs a line at a time: a reader of its stdout would wake up for each line (~1.3 ms per search)."""
-    fast_downward.prestart(CONFIGS["fd"])
-    [ready] = _wait_for_idle(1)
+    ready = _ready_process()
     command = fast_downward._search_command(fast_downward.search_binary(), CONFIGS["fd"].search)
     taken = search_processes.take(command)
     try:
         assert taken.process.pid == ready and taken.process.stdout is None
-        task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+        task = _desk_lamp_task(catalog)
         compiled = canonical_pddl(task) or compile_task(task)
         translated = fast_downward._translate(compiled.domain, compiled.problem, time.monotonic() + 30, 2048)
         assert translated.product is not None
@@ -377,8 +382,7 @@ def test_the_memory_limit_applies_to_a_process_started_ahead(monkeypatch: pytest
 
 
 def test_an_idle_process_that_died_is_replaced(catalog: Catalog, monkeypatch: pytest.MonkeyPatch) -> None:
-    fast_downward.prestart(CONFIGS["fd"])
-    [ready] = _wait_for_idle(1)
+    ready = _ready_process()
     os.kill(ready, signal.SIGKILL)
     while Path(f"/proc/{ready}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z":  # dead, not yet reaped
         time.sleep(0.001)
@@ -407,7 +411,7 @@ def test_the_switch_turns_prestarting_off(catalog: Catalog, monkeypatch: pytest.
     monkeypatch.setattr(search_processes, "prestart", lambda command: used.append("prestart"))
     monkeypatch.setenv("CAUSALPLAN_SEARCH_PRESTART", "0")
     fast_downward.prestart(CONFIGS["fd"])
-    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+    task = _desk_lamp_task(catalog)
     assert _solve(task, CONFIGS["fd"], False, monkeypatch).status is PlanStatus.SOLVED
     assert used == []
     assert _children() == set()  # the fresh process is reaped, none is kept
@@ -416,9 +420,8 @@ def test_the_switch_turns_prestarting_off(catalog: Catalog, monkeypatch: pytest.
 def test_a_forked_child_neither_uses_nor_kills_the_parents_idle_processes(
     catalog: Catalog, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    fast_downward.prestart(CONFIGS["fd"])
-    [ready] = _wait_for_idle(1)
-    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+    ready = _ready_process()
+    task = _desk_lamp_task(catalog)
     monkeypatch.setenv("CAUSALPLAN_SEARCH_PRESTART", "1")
     go_read, go_write = os.pipe()
     report_read, report_write = os.pipe()

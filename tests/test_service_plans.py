@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import threading
-import time
 import uuid
 from typing import Any
 
@@ -16,9 +14,10 @@ from causalplan.service.routes import plans
 from tests.service_fixtures import (
     DESK_LAMP,
     FLASHLIGHT_MAPPING,
+    ThreadHops,
     error_of,
     services_of,
-    sqlite_write_lock,
+    sqlite_write_lock_for_a_moment,
     with_unique_effect,
 )
 
@@ -81,25 +80,11 @@ def test_an_identical_request_is_answered_from_the_cache(client: TestClient) -> 
     assert other_planner["cached"] is False
 
 
-class _Hops:
-    """Counts the plan route's hops to a worker thread (it runs on the event loop otherwise)."""
-
-    def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
-        self.count = 0
-        real = plans.run_in_threadpool
-
-        async def counted(*args: Any, **kwargs: Any) -> Any:
-            self.count += 1
-            return await real(*args, **kwargs)
-
-        monkeypatch.setattr(plans, "run_in_threadpool", counted)
-
-
 @pytest.mark.parametrize("mapping", [None, FLASHLIGHT_MAPPING], ids=["own object", "mapping"])
 def test_a_repeated_request_is_answered_on_the_event_loop_as_a_thread_answers_it(
     client: TestClient, monkeypatch: pytest.MonkeyPatch, mapping: dict[str, Any] | None
 ) -> None:
-    hops = _Hops(monkeypatch)
+    hops = ThreadHops(monkeypatch, plans)
     request = {"model": with_unique_effect(DESK_LAMP), "include_pddl": True} | ({"mapping": mapping} if mapping else {})
     first = client.post("/v1/plans", json=request, headers={"X-Participant-Id": "loop"}).json()
     assert first["cached"] is False and hops.count == 1  # a new document: read and solved in a thread
@@ -120,21 +105,11 @@ def test_a_repeated_request_goes_to_a_thread_while_the_database_is_locked(
     client: TestClient, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """The event loop never waits for SQLite's write lock: the request waits for it in a thread."""
-    hops = _Hops(monkeypatch)
+    hops = ThreadHops(monkeypatch, plans)
     model = with_unique_effect(DESK_LAMP)
     assert client.post("/v1/plans", json={"model": model}).json()["cached"] is False
-    locked = threading.Event()
-
-    def hold_briefly() -> None:
-        with sqlite_write_lock(str(services_of(client).engine.url)):
-            locked.set()
-            time.sleep(0.3)
-
-    holder = threading.Thread(target=hold_briefly)
-    holder.start()
-    assert locked.wait(10)
-    response = client.post("/v1/plans", json={"model": model})
-    holder.join()
+    with sqlite_write_lock_for_a_moment(str(services_of(client).engine.url)):
+        response = client.post("/v1/plans", json={"model": model})
     assert response.status_code == 200 and response.json()["cached"] is True
     assert hops.count == 2  # the first request's, and this one's once the loop could not store it at once
     assert client.get(f"/v1/models/{response.json()['model_id']}").status_code == 200

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import threading
 import time
 import uuid
 from pathlib import Path
@@ -32,6 +31,7 @@ from tests.service_fixtures import (
     settings_for,
     sqlite_url,
     sqlite_write_lock,
+    sqlite_write_lock_for_a_moment,
 )
 
 
@@ -172,19 +172,9 @@ def test_saving_without_waiting_gives_way_to_a_held_write_lock(tmp_path: Path) -
     assert _count(engine, "locked") == (0, 0)
     # The pooled connection waits again for a lock (its busy timeout is back): a save made while
     # another connection holds the lock for a moment succeeds once the lock is free.
-    locked = threading.Event()
-
-    def hold_briefly() -> None:
-        with sqlite_write_lock(url):
-            locked.set()
-            time.sleep(0.3)
-
-    holder = threading.Thread(target=hold_briefly)
-    holder.start()
-    assert locked.wait(10)
     model, _ = _records("waited")
-    crud.save(engine, [model])
-    holder.join()
+    with sqlite_write_lock_for_a_moment(url):
+        crud.save(engine, [model])
     assert _count(engine, "waited") == (1, 0)
     with engine.connect() as connection:
         assert connection.exec_driver_sql("PRAGMA busy_timeout").scalar() == 10_000

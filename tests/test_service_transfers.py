@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import pytest
 from fastapi.testclient import TestClient
 
@@ -15,6 +13,7 @@ from tests.service_fixtures import (
     FAILED_DESK_LAMP,
     FAILED_FLASHLIGHT_MAPPING,
     FLASHLIGHT_MAPPING,
+    ThreadHops,
     error_of,
     with_unique_effect,
 )
@@ -86,25 +85,17 @@ def test_a_repeated_trial_is_cached_and_stored_again(client: TestClient) -> None
 def test_a_repeated_trial_is_answered_on_the_event_loop_as_a_thread_answers_it(
     client: TestClient, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    hops = 0
-    real = transfers.run_in_threadpool
-
-    async def counted(*args: Any, **kwargs: Any) -> Any:
-        nonlocal hops
-        hops += 1
-        return await real(*args, **kwargs)
-
-    monkeypatch.setattr(transfers, "run_in_threadpool", counted)
+    hops = ThreadHops(monkeypatch, transfers)
     request = {"model": with_unique_effect(DESK_LAMP), "mapping": FLASHLIGHT_MAPPING}
     headers = {"X-Participant-Id": "transfer-loop"}
     first = client.post("/v1/transfers", json=request, headers=headers).json()
-    assert first["cached"] is False and hops == 1  # new documents: read and solved in a thread
+    assert first["cached"] is False and hops.count == 1  # new documents: read and solved in a thread
     again = client.post("/v1/transfers", json=request, headers=headers).json()
-    assert again["cached"] is True and hops == 1  # read before, answer kept: no hop
+    assert again["cached"] is True and hops.count == 1  # read before, answer kept: no hop
     with monkeypatch.context() as without:
         without.setattr(submissions, "kept_transfer", lambda *_: None)
         threaded = client.post("/v1/transfers", json=request, headers=headers).json()
-    assert hops == 2
+    assert hops.count == 2
     ids = {"model_id": None, "trial_id": None}
     assert {**again, **ids} == {**threaded, **ids}
     assert {**again, **ids, "cached": False} == {**first, **ids}

@@ -18,7 +18,8 @@ starts once the search has ended, not when its predecessor was taken: on two cor
 (~3.7 ms of CPU) would compete with that very search (measured through the app, interleaved:
 the search 0.5-1.4 ms faster); now it overlaps the answer going back and the next translation.
 A service worker goes one step further and holds its retirements until its answer is sent
-(``retirements_held``): cold requests through the app, interleaved, 0.2-0.45 ms faster.
+(``retirements_held``): cold requests through the app, two servers interleaved, 0.18 and 0.46 ms
+faster (p50, two runs).
 
 Forks and exit: a forked child forgets the parent's idle processes and closes its copies of
 their stdin (if it kept them, the parent closing stdin would not reach the process as its end

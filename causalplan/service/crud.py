@@ -202,7 +202,7 @@ def save_without_waiting(engine: Engine, records: Sequence[ModelRecord | TrialRe
     """Store ``records`` as ``save`` does, if that needs no waiting; return whether they were stored.
 
     For the event loop, which must never wait for a database. Only SQLite qualifies: its writes
-    are local (~0.1 ms, as the service runs it: WAL, no sync per commit, checkpoints in the
+    are local (~0.2 ms for a request's record, as the service runs it: WAL, no sync per commit, checkpoints in the
     background), and this transaction runs with a busy timeout of 0, so a write lock held by
     another connection answers False at once instead of after up to 10 s. Other databases
     answer False without trying: their writes are round trips to a server. False means that

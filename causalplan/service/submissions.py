@@ -448,21 +448,26 @@ def _valid_inputs(
     )
 
 
-def _kept_reads(
-    model: dict[str, Any] | None, mapping: dict[str, Any] | None, services: Services
-) -> tuple[ModelRead, MappingRead | None] | None:
-    """Return the kept reads of an inline model and its mapping, when both are kept and valid (else None)."""
-    if model is None:  # a stored model is read from the database
+def _kept_inputs(body: PlanIn | TransferIn, services: Services, client: ClientIds) -> PlanInputs | None:
+    """Return a request's inputs from what was kept: an inline model and a mapping read before, both valid.
+
+    None otherwise (a stored model is read from the database; a new document is read in a thread).
+    """
+    if body.model is None:
         return None
-    model_read = services.reads.get(document_key("model", model)[0])
+    model_read = services.reads.get(document_key("model", body.model)[0])
     if not isinstance(model_read, ModelRead) or model_read.canonical is None:
         return None
-    if mapping is None:
-        return model_read, None
-    mapping_read = services.reads.get(document_key("mapping", mapping)[0])
-    if not isinstance(mapping_read, MappingRead) or mapping_read.canonical is None:
-        return None
-    return model_read, mapping_read
+    mapping_read: MappingRead | None = None
+    if body.mapping is not None:
+        kept = services.reads.get(document_key("mapping", body.mapping)[0])
+        if not isinstance(kept, MappingRead) or kept.canonical is None:
+            return None
+        mapping_read = kept
+    planner = resolve_planner(body.planner)
+    time_limit = resolve_time_limit(body.time_limit, services.settings)
+    submission = _inline_submission(clean_json(body.model, "the model"), model_read, client)
+    return _valid_inputs(submission, mapping_read, planner, time_limit, services)
 
 
 def kept_answer(body: PlanIn, services: Services, client: ClientIds, kind: str) -> tuple[PlanInputs, Answer] | None:
@@ -475,52 +480,33 @@ def kept_answer(body: PlanIn, services: Services, client: ClientIds, kind: str) 
     with nothing stored: the request then goes the usual way, in a thread.
     """
     started = time.perf_counter()
-    reads = _kept_reads(body.model, body.mapping, services)
-    if reads is None or body.model is None:
+    inputs = _kept_inputs(body, services, client)
+    if inputs is None:
         return None
-    model_read, mapping_read = reads
-    planner = resolve_planner(body.planner)
-    time_limit = resolve_time_limit(body.time_limit, services.settings)
-    submission = _inline_submission(clean_json(body.model, "the model"), model_read, client)
-    inputs = _valid_inputs(submission, mapping_read, planner, time_limit, services)
     data = services.cache.get(inputs.key(kind))
-    if data is None or not save_without_waiting(services.engine, [submission.record]):
+    if data is None or not save_without_waiting(services.engine, [inputs.submission.record]):
         return None
     return inputs, Answer(data, True, time.perf_counter() - started)
 
 
-@dataclass(frozen=True)
-class KeptTransfer:
-    """A transfer answered from what was kept: the answer and the two records stored with it."""
-
-    answer: Answer
-    model: ModelRecord
-    trial: TrialRecord
-
-
-def kept_transfer(body: TransferIn, services: Services, client: ClientIds) -> KeptTransfer | None:
+def kept_transfer(body: TransferIn, services: Services, client: ClientIds) -> tuple[Answer, TrialRecord] | None:
     """Answer a transfer request without waiting for anything, when it can be (as ``kept_answer``).
 
-    Its model and its trial are stored together, without waiting; None otherwise, with nothing stored.
+    Returns the answer and the trial, stored with its model (``trial.model_id``) without
+    waiting; None otherwise, with nothing stored.
     """
     started = time.perf_counter()
-    reads = _kept_reads(body.model, body.mapping, services)
-    if reads is None or body.model is None:
+    inputs = _kept_inputs(body, services, client)
+    if inputs is None:
         return None
-    model_read, mapping_read = reads
-    if model_read.canonical is None or mapping_read is None or mapping_read.canonical is None:
-        return None
-    planner = resolve_planner(body.planner)
-    time_limit = resolve_time_limit(body.time_limit, services.settings)
-    texts = (model_read.canonical, mapping_read.canonical)
-    key = answer_key("transfer", *texts, planner, time_limit, services.catalog_key)
-    data = services.cache.get(key)
+    data = services.cache.get(inputs.key("transfer"))  # the key the transfer route computes
     if data is None:
         return None
-    submission = _inline_submission(clean_json(body.model, "the model"), model_read, client)
     seconds = time.perf_counter() - started
-    mapping_document = clean_json(body.mapping, "the mapping")
-    trial = new_trial_record(submission.record.id, mapping_document, planner, data, True, seconds, client)
-    if not save_without_waiting(services.engine, [submission.record, trial]):
+    model = inputs.submission.record
+    trial = new_trial_record(
+        model.id, clean_json(body.mapping, "the mapping"), inputs.planner, data, True, seconds, client
+    )
+    if not save_without_waiting(services.engine, [model, trial]):
         return None
-    return KeptTransfer(Answer(data, True, seconds), submission.record, trial)
+    return Answer(data, True, seconds), trial

@@ -28,7 +28,8 @@ async def create_transfer(body: TransferIn, services: ServicesDep, client: Clien
     # A repeated trial is answered on the event loop, as a repeated plan is (see routes/plans.py).
     kept = submissions.kept_transfer(body, services, client)
     if kept is not None:
-        return _response(body, kept.answer, kept.trial.id, kept.model.id)
+        answer, trial = kept
+        return _response(body, answer, trial.id, trial.model_id)
     return await run_in_threadpool(_transfer, body, services, client)
 
 
