@@ -18,11 +18,16 @@ lamp and ~3.8 ms less on the kerosene lamp (four primitives). The translated tas
 same, operator for operator and in the same order, but for the operators' names (tests check
 it byte for byte), so FD's searches are too; ``plan_actions`` gives the plan back in the
 per-primitive names.
+
+Everything but the goal clauses (one line each, ``GOAL_CLAUSE_START``) depends only on the
+object, which lets ``planners.canonical_translation`` parse and ground that part once per object.
 """
 
 from __future__ import annotations
 
-from causalplan.objects.model import Fit
+from collections.abc import Iterable
+
+from causalplan.objects.model import AssemblyObject, Fit
 from causalplan.pddl.task import PlanningTask
 from causalplan.pddl.writer import CompiledTask, assembly_action, problem_text, requirements_line
 
@@ -34,9 +39,13 @@ ASSEMBLE = "assemble"
 """The one action schema of the canonical form."""
 KIND_PREFIX = "kind-"
 
-_ASSEMBLE_SCHEMA = assembly_action(
+ASSEMBLE_SCHEMA = assembly_action(
     ASSEMBLE, "?kind - kind ?moving - part ?fixed - part ?fit - fit", "(fit-joins ?fit ?kind ?moving ?fixed)"
 )
+"""The text of the ``assemble`` schema: a domain that contains it is in the canonical form."""
+
+GOAL_CLAUSE_START = "  (:derived (goal) "
+"""How each line of the domain that holds one goal clause (one minimal part set) starts."""
 
 Action = tuple[str, tuple[str, ...]]
 
@@ -118,11 +127,16 @@ def canonical_pddl(task: PlanningTask) -> CompiledTask | None:
     sets = minimal_part_sets(task)
     if sets is None:
         return None
-    obj = task.obj
+    domain, problem = canonical_texts(task.obj, sets)
+    return CompiledTask(domain, problem, {task.goal_key: "goal"})
+
+
+def canonical_texts(obj: AssemblyObject, sets: Iterable[Iterable[str]]) -> tuple[str, str]:
+    """Return the domain and problem whose goal holds once the assembly of ``obj`` contains one of ``sets``."""
     clauses = []
     for parts in sorted(sorted(group) for group in sets):
         body = " ".join(f"(in-assembly {part})" for part in parts)
-        clauses.append(f"  (:derived (goal) {body if len(parts) == 1 else f'(and {body})' if parts else '(and)'})")
+        clauses.append(f"{GOAL_CLAUSE_START}{body if len(parts) == 1 else f'(and {body})' if parts else '(and)'})")
     kinds = " ".join(f"{KIND_PREFIX}{primitive}" for primitive in sorted({fit.primitive for fit in obj.fits}))
     domain = (
         "\n".join(
@@ -134,11 +148,10 @@ def canonical_pddl(task: PlanningTask) -> CompiledTask | None:
                 "  (:predicates (in-assembly ?p - part) (available ?f - fit) (excludes ?f - fit ?g - fit)",
                 "               (fit-joins ?f - fit ?k - kind ?moving - part ?fixed - part) (goal))",
                 *clauses,
-                _ASSEMBLE_SCHEMA,
+                ASSEMBLE_SCHEMA,
                 ")",
             ]
         )
         + "\n"
     )
-    problem = problem_text(obj, "goal", comments=False, static_facts=_fit_facts)
-    return CompiledTask(domain, problem, {task.goal_key: "goal"})
+    return domain, problem_text(obj, "goal", comments=False, static_facts=_fit_facts)

@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from causalplan.errors import PlannerUnavailableError
-from causalplan.planners import search_processes
+from causalplan.planners import canonical_translation, search_processes
 from causalplan.planners.result import PlanStatus, SearchOutcome
 
 logger = logging.getLogger(__name__)
@@ -327,7 +327,7 @@ def _translator_options() -> Any:
     return options.parse_args(["domain.pddl", "problem.pddl", *TRANSLATOR_ARGUMENTS])
 
 
-def _parse_pddl(kind: str, text: str) -> Any:
+def parse_pddl(kind: str, text: str) -> Any:
     """Return the nested lists of a PDDL text, as the translator's ``parse_pddl_file`` does for a file."""
     from fast_downward.translate.pddl_parser import ParseError, lisp_parser
 
@@ -342,6 +342,7 @@ def _run_translator(domain: str, problem: str) -> tuple[int, str | None]:
 
     The steps of the translator's ``main.main()`` on texts in memory: no files to write and read
     back, no argument parsing per run (the options never change), and no statistics (only printed).
+    A task in the canonical form takes ``canonical_translation``'s shorter way to the same result.
     Tests check that its SAS task is byte-identical to the translator's own, run as a process.
     """
     from fast_downward.translate import main, normalize, options, pddl_parser
@@ -349,10 +350,13 @@ def _run_translator(domain: str, problem: str) -> tuple[int, str | None]:
 
     options.options = _translator_options()  # set on every run: it is the translator's global
     try:
-        task = parsing_functions.parse_task(_parse_pddl("domain", domain), _parse_pddl("problem", problem))
-        normalize.normalize(task)
+        sas_task = canonical_translation.sas_task(domain, problem)
+        if sas_task is None:
+            task = parsing_functions.parse_task(parse_pddl("domain", domain), parse_pddl("problem", problem))
+            normalize.normalize(task)
+            sas_task = main.pddl_to_sas(task)
         sas = io.StringIO()
-        main.pddl_to_sas(task).output(sas)
+        sas_task.output(sas)
     except MemoryError:
         return TRANSLATE_OUT_OF_MEMORY, None
     except pddl_parser.ParseError as exc:
