@@ -32,7 +32,7 @@ def _canonical_sas(domain: str, problem: str) -> str | None:
     """Return the SAS text of the shorter way, or None where it does not apply."""
     from fast_downward.translate import options
 
-    options.options = fast_downward._translator_options()
+    options.options = fast_downward.translator_options()
     task = canonical_translation.sas_task(domain, problem)
     if task is None:
         return None
@@ -187,3 +187,28 @@ def test_tasks_without_a_carried_exploration_are_explored_by_fd(
     readable = compile_task(task)
     code, sas = fast_downward._run_translator(readable.domain, readable.problem)
     assert code == 0 and sas == _sas_of_the_translators_own_process(task, tmp_path)
+
+
+def test_a_kept_object_is_not_parsed_again_for_its_first_model(
+    catalog: Catalog, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from causalplan.pddl.task import build_task
+    from tests.conftest import example_model
+
+    canonical_translation.keep_object(catalog.get("desk_lamp"))
+
+    def parse_again(domain: str, problem: str) -> None:
+        raise AssertionError("the object's half should have been kept")
+
+    monkeypatch.setattr(canonical_translation, "_read_object_half", parse_again)
+    compiled = canonical_pddl(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
+    assert compiled is not None
+    assert _canonical_sas(compiled.domain, compiled.problem) is not None
+
+
+def test_a_service_worker_keeps_the_catalogs_objects_when_it_starts(catalog: Catalog) -> None:
+    from causalplan.service.worker import warm_up
+
+    warm_up()
+    assert len(canonical_translation._halves) == len(catalog.objects)
+    assert all(half is not None for half in canonical_translation._halves.values())

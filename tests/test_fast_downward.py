@@ -298,7 +298,7 @@ def test_without_invariant_synthesis_every_example_and_synthetic_task_translates
                 continue
             ours = fast_downward._run_translator(compiled.domain, compiled.problem)
             with monkeypatch.context() as patch:
-                patch.setattr(fast_downward, "_translator_options", lambda: options.parse_args(["d.pddl", "p.pddl"]))
+                patch.setattr(fast_downward, "translator_options", lambda: options.parse_args(["d.pddl", "p.pddl"]))
                 defaults = fast_downward._run_translator(compiled.domain, compiled.problem)
             assert ours == defaults and ours[0] == 0, name
             compared += 1

@@ -42,7 +42,8 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
-from causalplan.pddl.canonical import ASSEMBLE, ASSEMBLE_SCHEMA, GOAL_CLAUSE_START
+from causalplan.objects.model import AssemblyObject
+from causalplan.pddl.canonical import ASSEMBLE, ASSEMBLE_SCHEMA, GOAL_CLAUSE_START, canonical_texts
 
 OBJECTS_KEPT = 32
 """How many objects' parsed halves are kept (least recently used first out)."""
@@ -85,16 +86,18 @@ def sas_task(domain: str, problem: str) -> Any | None:
 
     if ASSEMBLE_SCHEMA not in domain:
         return None
-    lines = domain.split("\n")
-    rest = "\n".join(line for line in lines if not line.startswith(GOAL_CLAUSE_START))
-    half = _object_half(rest, problem)
+    half = _object_half(_without_goal_clauses(domain), problem)
     if half is None:
         return None
-    task = _with_goal_clauses(half, [line for line in lines if line.startswith(GOAL_CLAUSE_START)])
+    task = _with_goal_clauses(half, [line for line in domain.split("\n") if line.startswith(GOAL_CLAUSE_START)])
     if task is None:
         return None
     _install_explore_hook()
     return main.pddl_to_sas(task)
+
+
+def _without_goal_clauses(domain: str) -> str:
+    return "\n".join(line for line in domain.split("\n") if not line.startswith(GOAL_CLAUSE_START))
 
 
 def _object_half(domain: str, problem: str) -> _ObjectHalf | None:
@@ -280,6 +283,20 @@ def _install_explore_hook() -> None:
 
         explore.carries_causalplan_exploration = True  # type: ignore[attr-defined]
         instantiate.explore = explore
+
+
+def keep_object(obj: AssemblyObject) -> None:
+    """Parse and walk ``obj``'s half now, so that its first model is translated the short way too.
+
+    A service worker does it for the catalog's objects while it starts.
+    """
+    from fast_downward.translate import options
+
+    from causalplan.planners.fast_downward import translator_options
+
+    options.options = translator_options()
+    domain, problem = canonical_texts(obj, ())
+    _object_half(_without_goal_clauses(domain), problem)
 
 
 def clear() -> None:

@@ -320,7 +320,7 @@ the translator's defaults on every example and on synthetic tasks, in both PDDL 
 
 
 @cache
-def _translator_options() -> Any:
+def translator_options() -> Any:
     """Return the translator's options (file names are never read, so any will do)."""
     from fast_downward.translate import options
 
@@ -348,7 +348,7 @@ def _run_translator(domain: str, problem: str) -> tuple[int, str | None]:
     from fast_downward.translate import main, normalize, options, pddl_parser
     from fast_downward.translate.pddl_parser import parsing_functions
 
-    options.options = _translator_options()  # set on every run: it is the translator's global
+    options.options = translator_options()  # set on every run: it is the translator's global
     try:
         sas_task = canonical_translation.sas_task(domain, problem)
         if sas_task is None:
