@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import cached_property
 
 from causalplan.causal.diagnostics import Diagnostic, Location, error, warning
 from causalplan.causal.labels import display_label, has_control_characters, normalize_label
@@ -26,11 +27,13 @@ class Rule:
     text: str
     index: int
 
-    @property
+    # Worked out once per rule (reading a model asks for them ~70 times): a frozen dataclass's
+    # cached_property is written to the instance's __dict__, outside its fields.
+    @cached_property
     def cause_keys(self) -> frozenset[str]:
         return frozenset(normalize_label(cause) for cause in self.causes)
 
-    @property
+    @cached_property
     def effect_key(self) -> str:
         return normalize_label(self.effect)
 
