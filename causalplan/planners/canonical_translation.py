@@ -86,18 +86,16 @@ def sas_task(domain: str, problem: str) -> Any | None:
 
     if ASSEMBLE_SCHEMA not in domain:
         return None
-    half = _object_half(_without_goal_clauses(domain), problem)
+    lines = domain.split("\n")
+    clauses = [line for line in lines if line.startswith(GOAL_CLAUSE_START)]
+    half = _object_half("\n".join(line for line in lines if not line.startswith(GOAL_CLAUSE_START)), problem)
     if half is None:
         return None
-    task = _with_goal_clauses(half, [line for line in domain.split("\n") if line.startswith(GOAL_CLAUSE_START)])
+    task = _with_goal_clauses(half, clauses)
     if task is None:
         return None
     _install_explore_hook()
     return main.pddl_to_sas(task)
-
-
-def _without_goal_clauses(domain: str) -> str:
-    return "\n".join(line for line in domain.split("\n") if not line.startswith(GOAL_CLAUSE_START))
 
 
 def _object_half(domain: str, problem: str) -> _ObjectHalf | None:
@@ -223,13 +221,15 @@ def _with_goal_clauses(half: _ObjectHalf, clauses: list[str]) -> Any | None:
     )
     normalize.normalize(clauses_task)
     model = list(half.model)
+    goal_reachable = False
     for axiom in clauses_task.axioms:
         parts = _clause_parts(axiom)
         if parts is None:
             return None
         if parts <= half.reachable_parts:
             model.append(pddl.Atom(axiom, ()))
-    if len(model) > len(half.model):
+            goal_reachable = True
+    if goal_reachable:
         model += [pddl.Atom(GOAL, ()), pddl.Atom("@goal-reachable", ())]
     task = copy.copy(base)
     task.axioms = clauses_task.axioms
@@ -295,8 +295,8 @@ def keep_object(obj: AssemblyObject) -> None:
     from causalplan.planners.fast_downward import translator_options
 
     options.options = translator_options()
-    domain, problem = canonical_texts(obj, ())
-    _object_half(_without_goal_clauses(domain), problem)
+    domain, problem = canonical_texts(obj, ())  # no goal clauses: the key ``sas_task`` looks up
+    _object_half(domain, problem)
 
 
 def clear() -> None:
