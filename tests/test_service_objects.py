@@ -52,7 +52,7 @@ def test_health_reports_planners_database_pool_and_limits(client: TestClient) ->
     }
     assert health["pool"]["workers"] == 2 and health["pool"]["max_in_flight"] == 18
     assert health["limits"]["max_rules"] == 200 and health["limits"]["max_time_limit"] == 60.0
-    assert set(health["cache"]) == {"size", "entries", "hits", "misses"}
+    assert set(health["cache"]) == set(health["repeats"]) == {"size", "entries", "hits", "misses"}
 
 
 def test_unknown_routes_and_methods_have_the_error_shape(client: TestClient) -> None:

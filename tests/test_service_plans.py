@@ -10,6 +10,7 @@ from fastapi.testclient import TestClient
 
 from causalplan.planners import pipeline
 from causalplan.service import submissions
+from causalplan.service.repeats import RepeatedPlans
 from causalplan.service.routes import plans
 from tests.service_fixtures import (
     DESK_LAMP,
@@ -92,6 +93,7 @@ def test_a_repeated_request_is_answered_on_the_event_loop_as_a_thread_answers_it
     assert again["cached"] is True and hops.count == 1  # read before, answer kept: no hop
     with monkeypatch.context() as without:
         without.setattr(submissions, "kept_answer", lambda *_: None)
+        without.setattr(services_of(client), "repeats", RepeatedPlans(0))  # nor answered before the route
         threaded = client.post("/v1/plans", json=request, headers={"X-Participant-Id": "loop"}).json()
     assert hops.count == 2
     assert len({first["model_id"], again["model_id"], threaded["model_id"]}) == 3  # every submission is kept

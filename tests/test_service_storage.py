@@ -155,27 +155,81 @@ def _count(engine: Any, participant: str) -> tuple[int, int]:
 def test_saving_without_waiting_stores_on_sqlite_and_only_there(database_url: str) -> None:
     engine = create_database_engine(database_url, background_checkpoints=True)
     upgrade(engine)
-    model, trial = _records("at-once")
-    stored = crud.save_without_waiting(engine, [model, trial])
-    assert stored is (engine.dialect.name == "sqlite")  # a database server's round trips are never made at once
-    assert _count(engine, "at-once") == ((1, 1) if stored else (0, 0))
+    writer = crud.NoWaitWriter.open(engine)
+    assert (writer is not None) is (engine.dialect.name == "sqlite")  # a server's round trips are never made at once
+    if writer is not None:
+        model, trial = _records("at-once")
+        assert writer.save([model, trial]) is True
+        assert _count(engine, "at-once") == (1, 1)
+        writer.close()
     engine.dispose()
+
+
+def test_a_prepared_row_is_stored_as_core_stores_the_same_record(tmp_path: Path) -> None:
+    """A repeated request's record: the document and report converted once, id, time and client ids new."""
+    engine = create_database_engine(sqlite_url(tmp_path), background_checkpoints=True)
+    upgrade(engine)
+    writer = crud.NoWaitWriter.open(engine)
+    assert writer is not None
+    first, _ = _records("first")
+    row = crud.PreparedModelRow(engine, first)
+    ids = [writer.save_prepared(row, crud.ClientIds("fast", "séance ☃")) for _ in range(2)]
+    assert ids[0] is not None and ids[1] is not None and ids[0] != ids[1]  # a record per request
+    with Session(engine) as session:
+        stored = session.get(ModelRecord, ids[0])
+        assert stored is not None and stored.participant_id == "fast" and stored.session_id == "séance ☃"
+        assert stored.created_at > first.created_at.replace(tzinfo=None)  # its own time (SQLite's are naive)
+        created_at = stored.created_at
+    core, _ = _records("core")
+    core.created_at = created_at
+    with engine.begin() as connection:
+        connection.execute(insert(ModelRecord), [crud._row(core)])
+    [fast_row] = [row for row in _rows(engine, "models") if row["id"] == ids[0].hex]
+    [core_row] = [row for row in _rows(engine, "models") if row["participant_id"] == "core"]
+    assert {**fast_row, "id": None, "participant_id": None} == {**core_row, "id": None, "participant_id": None}
+    # A client id is stored cleaned and cut to length, as new_model_record stores it.
+    nul_id = writer.save_prepared(row, crud.ClientIds("a\x00b" + "x" * 300, None))
+    with Session(engine) as session:
+        stored = session.get(ModelRecord, nul_id)
+        assert stored is not None and stored.participant_id == ("a\ufffdb" + "x" * 300)[:128]
+        assert stored.session_id is None
+    writer.close()
+    engine.dispose()
+
+
+def _rows(engine: Any, table: str) -> list[dict[str, Any]]:
+    with engine.connect() as connection:
+        return [dict(row) for row in connection.exec_driver_sql(f"SELECT * FROM {table}").mappings().all()]
 
 
 def test_saving_without_waiting_gives_way_to_a_held_write_lock(tmp_path: Path) -> None:
     url = sqlite_url(tmp_path)
     engine = create_database_engine(url, background_checkpoints=True)
     upgrade(engine)
+    writer = crud.NoWaitWriter.open(engine)
+    assert writer is not None
+    model, _ = _records("locked")
     with sqlite_write_lock(url):
-        model, _ = _records("locked")
-        assert crud.save_without_waiting(engine, [model]) is False  # at once, not after the 10 s busy timeout
+        assert writer.save([model]) is False  # at once, not after the 10 s busy timeout
+        assert writer.save_prepared(crud.PreparedModelRow(engine, model), crud.ClientIds("locked")) is None
     assert _count(engine, "locked") == (0, 0)
-    # The pooled connection waits again for a lock (its busy timeout is back): a save made while
-    # another connection holds the lock for a moment succeeds once the lock is free.
+    assert writer.save([model]) is True  # the lock is free again: the same connection stores
+    assert _count(engine, "locked") == (1, 0)
+    # A failed write (NOT NULL) stores nothing, raises StorageError, and leaves the connection usable.
+    failed, failed_trial = _records("refused")
+    failed_trial.verdict = None  # type: ignore[assignment]
+    with pytest.raises(StorageError, match="nothing was stored"):
+        writer.save([failed, failed_trial])
+    assert _count(engine, "refused") == (0, 0)
+    after, _ = _records("after")
+    assert writer.save([after]) is True
+    # The pooled connections wait for a lock (their busy timeout is the engine's): a save made
+    # while another connection holds the lock for a moment succeeds once the lock is free.
     model, _ = _records("waited")
     with sqlite_write_lock_for_a_moment(url):
         crud.save(engine, [model])
     assert _count(engine, "waited") == (1, 0)
+    writer.close()
     with engine.connect() as connection:
         assert connection.exec_driver_sql("PRAGMA busy_timeout").scalar() == 10_000
     engine.dispose()

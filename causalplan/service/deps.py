@@ -16,11 +16,12 @@ from sqlalchemy.orm import Session
 from causalplan.objects.catalog import Catalog
 from causalplan.service.attempts import FailedAttempts
 from causalplan.service.cache import LruCache, ResultCache
-from causalplan.service.crud import ClientIds
+from causalplan.service.crud import ClientIds, NoWaitWriter
 from causalplan.service.db.checkpoints import WalCheckpointer
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH
 from causalplan.service.errors import NotAuthenticatedError, ResearchDisabledError
 from causalplan.service.planning import PlannerPool
+from causalplan.service.repeats import RepeatedPlans
 from causalplan.service.settings import Settings
 
 
@@ -42,6 +43,10 @@ class Services:
     """Wrong research tokens by client address, to refuse guessing at full speed."""
     checkpointer: WalCheckpointer | None = None
     """SQLite's log checkpoints, off the requests (None for other databases)."""
+    no_wait_writer: NoWaitWriter | None = None
+    """The event loop's own SQLite connection, which stores only what needs no waiting (None for other databases)."""
+    repeats: RepeatedPlans = field(default_factory=lambda: RepeatedPlans(0))
+    """Answers of plan requests kept by their exact body (``RepeatedPlanMiddleware``)."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
 

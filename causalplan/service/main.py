@@ -24,16 +24,19 @@ from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.attempts import FailedAttempts
 from causalplan.service.cache import LruCache, ResultCache, catalog_key
+from causalplan.service.crud import NoWaitWriter
 from causalplan.service.db.checkpoints import WalCheckpointer
 from causalplan.service.db.migrate import upgrade
 from causalplan.service.db.session import create_database_engine
 from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
 from causalplan.service.planning import PlannerPool
+from causalplan.service.repeats import RepeatedPlanMiddleware, RepeatedPlans
 from causalplan.service.responses import SafeJSONResponse
 from causalplan.service.routes import health, models, objects, plans, research, simulations, transfers
 from causalplan.service.schemas import error_responses
 from causalplan.service.settings import Settings
+from causalplan.service.submissions import resolve_planner
 from causalplan.service.web import routers as web_routers
 from causalplan.service.worker import probe_job
 
@@ -53,13 +56,17 @@ def start_services(settings: Settings) -> Services:
     """Prepare the database (migrations), load the catalog and start the planner pool."""
     catalog = load_catalog(settings.catalog_folders)
     engine = create_database_engine(settings.database_url, background_checkpoints=True)
+    no_wait_writer = None
     try:
         revision = upgrade(engine)
+        no_wait_writer = NoWaitWriter.open(engine)
         pool = PlannerPool(
             settings.planning_workers, settings.queue_size, settings.worker_memory_mb, settings.queue_wait_seconds
         )
         pool.start()
     except BaseException:
+        if no_wait_writer is not None:
+            no_wait_writer.close()
         engine.dispose()
         raise
     services = Services(
@@ -73,6 +80,8 @@ def start_services(settings: Settings) -> Services:
         catalog_key=catalog_key(catalog),
         failed_attempts=FailedAttempts(settings.research_max_failures, settings.research_failure_window_seconds),
         checkpointer=WalCheckpointer(engine) if engine.dialect.name == "sqlite" else None,
+        no_wait_writer=no_wait_writer,
+        repeats=RepeatedPlans(settings.cache_size),
     )
     if services.checkpointer is not None:
         services.checkpointer.start()
@@ -118,6 +127,8 @@ def stop_services(services: Services) -> None:
     services.pool.close()
     if services.checkpointer is not None:
         services.checkpointer.stop()
+    if services.no_wait_writer is not None:
+        services.no_wait_writer.close()
     services.engine.dispose()
 
 
@@ -271,6 +282,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_exception_handler(RequestValidationError, handle_validation_error)
     app.add_exception_handler(StarletteHTTPException, handle_http_error)
     app.add_exception_handler(Exception, handle_unexpected_error)
+    app.add_middleware(RepeatedPlanMiddleware, resolve_planner=resolve_planner)  # inside the body limit
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
     for module in (models, plans, simulations, transfers, objects, research, health):
         app.include_router(module.router)

@@ -11,12 +11,17 @@ from typing import Any
 from fastapi.responses import JSONResponse
 
 
+def render_json(content: Any) -> bytes:
+    """Return ``content`` as compact UTF-8 JSON; a lone surrogate (valid in Python text, not in UTF-8) becomes '?'."""
+    text = json.dumps(content, ensure_ascii=False, allow_nan=False, indent=None, separators=(",", ":"))
+    return text.encode("utf-8", "replace")
+
+
 class SafeJSONResponse(JSONResponse):
-    """JSON that always encodes: a lone surrogate (valid in Python text, not in UTF-8) becomes '?'."""
+    """JSON that always encodes (``render_json``)."""
 
     def render(self, content: Any) -> bytes:
-        text = json.dumps(content, ensure_ascii=False, allow_nan=False, indent=None, separators=(",", ":"))
-        return text.encode("utf-8", "replace")
+        return render_json(content)
 
 
 _FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")

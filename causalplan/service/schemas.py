@@ -403,6 +403,9 @@ class HealthOut(OutputModel):
     database: DatabaseHealthOut
     pool: dict[str, int]
     cache: dict[str, int]
+    repeats: dict[str, int] = Field(
+        description="Plan request bodies whose cached answers are kept by their exact bytes, and their hits."
+    )
     limits: dict[str, int | float]
 
 

@@ -37,7 +37,6 @@ from causalplan.service.crud import (
     new_model_record,
     new_trial_record,
     save,
-    save_without_waiting,
 )
 from causalplan.service.db.models import ModelRecord, TrialRecord
 from causalplan.service.deps import Services, open_session
@@ -475,7 +474,7 @@ def kept_answer(body: PlanIn, services: Services, client: ClientIds, kind: str) 
 
     It can be when the model is inline, it and the mapping were read before (their reads are
     kept) and are valid, the answer (``kind``: 'plan', 'simulate:True', ...) is kept, and the
-    model's record is stored without waiting (``save_without_waiting``: SQLite, write lock free).
+    model's record is stored without waiting (``NoWaitWriter``: SQLite, write lock free).
     So the event loop can answer it itself, without a hop to a thread and back. None otherwise,
     with nothing stored: the request then goes the usual way, in a thread.
     """
@@ -484,7 +483,8 @@ def kept_answer(body: PlanIn, services: Services, client: ClientIds, kind: str) 
     if inputs is None:
         return None
     data = services.cache.get(inputs.key(kind))
-    if data is None or not save_without_waiting(services.engine, [inputs.submission.record]):
+    writer = services.no_wait_writer
+    if data is None or writer is None or not writer.save([inputs.submission.record]):
         return None
     return inputs, Answer(data, True, time.perf_counter() - started)
 
@@ -507,6 +507,7 @@ def kept_transfer(body: TransferIn, services: Services, client: ClientIds) -> tu
     trial = new_trial_record(
         model.id, clean_json(body.mapping, "the mapping"), inputs.planner, data, True, seconds, client
     )
-    if not save_without_waiting(services.engine, [model, trial]):
+    writer = services.no_wait_writer
+    if writer is None or not writer.save([model, trial]):
         return None
     return Answer(data, True, seconds), trial

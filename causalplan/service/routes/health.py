@@ -62,6 +62,7 @@ def health(services: ServicesDep) -> HealthOut:
         database=database,
         pool=services.pool.stats().as_dict(),
         cache=services.cache.stats(),
+        repeats=services.repeats.stats(),
         limits={
             "max_body_bytes": settings.max_body_bytes,
             "max_label_length": settings.max_label_length,
