@@ -304,3 +304,36 @@ def test_without_invariant_synthesis_every_example_and_synthetic_task_translates
             compared += 1
     assert compared >= 90
     capsys.readouterr()  # the translator's log
+
+
+_ROOMS_DOMAIN = """(define (domain rooms) (:requirements :strips :typing) (:types room)
+  (:predicates (at ?r - room))
+  (:action move :parameters (?from ?to - room) :precondition (at ?from)
+   :effect (and (not (at ?from)) (at ?to))))"""
+_ROOMS_PROBLEM = """(define (problem two) (:domain rooms) (:objects a b - room) (:init (at a)) (:goal (at b)))"""
+
+
+def test_the_invariant_shortcut_finds_nothing_only_when_no_candidate_is_allowed(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A domain with a real invariant (one room at a time): FD's own search finds it under any other limit."""
+    from fast_downward.translate import invariant_finder, normalize, options
+    from fast_downward.translate.pddl_parser import parsing_functions
+
+    fast_downward.install_invariant_shortcut()
+    fast_downward.install_invariant_shortcut()  # once is enough; again changes nothing
+    assert invariant_finder.find_invariants.is_causalplan_shortcut  # type: ignore[attr-defined]
+    saved = options.options
+    try:
+        groups = {}
+        for name, arguments in (("none allowed", fast_downward.TRANSLATOR_ARGUMENTS), ("defaults", ())):
+            options.options = options.parse_args(["d.pddl", "p.pddl", *arguments])
+            task = parsing_functions.parse_task(
+                fast_downward.parse_pddl("domain", _ROOMS_DOMAIN), fast_downward.parse_pddl("problem", _ROOMS_PROBLEM)
+            )
+            normalize.normalize(task)
+            groups[name] = [[str(atom) for atom in group] for group in invariant_finder.get_groups(task)]
+    finally:
+        options.options = saved
+    assert groups == {"none allowed": [], "defaults": [["Atom at(?X)"]]}  # at most one room
+    assert "0 initial candidates" in capsys.readouterr().out  # what FD itself prints with the limit
