@@ -216,3 +216,22 @@ def test_a_prepared_row_weighs_its_text(tmp_path: Path) -> None:
     assert writer is not None  # SQLite
     writer.close()
     engine.dispose()
+
+
+def test_a_failed_write_sends_the_repeat_to_the_route(
+    client: TestClient, routes: RouteCalls, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The route stores the record its own way, and says what went wrong if that fails too."""
+    from causalplan.service.errors import StorageError
+
+    body = _body()
+    assert [_post(client, body).json()["cached"] for _ in range(2)] == [False, True]
+
+    def failing(*_: Any) -> None:
+        raise StorageError("The database could not be used (test); nothing was stored.")
+
+    monkeypatch.setattr(NoWaitWriter, "save_prepared", failing)
+    response = _post(client, body)
+    assert response.status_code == 200 and response.json()["cached"] is True
+    assert routes.count == 3
+    assert client.get(f"/v1/models/{response.json()['model_id']}").status_code == 200
