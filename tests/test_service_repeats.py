@@ -13,7 +13,7 @@ from fastapi.testclient import TestClient
 from sqlalchemy import Engine
 
 from causalplan.planners import pipeline
-from causalplan.service import repeats
+from causalplan.service import repeats, submissions
 from causalplan.service.crud import ClientIds, NoWaitWriter, PreparedModelRow, new_model_record
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH
 from causalplan.service.repeats import RepeatedPlans
@@ -38,14 +38,13 @@ class RouteCalls:
 
     def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
         self.count = 0
-        real = repeats.body_key
+        real = submissions.kept_answer
 
-        def counted(*args: Any) -> str | None:
+        def counted(*args: Any) -> Any:
             self.count += 1
             return real(*args)
 
-        # The route works out each inline body's key; the middleware calls its own module's name.
-        monkeypatch.setattr("causalplan.service.routes.plans.body_key", counted)
+        monkeypatch.setattr(submissions, "kept_answer", counted)  # the route's first call
 
 
 @pytest.fixture

@@ -55,12 +55,6 @@ class LruCache(Generic[V]):
             self.hits += 1
             return entry[0]
 
-    def peek(self, key: str) -> V | None:
-        """Return the value stored for ``key``, or None, without counting a hit or a miss or refreshing it."""
-        with self._lock:
-            entry = self._entries.get(key)
-            return None if entry is None else entry[0]
-
     def put(self, key: str, value: V, weight: int = 0) -> None:
         """Store ``value`` for ``key``, dropping the least recently used beyond the bounds."""
         if self.size <= 0 or weight > self.max_bytes:

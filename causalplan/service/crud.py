@@ -11,7 +11,7 @@ import threading
 import uuid
 import weakref
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import closing, contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -131,6 +131,7 @@ class _CompiledInsert:
         self.statement = str(compiled)
         self.positional = compiled.positional
         self.names = list(compiled.positiontup or ()) if compiled.positional else list(compiled.params)
+        self._positions = {name: position for position, name in enumerate(self.names)}
         self.processors: list[Callable[[Any], Any] | None] = [
             table.columns[name].type.dialect_impl(dialect).bind_processor(dialect) for name in self.names
         ]
@@ -153,15 +154,11 @@ class _CompiledInsert:
             return parameters | converted
         copy = list(parameters)
         for name, value in converted.items():
-            copy[self.names.index(name)] = value
+            copy[self._positions[name]] = value
         return copy
 
-    def values(self, parameters: list[Any] | dict[str, Any]) -> list[Any]:
-        """Return one row's parameter values, in column order."""
-        return [parameters[name] for name in self.names] if isinstance(parameters, dict) else list(parameters)
-
     def _convert(self, name: str, value: Any) -> Any:
-        processor = self.processors[self.names.index(name)]
+        processor = self.processors[self._positions[name]]
         return value if processor is None else processor(value)
 
 
@@ -263,21 +260,15 @@ class NoWaitWriter:
         if not self._lock.acquire(blocking=False):
             return False
         try:
-            with storage_errors(driver_errors=(sqlite3.Error,)):
-                cursor = self._connection.cursor()
+            with storage_errors(driver_errors=(sqlite3.Error,)), closing(self._connection.cursor()) as cursor:
                 try:
                     insert(cursor)
                     self._connection.commit()
-                except sqlite3.OperationalError as exc:
+                except BaseException as exc:
                     self._connection.rollback()
-                    if not _is_busy(exc):
-                        raise
-                    return False
-                except BaseException:
-                    self._connection.rollback()
+                    if isinstance(exc, sqlite3.OperationalError) and _is_busy(exc):
+                        return False
                     raise
-                finally:
-                    cursor.close()
                 return True
         finally:
             self._lock.release()
@@ -302,7 +293,8 @@ class PreparedModelRow:
         self._insert = _compiled_insert(engine, table)
         self.statement = self._insert.statement
         self._parameters = self._insert.parameters([_row(record)])[0]
-        self.weight = sum(len(value) for value in self._insert.values(self._parameters) if isinstance(value, str))
+        values = self._parameters.values() if isinstance(self._parameters, dict) else self._parameters
+        self.weight = sum(len(value) for value in values if isinstance(value, str))
         """The size of its text, for a cache's bound."""
 
     def new(self, client: ClientIds) -> tuple[uuid.UUID, list[Any] | dict[str, Any]]:

@@ -38,6 +38,8 @@ if TYPE_CHECKING:
     from causalplan.service.deps import Services
 
 PLANS_PATH = "/v1/plans"
+REPEAT_KEY = "causalplan.repeat_key"
+"""The scope entry where the middleware leaves a body's key for the route, which keeps a cached answer under it."""
 _CLIENT_HEADERS = {b"x-participant-id": "participant_id", b"x-session-id": "session_id"}
 
 
@@ -90,6 +92,11 @@ class RepeatedPlans:
     def __init__(self, size: int) -> None:
         self._kept: LruCache[RepeatedPlan] = LruCache(size)
 
+    @property
+    def size(self) -> int:
+        """Return how many bodies may be kept (0: none)."""
+        return self._kept.size
+
     def keep(
         self,
         key: str,
@@ -99,8 +106,6 @@ class RepeatedPlans:
         planner: str,
     ) -> None:
         """Keep ``answer`` (the route's JSON, cached) for the body ``key``, with its model's ``row``."""
-        if self._kept.size <= 0:
-            return
         marker = _marker()  # where the model id goes: a text no answer contains otherwise
         rendered = render_json({**answer, "model_id": marker})
         pieces = rendered.split(marker.encode())
@@ -109,10 +114,6 @@ class RepeatedPlans:
         head, tail = pieces
         kept = RepeatedPlan(row, head, tail, planner_requested, planner)
         self._kept.put(key, kept, len(rendered) + row.weight)
-
-    def knows(self, key: str) -> bool:
-        """Return whether the body ``key`` is kept (not counted as a hit or a miss)."""
-        return self._kept.peek(key) is not None
 
     def answer(
         self, key: str, client: ClientIds, writer: NoWaitWriter, resolve_planner: Callable[[str], str]
@@ -143,9 +144,10 @@ class RepeatedPlans:
 class RepeatedPlanMiddleware:
     """Answer ``POST /v1/plans`` with a kept body's answer (``RepeatedPlans``); pass everything else on.
 
-    Inside ``BodyLimitMiddleware``, which has refused bodies over the limit. It uses the app's
-    services (``app.state.services``) once the app has started; ``resolve_planner`` is what the
-    route resolves a requested planner with.
+    Inside ``BodyLimitMiddleware``, which has refused bodies over the limit and passes the body on
+    in one message. It uses the app's services (``app.state.services``) once the app has started;
+    ``resolve_planner`` is what the route resolves a requested planner with. A body it does not
+    answer goes on with its key in the scope (``REPEAT_KEY``).
     """
 
     def __init__(self, app: ASGIApp, resolve_planner: Callable[[str], str]) -> None:
@@ -153,37 +155,48 @@ class RepeatedPlanMiddleware:
         self.resolve_planner = resolve_planner
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] != "http" or scope["method"] != "POST" or scope["path"] != PLANS_PATH or scope["query_string"]:
+        found = _services_to_answer(scope)
+        if found is None:
             await self.app(scope, receive, send)
             return
-        services: Services | None = getattr(scope["app"].state, "services", None)
-        writer = services.no_wait_writer if services is not None else None
-        if services is None or writer is None:
-            await self.app(scope, receive, send)
-            return
-        messages: list[Message] = []
-        more = True
-        while more:
-            message = await receive()
-            messages.append(message)
-            if message["type"] != "http.request":
-                break
-            more = message.get("more_body", False)
-        if not more and messages[-1]["type"] == "http.request":
-            answer = self._answer(scope, b"".join(message.get("body", b"") for message in messages), services, writer)
+        message = await receive()
+        if message["type"] == "http.request" and not message.get("more_body", False):
+            answer = self._answer(scope, message.get("body", b""), *found)
             if answer is not None:
                 await Response(answer, media_type="application/json")(scope, receive, send)
                 return
+        delivered = False
 
         async def replay() -> Message:
-            return messages.pop(0) if messages else await receive()
+            nonlocal delivered
+            if delivered:
+                return await receive()
+            delivered = True
+            return message
 
         await self.app(scope, replay, send)
 
     def _answer(self, scope: Scope, body: bytes, services: Services, writer: NoWaitWriter) -> bytes | None:
         headers: list[tuple[bytes, bytes]] = scope["headers"]
         key = body_key(headers, body)
+        if key is None:
+            return None
+        scope[REPEAT_KEY] = key
         client = client_ids(headers)
-        if key is None or client is None:
+        if client is None:
             return None
         return services.repeats.answer(key, client, writer, self.resolve_planner)
+
+
+def _services_to_answer(scope: Scope) -> tuple[Services, NoWaitWriter] | None:
+    """Return the app's services and event-loop writer for a request this layer may answer, else None.
+
+    It may answer ``POST /v1/plans`` without a query string, once the app has started, on SQLite,
+    with room for kept bodies.
+    """
+    if scope["type"] != "http" or scope["method"] != "POST" or scope["path"] != PLANS_PATH or scope["query_string"]:
+        return None
+    services: Services | None = getattr(scope["app"].state, "services", None)
+    if services is None or services.no_wait_writer is None or services.repeats.size <= 0:
+        return None
+    return services, services.no_wait_writer

@@ -479,12 +479,14 @@ def kept_answer(body: PlanIn, services: Services, client: ClientIds, kind: str) 
     with nothing stored: the request then goes the usual way, in a thread.
     """
     started = time.perf_counter()
+    writer = services.no_wait_writer
+    if writer is None:  # a database server: storing the record waits, so a thread answers
+        return None
     inputs = _kept_inputs(body, services, client)
     if inputs is None:
         return None
     data = services.cache.get(inputs.key(kind))
-    writer = services.no_wait_writer
-    if data is None or writer is None or not writer.save([inputs.submission.record]):
+    if data is None or not writer.save([inputs.submission.record]):
         return None
     return inputs, Answer(data, True, time.perf_counter() - started)
 
@@ -496,6 +498,9 @@ def kept_transfer(body: TransferIn, services: Services, client: ClientIds) -> tu
     waiting; None otherwise, with nothing stored.
     """
     started = time.perf_counter()
+    writer = services.no_wait_writer
+    if writer is None:  # a database server: storing the record waits, so a thread answers
+        return None
     inputs = _kept_inputs(body, services, client)
     if inputs is None:
         return None
@@ -507,7 +512,6 @@ def kept_transfer(body: TransferIn, services: Services, client: ClientIds) -> tu
     trial = new_trial_record(
         model.id, clean_json(body.mapping, "the mapping"), inputs.planner, data, True, seconds, client
     )
-    writer = services.no_wait_writer
-    if writer is None or not writer.save([model, trial]):
+    if not writer.save([model, trial]):
         return None
     return Answer(data, True, seconds), trial

@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from fastapi import APIRouter, Request
 from starlette.concurrency import run_in_threadpool
 
 from causalplan.service import submissions
 from causalplan.service.crud import ClientIds, PreparedModelRow
 from causalplan.service.deps import ClientIdsDep, Services, ServicesDep
-from causalplan.service.repeats import body_key
+from causalplan.service.repeats import REPEAT_KEY
 from causalplan.service.responses import SafeJSONResponse
 from causalplan.service.schemas import PlanIn, PlanOut, error_responses
 
@@ -26,9 +24,8 @@ async def create_plan(body: PlanIn, services: ServicesDep, client: ClientIdsDep,
     model or mapping is answered with 422 and the CLI's codes.
     """
     # A body answered from the cache before is answered again by RepeatedPlanMiddleware, before
-    # this route; a cached answer given here is kept for it (the body's key is worked out here,
-    # where the body is at hand, for inline models only: a model by id stores no record).
-    repeat_key = body_key(request.scope["headers"], await request.body()) if body.model is not None else None
+    # this route; a cached answer given here is kept under the key it left (see _response).
+    repeat_key: str | None = request.scope.get(REPEAT_KEY)
     # A repeated request (documents read before, answer kept, record stored without waiting) is
     # answered here, on the event loop. Through HTTP, two servers interleaved, that took 0.34-0.44
     # ms less than the hop to a worker thread and back, about a fifth of such a request.
@@ -70,16 +67,7 @@ def _response(
             "warnings": [warning.as_dict() for warning in inputs.warnings],
         }
     ).model_dump(mode="json")
-    if repeat_key is not None and answer.cached and inputs.submission.is_new:
-        _keep_repeat(repeat_key, body, services, inputs, response)
+    if repeat_key is not None and answer.cached and inputs.submission.is_new:  # an inline model's cached answer
+        row = PreparedModelRow(services.engine, inputs.submission.record)
+        services.repeats.keep(repeat_key, row, response, body.planner, inputs.planner)
     return SafeJSONResponse(response)
-
-
-def _keep_repeat(
-    repeat_key: str, body: PlanIn, services: Services, inputs: submissions.PlanInputs, response: dict[str, Any]
-) -> None:
-    """Keep a cached answer to an inline model, with its record, for the next request with the same body."""
-    if services.no_wait_writer is None or services.repeats.knows(repeat_key):
-        return
-    row = PreparedModelRow(services.engine, inputs.submission.record)
-    services.repeats.keep(repeat_key, row, response, body.planner, inputs.planner)
