@@ -57,6 +57,16 @@ def _short(text: str | None, length: int = _SHORT_TEXT) -> str | None:
     return None if text is None else clean_text(text)[:length]
 
 
+def _new_record_fields(client: ClientIds) -> dict[str, Any]:
+    """Return what every new record gets: a new id, the time now, and ``client``'s ids, cleaned and cut."""
+    return {
+        "id": uuid.uuid4(),
+        "created_at": utc_now(),
+        "participant_id": _short(client.participant_id, MAX_CLIENT_ID_LENGTH),
+        "session_id": _short(client.session_id, MAX_CLIENT_ID_LENGTH),
+    }
+
+
 def new_model_record(
     document: dict[str, Any],
     object_id: str,
@@ -72,10 +82,7 @@ def new_model_record(
     document is cleaned as it is checked, and a report once per document read): not cleaned again.
     """
     return ModelRecord(
-        id=uuid.uuid4(),
-        created_at=utc_now(),
-        participant_id=_short(client.participant_id, MAX_CLIENT_ID_LENGTH),
-        session_id=_short(client.session_id, MAX_CLIENT_ID_LENGTH),
+        **_new_record_fields(client),
         object_id=_short(object_id) or "",
         is_valid=is_valid,
         canonical_hash=canonical_hash,
@@ -95,10 +102,7 @@ def new_trial_record(
 ) -> TrialRecord:
     """Return an unsaved record of a transfer trial (``verdict`` is ``TransferVerdict.as_dict()``)."""
     return TrialRecord(
-        id=uuid.uuid4(),
-        created_at=utc_now(),
-        participant_id=_short(client.participant_id, MAX_CLIENT_ID_LENGTH),
-        session_id=_short(client.session_id, MAX_CLIENT_ID_LENGTH),
+        **_new_record_fields(client),
         model_id=model_id,
         mapping=clean_json(mapping),
         training_object=_short(verdict.get("training_object")),
@@ -166,8 +170,10 @@ _inserts: weakref.WeakKeyDictionary[Engine, dict[str, _CompiledInsert]] = weakre
 _inserts_lock = threading.Lock()
 
 
-def _compiled_insert(engine: Engine, table: Table) -> _CompiledInsert:
-    """Return ``table``'s compiled INSERT for ``engine`` (compiled on first use; forgotten with the engine)."""
+def _compiled_insert(engine: Engine, kind: type[ModelRecord | TrialRecord]) -> _CompiledInsert:
+    """Return the compiled INSERT of ``kind``'s table for ``engine`` (compiled once; forgotten with the engine)."""
+    table = kind.__table__
+    assert isinstance(table, Table)
     with _inserts_lock:
         by_table = _inserts.setdefault(engine, {})
         compiled = by_table.get(table.name)
@@ -181,9 +187,7 @@ def _insert(cursor: Any, engine: Engine, records: Sequence[ModelRecord | TrialRe
         rows = [_row(record) for record in records if isinstance(record, kind)]
         if not rows:
             continue
-        table = kind.__table__
-        assert isinstance(table, Table)
-        compiled = _compiled_insert(engine, table)
+        compiled = _compiled_insert(engine, kind)
         parameters = compiled.parameters(rows)
         if len(parameters) == 1:
             cursor.execute(compiled.statement, parameters[0])
@@ -288,9 +292,7 @@ class PreparedModelRow:
     """
 
     def __init__(self, engine: Engine, record: ModelRecord) -> None:
-        table = ModelRecord.__table__
-        assert isinstance(table, Table)
-        self._insert = _compiled_insert(engine, table)
+        self._insert = _compiled_insert(engine, ModelRecord)
         self.statement = self._insert.statement
         self._parameters = self._insert.parameters([_row(record)])[0]
         values = self._parameters.values() if isinstance(self._parameters, dict) else self._parameters
@@ -299,14 +301,8 @@ class PreparedModelRow:
 
     def new(self, client: ClientIds) -> tuple[uuid.UUID, list[Any] | dict[str, Any]]:
         """Return a new record's id and its parameters: this row, sent now by ``client``."""
-        model_id = uuid.uuid4()
-        changes = {
-            "id": model_id,
-            "created_at": utc_now(),
-            "participant_id": _short(client.participant_id, MAX_CLIENT_ID_LENGTH),
-            "session_id": _short(client.session_id, MAX_CLIENT_ID_LENGTH),
-        }
-        return model_id, self._insert.replaced(self._parameters, changes)
+        changes = _new_record_fields(client)
+        return changes["id"], self._insert.replaced(self._parameters, changes)
 
 
 def get_model(session: Session, model_id: uuid.UUID) -> ModelRecord:

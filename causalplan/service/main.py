@@ -32,6 +32,7 @@ from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
 from causalplan.service.planning import PlannerPool
 from causalplan.service.repeats import RepeatedPlanMiddleware, RepeatedPlans
+from causalplan.service.replay import replaying
 from causalplan.service.responses import SafeJSONResponse
 from causalplan.service.routes import health, models, objects, plans, research, simulations, transfers
 from causalplan.service.schemas import error_responses
@@ -161,17 +162,8 @@ class BodyLimitMiddleware:
                 return
             chunks.append(chunk)
             more = message.get("more_body", False)
-        body = b"".join(chunks)
-        delivered = False
-
-        async def replay() -> Message:
-            nonlocal delivered
-            if delivered:
-                return await receive()
-            delivered = True
-            return {"type": "http.request", "body": body, "more_body": False}
-
-        await self.app(scope, replay, send)
+        body = {"type": "http.request", "body": b"".join(chunks), "more_body": False}
+        await self.app(scope, replaying(body, receive), send)
 
     async def _refuse(self, scope: Scope, receive: Receive, send: Send) -> None:
         error = BodyTooLargeError(

@@ -26,12 +26,13 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from starlette.responses import Response
-from starlette.types import ASGIApp, Message, Receive, Scope, Send
+from starlette.types import ASGIApp, Receive, Scope, Send
 
 from causalplan.errors import CausalPlanError
 from causalplan.service.cache import LruCache
 from causalplan.service.crud import ClientIds, NoWaitWriter, PreparedModelRow
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH
+from causalplan.service.replay import replaying
 from causalplan.service.responses import render_json
 
 if TYPE_CHECKING:
@@ -165,16 +166,7 @@ class RepeatedPlanMiddleware:
             if answer is not None:
                 await Response(answer, media_type="application/json")(scope, receive, send)
                 return
-        delivered = False
-
-        async def replay() -> Message:
-            nonlocal delivered
-            if delivered:
-                return await receive()
-            delivered = True
-            return message
-
-        await self.app(scope, replay, send)
+        await self.app(scope, replaying(message, receive), send)
 
     def _answer(self, scope: Scope, body: bytes, services: Services, writer: NoWaitWriter) -> bytes | None:
         headers: list[tuple[bytes, bytes]] = scope["headers"]
