@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import os
 import signal
 import threading
@@ -321,3 +322,66 @@ def test_a_job_that_cannot_be_sent_fails_alone_and_the_pool_keeps_its_workers(tw
     # Two jobs at once, each on its own worker: neither worker was lost (a lost one leaves the second waiting, refused).
     assert len({pid for _, _, pid in answers}) == 2
     assert two_workers.stats().busy == 0
+
+
+def test_an_answer_waited_for_on_the_event_loop_leaves_the_loop_running(two_workers: PlannerPool) -> None:
+    ticks: list[float] = []
+
+    async def tick_while_waiting() -> tuple[float, float, int]:
+        job = two_workers.submit(timed_sleep, (0.3,), 30)
+        assert two_workers.stats().busy == 1
+
+        async def ticker() -> None:
+            while True:
+                ticks.append(time.monotonic())
+                await asyncio.sleep(0.01)
+
+        ticking = asyncio.create_task(ticker())
+        try:
+            return await job.reply()
+        finally:
+            ticking.cancel()
+
+    began, ended, pid = asyncio.run(tick_while_waiting())
+    assert ended - began >= 0.3 and pid in two_workers.worker_pids()
+    assert any(began < tick < ended for tick in ticks)  # the loop ran other work while the worker worked
+    assert two_workers.stats().busy == 0
+
+
+def test_what_meanwhile_raises_comes_after_the_answer_on_the_event_loop_too(two_workers: PlannerPool) -> None:
+    def broken() -> None:
+        raise StorageError("the database is gone")
+
+    job = two_workers.submit(timed_sleep, (0.1,), 30, meanwhile=broken)
+    with pytest.raises(StorageError, match="the database is gone"):
+        asyncio.run(job.reply())
+    began, ended, _ = two_workers.run(timed_sleep, (0.2,), 30)  # its own answer, not the failed request's
+    assert ended - began >= 0.2 and two_workers.stats().busy == 0
+
+
+def test_a_worker_that_does_not_answer_in_time_on_the_event_loop_is_replaced() -> None:
+    with bare_pool(1) as pool:
+        [stuck] = pool.worker_pids()
+        job = pool.submit(sleep_forever, (), 0.5)
+        with pytest.raises(PlanningTimeoutError):
+            asyncio.run(job.reply())
+        wait_until(lambda: not is_running(stuck))
+        assert pool.worker_pids() != [stuck] and pool.stats().busy == 0
+        assert pool.run(timed_sleep, (0.0,), 30)[2] in pool.worker_pids()
+
+
+def test_a_cancelled_wait_replaces_the_worker_so_no_job_gets_another_jobs_answer() -> None:
+    with bare_pool(1) as pool:
+        [first] = pool.worker_pids()
+        job = pool.submit(timed_sleep, (0.3,), 30)
+
+        async def give_up() -> None:
+            await asyncio.wait_for(job.reply(), 0.05)
+
+        with pytest.raises(TimeoutError):
+            asyncio.run(give_up())
+        assert pool.stats().busy == 0 and pool.worker_pids() != [first]
+        began, ended, pid = pool.run(timed_sleep, (0.4,), 30)
+        assert ended - began >= 0.4 and pid != first  # its own answer, from the replacement
+        job.abandon()  # giving up twice changes nothing
+        assert pool.stats().busy == 0 and len(pool.worker_pids()) == 1

@@ -5,12 +5,16 @@ executor breaks and every queued solve fails; and it cannot kill the one worker 
 its time limit. Here each request owns one worker while it runs, so a killed or stuck worker
 fails only that request, and is replaced before the next one needs it.
 
-Request threads call ``PlannerPool.run``; it blocks the calling thread (FastAPI runs the
-routes in a thread pool), never the event loop.
+Request threads call ``PlannerPool.run``, which blocks the calling thread, never the event loop.
+Or they call ``PlannerPool.submit``, which blocks only until a worker has the job, and the event
+loop awaits the answer (``SentJob.reply``): the worker's answer then wakes the loop itself, not
+a thread that would then hand it over. Measured on cold POST /v1/plans, two servers interleaved
+six times each (300 new models per run): p50 8.00 -> 6.89 ms (median of the runs' p50s).
 """
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import math
 import os
@@ -23,12 +27,14 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager, suppress
+from collections.abc import Callable
+from contextlib import suppress
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Generic, TypeVar
+
+import anyio
 
 from causalplan.errors import CausalPlanError
 from causalplan.service.errors import (
@@ -282,8 +288,8 @@ class PlannerPool:
         with self._lock:
             return max(1, math.ceil(self._seconds_per_job * self._in_flight / self.size))
 
-    @contextmanager
-    def _admitted(self) -> Iterator[None]:
+    def _admit(self) -> None:
+        """Count one more solve running or waiting; QueueFullError (429) when there is no room."""
         with self._lock:
             full = self._closed or self._in_flight >= self.max_in_flight
             if not full:
@@ -295,11 +301,6 @@ class PlannerPool:
                 f"are already waiting. Try again in {retry} s.",
                 retry,
             )
-        try:
-            yield
-        finally:
-            with self._lock:
-                self._in_flight -= 1
 
     def _take_worker(self) -> _Worker:
         try:
@@ -323,63 +324,73 @@ class PlannerPool:
         timeout: float,
         meanwhile: Callable[[], None] | None = None,
     ) -> T:
-        """Run ``function(*args)`` in a worker; kill it after ``timeout`` seconds.
+        """Run ``function(*args)`` in a worker and wait for its answer here; kill it after ``timeout`` seconds.
 
-        ``meanwhile`` runs in the calling thread while the worker works (e.g. storing the request's
-        record): only once a worker has the job, so a refused request (429) runs nothing. What it
-        raises is raised once the worker has answered, in place of the job's own answer or error
-        (a worker that timed out or crashed is reported as such instead).
-
-        Raises QueueFullError (429), PlanningTimeoutError (504), WorkerCrashedError (503), the
-        ``CausalPlanError`` the job raised, or InternalError for a bug in the job.
+        ``submit`` and then ``SentJob.wait``: see there for ``meanwhile`` and what is raised.
         """
-        failure: Exception | None = None
+        job: SentJob[T] = self.submit(function, args, timeout, meanwhile)
+        return job.wait()
 
-        def guarded() -> None:
-            nonlocal failure
-            assert meanwhile is not None
+    def submit(
+        self,
+        function: Callable[..., T],
+        args: tuple[Any, ...],
+        timeout: float,
+        meanwhile: Callable[[], None] | None = None,
+    ) -> SentJob[T]:
+        """Send ``function(*args)`` to a free worker (waiting for one if need be); return the job to wait for.
+
+        Blocks while no worker is free, and while a just-started worker imports: call it from a
+        thread, not the event loop. The answer is waited for by ``SentJob.wait`` in a thread, or
+        by ``SentJob.reply`` on the event loop (no thread hop back); the worker is killed if it
+        has not answered ``timeout`` seconds after the job was sent.
+
+        ``meanwhile`` runs in the calling thread once the job is sent, while the worker works on
+        it (e.g. storing the request's record): only once a worker has the job, so a refused
+        request (429) runs nothing. What it raises is raised once the worker has answered, in
+        place of the job's own answer or error (a worker that timed out or crashed is reported as
+        such instead).
+
+        Raises QueueFullError (429). The rest comes from the ``SentJob``: PlanningTimeoutError
+        (504), WorkerCrashedError (503), what sending the job raised (e.g. it cannot be pickled),
+        the ``CausalPlanError`` the job raised, or InternalError for a bug in the job.
+        """
+        self._admit()
+        try:
+            worker = self._take_worker()
+        except BaseException:
+            with self._lock:
+                self._in_flight -= 1
+            raise
+        with self._lock:
+            self._busy += 1
+        job: SentJob[T] = SentJob(self, worker, timeout)
+        try:
+            worker.wait_ready(timeout)
+            worker.connection.send((function, args))
+        except BaseException as exc:  # noqa: BLE001 - e.g. a job that cannot be pickled: raised by the SentJob
+            job.unsent = exc
+            return job
+        if meanwhile is not None:
             try:
                 meanwhile()
             except Exception as exc:  # noqa: BLE001 - raised once the worker has answered
-                failure = exc
+                job.failure = exc
+        return job
 
-        with self._admitted():
-            worker = self._take_worker()
-            with self._lock:
-                self._busy += 1
-            started = time.perf_counter()
-            try:
-                reply = worker.call(function, args, timeout, guarded if meanwhile is not None else None)
-            except TimeoutError:
-                self._replace(worker)
-                raise PlanningTimeoutError(
-                    f"The planner worker was still busy {timeout:g} s after the solve started, so it was "
-                    "stopped. Try a smaller model or a lower time_limit.",
-                    details={"seconds": round(timeout, 3)},
-                ) from None
-            except (EOFError, OSError):
-                exit_code = worker.exit_code()
-                self._replace(worker)
-                raise WorkerCrashedError(
-                    "The planner worker running this request stopped unexpectedly (killed, out of memory, "
-                    "or crashed). It has been replaced; sending the request again should work.",
-                    details={"exit_code": exit_code},
-                ) from None
-            except BaseException:  # e.g. a job that cannot be pickled: its worker's state is unknown
-                self._replace(worker)
-                raise
-            finally:
-                with self._lock:
-                    self._busy -= 1
-            seconds = time.perf_counter() - started
-            with self._lock:
+    def _end(self, worker: _Worker | None, seconds: float | None = None) -> None:
+        """A sent job is over: count it out, and give its worker back (None: replaced instead).
+
+        ``seconds``: how long the job took, for a job that was answered.
+        """
+        with self._lock:
+            self._in_flight -= 1
+            self._busy -= 1
+            if seconds is not None:
                 self._completed += 1
                 self._seconds_per_job = 0.8 * self._seconds_per_job + 0.2 * seconds
+        if worker is not None:
             self._idle.put(worker)
-        if failure is not None:
-            raise failure
-        result: T = _unwrap(reply)
-        return result
 
     def _replace(self, worker: _Worker) -> None:
         logger.warning("replacing planner worker %s", worker.pid)
@@ -423,6 +434,125 @@ class PlannerPool:
                 worker.stop()
             else:
                 worker.kill()
+
+
+class SentJob(Generic[T]):
+    """A job sent to a worker (``PlannerPool.submit``): its answer, waited for once.
+
+    ``wait`` waits in the calling thread; ``reply`` on the event loop, which the worker's
+    answer then wakes directly: no thread to wake and hop back from.
+    """
+
+    def __init__(self, pool: PlannerPool, worker: _Worker, timeout: float) -> None:
+        self._pool = pool
+        self._worker = worker
+        self._timeout = timeout
+        self._started = time.perf_counter()
+        self._deadline = time.monotonic() + timeout
+        self._finished = False
+        self.unsent: BaseException | None = None
+        """What sending the job raised (the worker then never had it)."""
+        self.failure: Exception | None = None
+        """What ``meanwhile`` raised: raised once the worker has answered."""
+
+    def _remaining(self) -> float:
+        return max(0.0, self._deadline - time.monotonic())
+
+    def wait(self) -> T:
+        """Wait here for the worker's answer; return it or raise (see ``PlannerPool.submit``)."""
+        ready = self.unsent is None and self._worker.connection.poll(self._remaining())
+        return self._conclude(self._receive(ready))
+
+    async def reply(self) -> T:
+        """Wait on the event loop for the worker's answer; return it or raise, as ``wait`` does.
+
+        A worker that gave no answer (it timed out or died) is replaced in a thread: that
+        starts a process. If this wait is cancelled, the answer would never be read, so the
+        worker is replaced then too (the next job must not get this one's answer).
+        """
+        ready = True
+        if self.unsent is None and not self._worker.connection.poll(0):
+            try:
+                ready = await _readable(self._worker.connection, self._remaining())
+            except BaseException:
+                self.abandon()
+                raise
+        outcome = self._receive(ready)
+        if isinstance(outcome, BaseException):
+            result: T = await anyio.to_thread.run_sync(self._conclude, outcome)
+            return result
+        return self._conclude(outcome)
+
+    def _receive(self, ready: bool) -> tuple[Any, ...] | BaseException:
+        """Return the worker's reply (``ready``: it is there, or the worker's end), or what went wrong instead."""
+        self._finish()
+        try:
+            if self.unsent is not None:
+                return self.unsent
+            if not ready:
+                return TimeoutError()
+            reply: tuple[Any, ...] = self._worker.connection.recv()  # EOFError when the worker died
+        except BaseException as exc:  # noqa: BLE001 - dealt with by _conclude
+            return exc
+        return reply
+
+    def _conclude(self, outcome: tuple[Any, ...] | BaseException) -> T:
+        """Give the worker back and return its answer; or replace it, and raise what went wrong."""
+        pool, worker = self._pool, self._worker
+        if not isinstance(outcome, BaseException):
+            pool._end(worker, time.perf_counter() - self._started)
+            if self.failure is not None:
+                raise self.failure
+            result: T = _unwrap(outcome)
+            return result
+        timed_out = isinstance(outcome, TimeoutError)  # an OSError too: asked first
+        crashed = not timed_out and isinstance(outcome, EOFError | OSError)
+        exit_code = worker.exit_code() if crashed else None
+        pool._replace(worker)
+        pool._end(None)
+        if timed_out:
+            raise PlanningTimeoutError(
+                f"The planner worker was still busy {self._timeout:g} s after the solve started, so it was "
+                "stopped. Try a smaller model or a lower time_limit.",
+                details={"seconds": round(self._timeout, 3)},
+            )
+        if crashed:
+            raise WorkerCrashedError(
+                "The planner worker running this request stopped unexpectedly (killed, out of memory, "
+                "or crashed). It has been replaced; sending the request again should work.",
+                details={"exit_code": exit_code},
+            )
+        raise outcome  # e.g. a job that could not be pickled: its worker's state was unknown
+
+    def _finish(self) -> None:
+        assert not self._finished, "a job's answer is read once"
+        self._finished = True
+
+    def abandon(self) -> None:
+        """Give up the answer unread (a cancelled wait): the worker is replaced, so the next job does not get it."""
+        if not self._finished:
+            self._finish()
+            self._pool._replace(self._worker)
+            self._pool._end(None)
+
+
+def _settle(future: asyncio.Future[bool], value: bool) -> None:
+    if not future.done():
+        future.set_result(value)
+
+
+async def _readable(connection: Connection, seconds: float) -> bool:
+    """Wait on the event loop until ``connection`` can be read (an answer, or its end); False after ``seconds``."""
+    loop = asyncio.get_running_loop()
+    readable: asyncio.Future[bool] = loop.create_future()
+    descriptor = connection.fileno()
+    loop.add_reader(descriptor, _settle, readable, True)
+    timer = loop.call_later(seconds, _settle, readable, False)
+    try:
+        return await readable
+    finally:
+        timer.cancel()
+        loop.remove_reader(descriptor)
 
 
 def _unwrap(reply: tuple[Any, ...]) -> Any:

@@ -42,6 +42,7 @@ from causalplan.service.db.models import ModelRecord, TrialRecord
 from causalplan.service.deps import Services, open_session
 from causalplan.service.errors import InvalidMappingError, InvalidModelError, LimitExceededError
 from causalplan.service.limits import check_labelling_limits, check_model_limits, clean_json
+from causalplan.service.planning import SentJob
 from causalplan.service.schemas import PlanIn, TransferIn
 from causalplan.service.settings import Settings
 from causalplan.transfer.verdict import Verdict
@@ -279,6 +280,62 @@ def _key(
     return request_key(kind, model, mapping, planner, limit, services.catalog_key)
 
 
+@dataclass(frozen=True)
+class PendingAnswer:
+    """An answer a worker is working on: waited for in a thread (``wait``) or on the event loop (``reply``).
+
+    Once there, it is kept for its key if it is final (``_start``'s ``is_final``).
+    """
+
+    services: Services
+    key: str
+    job: SentJob[dict[str, Any]]
+    is_final: Callable[[dict[str, Any]], bool]
+    started: float
+
+    def wait(self) -> Answer:
+        """Wait here for the worker's answer (see ``PlannerPool.submit`` for its errors)."""
+        return self._kept(self.job.wait())
+
+    async def reply(self) -> Answer:
+        """Wait on the event loop for the worker's answer (see ``PlannerPool.submit`` for its errors)."""
+        return self._kept(await self.job.reply())
+
+    def abandon(self) -> None:
+        """Give up the answer unread: its worker is replaced (the next job must not get this answer)."""
+        self.job.abandon()
+
+    def _kept(self, data: dict[str, Any]) -> Answer:
+        if self.is_final(data):
+            self.services.cache.put(self.key, data)
+        return Answer(data, False, time.perf_counter() - self.started)
+
+
+def _start(
+    services: Services,
+    key: str,
+    job: Callable[..., dict[str, Any]],
+    args: tuple[Any, ...],
+    seconds: float,
+    is_final: Callable[[dict[str, Any]], bool],
+    meanwhile: Callable[[], None] | None = None,
+) -> Answer | PendingAnswer:
+    """Return the answer kept for ``key``, or send ``job(*args)`` to a worker for at most ``seconds``.
+
+    Blocks while no worker is free: call it in a thread. A new answer is kept only when
+    ``is_final``: a timeout may go otherwise next time. ``meanwhile`` (e.g. storing the
+    request's record) runs while the worker solves, or first when the answer is kept; it runs
+    unless the request is refused before a worker takes it.
+    """
+    started = time.perf_counter()
+    cached = services.cache.get(key)
+    if cached is not None:
+        if meanwhile is not None:
+            meanwhile()
+        return Answer(cached, True, time.perf_counter() - started)
+    return PendingAnswer(services, key, services.pool.submit(job, args, seconds, meanwhile), is_final, started)
+
+
 def _answer(
     services: Services,
     key: str,
@@ -288,26 +345,33 @@ def _answer(
     is_final: Callable[[dict[str, Any]], bool],
     meanwhile: Callable[[], None] | None = None,
 ) -> Answer:
-    """Return the answer kept for ``key``, or run ``job(*args)`` in a worker for at most ``seconds``.
-
-    A new answer is kept only when ``is_final``: a timeout may go otherwise next time.
-    ``meanwhile`` (e.g. storing the request's record) runs while the worker solves, or first
-    when the answer is kept; it runs unless the request is refused before a worker takes it.
-    """
-    started = time.perf_counter()
-    cached = services.cache.get(key)
-    if cached is not None:
-        if meanwhile is not None:
-            meanwhile()
-        return Answer(cached, True, time.perf_counter() - started)
-    data = services.pool.run(job, args, seconds, meanwhile)
-    if is_final(data):
-        services.cache.put(key, data)
-    return Answer(data, False, time.perf_counter() - started)
+    """Return the answer kept for ``key``, or what ``job(*args)`` gives in a worker, waited for here (``_start``)."""
+    answer = _start(services, key, job, args, seconds, is_final, meanwhile)
+    return answer if isinstance(answer, Answer) else answer.wait()
 
 
 def _is_final_plan(data: dict[str, Any]) -> bool:
     return PlanStatus(str(data["status"])).is_final()
+
+
+def start_plan(
+    services: Services,
+    model: CausalModel,
+    mapping: Labelling | None,
+    planner: str,
+    time_limit: float,
+    key: str | None = None,
+    meanwhile: Callable[[], None] | None = None,
+) -> Answer | PendingAnswer:
+    """Return the kept plan of ``model`` (on ``mapping``'s object), or the one a worker is working on.
+
+    ``key``: the request's answer key (``PlanInputs.key``), when the caller has it already.
+    ``meanwhile``: work to do while a worker solves (see ``_start``). Blocks while no worker is free.
+    """
+    key = key or _key(services, "plan", model, mapping, planner, time_limit)
+    args = (model, mapping, planner, time_limit, tuple(services.settings.catalog_folders))
+    seconds = time_limit + services.settings.solve_grace_seconds
+    return _start(services, key, worker.plan_job, args, seconds, _is_final_plan, meanwhile)
 
 
 def plan(
@@ -316,18 +380,10 @@ def plan(
     mapping: Labelling | None,
     planner: str,
     time_limit: float,
-    key: str | None = None,
-    meanwhile: Callable[[], None] | None = None,
 ) -> Answer:
-    """Return the plan of ``model`` (on ``mapping``'s object), from the cache or a worker.
-
-    ``key``: the request's answer key (``PlanInputs.key``), when the caller has it already.
-    ``meanwhile``: work to do while a worker solves (see ``_answer``).
-    """
-    key = key or _key(services, "plan", model, mapping, planner, time_limit)
-    args = (model, mapping, planner, time_limit, tuple(services.settings.catalog_folders))
-    seconds = time_limit + services.settings.solve_grace_seconds
-    return _answer(services, key, worker.plan_job, args, seconds, _is_final_plan, meanwhile)
+    """Return the plan of ``model`` (on ``mapping``'s object), from the cache or a worker, waited for here."""
+    answer = start_plan(services, model, mapping, planner, time_limit)
+    return answer if isinstance(answer, Answer) else answer.wait()
 
 
 def transfer(

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from fastapi import APIRouter, Request
 from starlette.concurrency import run_in_threadpool
 
@@ -29,23 +31,42 @@ async def create_plan(body: PlanIn, services: ServicesDep, client: ClientIdsDep,
     # A repeated request (documents read before, answer kept, record stored without waiting) is
     # answered here, on the event loop. Through HTTP, two servers interleaved, that took 0.34-0.44
     # ms less than the hop to a worker thread and back, about a fifth of such a request.
-    # Everything that may wait (reading a new document, solving, a database server) goes to a
-    # thread: one hop, the dependencies being `async def` (see deps) and the response checked
-    # here, not by FastAPI in another hop.
+    # Everything that may wait (reading a new document, a free worker, a database server) goes
+    # to a thread: one hop, the dependencies being `async def` (see deps). The worker's answer
+    # is then waited for here, on the event loop, which it wakes directly (no thread to wake
+    # and hop back from), and the response is made here too.
     kept = submissions.kept_answer(body, services, client, "plan")
     if kept is not None:
         return _response(body, services, *kept, repeat_key)
-    return await run_in_threadpool(_plan, body, services, client, repeat_key)
+    sent: list[submissions.PendingAnswer] = []
+    try:
+        inputs, started, pddl = await run_in_threadpool(_start_plan, body, services, client, sent.append)
+    except BaseException:  # cancelled while the thread ran: the answer it asked for will never be read
+        for pending in sent:
+            pending.abandon()
+        raise
+    answer = started if isinstance(started, submissions.Answer) else await started.reply()
+    return _response(body, services, inputs, answer, repeat_key, pddl)
 
 
-def _plan(body: PlanIn, services: Services, client: ClientIds, repeat_key: str | None) -> SafeJSONResponse:
+def _start_plan(
+    body: PlanIn, services: Services, client: ClientIds, sent: Callable[[submissions.PendingAnswer], None]
+) -> tuple[submissions.PlanInputs, submissions.Answer | submissions.PendingAnswer, dict[str, str] | None]:
+    """Read the request and send it to a worker (or find its answer kept); return also its PDDL, if asked for.
+
+    ``sent`` is told of an answer sent for before it is returned (see ``create_plan``).
+    """
     inputs = submissions.plan_inputs(body, services, client)
-    key = inputs.key("plan")
+    pddl = submissions.compiled_pddl(services, inputs.model, inputs.mapping) if body.include_pddl else None
     # An inline model's record is stored while the worker solves (the two take ~0.16 ms and
     # ~8 ms), or at once for a kept answer; a request refused before a worker took it stores nothing.
     store = submissions.storing(services, inputs.submission)
-    answer = submissions.plan(services, inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, key, store)
-    return _response(body, services, inputs, answer, repeat_key)
+    started = submissions.start_plan(
+        services, inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, inputs.key("plan"), store
+    )
+    if isinstance(started, submissions.PendingAnswer):
+        sent(started)
+    return inputs, started, pddl
 
 
 def _response(
@@ -54,10 +75,11 @@ def _response(
     inputs: submissions.PlanInputs,
     answer: submissions.Answer,
     repeat_key: str | None,
+    pddl: dict[str, str] | None = None,
 ) -> SafeJSONResponse:
     data = dict(answer.data)
     if body.include_pddl:
-        data["pddl"] = submissions.compiled_pddl(services, inputs.model, inputs.mapping)
+        data["pddl"] = pddl if pddl is not None else submissions.compiled_pddl(services, inputs.model, inputs.mapping)
     response = PlanOut.model_validate(
         {
             **data,
