@@ -21,7 +21,7 @@ from causalplan.inputs import model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.service import main, worker
 from causalplan.service.cache import ResultCache, request_key
-from causalplan.service.errors import PlanningTimeoutError, QueueFullError, StorageError
+from causalplan.service.errors import PlanningTimeoutError, QueueFullError, StorageError, WorkerCrashedError
 from causalplan.service.planning import PlannerPool
 from tests.service_fixtures import (
     DESK_LAMP,
@@ -385,3 +385,18 @@ def test_a_cancelled_wait_replaces_the_worker_so_no_job_gets_another_jobs_answer
         assert ended - began >= 0.4 and pid != first  # its own answer, from the replacement
         job.abandon()  # giving up twice changes nothing
         assert pool.stats().busy == 0 and len(pool.worker_pids()) == 1
+
+
+def test_closing_the_pool_ends_a_wait_on_the_event_loop() -> None:
+    async def close_while_waiting(pool: PlannerPool) -> None:
+        job = pool.submit(sleep_forever, (), 30)
+        closing = asyncio.get_running_loop().run_in_executor(None, pool.close)
+        try:
+            with pytest.raises(WorkerCrashedError):
+                await job.reply()
+        finally:
+            await closing
+
+    with bare_pool(1) as pool:
+        asyncio.run(close_while_waiting(pool))
+        assert pool.stats().busy == 0 and pool.worker_pids() == []

@@ -460,7 +460,10 @@ class SentJob(Generic[T]):
 
     def wait(self) -> T:
         """Wait here for the worker's answer; return it or raise (see ``PlannerPool.submit``)."""
-        ready = self.unsent is None and self._worker.connection.poll(self._remaining())
+        try:
+            ready = self.unsent is None and self._worker.connection.poll(self._remaining())
+        except OSError:  # its connection is closed (the pool is closing): reading it says so
+            ready = True
         return self._conclude(self._receive(ready))
 
     async def reply(self) -> T:
@@ -471,9 +474,12 @@ class SentJob(Generic[T]):
         worker is replaced then too (the next job must not get this one's answer).
         """
         ready = True
-        if self.unsent is None and not self._worker.connection.poll(0):
+        if self.unsent is None:
             try:
-                ready = await _readable(self._worker.connection, self._remaining())
+                if not self._worker.connection.poll(0):
+                    ready = await _readable(self._worker.connection, self._remaining())
+            except OSError:  # its connection is closed (the pool is closing): reading it says so
+                ready = True
             except BaseException:
                 self.abandon()
                 raise
@@ -542,17 +548,25 @@ def _settle(future: asyncio.Future[bool], value: bool) -> None:
 
 
 async def _readable(connection: Connection, seconds: float) -> bool:
-    """Wait on the event loop until ``connection`` can be read (an answer, or its end); False after ``seconds``."""
+    """Wait on the event loop until ``connection`` can be read (an answer, or its end); False after ``seconds``.
+
+    The loop watches a descriptor of its own for the socket: a connection closed meanwhile by
+    another thread (a closing pool kills the worker, then closes it) would otherwise leave the
+    loop nothing to wake it before ``seconds``.
+    """
     loop = asyncio.get_running_loop()
     readable: asyncio.Future[bool] = loop.create_future()
-    descriptor = connection.fileno()
-    loop.add_reader(descriptor, _settle, readable, True)
-    timer = loop.call_later(seconds, _settle, readable, False)
+    descriptor = os.dup(connection.fileno())
     try:
-        return await readable
+        loop.add_reader(descriptor, _settle, readable, True)
+        timer = loop.call_later(seconds, _settle, readable, False)
+        try:
+            return await readable
+        finally:
+            timer.cancel()
+            loop.remove_reader(descriptor)
     finally:
-        timer.cancel()
-        loop.remove_reader(descriptor)
+        os.close(descriptor)
 
 
 def _unwrap(reply: tuple[Any, ...]) -> Any:
