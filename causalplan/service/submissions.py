@@ -336,17 +336,8 @@ def _start(
     return PendingAnswer(services, key, services.pool.submit(job, args, seconds, meanwhile), is_final, started)
 
 
-def _answer(
-    services: Services,
-    key: str,
-    job: Callable[..., dict[str, Any]],
-    args: tuple[Any, ...],
-    seconds: float,
-    is_final: Callable[[dict[str, Any]], bool],
-    meanwhile: Callable[[], None] | None = None,
-) -> Answer:
-    """Return the answer kept for ``key``, or what ``job(*args)`` gives in a worker, waited for here (``_start``)."""
-    answer = _start(services, key, job, args, seconds, is_final, meanwhile)
+def waited(answer: Answer | PendingAnswer) -> Answer:
+    """Return ``answer``, waited for here if a worker is still working on it."""
     return answer if isinstance(answer, Answer) else answer.wait()
 
 
@@ -382,8 +373,7 @@ def plan(
     time_limit: float,
 ) -> Answer:
     """Return the plan of ``model`` (on ``mapping``'s object), from the cache or a worker, waited for here."""
-    answer = start_plan(services, model, mapping, planner, time_limit)
-    return answer if isinstance(answer, Answer) else answer.wait()
+    return waited(start_plan(services, model, mapping, planner, time_limit))
 
 
 def transfer(
@@ -401,8 +391,10 @@ def transfer(
     key = key or _key(services, "transfer", model, mapping, planner, time_limit)
     args = (model, mapping, planner, time_limit, tuple(services.settings.catalog_folders))
     seconds = time_limit + services.settings.solve_grace_seconds
-    return _answer(
-        services, key, worker.transfer_job, args, seconds, lambda data: data["verdict"] != Verdict.UNDECIDED.value
+    return waited(
+        _start(
+            services, key, worker.transfer_job, args, seconds, lambda data: data["verdict"] != Verdict.UNDECIDED.value
+        )
     )
 
 
@@ -418,19 +410,21 @@ def simulate(
 ) -> Answer:
     """Return the plan and its simulation report (and picture), from the cache or a worker.
 
-    ``meanwhile``: work to do while a worker solves (see ``_answer``).
+    ``meanwhile``: work to do while a worker solves (see ``_start``).
     """
     key = key or _key(services, f"simulate:{picture}", model, mapping, planner, time_limit)
     args = (model, mapping, planner, time_limit, tuple(services.settings.catalog_folders), picture)
     seconds = time_limit + services.settings.solve_grace_seconds + SIMULATION_SECONDS
-    return _answer(
-        services,
-        key,
-        worker.simulate_job,
-        args,
-        seconds,
-        lambda data: isinstance(data["planning"], dict) and _is_final_plan(data["planning"]),
-        meanwhile,
+    return waited(
+        _start(
+            services,
+            key,
+            worker.simulate_job,
+            args,
+            seconds,
+            lambda data: isinstance(data["planning"], dict) and _is_final_plan(data["planning"]),
+            meanwhile,
+        )
     )
 
 
