@@ -343,6 +343,8 @@ def install_invariant_shortcut() -> None:
     """
     from fast_downward.translate import invariant_finder, options
 
+    if getattr(invariant_finder.find_invariants, "is_causalplan_shortcut", False):
+        return  # every translation after the first: no lock to take
     with _shortcut_lock:
         original: Callable[[Any, Any], Any] = invariant_finder.find_invariants
         if getattr(original, "is_causalplan_shortcut", False):

@@ -40,24 +40,23 @@ async def create_plan(body: PlanIn, services: ServicesDep, client: ClientIdsDep,
         return _response(body, services, *kept, repeat_key)
     sent: list[submissions.PendingAnswer] = []
     try:
-        inputs, started, pddl = await run_in_threadpool(_start_plan, body, services, client, sent.append)
+        inputs, started = await run_in_threadpool(_start_plan, body, services, client, sent.append)
     except BaseException:  # cancelled while the thread ran: the answer it asked for will never be read
         for pending in sent:
             pending.abandon()
         raise
     answer = started if isinstance(started, submissions.Answer) else await started.reply()
-    return _response(body, services, inputs, answer, repeat_key, pddl)
+    return _response(body, services, inputs, answer, repeat_key)
 
 
 def _start_plan(
     body: PlanIn, services: Services, client: ClientIds, sent: Callable[[submissions.PendingAnswer], None]
-) -> tuple[submissions.PlanInputs, submissions.Answer | submissions.PendingAnswer, dict[str, str] | None]:
-    """Read the request and send it to a worker (or find its answer kept); return also its PDDL, if asked for.
+) -> tuple[submissions.PlanInputs, submissions.Answer | submissions.PendingAnswer]:
+    """Read the request and send it to a worker (or find its answer kept).
 
     ``sent`` is told of an answer sent for before it is returned (see ``create_plan``).
     """
     inputs = submissions.plan_inputs(body, services, client)
-    pddl = submissions.compiled_pddl(services, inputs.model, inputs.mapping) if body.include_pddl else None
     # An inline model's record is stored while the worker solves (the two take ~0.16 ms and
     # ~8 ms), or at once for a kept answer; a request refused before a worker took it stores nothing.
     store = submissions.storing(services, inputs.submission)
@@ -66,7 +65,7 @@ def _start_plan(
     )
     if isinstance(started, submissions.PendingAnswer):
         sent(started)
-    return inputs, started, pddl
+    return inputs, started
 
 
 def _response(
@@ -75,11 +74,10 @@ def _response(
     inputs: submissions.PlanInputs,
     answer: submissions.Answer,
     repeat_key: str | None,
-    pddl: dict[str, str] | None = None,
 ) -> SafeJSONResponse:
     data = dict(answer.data)
     if body.include_pddl:
-        data["pddl"] = pddl if pddl is not None else submissions.compiled_pddl(services, inputs.model, inputs.mapping)
+        data["pddl"] = submissions.compiled_pddl(services, inputs.model, inputs.mapping)
     response = PlanOut.model_validate(
         {
             **data,
