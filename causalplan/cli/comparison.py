@@ -1,0 +1,192 @@
+"""Commands over many tasks or trials: compare planners, batch-judge transfer trials."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from causalplan.cli.common import (
+    FILE,
+    catalog_from,
+    catalog_option,
+    check_planner,
+    fail,
+    make_console,
+    planner_option,
+    progress_bar,
+    time_limit_option,
+)
+
+if TYPE_CHECKING:
+    pass
+
+
+def _int_list(text: str, what: str) -> list[int]:
+    try:
+        return [int(item) for item in text.split(",") if item.strip()]
+    except ValueError:
+        fail("invalid_option", f"{what} must be whole numbers separated by commas, e.g. 10,40,80; got '{text}'.")
+
+
+@click.command(short_help="Compare planners on tasks: a table, CSV, JSON and a plot.")
+@click.argument("tasks", nargs=-1, type=FILE)
+@click.option(
+    "--planners",
+    "planners_option",
+    default="fd,fd-opt,mdp,up:fast-downward",
+    help="Comma-separated planners (see `causalplan planners`).",
+)
+@click.option("--synthetic", help="Also synthetic objects of these sizes, e.g. 10,40,80.")
+@click.option("--timeout", type=click.FloatRange(0.5, 3600), default=60.0, help="Seconds per run.")
+@click.option("--memory", type=click.IntRange(min=256), default=4096, help="Memory limit per run, in MB.")
+@click.option("--repeat", type=click.IntRange(1, 50), default=1, help="Runs per pair; medians are reported.")
+@click.option(
+    "--out", type=FILE, default=Path("out/compare"), help="Folder for compare.csv, compare.json and compare.png."
+)
+@catalog_option
+def compare(
+    tasks: tuple[Path, ...],
+    planners_option: str,
+    synthetic: str | None,
+    timeout: float,
+    memory: int,
+    repeat: int,
+    out: Path,
+    catalog: tuple[Path, ...],
+) -> None:
+    """Run several planners on several tasks, one process per run, and compare them.
+
+    TASKS are model files, or task files (YAML with model:, mapping:, catalog:); the default is
+    the paper's examples (found under the current folder's examples/). Prints a table (status,
+    plan length, time, success probability, valid), and writes CSV, JSON and a plot of time
+    against the number of parts. A planner that fails is a row.
+    """
+    from rich.table import Table
+
+    from causalplan.comparison import report
+    from causalplan.comparison import tasks as comparison_tasks
+    from causalplan.comparison.runner import compare as run_comparison
+    from causalplan.comparison.runner import total_runs
+    from causalplan.errors import CausalPlanError
+
+    chosen = [name.strip() for name in planners_option.split(",") if name.strip()]
+    for name in chosen:
+        check_planner(name)
+    try:
+        sizes = _int_list(synthetic, "--synthetic") if synthetic else []
+        if tasks:
+            selected = [comparison_tasks.from_argument(path, list(catalog)) for path in tasks]
+        else:
+            selected = comparison_tasks.default_tasks(Path.cwd())
+        selected += [comparison_tasks.synthetic(size) for size in sizes]
+    except CausalPlanError as exc:
+        fail(exc.code, exc.message)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
+    console = make_console()
+    with progress_bar() as progress:
+        bar = progress.add_task("comparing", total=total_runs(selected, chosen, repeat))
+
+        def advance(what: str) -> None:
+            progress.update(bar, advance=1, description=what)
+
+        rows = run_comparison(selected, chosen, timeout, memory, repeat, advance)
+    table = Table(
+        "task",
+        "parts",
+        "planner",
+        "status",
+        "length",
+        "time",
+        "P(success)",
+        "valid",
+        title=f"median of {repeat} run(s), limit {timeout:g} s per run",
+    )
+    for row in rows:
+        probability = "-" if row.success_probability is None else f"{row.success_probability:.3f}"
+        valid = "-" if row.valid is None else ("yes" if row.valid else "NO")
+        used = f" ({row.planner_used})" if row.planner_used and row.planner_used != row.planner else ""
+        table.add_row(
+            row.task,
+            str(row.parts),
+            row.planner + used,
+            row.status,
+            "-" if row.plan_length is None else str(row.plan_length),
+            report.format_seconds(row.seconds),
+            probability,
+            valid,
+        )
+    console.print(table)
+    settings = {"planners": chosen, "timeout": timeout, "memory_mb": memory, "repeat": repeat}
+    report.write_csv(rows, out / "compare.csv")
+    report.write_json(rows, out / "compare.json", settings)
+    report.plot(rows, out / "compare.png", timeout)
+    console.print(f"Wrote {out / 'compare.csv'}, {out / 'compare.json'} and {out / 'compare.png'}")
+
+
+@click.command(short_help="Judge many transfer trials; write their verdicts and reasons.")
+@click.argument("trials_file", metavar="TRIALS", type=FILE)
+@planner_option
+@time_limit_option
+@click.option("--simulate/--no-simulate", default=True, help="Check plans in the physics simulator (as transfer does).")
+@click.option("--out", type=FILE, default=Path("out/batch"), help="Folder for verdicts.csv and verdicts.json.")
+@catalog_option
+def batch(
+    trials_file: Path, planner: str, time_limit: float, simulate: bool, out: Path, catalog: tuple[Path, ...]
+) -> None:
+    """Judge many transfer trials (e.g. a study's participants) and write their verdicts and reasons.
+
+    TRIALS is a JSON Lines file, one {"id", "model", "mapping"} per line (or a JSON/YAML list).
+    What can be decided without the planner is (a line that cannot be read, an invalid model
+    or mapping, a function no part carries); equal planning problems are solved once. The
+    verdicts are those `causalplan transfer` gives one trial at a time.
+    """
+    import csv
+    import time
+
+    from rich.table import Table
+
+    from causalplan.transfer.batch import CSV_COLUMNS, read_trials, run_batch
+
+    check_planner(planner)
+    objects = catalog_from(catalog)
+    if not trials_file.is_file():
+        fail("file_not_found", f"There is no file {trials_file}.")
+    trials = list(read_trials(trials_file))
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
+    started = time.perf_counter()
+    with progress_bar() as progress:
+        bar = progress.add_task("judging trials", total=len(trials))
+        results = run_batch(trials, objects, planner, time_limit, simulate, lambda: progress.advance(bar))
+    seconds = time.perf_counter() - started
+    with (out / "verdicts.csv").open("w", newline="", encoding="utf-8") as handle:
+        writer = csv.DictWriter(handle, fieldnames=CSV_COLUMNS)
+        writer.writeheader()
+        writer.writerows(result.row() for result in results)
+    (out / "verdicts.json").write_text(
+        json.dumps([{"id": result.trial_id, **result.verdict.as_dict()} for result in results], indent=1) + "\n",
+        encoding="utf-8",
+    )
+    console = make_console()
+    table = Table("verdict", "trials", "decided by", title=f"{len(results)} trials from {trials_file}")
+    verdicts = sorted({result.verdict.verdict.value for result in results})
+    for value in verdicts:
+        mine = [result for result in results if result.verdict.verdict.value == value]
+        deciders: dict[str, int] = {}
+        for result in mine:
+            deciders[result.verdict.decided_by] = deciders.get(result.verdict.decided_by, 0) + 1
+        table.add_row(value, str(len(mine)), ", ".join(f"{name} {count}" for name, count in sorted(deciders.items())))
+    console.print(table)
+    rate = len(results) / seconds if seconds > 0 else float("inf")
+    console.print(
+        f"{len(results)} trials in {seconds:.2f} s ({rate:.0f} trials/s). "
+        f"Wrote {out / 'verdicts.csv'} and {out / 'verdicts.json'}"
+    )

@@ -1,0 +1,175 @@
+"""Commands on one model or mapping file: check, compile, graph; and the catalog: objects."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from causalplan.cli.common import (
+    EXIT_INVALID,
+    EXIT_OK,
+    FILE,
+    catalog_from,
+    catalog_option,
+    exit_with,
+    fail,
+    is_mapping_file,
+    json_option,
+    load_task,
+    make_console,
+    mark,
+    print_json,
+    print_report,
+    say,
+    write_pddl,
+)
+
+if TYPE_CHECKING:
+    pass
+
+
+@click.command(short_help="Validate a model or mapping: what is wrong, where, how to fix it.")
+@click.argument("model", type=FILE)
+@json_option
+@catalog_option
+def check(model: Path, as_json: bool, catalog: tuple[Path, ...]) -> None:
+    """Validate a model (or mapping): errors with a code, where, and how to fix them.
+
+    MODEL is a model file (or a step-3 mapping file) in YAML or JSON. Exit 0 when valid
+    (warnings allowed), 2 when invalid.
+    """
+    from causalplan.inputs import load_mapping, load_model
+
+    objects = catalog_from(catalog)
+    kind = "mapping" if is_mapping_file(model) else "model"
+    report = load_mapping(model, objects).report if kind == "mapping" else load_model(model, objects).report
+    if as_json:
+        print_json({"file": str(model), "kind": kind, **report.as_dict()})
+    else:
+        print_report(report)
+        verdict = mark(report.is_valid, "valid", "invalid")
+        say(f"{model}: {kind} is {verdict} ({len(report.errors)} error(s), {len(report.warnings)} warning(s))")
+    exit_with(EXIT_OK if report.is_valid else EXIT_INVALID)
+
+
+@click.command(name="compile", short_help="Write the model as PDDL (domain and problem), without planning.")
+@click.argument("model", type=FILE)
+@click.option("--out", "-o", type=FILE, required=True, help="Folder to write domain.pddl and problem.pddl to.")
+@click.option("--mapping", "-m", type=FILE, help="Compile for a step-3 mapping's object.")
+@catalog_option
+def compile_command(model: Path, out: Path, mapping: Path | None, catalog: tuple[Path, ...]) -> None:
+    """Compile a model to a PDDL 2.2 domain and problem with derived predicates, without planning.
+
+    MODEL is the causal model file (YAML or JSON).
+    """
+    from causalplan.pddl.writer import compile_task
+
+    objects = catalog_from(catalog)
+    compiled = compile_task(load_task(model, mapping, objects, False))
+    write_pddl(out, compiled.domain, compiled.problem)
+    say(f"Wrote {out / 'domain.pddl'} and {out / 'problem.pddl'}")
+
+
+@click.command(short_help="Draw the model's causal graph (PNG, SVG, PDF or DOT).")
+@click.argument("model", type=FILE)
+@click.option(
+    "--out",
+    "-o",
+    type=FILE,
+    help="Write a picture (.png, .svg, .pdf) or Graphviz text (.dot); without it, DOT goes to the screen.",
+)
+@json_option
+@catalog_option
+def graph(model: Path, out: Path | None, as_json: bool, catalog: tuple[Path, ...]) -> None:
+    """Draw the model's causal graph, left to right from the parts' functions to the goal.
+
+    MODEL is the causal model file (YAML or JSON). Invalid models are drawn too (causes
+    nothing produces are red), to help see what is wrong.
+    """
+    from causalplan.causal.render import PICTURE_SUFFIXES, draw, to_dot, to_json
+    from causalplan.inputs import load_model
+
+    loaded = load_model(model, catalog_from(catalog))
+    if loaded.model is None:
+        print_report(loaded.report, err=True)
+        exit_with(EXIT_INVALID)
+    if as_json:
+        print_json(to_json(loaded.model))
+    elif out is None:
+        sys.stdout.write(to_dot(loaded.model))
+    elif out.suffix.lower() == ".dot":
+        try:
+            out.write_text(to_dot(loaded.model), encoding="utf-8")
+        except OSError as exc:
+            fail("output_not_writable", f"Cannot write {out}: {exc.strerror}.")
+    elif out.suffix.lower() in PICTURE_SUFFIXES:
+        try:
+            draw(loaded.model, out)
+        except OSError as exc:
+            fail("output_not_writable", f"Cannot write {out}: {exc.strerror}.")
+    else:
+        fail("unknown_format", f"Cannot tell the format of {out}: use .png, .svg, .pdf or .dot.")
+    if out is not None:
+        say(f"Wrote {out}", err=True)
+    exit_with(EXIT_OK if loaded.report.is_valid else EXIT_INVALID)
+
+
+@click.command(short_help="List the catalog's objects, or show one in detail.")
+@click.argument("object_id", required=False, metavar="[OBJECT]")
+@json_option
+@catalog_option
+def objects(object_id: str | None, as_json: bool, catalog: tuple[Path, ...]) -> None:
+    """List the catalog's objects, or show one (OBJECT): parts, connectors, fits, true mechanism."""
+    from dataclasses import asdict
+
+    from rich.markup import escape
+    from rich.table import Table
+
+    from causalplan.errors import CausalPlanError
+
+    known = catalog_from(catalog)
+    console = make_console()
+    if object_id is not None:
+        try:
+            obj = known.get(object_id)
+        except CausalPlanError as exc:
+            fail(exc.code, exc.message)
+        if as_json:
+            print_json(asdict(obj))
+            return
+        console.print(f"[bold]{escape(obj.name)}[/] ({obj.id}, {obj.category}, goal: {escape(obj.goal)})")
+        console.print(escape(obj.description))
+        parts = Table("part", "name", "connectors (kind, spec)", title="Parts", title_justify="left")
+        for part in obj.parts:
+            base = " (base)" if part.id == obj.base else ""
+            parts.add_row(part.id + base, part.name, "; ".join(f"{c.id}: {c.kind}, {c.spec}" for c in part.connectors))
+        console.print(parts)
+        fits = Table("fit", "step", "p", "blocks", title="Fits", title_justify="left")
+        for fit in obj.fits:
+            fits.add_row(fit.id, obj.step_text(fit), f"{fit.probability:g}", ", ".join(".".join(b) for b in fit.blocks))
+        console.print(fits)
+        console.print("[bold]True mechanism:[/] " + escape(obj.mechanism_explanation))
+        for requirement in obj.mechanism:
+            console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)})")
+        return
+    if as_json:
+        print_json(
+            [
+                {
+                    "id": obj.id,
+                    "name": obj.name,
+                    "category": obj.category,
+                    "goal": obj.goal,
+                    "parts": [{"id": part.id, "name": part.name} for part in obj.parts],
+                }
+                for obj in known.objects.values()
+            ]
+        )
+        return
+    table = Table("id", "name", "category", "goal", "parts")
+    for obj in known.objects.values():
+        table.add_row(obj.id, obj.name, obj.category, obj.goal, ", ".join(obj.part_ids))
+    console.print(table)

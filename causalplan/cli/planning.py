@@ -1,0 +1,159 @@
+"""Commands that plan: plan, transfer, and planners (what can run here)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from causalplan.cli.common import (
+    EXIT_NO_PLAN,
+    EXIT_OK,
+    FILE,
+    catalog_from,
+    catalog_option,
+    check_planner,
+    exit_with,
+    fail,
+    json_option,
+    load_task,
+    make_console,
+    planner_option,
+    print_json,
+    print_plan,
+    say,
+    time_limit_option,
+    write_pddl,
+)
+
+if TYPE_CHECKING:
+    from causalplan.transfer.verdict import TransferVerdict
+
+
+@click.command(short_help="Plan the assembly that makes the model's goal hold.")
+@click.argument("model", type=FILE)
+@click.option(
+    "--mapping",
+    "-m",
+    type=FILE,
+    help="A step-3 mapping: plan for that object instead, with its parts carrying the model's functions.",
+)
+@planner_option
+@time_limit_option
+@click.option("--pddl-out", type=FILE, help="Also write domain.pddl and problem.pddl to this folder.")
+@click.option("--up-validate", is_flag=True, help="Also check the plan with unified-planning's plan validator.")
+@json_option
+@catalog_option
+def plan(
+    model: Path,
+    mapping: Path | None,
+    planner: str,
+    time_limit: float,
+    pddl_out: Path | None,
+    up_validate: bool,
+    as_json: bool,
+    catalog: tuple[Path, ...],
+) -> None:
+    """Plan how to assemble the object so the model's goal holds, and print the steps.
+
+    MODEL is the causal model file (YAML or JSON). Every plan is replayed on the object before
+    it is shown: against the model, and against the object's true mechanism. Exit 0 with a
+    plan, 1 without one, 2 for invalid input.
+    """
+    from causalplan.errors import CausalPlanError
+    from causalplan.planners.pipeline import plan_task
+
+    check_planner(planner)
+    objects = catalog_from(catalog)
+    task = load_task(model, mapping, objects, as_json)
+    try:
+        result = plan_task(
+            task,
+            planner,
+            time_limit,
+            include_pddl=pddl_out is not None,
+            validate_up=up_validate,
+        )
+    except CausalPlanError as exc:
+        fail(exc.code, exc.message)
+    if pddl_out is not None and result.pddl is not None:
+        write_pddl(pddl_out, result.pddl["domain"], result.pddl["problem"])
+    if as_json:
+        data = result.as_dict()
+        data.pop("pddl", None)
+        print_json(data)
+    else:
+        print_plan(result)
+    exit_with(EXIT_OK if result.has_plan else EXIT_NO_PLAN)
+
+
+def _print_verdict(verdict: TransferVerdict) -> None:
+    colors = {"transfers": "green", "fails": "red", "invalid": "red", "undecided": "yellow"}
+    kind = f" ({verdict.generalization}-generalization)" if verdict.generalization in ("near", "far") else ""
+    value = click.style(verdict.verdict.value, fg=colors[verdict.verdict.value], bold=True)
+    say(f"{value}: {verdict.training_object} → {verdict.test_object}{kind}, decided by {verdict.decided_by}")
+    for reason in verdict.reasons:
+        severity = click.style(reason.severity.value, fg="red" if reason.severity.value == "error" else "yellow")
+        say(f"  {severity}[{reason.code}]: {reason.message}")
+    if verdict.plan is not None and verdict.plan.has_plan:
+        say("Plan:")
+        for number, step in enumerate(verdict.plan.steps, start=1):
+            say(f"  {number}. {step.text}")
+
+
+@click.command(short_help="Test whether a model transfers to a new object (step 3).")
+@click.argument("model", type=FILE)
+@click.argument("mapping", type=FILE)
+@planner_option
+@time_limit_option
+@json_option
+@catalog_option
+def transfer(
+    model: Path, mapping: Path, planner: str, time_limit: float, as_json: bool, catalog: tuple[Path, ...]
+) -> None:
+    """Test whether a model transfers to a new object (step 3), and say why or why not.
+
+    MODEL is the causal model of the training object (steps 1-2); MAPPING maps a new object's
+    parts to the model's functions (step 3). Exit 0 when it transfers, 1 when it fails, 2 when
+    the model or mapping is invalid, 3 when the planner could not decide (e.g. it timed out).
+    """
+    from causalplan.errors import CausalPlanError
+    from causalplan.inputs import load_mapping, load_model
+    from causalplan.transfer.verdict import transfer_verdict
+
+    check_planner(planner)
+    objects = catalog_from(catalog)
+    loaded_model, loaded_mapping = load_model(model, objects), load_mapping(mapping, objects)
+    try:
+        verdict = transfer_verdict(loaded_model, loaded_mapping, objects, planner, time_limit)
+    except CausalPlanError as exc:
+        fail(exc.code, exc.message)
+    if as_json:
+        print_json(verdict.as_dict())
+    else:
+        _print_verdict(verdict)
+    exit_with(verdict.verdict.exit_code)
+
+
+@click.command(short_help="List the planners and whether each can run here.")
+@json_option
+def planners(as_json: bool) -> None:
+    """List the planners, what each is for, and whether it can run on this machine."""
+    from rich.table import Table
+
+    from causalplan.planners.pipeline import DESCRIPTIONS, planner_availability
+
+    availability = planner_availability()
+    if as_json:
+        print_json(
+            [
+                {"name": name, "description": DESCRIPTIONS[name], "available": problem is None, "problem": problem}
+                for name, problem in availability.items()
+            ]
+        )
+        return
+    table = Table("planner", "what it does", "available")
+    for name, problem in availability.items():
+        table.add_row(name, DESCRIPTIONS[name], "yes" if problem is None else f"no: {problem}")
+    make_console().print(table)
