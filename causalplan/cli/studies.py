@@ -1,0 +1,94 @@
+"""The analyze command: an experiment export turned into rates, tests and conclusions."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from causalplan.cli.common import (
+    EXIT_OK,
+    FILE,
+    catalog_from,
+    catalog_option,
+    exit_with,
+    fail,
+    json_option,
+    make_console,
+    print_json,
+)
+
+
+@click.command(short_help="Analyse an experiment export: rates, the paper's predictions tested, plots.")
+@click.argument("export", type=FILE)
+@click.option(
+    "--out",
+    type=FILE,
+    default=Path("out/analysis"),
+    help="Folder for trials.csv, codebook.csv, analysis.json, rates.png/.svg.",
+)
+@json_option
+@catalog_option
+def analyze(export: Path, out: Path, as_json: bool, catalog: tuple[Path, ...]) -> None:
+    """Analyse an experiment export (the research page's JSON export).
+
+    Prints the transfer rate of every condition on every test object with its 95% Wilson
+    interval, tests the paper's predictions (trained on one category, models transfer more to
+    that category's test object; trained on both, to both) with Fisher's exact tests
+    (Holm-corrected) and a logistic GEE with the participant as cluster, and says in plain
+    words what the data show. Writes a tidy CSV (one row per trial) with its codebook, the
+    JSON of everything, and the plot.
+    """
+    from rich.markup import escape
+    from rich.table import Table
+
+    from causalplan.errors import CausalPlanError
+    from causalplan.studies.analysis import analyse
+    from causalplan.studies.outputs import write_outputs
+    from causalplan.studies.trials import read_export, trial_rows
+
+    objects = catalog_from(catalog)
+    try:
+        analysis = analyse(trial_rows(read_export(export), objects), objects)
+    except CausalPlanError as exc:
+        fail(exc.code, exc.message)
+    try:
+        written = write_outputs(analysis, out)
+    except OSError as exc:
+        fail("output_not_writable", f"Cannot write to {out}: {exc.strerror}.")
+    if as_json:
+        print_json({**analysis.as_dict(), "files": [str(path) for path in written]})
+        exit_with(EXIT_OK)
+    console = make_console()
+    table = Table(
+        "condition",
+        "training",
+        "test object",
+        "generalization",
+        "transferred",
+        "rate (95% CI)",
+        "undecided",
+        title=f"{len(analysis.analysed)} analysed trials from {export}",
+    )
+    for cell in analysis.cells:
+        share = cell.share
+        rate = "-" if share.rate is None else f"{share.rate:.0%} ({share.low:.0%}-{share.high:.0%})"
+        table.add_row(
+            escape(cell.condition),
+            cell.training_span,
+            cell.test_object,
+            cell.generalization,
+            f"{share.successes}/{share.trials}",
+            rate,
+            str(cell.undecided),
+        )
+    console.print(table)
+    for condition, reasons in analysis.reasons.items():
+        if reasons:
+            listed = ", ".join(f"{code} {count}" for code, count in reasons.items())
+            console.print(f"Why models failed in {escape(condition)}: {listed}")
+    console.print("[bold]Conclusions[/]")
+    for conclusion in analysis.conclusions:
+        console.print(f"  - {escape(conclusion)}")
+    console.print(f"Wrote {', '.join(str(path) for path in written)}")
+    exit_with(EXIT_OK)

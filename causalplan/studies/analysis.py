@@ -1,0 +1,245 @@
+"""The analysis the paper's far-generalization experiment needs, computed from an export's trials.
+
+The paper predicts: trained on one category, models transfer more to a test object of that
+category than to one of the other (near beats far); trained on both categories, they transfer
+to both. ``analyse`` gives the transfer rate of every condition x test object with a Wilson
+interval, Fisher's exact tests of those predictions (Holm-corrected over the family), a
+logistic GEE with the participant as cluster, failure reasons per condition, the paper's
+misconception per participant, and the conclusions in plain words with the sample behind each.
+A trial's outcome is 1 when its model transferred and 0 when it failed or was invalid;
+undecided trials (the planner timed out) and excluded participants are counted, not analysed.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from causalplan.objects.catalog import Catalog
+from causalplan.studies.misconceptions import Misconception, misconceptions
+from causalplan.studies.statistics import (
+    ClusteredModel,
+    Comparison,
+    Proportion,
+    clustered_logistic,
+    fisher,
+    holm,
+    wilson,
+)
+from causalplan.studies.trials import TrialRow
+
+SIGNIFICANCE = 0.05
+ONE_CATEGORY, BOTH_CATEGORIES = "one category", "both categories"
+
+
+@dataclass(frozen=True)
+class Cell:
+    """The transfer rate of one condition on one test object."""
+
+    condition: str
+    training_span: str
+    test_object: str
+    generalization: str
+    share: Proportion
+    undecided: int
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "condition": self.condition,
+            "training_span": self.training_span,
+            "test_object": self.test_object,
+            "generalization": self.generalization,
+            **self.share.as_dict(),
+            "undecided": self.undecided,
+        }
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """Everything ``analyse`` computed; ``as_dict`` is the JSON the command writes."""
+
+    rows: tuple[TrialRow, ...]
+    cells: tuple[Cell, ...]
+    comparisons: tuple[Comparison, ...]
+    clustered: ClusteredModel
+    reasons: dict[str, dict[str, int]]
+    misconceptions: dict[str, tuple[Misconception, ...]]
+    conclusions: tuple[str, ...]
+
+    @property
+    def analysed(self) -> list[TrialRow]:
+        return [row for row in self.rows if not row.excluded and row.outcome is not None]
+
+    def as_dict(self) -> dict[str, object]:
+        excluded = sorted({row.participant_id for row in self.rows if row.excluded})
+        return {
+            "trials": len(self.rows),
+            "analysed_trials": len(self.analysed),
+            "undecided_trials": sum(1 for row in self.rows if row.outcome is None and not row.excluded),
+            "excluded_participants": excluded,
+            "cells": [cell.as_dict() for cell in self.cells],
+            "comparisons": [comparison.as_dict() for comparison in self.comparisons],
+            "clustered_model": self.clustered.as_dict(),
+            "failure_reasons": self.reasons,
+            "misconceptions": {
+                participant: [found.as_dict() for found in items] for participant, items in self.misconceptions.items()
+            },
+            "conclusions": list(self.conclusions),
+        }
+
+
+def training_spans(rows: Sequence[TrialRow], catalog: Catalog) -> dict[str, str]:
+    """Return, per condition, whether its training objects come from one category or from both."""
+    categories: dict[str, set[str]] = {}
+    for row in rows:
+        categories.setdefault(row.condition, set()).update(catalog.get(o).category for o in row.training_objects)
+    return {condition: ONE_CATEGORY if len(found) <= 1 else BOTH_CATEGORIES for condition, found in categories.items()}
+
+
+def _share(rows: Sequence[TrialRow]) -> Proportion:
+    return wilson(sum(row.outcome or 0 for row in rows), len(rows))
+
+
+def _cells(rows: Sequence[TrialRow], spans: dict[str, str]) -> list[Cell]:
+    cells = []
+    for condition in dict.fromkeys(row.condition for row in rows):
+        for test in sorted({row.test_object for row in rows if row.condition == condition}):
+            mine = [row for row in rows if row.condition == condition and row.test_object == test]
+            decided = [row for row in mine if row.outcome is not None]
+            cells.append(
+                Cell(
+                    condition, spans[condition], test, mine[0].generalization, _share(decided), len(mine) - len(decided)
+                )
+            )
+    return cells
+
+
+def _comparisons(rows: Sequence[TrialRow], spans: dict[str, str]) -> list[Comparison]:
+    """Return the family of tests of the paper's two predictions (before Holm's correction)."""
+    found = []
+    conditions = list(dict.fromkeys(row.condition for row in rows))
+    for condition in conditions:
+        mine = [row for row in rows if row.condition == condition]
+        if spans[condition] == ONE_CATEGORY:
+            same = [row for row in mine if row.trained_category]
+            other = [row for row in mine if not row.trained_category]
+            if same and other:
+                found.append(
+                    fisher(
+                        f"{condition}: same-category vs other-category test objects",
+                        ("same category", _share(same)),
+                        ("other category", _share(other)),
+                        "greater",
+                    )
+                )
+            continue
+        tests = sorted({row.test_object for row in mine})
+        for index, first in enumerate(tests):
+            for second in tests[index + 1 :]:
+                found.append(
+                    fisher(
+                        f"{condition}: {first} vs {second}",
+                        (first, _share([row for row in mine if row.test_object == first])),
+                        (second, _share([row for row in mine if row.test_object == second])),
+                        "two-sided",
+                    )
+                )
+        for other_condition in conditions:
+            if spans[other_condition] != ONE_CATEGORY:
+                continue
+            untrained = {
+                row.test_object for row in rows if row.condition == other_condition and not row.trained_category
+            }
+            for test in sorted(untrained & set(tests)):
+                found.append(
+                    fisher(
+                        f"{test}: {condition} vs {other_condition}",
+                        (condition, _share([row for row in mine if row.test_object == test])),
+                        (
+                            other_condition,
+                            _share([r for r in rows if r.condition == other_condition and r.test_object == test]),
+                        ),
+                        "greater",
+                    )
+                )
+    return holm(found)
+
+
+def _percent(share: Proportion) -> str:
+    if share.rate is None or share.low is None or share.high is None:
+        return "no trials"
+    return f"{share.successes}/{share.trials} ({share.rate:.0%}, 95% CI {share.low:.0%}-{share.high:.0%})"
+
+
+def _conclusion(comparison: Comparison) -> str:
+    assert comparison.p_holm is not None
+    significant = comparison.p_holm < SIGNIFICANCE
+    if comparison.alternative == "greater":
+        verdict = "the prediction holds" if significant else "the prediction is not shown at this sample size"
+    else:
+        verdict = (
+            "they differ, so models did not transfer equally to both"
+            if significant
+            else "no reliable difference, consistent with transfer to both"
+        )
+    return (
+        f"{comparison.name}: {_percent(comparison.first_share)} vs {_percent(comparison.second_share)}; "
+        f"Fisher {comparison.alternative} p = {comparison.p_value:.3g}, Holm p = {comparison.p_holm:.3g}, "
+        f"odds ratio {comparison.odds_ratio:.2f} (95% CI {comparison.odds_ratio_interval[0]:.2f}-"
+        f"{comparison.odds_ratio_interval[1]:.2f}): {verdict}."
+    )
+
+
+def _misconceptions(rows: Sequence[TrialRow], catalog: Catalog) -> dict[str, tuple[Misconception, ...]]:
+    found: dict[str, tuple[Misconception, ...]] = {}
+    for row in rows:
+        if row.participant_id in found or row.model is None:
+            continue
+        found[row.participant_id] = tuple(misconceptions(row.model, catalog))
+    return {participant: items for participant, items in found.items() if items}
+
+
+def analyse(rows: Sequence[TrialRow], catalog: Catalog) -> Analysis:
+    """Return the study's analysis: rates, tests, the clustered model, reasons, misconceptions, conclusions."""
+    included = [row for row in rows if not row.excluded]
+    decided = [row for row in included if row.outcome is not None]
+    spans = training_spans(included, catalog)
+    comparisons = _comparisons(decided, spans) if decided else []
+    clustered = clustered_logistic(
+        [row.outcome or 0 for row in decided],
+        {
+            "other_category_test": [0 if row.trained_category else 1 for row in decided],
+            "trained_on_both": [1 if spans[row.condition] == BOTH_CATEGORIES else 0 for row in decided],
+        },
+        [row.participant_id for row in decided],
+    )
+    reasons: dict[str, dict[str, int]] = {}
+    for condition in dict.fromkeys(row.condition for row in included):
+        counts = Counter(
+            code
+            for row in included
+            if row.condition == condition and row.outcome == 0
+            for code in set(row.reason_codes)
+        )
+        reasons[condition] = dict(counts.most_common())
+    found = _misconceptions(included, catalog)
+    conclusions = [_conclusion(comparison) for comparison in comparisons]
+    if not comparisons:
+        conclusions.append("No test of the predictions could be made: each needs two groups of decided trials.")
+    for effect in clustered.effects:
+        conclusions.append(
+            f"Logistic GEE ({clustered.trials} trials, {clustered.participants} participants): {effect.name} has an "
+            f"odds ratio of {effect.odds_ratio:.2f} (95% CI {effect.interval[0]:.2f}-{effect.interval[1]:.2f}, "
+            f"p = {effect.p_value:.3g})."
+        )
+    if clustered.problem:
+        conclusions.append(f"Logistic GEE not reported: {clustered.problem}.")
+    if found:
+        conclusions.append(
+            f"{len(found)} of {len({row.participant_id for row in included})} participants made a function the true "
+            "mechanism does not need a necessary cause (the paper's 'diffuse light' misconception)."
+        )
+    return Analysis(
+        tuple(rows), tuple(_cells(included, spans)), tuple(comparisons), clustered, reasons, found, tuple(conclusions)
+    )
