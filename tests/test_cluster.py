@@ -1,0 +1,77 @@
+"""Batches on a Dask LocalCluster: the same verdicts as the local batch, and a killed worker loses nothing."""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+from pathlib import Path
+
+import pytest
+from distributed import Client, LocalCluster
+
+from causalplan.objects.catalog import Catalog, load_catalog
+from causalplan.transfer.batch import TrialResult, read_trials, run_batch
+from causalplan.transfer.cluster import ClusterError, JudgeOptions, chunks, run_batch_on_cluster
+
+TRIALS = Path(__file__).resolve().parent.parent / "examples" / "batch" / "trials.jsonl"
+OPTIONS = JudgeOptions(simulate=False)
+
+
+@pytest.fixture(scope="module")
+def catalog() -> Catalog:
+    return load_catalog()
+
+
+def _verdicts(results: list[TrialResult]) -> list[tuple[str, dict[str, object]]]:
+    """Return each trial's verdict without what differs between runs (times, whether a cache answered)."""
+    verdicts = []
+    for result in results:
+        data = result.verdict.as_dict()
+        if isinstance(data.get("planning"), dict):
+            data["planning"] = {k: v for k, v in data["planning"].items() if k not in ("timing", "cached")}
+        verdicts.append((result.trial_id, data))
+    return verdicts
+
+
+def test_chunks_keep_every_trial_once_in_order() -> None:
+    trials = list(read_trials(TRIALS))
+    parts = chunks(trials, 7)
+    assert [trial for part in parts for trial in part] == trials
+    assert all(len(part) == 7 for part in parts[:-1])
+
+
+def test_a_local_cluster_gives_the_verdicts_of_the_local_batch(catalog: Catalog) -> None:
+    trials = list(read_trials(TRIALS))
+    local = run_batch(trials, catalog, simulate=False)
+    seen: list[int] = []
+    on_cluster = run_batch_on_cluster(
+        trials, catalog, OPTIONS, workers=2, chunk_size=9, on_chunk=lambda results: seen.append(len(results))
+    )
+    assert _verdicts(on_cluster) == _verdicts(local)
+    assert sum(seen) == len(trials)
+
+
+def test_a_worker_killed_mid_batch_loses_nothing_and_counts_nothing_twice(catalog: Catalog) -> None:
+    trials = list(read_trials(TRIALS)) * 4
+    local = run_batch(trials, catalog, simulate=False)
+    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=logging.ERROR) as cluster:
+        with Client(cluster) as watcher:
+            pids = list(watcher.run(os.getpid).values())
+        killed: list[int] = []
+
+        def kill_one_worker(results: list[TrialResult]) -> None:
+            if not killed:
+                killed.append(pids[0])
+                os.kill(pids[0], signal.SIGKILL)
+
+        on_cluster = run_batch_on_cluster(
+            trials, catalog, OPTIONS, address=cluster.scheduler_address, chunk_size=3, on_chunk=kill_one_worker
+        )
+    assert killed
+    assert _verdicts(on_cluster) == _verdicts(local)
+
+
+def test_an_unreachable_scheduler_is_a_clear_error(catalog: Catalog) -> None:
+    with pytest.raises(ClusterError, match=r"Cannot reach the Dask scheduler at tcp://127\.0\.0\.1:9"):
+        run_batch_on_cluster([], catalog, address="tcp://127.0.0.1:9")
