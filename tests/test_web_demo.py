@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from datetime import timedelta
 from pathlib import Path
 
@@ -12,6 +13,7 @@ from sqlalchemy.orm import Session
 from causalplan.service.db.models import ModelRecord, ParticipantRecord, TrialRecord, utc_now
 from causalplan.service.web.demo import WINDOW_SECONDS, DemoStarts, purge_demo_participants
 from causalplan.service.web.errors import TooManyDemoStartsError
+from causalplan.service.web.upkeep import purge_interval
 from tests.service_fixtures import running_client, services_of, settings_for, wait_until
 from tests.web_flows import FLASHLIGHT_CHOICES, complete, experiment, links
 
@@ -93,3 +95,11 @@ def test_the_purge_runs_when_the_service_starts(tmp_path: Path) -> None:
         wait_until(lambda: client.app.state.upkeep.purges >= 1)  # type: ignore[attr-defined]
         with Session(services_of(client).engine) as session:
             assert counts(session)[0] == 0
+
+
+def test_the_purge_runs_four_times_per_retention_period_and_at_least_hourly(tmp_path: Path) -> None:
+    with running_client(settings_for(f"sqlite:///{tmp_path}/every.sqlite3", planning_workers=1)) as client:
+        services = services_of(client)
+        assert purge_interval(services) == 3600.0  # a day's retention: hourly
+        short = services.settings.model_copy(update={"demo_retention_hours": 1.0})
+        assert purge_interval(replace(services, settings=short)) == 900.0

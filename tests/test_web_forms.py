@@ -45,3 +45,13 @@ def test_a_label_holding_a_keyword_is_noted_once_before_step_one_goes_on(client:
     again = changed.text.split('name="noted" value="')[1].split('"')[0]
     kept = post(client, f"/p/{code}/step1/1", {**functions, "part:shade": "heat causes glow", "noted": again})
     assert kept.headers["location"] == f"/p/{code}/step2"
+
+
+def test_step_two_keeps_saying_which_label_no_rule_can_name(client: TestClient) -> None:
+    code = new_participant(client)
+    noted = post(client, f"/p/{code}/step1/1", {**LAMP_FUNCTIONS, "part:shade": "rock and roll"}, 200)
+    fingerprint = noted.text.split('name="noted" value="')[1].split('"')[0]
+    post(client, f"/p/{code}/step1/1", {**LAMP_FUNCTIONS, "part:shade": "rock and roll", "noted": fingerprint})
+    check = client.post(f"/p/{code}/check", json={"rules": "rock and roll CAUSES light"}).json()
+    assert "keyword_in_label" in [warning["code"] for warning in check["warnings"]]
+    assert "keyword_in_label" in client.get(f"/p/{code}/step2").text

@@ -47,8 +47,12 @@ class _UniqueKeyLoader(SAFE_LOADER):  # type: ignore[misc, valid-type]
         return mapping
 
 
-def _refuse_duplicate_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
-    """``json``'s object hook: the object, or DuplicateKeyError for a key named twice (no line yet)."""
+def refuse_duplicate_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
+    """``json``'s ``object_pairs_hook``: the object, or DuplicateKeyError for a key named twice (no line yet).
+
+    Whatever reads JSON documents people send (files here, request bodies in the service) uses
+    it, so a repeated key is refused everywhere instead of the last one silently winning.
+    """
     result: dict[str, object] = {}
     for key, value in pairs:
         if key in result:
@@ -57,7 +61,7 @@ def _refuse_duplicate_keys(pairs: list[tuple[str, object]]) -> dict[str, object]
     return result
 
 
-def _duplicate_key_line(text: str, key: object) -> int | None:
+def duplicate_key_line(text: str, key: object) -> int | None:
     """Return the line of the second ``key`` in one mapping of ``text`` (JSON read as YAML), if found."""
     try:
         yaml.load(text, Loader=_UniqueKeyLoader)
@@ -161,9 +165,9 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
     text = text.removeprefix("\ufeff")
     if _looks_like_json(text, file_name):
         try:
-            data = json.loads(text, object_pairs_hook=_refuse_duplicate_keys)
+            data = json.loads(text, object_pairs_hook=refuse_duplicate_keys)
         except DuplicateKeyError as exc:
-            exc.line = _duplicate_key_line(text.replace("\t", " "), exc.key)
+            exc.line = duplicate_key_line(text.replace("\t", " "), exc.key)
             return _duplicate_key(file_name, exc)
         except RecursionError:
             return _too_deep(file_name)

@@ -184,11 +184,11 @@ def _read_label(
 
 def _keyword_warning(label: str, part: str, keywords: list[str], where: Location) -> Diagnostic:
     """Return the warning for a label a rule cannot name: the rule reader splits it at its keywords."""
-    words = " and ".join(keywords)
+    several = len(keywords) > 1
     return warning(
         "keyword_in_label",
-        f"The function '{label}' of part '{part}' contains the word{'s' if len(keywords) > 1 else ''} {words}, "
-        "which rules read as keywords, so no rule can use this function.",
+        f"The function '{label}' of part '{part}' contains the word{'s' if several else ''} {' and '.join(keywords)}, "
+        f"which rules read as {'keywords' if several else 'a keyword'}, so no rule can use this function.",
         where,
         "Reword it without the words 'and' and 'causes' (e.g. '&' or 'makes' instead).",
     )

@@ -33,7 +33,7 @@ class Rule:
     text: str
     index: int
 
-    # Worked out once per rule (reading a model asks for them ~70 times): a frozen dataclass's
+    # Worked out once per rule (reading a model asks for them many times): a frozen dataclass's
     # cached_property is written to the instance's __dict__, outside its fields.
     @cached_property
     def cause_keys(self) -> frozenset[str]:

@@ -119,7 +119,7 @@ def _check_goal(model: CausalModel) -> list[Diagnostic]:
 
 
 def _is_acyclic(model: CausalModel) -> bool:
-    """Return whether the rules form no cycle (stdlib only: networkx costs ~0.1 s to import)."""
+    """Return whether the rules form no cycle (stdlib only: networkx is slow to import, and most models need none)."""
     from graphlib import CycleError, TopologicalSorter
 
     sorter: TopologicalSorter[str] = TopologicalSorter()
