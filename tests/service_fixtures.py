@@ -109,6 +109,7 @@ def settings_for(database_url: str, **overrides: Any) -> Settings:
         "research_token": RESEARCH_TOKEN,
         "planning_workers": 2,
         "default_time_limit": 20.0,
+        "draw_plans_ahead": False,  # the tests that need it ask; elsewhere it would compete for the workers
         **overrides,
     }
     return Settings(**values)

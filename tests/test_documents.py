@@ -295,3 +295,42 @@ def test_file_at_the_size_limit_is_read(tmp_path: Path) -> None:
     data, _, problems = read_document(path)
     assert problems == []
     assert data == {"object": "candle"}
+
+
+# --- duplicate keys ------------------------------------------------------------------------------
+
+
+def test_a_yaml_key_named_twice_is_refused_with_its_line() -> None:
+    text = "object: desk_lamp\nfunctions: {}\nrules: []\nobject: candle\n"
+    data, _, problems = parse_text(text, "model.yaml")
+    assert data is None
+    assert [p.code for p in problems] == ["duplicate_key"]
+    assert "'object'" in problems[0].message
+    assert problems[0].location.line == 4
+
+
+def test_a_nested_yaml_key_named_twice_is_refused() -> None:
+    text = "object: desk_lamp\nfunctions:\n  shade: [diffuse light]\n  shade: [hold things together]\n"
+    _, _, problems = parse_text(text, "model.yaml")
+    assert [(p.code, p.location.line) for p in problems] == [("duplicate_key", 4)]
+
+
+def test_a_json_key_named_twice_is_refused_with_its_line() -> None:
+    text = '{\n  "object": "desk_lamp",\n  "functions": {},\n  "object": "candle"\n}\n'
+    data, _, problems = parse_text(text, "model.json")
+    assert data is None
+    assert [p.code for p in problems] == ["duplicate_key"]
+    assert "'object'" in problems[0].message
+    assert problems[0].location.line == 4
+
+
+def test_a_yaml_merge_key_may_override_what_it_merges() -> None:
+    data, _, problems = parse_text("base: &b {goal: light}\nmodel:\n  <<: *b\n  goal: heat\n", "m.yaml")
+    assert problems == []
+    assert data == {"base": {"goal": "light"}, "model": {"goal": "heat"}}
+
+
+def test_keys_repeated_in_different_mappings_are_fine() -> None:
+    data, _, problems = parse_text('{"a": {"x": 1}, "b": {"x": 2}}', "m.json")
+    assert problems == []
+    assert data == {"a": {"x": 1}, "b": {"x": 2}}

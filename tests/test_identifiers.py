@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import unicodedata
 
 from hypothesis import given
 from hypothesis import strategies as st
@@ -44,3 +45,10 @@ def test_every_identifier_is_a_plain_pddl_name_and_distinct(labels: list[str]) -
     assert set(names) == set(labels)
     assert len(set(names.values())) == len(names)
     assert all(PDDL_NAME.match(name) for name in names.values())
+
+
+def test_composed_and_decomposed_labels_get_one_identifier() -> None:
+    composed, decomposed = unicodedata.normalize("NFC", "café"), unicodedata.normalize("NFD", "café")
+    names = node_identifiers([composed, decomposed, "cafe"])
+    assert names[composed] == names[decomposed]
+    assert len({names[composed], names["cafe"]}) == 2

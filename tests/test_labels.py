@@ -99,3 +99,10 @@ def test_closest_respects_the_cutoff() -> None:
     candidates = ["desk_lamp"]  # 'desk' is 8/13 similar to 'desk_lamp'
     assert closest("desk", candidates, cutoff=0.6) == "desk_lamp"
     assert closest("desk", candidates, cutoff=0.7) is None
+
+
+def test_composed_and_decomposed_accents_are_one_label() -> None:
+    composed, decomposed = unicodedata.normalize("NFC", "café"), unicodedata.normalize("NFD", "café")
+    assert composed != decomposed
+    assert normalize_label(composed) == normalize_label(decomposed) == "café"
+    assert display_label(decomposed) == composed

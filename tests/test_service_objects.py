@@ -46,8 +46,8 @@ def test_health_reports_planners_database_pool_and_limits(client: TestClient) ->
     assert health["database"] == {
         "reachable": True,
         "backend": "sqlite",
-        "revision": "0002",
-        "expected_revision": "0002",
+        "revision": "0003",
+        "expected_revision": "0003",
         "problem": None,
     }
     assert health["pool"]["workers"] == 2 and health["pool"]["max_in_flight"] == 18

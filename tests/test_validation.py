@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import unicodedata
+
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -549,3 +551,55 @@ def test_a_rule_causing_itself_names_that_one_rule() -> None:
     assert len(cycles) == 1
     assert cycles[0].message == "The rules go round in a circle: light → light."
     assert cycles[0].hint is not None and cycles[0].hint.endswith("Remove or change rule 2.")
+
+
+# --- labels people cannot tell apart, or cannot use -----------------------------------------------
+
+
+def test_a_function_written_composed_is_used_by_a_rule_written_decomposed() -> None:
+    composed, decomposed = unicodedata.normalize("NFC", "café power"), unicodedata.normalize("NFD", "café power")
+    text = DESK_LAMP_HEAD.replace("provide electricity", composed) + (
+        f"  - {decomposed} AND close the circuit AND turn electricity into light CAUSES light\n"
+    )
+    report = report_of(text)
+    assert report.is_valid, report.codes()
+    assert "unused_function" not in report.codes()
+
+
+def test_a_function_holding_a_keyword_is_warned_about() -> None:
+    text = DESK_LAMP_HEAD.replace("[provide electricity]", "[provide electricity, rock and roll]") + (
+        "  - provide electricity AND close the circuit AND turn electricity into light CAUSES light\n"
+    )
+    problem = only(report_of(text), "keyword_in_label")
+    assert problem.severity is Severity.WARNING
+    assert "'rock and roll'" in problem.message and "AND" in problem.message
+    assert problem.location.part == "base_with_cables"
+    assert problem.location.line == 4
+
+
+def test_a_function_holding_causes_is_warned_about_too() -> None:
+    mapping = {"object": "desk_lamp", "functions": {"light_bulb": ["heat causes light"]}}
+    labelling, problems = read_labelling(mapping, SourceMap())
+    assert labelling is not None
+    assert [p.code for p in problems] == ["keyword_in_label"]
+    assert "CAUSES" in problems[0].message
+
+
+def test_words_that_only_contain_a_keyword_are_not_warned_about() -> None:
+    mapping = {"object": "desk_lamp", "functions": {"light_bulb": ["hand over power", "rock-and-roll"]}}
+    _, problems = read_labelling(mapping, SourceMap())
+    assert problems == []
+
+
+def test_the_missing_goal_hint_suggests_the_form_not_a_label() -> None:
+    # The toy car of the tutorial: its first function is the one it teaches to leave out.
+    text = (
+        "object: toy_car\ngoal: motion\nfunctions:\n  chassis: [hold things together]\n"
+        "  wind_up_motor: [store energy]\nrules:\n  - store energy CAUSES stored motion\n"
+    )
+    loaded = model_from_text(text, builtin_catalog(), "model.yaml")
+    assert loaded.model is not None
+    problem = only(loaded.report, "goal_not_produced")
+    assert problem.hint is not None
+    assert "hold things together" not in problem.hint
+    assert "FUNCTION AND FUNCTION CAUSES motion" in problem.hint

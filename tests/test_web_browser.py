@@ -120,6 +120,7 @@ def test_a_participant_does_the_tutorial_and_the_three_steps_and_sees_the_verdic
     expect(picture).to_have_attribute("alt", "The desk lamp after the robot's plan, in the simulator")
     expect(picture).to_have_js_property("complete", True)
     assert picture.evaluate("image => image.naturalWidth") == 480  # the simulator's picture arrived
+    expect(plan.locator(".picture-waiting")).to_have_count(0)  # and its progress bar went
     shoot(page, "participant-2-rules-and-plan")
     page.get_by_role("button", name="Submit my model").click()
 

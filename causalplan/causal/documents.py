@@ -15,7 +15,74 @@ PathKey = tuple[str | int, ...]
 
 MAX_DOCUMENT_BYTES = 1_000_000
 SAFE_LOADER: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-"""libyaml's safe loader where PyYAML has it: about ten times faster than the pure-Python one."""
+"""libyaml's safe loader where PyYAML has it: much faster than the pure-Python one."""
+
+
+class DuplicateKeyError(ValueError):
+    """A mapping names the same key twice (``line`` is 1-based, None when unknown)."""
+
+    def __init__(self, key: object, line: int | None) -> None:
+        super().__init__(f"duplicate key {key!r}")
+        self.key = key
+        self.line = line
+
+
+class _UniqueKeyLoader(SAFE_LOADER):  # type: ignore[misc, valid-type]
+    """The safe loader, refusing a mapping that names a key twice (PyYAML keeps the last one)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[object, object]:
+        seen: set[object] = set()
+        for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":
+                continue  # '<<' merges another mapping in: its keys may be overridden on purpose
+            key = self.construct_object(key_node, deep=deep)
+            try:
+                is_repeated = key in seen
+            except TypeError:  # an unhashable key: construct_mapping below reports it
+                continue
+            if is_repeated:
+                raise DuplicateKeyError(key, key_node.start_mark.line + 1)
+            seen.add(key)
+        mapping: dict[object, object] = super().construct_mapping(node, deep=deep)
+        return mapping
+
+
+def refuse_duplicate_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
+    """``json``'s ``object_pairs_hook``: the object, or DuplicateKeyError for a key named twice (no line yet).
+
+    Whatever reads JSON documents people send (files here, request bodies in the service) uses
+    it, so a repeated key is refused everywhere instead of the last one silently winning.
+    """
+    result: dict[str, object] = {}
+    for key, value in pairs:
+        if key in result:
+            raise DuplicateKeyError(key, None)
+        result[key] = value
+    return result
+
+
+def duplicate_key_line(text: str, key: object) -> int | None:
+    """Return the line of the second ``key`` in one mapping of ``text`` (JSON read as YAML), if found."""
+    try:
+        yaml.load(text, Loader=_UniqueKeyLoader)
+    except DuplicateKeyError as exc:
+        return exc.line if exc.key == key else None
+    except (yaml.YAMLError, RecursionError):
+        return None
+    return None
+
+
+def _duplicate_key(file_name: str | None, exc: DuplicateKeyError) -> tuple[object, SourceMap, list[Diagnostic]]:
+    where = f" at line {exc.line}" if exc.line is not None else ""
+    return _unreadable(
+        file_name,
+        error(
+            "duplicate_key",
+            f"The key {exc.key!r} appears twice in one mapping{where}; only one may stay.",
+            Location(file=file_name, line=exc.line),
+            "Merge the two entries into one, or rename one of them.",
+        ),
+    )
 
 
 @dataclass(frozen=True)
@@ -98,7 +165,10 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
     text = text.removeprefix("\ufeff")
     if _looks_like_json(text, file_name):
         try:
-            data = json.loads(text)
+            data = json.loads(text, object_pairs_hook=refuse_duplicate_keys)
+        except DuplicateKeyError as exc:
+            exc.line = duplicate_key_line(text.replace("\t", " "), exc.key)
+            return _duplicate_key(file_name, exc)
         except RecursionError:
             return _too_deep(file_name)
         except json.JSONDecodeError as exc:
@@ -114,7 +184,9 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
         # JSON allows tabs between tokens (never inside strings); YAML does not.
         return data, SourceMap(file_name, text.replace("\t", " ")), []
     try:
-        data = yaml.load(text, Loader=SAFE_LOADER)
+        data = yaml.load(text, Loader=_UniqueKeyLoader)
+    except DuplicateKeyError as exc:
+        return _duplicate_key(file_name, exc)
     except RecursionError:
         return _too_deep(file_name)
     except yaml.YAMLError as exc:

@@ -7,13 +7,17 @@ import unicodedata
 
 
 def normalize_label(label: str) -> str:
-    """Return the label's comparison key: case folded, whitespace collapsed (nothing else)."""
-    return " ".join(label.split()).casefold()
+    """Return the label's comparison key: Unicode NFC, case folded, whitespace collapsed (nothing else).
+
+    NFC first, so "café" typed as one character or as "e" and a combining accent is one label;
+    again after folding, which can take a character apart (e.g. "ǰ").
+    """
+    return unicodedata.normalize("NFC", unicodedata.normalize("NFC", " ".join(label.split())).casefold())
 
 
 def display_label(label: str) -> str:
-    """Return the label as people wrote it, with runs of whitespace collapsed to one space."""
-    return " ".join(label.split())
+    """Return the label as people wrote it in Unicode NFC, with runs of whitespace collapsed to one space."""
+    return unicodedata.normalize("NFC", " ".join(label.split()))
 
 
 def has_control_characters(label: str) -> bool:

@@ -17,10 +17,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from causalplan.causal.diagnostics import Diagnostic, error, warning
+from causalplan.causal.diagnostics import Diagnostic, Location, error, warning
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.labels import closest, display_label, has_control_characters, normalize_label
-from causalplan.causal.rules import Rule, parse_rule
+from causalplan.causal.rules import Rule, keywords_in, parse_rule
 
 DEFAULT_GOAL = "light"
 MAX_LABEL_LENGTH = 200
@@ -182,6 +182,18 @@ def _read_label(
     return display_label(value)
 
 
+def _keyword_warning(label: str, part: str, keywords: list[str], where: Location) -> Diagnostic:
+    """Return the warning for a label a rule cannot name: the rule reader splits it at its keywords."""
+    several = len(keywords) > 1
+    return warning(
+        "keyword_in_label",
+        f"The function '{label}' of part '{part}' contains the word{'s' if several else ''} {' and '.join(keywords)}, "
+        f"which rules read as {'keywords' if several else 'a keyword'}, so no rule can use this function.",
+        where,
+        "Reword it without the words 'and' and 'causes' (e.g. '&' or 'makes' instead).",
+    )
+
+
 def _read_functions(value: object, source: SourceMap, problems: list[Diagnostic]) -> dict[str, tuple[str, ...]]:
     if not isinstance(value, Mapping):
         problems.append(
@@ -231,6 +243,11 @@ def _read_functions(value: object, source: SourceMap, problems: list[Diagnostic]
                 continue
             seen.add(normalize_label(label))
             labels.append(label)
+            keywords = keywords_in(label)
+            if keywords:
+                problems.append(
+                    _keyword_warning(label, part, keywords, source.locate("functions", part, index, part=part))
+                )
         functions[part] = tuple(labels)
     return functions
 

@@ -16,6 +16,12 @@ from causalplan.causal.labels import display_label, has_control_characters, norm
 _CAUSES = re.compile(r"(?<!\S)causes(?!\S)", re.IGNORECASE)
 _AND = re.compile(r"(?<!\S)and(?!\S)", re.IGNORECASE)
 _OR = re.compile(r"(?<!\S)or(?!\S)", re.IGNORECASE)
+_KEYWORD = re.compile(r"(?<!\S)(and|causes)(?!\S)", re.IGNORECASE)
+
+
+def keywords_in(label: str) -> list[str]:
+    """Return the rule keywords (AND, CAUSES) that ``label`` holds as words, upper-case, once each."""
+    return sorted({match.upper() for match in _KEYWORD.findall(label)})
 
 
 @dataclass(frozen=True)
@@ -27,7 +33,7 @@ class Rule:
     text: str
     index: int
 
-    # Worked out once per rule (reading a model asks for them ~70 times): a frozen dataclass's
+    # Worked out once per rule (reading a model asks for them many times): a frozen dataclass's
     # cached_property is written to the instance's __dict__, outside its fields.
     @cached_property
     def cause_keys(self) -> frozenset[str]:

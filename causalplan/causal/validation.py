@@ -96,17 +96,12 @@ def _check_causes(model: CausalModel) -> list[Diagnostic]:
                         f"Rule {rule.index} uses '{cause}' as a cause, but nothing produces it: no part has this "
                         "function and no rule causes it.",
                         where,
-                        f"If it is an intermediate effect, add a rule that causes it, e.g. "
-                        f"'{_example_cause(model)} CAUSES {cause}'. If it is what a part does, give that part "
+                        f"If it is an intermediate effect, add a rule that causes it: "
+                        f"'FUNCTION AND FUNCTION CAUSES {cause}'. If it is what a part does, give that part "
                         "this function in step 1.",
                     )
                 )
     return problems
-
-
-def _example_cause(model: CausalModel) -> str:
-    labels = model.labelling.labels()
-    return next(iter(labels.values()), "provide electricity")
 
 
 def _check_goal(model: CausalModel) -> list[Diagnostic]:
@@ -117,13 +112,14 @@ def _check_goal(model: CausalModel) -> list[Diagnostic]:
             "goal_not_produced",
             f"No rule produces the goal '{model.goal}'.",
             model.source.locate("rules"),
-            f"Add a rule ending in 'CAUSES {model.goal}', e.g. '{_example_cause(model)} CAUSES {model.goal}'.",
+            f"Add a rule of the form 'FUNCTION AND FUNCTION CAUSES {model.goal}', naming the functions "
+            f"that together produce {model.goal}.",
         )
     ]
 
 
 def _is_acyclic(model: CausalModel) -> bool:
-    """Return whether the rules form no cycle (stdlib only: networkx costs ~0.1 s to import)."""
+    """Return whether the rules form no cycle (stdlib only: networkx is slow to import, and most models need none)."""
     from graphlib import CycleError, TopologicalSorter
 
     sorter: TopologicalSorter[str] = TopologicalSorter()

@@ -24,17 +24,24 @@ def slug(label: str) -> str:
 
 
 def node_identifiers(keys: Iterable[str]) -> dict[str, str]:
-    """Return a distinct PDDL predicate name for every normalised node label."""
+    """Return a PDDL predicate name for every node label: one name per label in Unicode NFC.
+
+    Keys that differ only in how their characters are composed (NFC "café" and NFD "café")
+    look the same to a person, so they get the same name; any other two keys get distinct ones.
+    """
+    by_form: dict[str, list[str]] = {}
+    for key in set(keys):
+        by_form.setdefault(unicodedata.normalize("NFC", key), []).append(key)
     result: dict[str, str] = {}
     taken: set[str] = set()
-    for key in sorted(set(keys)):
-        base = NODE_PREFIX + (slug(key) or "label")
+    for form in sorted(by_form):
+        base = NODE_PREFIX + (slug(form) or "label")
         name, counter = base, 1
         while name in taken:
             counter += 1
             name = f"{base}-{counter}"
         taken.add(name)
-        result[key] = name
+        result.update(dict.fromkeys(by_form[form], name))
     return result
 
 

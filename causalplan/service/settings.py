@@ -66,6 +66,19 @@ class Settings(BaseSettings):
     max_labels_per_part: int = Field(default=16, ge=1, description="Most function labels one part may carry.")
     max_rules: int = Field(default=200, ge=1, description="Most rules a model may have.")
 
+    # The participant pages (causalplan.service.web).
+    demo_starts_per_minute: int = Field(
+        default=10,
+        ge=0,
+        description="Demo participants ('Try it yourself') one client may start a minute (0: no limit).",
+    )
+    demo_retention_hours: float = Field(
+        default=24.0, gt=0, description="Hours a demo participant's work is kept after their last change; then purged."
+    )
+    draw_plans_ahead: bool = Field(
+        default=True, description="Draw the pictures of the catalog objects' likely plans in the background at start."
+    )
+
     @field_validator("database_url")
     @classmethod
     def _use_psycopg(cls, value: str) -> str:

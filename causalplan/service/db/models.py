@@ -156,3 +156,12 @@ class ParticipantTrialRecord(Base):
 
     participant: Mapped[ParticipantRecord] = relationship(back_populates="trials")
     trial: Mapped[TrialRecord] = relationship()
+
+
+class RevokedResearchSessionRecord(Base):
+    """A research sign-in cookie signed out before it lapsed: refused by every server process until then."""
+
+    __tablename__ = "revoked_research_sessions"
+
+    id: Mapped[str] = mapped_column(String(64), primary_key=True)
+    expires_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), index=True)

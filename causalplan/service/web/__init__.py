@@ -11,7 +11,9 @@ Served by the service's app (``main.create_app`` includes ``routers()``):
   make participant links, follow progress, see transfer rates and trials, export;
 * ``/v1/experiments`` the same for programs (bearer token), in the OpenAPI document.
 
-Templates and scripts ship in the package (``templates/``, ``static/``); no build step.
+While the app runs, a background thread purges old demo participants and draws the catalog
+objects' likely plans ahead (``upkeep``). Templates and scripts ship in the package
+(``templates/``, ``static/``); no build step.
 """
 
 from __future__ import annotations
@@ -21,9 +23,11 @@ from fastapi import APIRouter
 
 def routers() -> list[APIRouter]:
     """Return the web routers, in the order the app includes them."""
+    from causalplan.service.web import upkeep
     from causalplan.service.web.routes import assets, experiments, participant, participant_api, research
 
     return [
+        APIRouter(lifespan=upkeep.lifespan),  # no routes: the demo's limit and the background upkeep
         assets.pages,
         assets.router,
         participant.router,

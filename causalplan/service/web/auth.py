@@ -1,8 +1,10 @@
 """Research pages: the same research token as the JSON endpoints, as a bearer header or a sign-in cookie.
 
-Signing in with the token sets an HttpOnly, SameSite=Strict cookie that holds an expiry time
-and an HMAC of it keyed by the token, never the token itself: it lapses on its own, and
-changing the token signs everyone out.
+Signing in with the token sets an HttpOnly, SameSite=Strict cookie that holds an expiry time,
+a random session id and an HMAC of both keyed by the token, never the token itself: it lapses
+on its own, and changing the token signs everyone out. Signing out stores the session id as
+revoked in the database until the cookie would have lapsed, so a copy of the cookie is refused
+by every server process sharing that database.
 """
 
 from __future__ import annotations
@@ -11,11 +13,16 @@ import hashlib
 import hmac
 import secrets
 import time
+from datetime import UTC, datetime
 from typing import Annotated
 
 from fastapi import Depends, Request, Response
+from sqlalchemy import delete
+from sqlalchemy.orm import Session
 
-from causalplan.service.deps import ServicesDep, check_research_token
+from causalplan.service.crud import storage_errors
+from causalplan.service.db.models import RevokedResearchSessionRecord
+from causalplan.service.deps import ServicesDep, SessionDep, check_research_token
 from causalplan.service.errors import ResearchDisabledError
 from causalplan.service.settings import Settings
 from causalplan.service.web.errors import CrossSiteRequestError, LoginRequiredError
@@ -26,25 +33,63 @@ SESSION_SECONDS = 12 * 3600
 _SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 
 
-def _signature(token: str, expires: int) -> str:
-    return hmac.new(token.encode(), f"causalplan research pages until {expires}".encode(), hashlib.sha256).hexdigest()
+def _signature(token: str, expires: int, session_id: str) -> str:
+    message = f"causalplan research pages until {expires} for session {session_id}"
+    return hmac.new(token.encode(), message.encode(), hashlib.sha256).hexdigest()
 
 
 def session_cookie(token: str, now: float | None = None) -> str:
-    """Return the cookie value of a research session that starts now."""
+    """Return the cookie value of a new research session that starts now."""
     expires = int(now if now is not None else time.time()) + SESSION_SECONDS
-    return f"{expires}.{_signature(token, expires)}"
+    session_id = secrets.token_hex(16)
+    return f"{expires}.{session_id}.{_signature(token, expires, session_id)}"
+
+
+def cookie_session(value: str, token: str, now: float | None = None) -> tuple[str, int] | None:
+    """Return the session id and expiry time of a research cookie of ``token`` that has not lapsed, else None.
+
+    Only the signature and the time are checked here; whether the session was signed out is
+    the database's to say (``is_revoked``).
+    """
+    expires_text, _, rest = value.partition(".")
+    session_id, _, signature = rest.partition(".")
+    if not expires_text.isdigit() or len(expires_text) > 12 or len(session_id) != 32:
+        return None
+    expires = int(expires_text)
+    if expires < (now if now is not None else time.time()):
+        return None
+    if not secrets.compare_digest(signature.encode(), _signature(token, expires, session_id).encode()):
+        return None
+    return session_id, expires
 
 
 def is_valid_cookie(value: str, token: str, now: float | None = None) -> bool:
-    """Return whether ``value`` is a research session cookie of ``token`` that has not expired."""
-    expires_text, _, signature = value.partition(".")
-    if not expires_text.isdigit() or len(expires_text) > 12:
-        return False
-    expires = int(expires_text)
-    if expires < (now if now is not None else time.time()):
-        return False
-    return secrets.compare_digest(signature.encode(), _signature(token, expires).encode())
+    """Return whether ``value`` is a research session cookie of ``token`` that has not lapsed (revocation aside)."""
+    return cookie_session(value, token, now) is not None
+
+
+def is_revoked(session: Session, session_id: str) -> bool:
+    """Return whether the research session ``session_id`` was signed out."""
+    with storage_errors(session):
+        return session.get(RevokedResearchSessionRecord, session_id) is not None
+
+
+def revoke(session: Session, session_id: str, expires: int) -> None:
+    """Store the research session ``session_id`` as signed out until it would have lapsed."""
+    with storage_errors(session):
+        if session.get(RevokedResearchSessionRecord, session_id) is None:
+            session.add(RevokedResearchSessionRecord(id=session_id, expires_at=datetime.fromtimestamp(expires, UTC)))
+            session.commit()
+
+
+def forget_lapsed_revocations(session: Session, now: datetime) -> int:
+    """Delete the revocations of sessions that have lapsed anyway; return how many."""
+    with storage_errors(session):
+        result = session.execute(
+            delete(RevokedResearchSessionRecord).where(RevokedResearchSessionRecord.expires_at < now)
+        )
+        session.commit()
+    return int(getattr(result, "rowcount", 0) or 0)
 
 
 def sign_in(response: Response, request: Request, settings: Settings) -> None:
@@ -61,8 +106,13 @@ def sign_in(response: Response, request: Request, settings: Settings) -> None:
     )
 
 
-def sign_out(response: Response) -> None:
-    """Clear the session cookie on ``response``."""
+def sign_out(response: Response, request: Request, settings: Settings, session: Session) -> None:
+    """Revoke the request's session cookie (if it is one) on the server, and clear it on ``response``."""
+    cookie = request.cookies.get(COOKIE_NAME)
+    if cookie is not None and settings.research_token is not None:
+        found = cookie_session(cookie, settings.research_token.get_secret_value())
+        if found is not None:
+            revoke(session, *found)
     response.delete_cookie(COOKIE_NAME, path=COOKIE_PATH, httponly=True, samesite="strict")
 
 
@@ -73,7 +123,7 @@ def _same_origin(request: Request) -> bool:
     return origin == f"{request.url.scheme}://{request.url.netloc}"
 
 
-def require_research_page(request: Request, services: ServicesDep) -> None:
+def require_research_page(request: Request, services: ServicesDep, session: SessionDep) -> None:
     """Let a research page through with the bearer token or a valid session cookie.
 
     A bearer token counts against the client's failed attempts (``TooManyAttemptsError``); a cookie
@@ -88,7 +138,8 @@ def require_research_page(request: Request, services: ServicesDep) -> None:
     if scheme.lower() == "bearer" and check_research_token(credentials.strip(), request, services):
         return
     cookie = request.cookies.get(COOKIE_NAME)
-    if cookie is None or not is_valid_cookie(cookie, settings.research_token.get_secret_value()):
+    found = cookie_session(cookie, settings.research_token.get_secret_value()) if cookie is not None else None
+    if found is None or is_revoked(session, found[0]):
         raise LoginRequiredError("Sign in with the research token to see this page.")
     # SameSite=Strict already keeps the cookie off other sites' requests; this is the second lock.
     if request.method not in _SAFE_METHODS and not _same_origin(request):

@@ -78,6 +78,16 @@ def part_picture(services: Services, obj: AssemblyObject, part_id: str) -> tuple
     return png, "image/png"
 
 
+def forget_plan_pictures() -> None:
+    """Forget every kept picture of a plan (the next request for one draws it again)."""
+    _plan_pictures.clear()
+
+
+def is_plan_picture_kept(services: Services, obj: AssemblyObject, fit_ids: tuple[str, ...]) -> bool:
+    """Return whether the picture of ``obj`` after the plan making ``fit_ids`` is drawn and kept already."""
+    return _plan_pictures.has(_picture_key(services, obj.id, *fit_ids))
+
+
 def plan_picture(services: Services, obj: AssemblyObject, fit_ids: tuple[str, ...]) -> bytes:
     """Return the simulator's picture of the object after the plan that makes ``fit_ids`` (PNG)."""
     folders = tuple(services.settings.catalog_folders)

@@ -52,3 +52,14 @@ class CrossSiteRequestError(ServiceError):
 
     code = "cross_site_request"
     status_code = 403
+
+
+class TooManyDemoStartsError(ServiceError):
+    """One client started more demo participants this minute than the service allows."""
+
+    code = "too_many_demo_starts"
+    status_code = 429
+
+    def __init__(self, message: str, retry_after: int) -> None:
+        super().__init__(message, details={"retry_after": retry_after}, headers={"Retry-After": str(retry_after)})
+        self.retry_after = retry_after

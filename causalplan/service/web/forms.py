@@ -10,7 +10,7 @@ from urllib.parse import parse_qs
 
 from fastapi import Request
 
-from causalplan.service.limits import clean_text
+from causalplan.causal.labels import has_control_characters
 from causalplan.service.web.errors import InvalidFormError
 
 MAX_FIELDS = 2000
@@ -73,10 +73,15 @@ async def read_form(request: Request) -> Form:
         parsed = parse_qs(text, keep_blank_values=True, max_num_fields=MAX_FIELDS, errors="strict")
     except (ValueError, UnicodeDecodeError) as exc:
         raise InvalidFormError(f"The form cannot be read: {exc}.") from None
-    # Browsers send textarea line breaks as CRLF; NUL and lone surrogates cannot be stored.
-    return Form(
-        {
-            clean_text(name): [clean_text(value.replace("\r\n", "\n")) for value in values]
-            for name, values in parsed.items()
-        }
-    )
+    # The API's rule: text holding control characters (NUL among them) is refused, not changed.
+    # (A lone surrogate cannot get here: the strict decoding above refuses it.)
+    for name, values in parsed.items():
+        if has_control_characters(name) or any(has_control_characters(value) for value in values):
+            shown = "".join(char for char in name if char.isprintable())[:100]
+            raise InvalidFormError(
+                f"The field '{shown}' contains invisible control characters (such as NUL); "
+                "retype it using ordinary letters, digits and punctuation.",
+                details={"field": shown},
+            )
+    # Browsers send textarea line breaks as CRLF.
+    return Form({name: [value.replace("\r\n", "\n") for value in values] for name, values in parsed.items()})

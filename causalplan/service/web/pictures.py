@@ -1,9 +1,9 @@
 """Pictures for the pages, drawn by the simulator: each part of an object, and an object after a plan.
 
 The jobs here run in a planner worker process (PyBullet never loads in the web server);
-``PictureCache`` keeps what they drew in the server, since one picture costs ~0.2 s and the
-same pictures are asked for again and again. When the simulator cannot draw (busy, missing),
-``drawing`` gives a plain picture with the part's name instead.
+``PictureCache`` keeps what they drew in the server, since a picture runs the simulator and
+the same pictures are asked for again and again. When the simulator cannot draw (busy,
+missing), ``drawing`` gives a plain picture with the part's name instead.
 """
 
 from __future__ import annotations
@@ -13,7 +13,8 @@ from collections.abc import Callable
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-from causalplan.service.cache import LruCache
+from cachetools import LRUCache
+
 from causalplan.service.worker import worker_catalog
 
 PART_PICTURE_SIZE = (320, 240)
@@ -64,12 +65,22 @@ def drawing(name: str, width: int = PART_PICTURE_SIZE[0], height: int = PART_PIC
 
 
 class PictureCache:
-    """A bounded map of drawn pictures (the service's ``LruCache``); one drawing per key at a time (others wait)."""
+    """The ``size`` pictures last used (``cachetools.LRUCache``); one drawing per key at a time (others wait)."""
 
     def __init__(self, size: int) -> None:
-        self._pictures: LruCache[bytes] = LruCache(size)
+        self._pictures: LRUCache[str, bytes] = LRUCache(size)
         self._lock = threading.Lock()
         self._drawing: dict[str, threading.Lock] = {}
+
+    def clear(self) -> None:
+        """Forget every kept picture (the next request for one draws it again)."""
+        with self._lock:
+            self._pictures.clear()
+
+    def has(self, key: str) -> bool:
+        """Return whether the picture of ``key`` is kept (without making it the last used)."""
+        with self._lock:
+            return key in self._pictures
 
     def get(self, key: str, draw: Callable[[], dict[str, bytes]]) -> bytes | None:
         """Return the picture of ``key``; ``draw`` makes it (and maybe others) when it is not kept yet.
@@ -77,19 +88,21 @@ class PictureCache:
         Returns None when ``draw`` did not make ``key``. Errors of ``draw`` go to the caller,
         and nothing is kept, so the next request tries again.
         """
-        picture = self._pictures.get(key)
+        with self._lock:  # cachetools' caches are not thread-safe, and a read reorders an LRU
+            picture = self._pictures.get(key)
         if picture is not None:
             return picture
         with self._lock:
             drawing_lock = self._drawing.setdefault(key, threading.Lock())
         with drawing_lock:
-            picture = self._pictures.get(key)
+            with self._lock:
+                picture = self._pictures.get(key)
             if picture is not None:  # drawn while this request waited
                 return picture
             try:
                 drawn = draw()
-                for new_key, new_picture in drawn.items():
-                    self._pictures.put(new_key, new_picture, len(new_picture))
+                with self._lock:
+                    self._pictures.update(drawn)
             finally:
                 with self._lock:
                     self._drawing.pop(key, None)

@@ -11,6 +11,7 @@ Everything here takes and returns values; storing them is ``store``'s job.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
@@ -234,6 +235,22 @@ def check_mapping(document: dict[str, Any], catalog: Catalog, settings: Settings
             )
         )
     return MappingCheck(loaded.mapping, report, document)
+
+
+UNUSABLE_LABEL_CODES = ("keyword_in_label",)
+"""Step-1 warnings a participant sees before going on: a label no rule will ever be able to name."""
+
+
+def unusable_label_notes(report: Report) -> str:
+    """Return a fingerprint of the report's unusable-label warnings ('' when there are none).
+
+    The step-1 page shows them once and sends the fingerprint back with the form: the same
+    labels sent again go on, changed ones that still hold a keyword are shown again.
+    """
+    messages = [d.message for d in report.warnings if d.code in UNUSABLE_LABEL_CODES]
+    if not messages:
+        return ""
+    return hashlib.sha256("\n".join(messages).encode("utf-8", "surrogatepass")).hexdigest()[:16]
 
 
 def check_functions(obj: AssemblyObject, texts: Mapping[str, str], catalog: Catalog, settings: Settings) -> Report:

@@ -7,9 +7,10 @@ from importlib import resources
 
 from fastapi import APIRouter, Request, Response
 
-from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep
+from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, client_address
 from causalplan.service.errors import NotFoundError
 from causalplan.service.web import store
+from causalplan.service.web.demo import DemoStarts
 from causalplan.service.web.design import Condition, Design
 from causalplan.service.web.drawings import SVG_HEADERS, part_picture
 from causalplan.service.web.templating import PageRoute, redirect, render
@@ -31,8 +32,10 @@ def start(request: Request, catalog: CatalogDep) -> Response:
 
 
 @pages.post("/try")
-def try_it(session: SessionDep, catalog: CatalogDep) -> Response:
-    """Make a participant of the demo experiment and go to their first page."""
+def try_it(request: Request, session: SessionDep, catalog: CatalogDep) -> Response:
+    """Make a participant of the demo experiment and go to their first page (a few a minute per client)."""
+    demo_starts: DemoStarts = request.app.state.demo_starts
+    demo_starts.admit(client_address(request))
     for object_id in ("desk_lamp", "flashlight"):
         catalog.get(object_id)
     experiment = store.demo_experiment(session, DEMO_DESIGN)

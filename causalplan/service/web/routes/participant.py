@@ -30,6 +30,7 @@ from causalplan.service.web.study import (
     mapping_document,
     rule_lines,
     rules_from_text,
+    unusable_label_notes,
 )
 from causalplan.service.web.templating import PageRoute, redirect, render
 from causalplan.service.web.tutorial import (
@@ -171,7 +172,12 @@ def _used_labels(journey: Journey) -> list[str]:
 
 
 def _step1_page(
-    request: Request, journey: Journey, index: int, report: Report | None = None, status_code: int = 200
+    request: Request,
+    journey: Journey,
+    index: int,
+    report: Report | None = None,
+    status_code: int = 200,
+    noted: str = "",
 ) -> Response:
     obj = journey.training[index]
     return render(
@@ -187,6 +193,7 @@ def _step1_page(
         used_labels=_used_labels(journey),
         problems=[d.as_dict() for d in report.diagnostics] if report is not None else [],
         may_go_back=index > 0,
+        noted=noted,
     )
 
 
@@ -216,6 +223,10 @@ async def finish_step1(
     if not report.is_valid:
         store.save(session, journey.participant)
         return _step1_page(request, journey, index, report, status_code=422)
+    notes = unusable_label_notes(report)
+    if notes and form.text("noted", "", max_length=64) != notes:  # shown once; sent again as it is, it goes on
+        store.save(session, journey.participant)
+        return _step1_page(request, journey, index, report, noted=notes)
     journey.finish_functions(index)
     store.save(session, journey.participant)
     code = journey.participant.code

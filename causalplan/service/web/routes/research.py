@@ -80,9 +80,9 @@ async def login(request: Request, services: ServicesDep) -> Response:
 
 
 @router.post("/logout")
-def logout(_: ResearchPageDep) -> Response:
+def logout(request: Request, _: ResearchPageDep, settings: SettingsDep, session: SessionDep) -> Response:
     response = redirect("/research/login")
-    sign_out(response)
+    sign_out(response, request, settings, session)
     return response
 
 

@@ -224,6 +224,36 @@
 
   // -- the robot's plan ----------------------------------------------------------------------------------
 
+  // The plan's steps show at once; its picture (the simulator's, maybe still being drawn) comes
+  // on its own, with a progress bar until it has arrived.
+  function planPicture(plan) {
+    const frame = document.createElement("figure");
+    frame.className = "plan-picture-frame";
+    const waiting = document.createElement("p");
+    waiting.className = "small picture-waiting";
+    waiting.setAttribute("role", "status");
+    const bar = document.createElement("progress");
+    bar.setAttribute("aria-label", "Drawing the picture");
+    waiting.appendChild(bar);
+    waiting.appendChild(document.createTextNode(" The simulator is drawing the " + plan.name + "…"));
+    frame.appendChild(waiting);
+    const picture = document.createElement("img");
+    picture.alt = "The " + plan.name + " after the robot's plan, in the simulator";
+    picture.width = 480;
+    picture.height = 360;
+    picture.hidden = true;
+    picture.addEventListener("load", function () {
+      waiting.remove();
+      picture.hidden = false;
+    });
+    picture.addEventListener("error", function () {
+      waiting.textContent = "The picture could not be drawn now; the steps above are the robot's plan.";
+    });
+    frame.appendChild(picture);
+    picture.src = plan.picture_url;
+    return frame;
+  }
+
   const planButton = document.getElementById("show-plan");
   if (planButton && rules) {
     const section = document.getElementById("plan");
@@ -262,14 +292,7 @@
             warning.textContent = plan.message;
             block.appendChild(warning);
           }
-          if (plan.picture_url) {
-            const picture = document.createElement("img");
-            picture.src = plan.picture_url;
-            picture.alt = "The " + plan.name + " after the robot's plan, in the simulator";
-            picture.width = 480;
-            picture.height = 360;
-            block.appendChild(picture);
-          }
+          if (plan.picture_url) block.appendChild(planPicture(plan));
           body.appendChild(block);
         });
         const advice = document.createElement("p");
