@@ -38,13 +38,13 @@ if TYPE_CHECKING:
 def serve(host: str, port: int, workers: int | None, database_url: str | None, access_log: bool | None) -> None:
     """Run the HTTP planning service: JSON API under /v1, OpenAPI docs at /docs, /health.
 
-    Other settings come from CAUSALPLAN_* environment variables (see causalplan/service/settings.py).
+    Other settings come from CAUSALPLAN_* environment variables (see causalplan/settings.py).
     The database is migrated to the newest schema on start. Stop with Ctrl-C.
     """
     from pydantic import ValidationError
 
     from causalplan.errors import CausalPlanError
-    from causalplan.service.settings import Settings
+    from causalplan.settings import Settings
 
     overrides: dict[str, object] = {}
     if workers is not None:

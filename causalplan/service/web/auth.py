@@ -17,8 +17,8 @@ from fastapi import Depends, Request, Response
 
 from causalplan.service.deps import ServicesDep, check_research_token
 from causalplan.service.errors import ResearchDisabledError
-from causalplan.service.settings import Settings
 from causalplan.service.web.errors import CrossSiteRequestError, LoginRequiredError
+from causalplan.settings import Settings
 
 COOKIE_NAME = "causalplan_research"
 COOKIE_PATH = "/research"

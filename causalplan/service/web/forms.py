@@ -10,7 +10,7 @@ from urllib.parse import parse_qs
 
 from fastapi import Request
 
-from causalplan.service.limits import clean_text
+from causalplan.service.db.crud import clean_text
 from causalplan.service.web.errors import InvalidFormError
 
 MAX_FIELDS = 2000

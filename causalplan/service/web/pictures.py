@@ -13,8 +13,9 @@ from collections.abc import Callable
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-from causalplan.service.cache import LruCache
-from causalplan.service.worker import worker_catalog
+from cachetools import LRUCache
+
+from causalplan.service.pool.jobs import worker_catalog
 
 PART_PICTURE_SIZE = (320, 240)
 PLAN_PICTURE_SIZE = (480, 360)
@@ -64,10 +65,10 @@ def drawing(name: str, width: int = PART_PICTURE_SIZE[0], height: int = PART_PIC
 
 
 class PictureCache:
-    """A bounded map of drawn pictures (the service's ``LruCache``); one drawing per key at a time (others wait)."""
+    """A bounded map of drawn pictures (``cachetools.LRUCache``); one drawing per key at a time (others wait)."""
 
     def __init__(self, size: int) -> None:
-        self._pictures: LruCache[bytes] = LruCache(size)
+        self._pictures: LRUCache[str, bytes] = LRUCache(max(size, 1))
         self._lock = threading.Lock()
         self._drawing: dict[str, threading.Lock] = {}
 
@@ -89,7 +90,7 @@ class PictureCache:
             try:
                 drawn = draw()
                 for new_key, new_picture in drawn.items():
-                    self._pictures.put(new_key, new_picture, len(new_picture))
+                    self._pictures[new_key] = new_picture
             finally:
                 with self._lock:
                     self._drawing.pop(key, None)
