@@ -274,10 +274,7 @@ async def handle_http_error(request: Request, exc: Exception) -> Response:
             message = f"There is no such route; did you mean {stripped} (without the trailing slash)?"
     if exc.status_code == 405:
         # Starlette names the methods of the first route with this path; several routes may share it.
-        methods = {
-            method for route in _routes_for(request.app.routes, path) for method in getattr(route, "methods", ())
-        }
-        headers["Allow"] = ", ".join(sorted(methods))
+        headers["Allow"] = ", ".join(sorted(_methods_for(request.app.routes, path)))
         message = f"This route does not accept {request.method}; it accepts {headers['Allow']}."
     code = _HTTP_CODES.get(exc.status_code, "http_error")
     return _error_response(code, message, exc.status_code, headers=headers)
