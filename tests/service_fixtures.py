@@ -29,7 +29,7 @@ from sqlalchemy.engine import make_url
 
 from causalplan.service.deps import Services
 from causalplan.service.main import create_app
-from causalplan.service.settings import Settings
+from causalplan.settings import Settings
 from tests.conftest import EXAMPLES
 
 POSTGRES_URL_VARIABLE = "CAUSALPLAN_TEST_POSTGRES_URL"

@@ -14,7 +14,7 @@ from pydantic import ValidationError
 
 from causalplan.service.attempts import FailedAttempts
 from causalplan.service.errors import TooManyAttemptsError
-from causalplan.service.settings import Settings
+from causalplan.settings import Settings
 from tests.service_fixtures import AUTH, RESEARCH_TOKEN, error_of, running_client, services_of, settings_for, sqlite_url
 
 MAX_FAILURES = 3

@@ -8,7 +8,7 @@ from causalplan.causal.documents import SourceMap
 from causalplan.inputs import model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.service.responses import csv_bytes
-from causalplan.service.settings import Settings
+from causalplan.settings import Settings
 from causalplan.service.web.auth import is_valid_cookie, session_cookie
 from causalplan.service.web.design import read_design
 from causalplan.service.web.diagram import diagram_svg

@@ -7,6 +7,7 @@ are plain values (models, mappings, JSON-ready dicts).
 from __future__ import annotations
 
 import importlib
+import re
 from contextlib import suppress
 from functools import cache
 from importlib import metadata
@@ -75,6 +76,14 @@ def _version(distribution: str) -> str | None:
         return None
 
 
+_PATH = re.compile(r"(?:/[^/\s'\"]+)+/([^/\s'\"]+)")
+
+
+def without_paths(text: str | None) -> str | None:
+    """Return ``text`` with each absolute path cut to its last part (/health says what, not where on disk)."""
+    return None if text is None else _PATH.sub(r"\1", text)
+
+
 def probe_job() -> dict[str, object]:
     """Return what this worker can run: the planner registry, Fast Downward, failed optional imports.
 
@@ -88,10 +97,10 @@ def probe_job() -> dict[str, object]:
         try:
             __import__(module)
         except Exception as exc:  # noqa: BLE001 - any import failure is what /health reports
-            failed[module] = f"{exc.__class__.__name__}: {exc}"
+            failed[module] = f"{exc.__class__.__name__}: {without_paths(str(exc))}"
     # The registry's own availability check imports unified-planning's engines, which is why
     # the probe runs in a throwaway process.
-    problems = pipeline.planner_availability()
+    problems = {name: without_paths(problem) for name, problem in pipeline.planner_availability().items()}
     fd_problem = problems.get(FAST_DOWNWARD, f"the planner registry has no '{FAST_DOWNWARD}'")
     return {
         "planners": [
