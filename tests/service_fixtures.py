@@ -157,20 +157,6 @@ def sqlite_write_lock_for_a_moment(url: str, seconds: float = 0.3) -> Iterator[N
         holder.join()
 
 
-class ThreadHops:
-    """Counts a route module's hops to a worker thread (``run_in_threadpool``); it runs on the event loop otherwise."""
-
-    def __init__(self, monkeypatch: pytest.MonkeyPatch, route_module: Any) -> None:
-        self.count = 0
-        real = route_module.run_in_threadpool
-
-        async def counted(*args: Any, **kwargs: Any) -> Any:
-            self.count += 1
-            return await real(*args, **kwargs)
-
-        monkeypatch.setattr(route_module, "run_in_threadpool", counted)
-
-
 def services_of(client: TestClient) -> Services:
     """Return the running app's services (pool, cache, engine)."""
     services: Services = client.app.state.services  # type: ignore[attr-defined]

@@ -201,8 +201,9 @@ def test_a_kept_object_is_not_parsed_again_for_its_first_model(
 
 
 def test_a_service_worker_keeps_the_catalogs_objects_when_it_starts(catalog: Catalog) -> None:
-    from causalplan.planners import search_processes
     from causalplan.service.worker import warm_up
+
+    from causalplan.planners import search_processes
 
     try:
         warm_up()

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from causalplan.service.cache import LruCache, ResultCache, document_key
 from fastapi.testclient import TestClient
 
 from causalplan.causal.documents import SourceMap
@@ -16,7 +17,6 @@ from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import build_task
 from causalplan.planners.pipeline import plan_task
-from causalplan.service.cache import LruCache, ResultCache, document_key
 from tests.service_fixtures import (
     AUTH,
     DESK_LAMP,

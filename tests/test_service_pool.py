@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import signal
 import subprocess
 import sys
 import tempfile
-import os
-import signal
 import threading
 import time
 from collections.abc import Iterator

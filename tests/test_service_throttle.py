@@ -9,10 +9,10 @@ from pathlib import Path
 
 import httpx
 import pytest
+from causalplan.service.attempts import FailedAttempts
 from fastapi.testclient import TestClient
 from pydantic import ValidationError
 
-from causalplan.service.attempts import FailedAttempts
 from causalplan.service.errors import TooManyAttemptsError
 from causalplan.settings import Settings
 from tests.service_fixtures import AUTH, RESEARCH_TOKEN, error_of, running_client, services_of, settings_for, sqlite_url
