@@ -200,6 +200,7 @@ def test_canonical_keys_ignore_layout_but_not_meaning(catalog: Catalog) -> None:
     base = model(DESK_LAMP)
     layout = model({**DESK_LAMP, "rules": [r.replace(" AND ", " and  ") for r in reversed(DESK_LAMP["rules"])]})
     other = model({**DESK_LAMP, "goal": "Light"})
+
     def request_key(kind: str, model: Any, planner: str, limit: float, catalog: str) -> str:
         return answer_key(kind, model_text(model), mapping_text(None), planner, limit, catalog)
 

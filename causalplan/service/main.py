@@ -12,8 +12,8 @@ import json
 import logging
 import threading
 from collections.abc import AsyncIterator
-from contextlib import asynccontextmanager
-from typing import Any
+from contextlib import asynccontextmanager, suppress
+from typing import TYPE_CHECKING, Any
 
 import anyio.to_thread
 from fastapi import FastAPI, Request
@@ -40,6 +40,9 @@ from causalplan.service.schemas.common import error_responses
 from causalplan.service.throttle import FailedAttempts
 from causalplan.service.web import routers as web_routers
 from causalplan.settings import Settings
+
+if TYPE_CHECKING:
+    import uvicorn
 
 logger = logging.getLogger(__name__)
 
@@ -328,15 +331,15 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     return app
 
 
-def serve(settings: Settings, host: str, port: int, log_level: str = "info") -> None:
-    """Run the service with uvicorn until interrupted (what ``causalplan serve`` does).
+def uvicorn_config(settings: Settings, host: str, port: int, log_level: str = "info") -> uvicorn.Config:
+    """Return how ``serve`` runs the app with uvicorn.
 
     uvicorn's own reading of X-Forwarded-For is off: ``deps.client_address`` trusts it only
     from the proxies the settings name.
     """
     import uvicorn
 
-    uvicorn.run(
+    return uvicorn.Config(
         create_app(settings),
         host=host,
         port=port,
@@ -345,3 +348,11 @@ def serve(settings: Settings, host: str, port: int, log_level: str = "info") -> 
         proxy_headers=False,
         timeout_graceful_shutdown=10,
     )
+
+
+def serve(settings: Settings, host: str, port: int, log_level: str = "info") -> None:
+    """Run the service with uvicorn until interrupted (what ``causalplan serve`` does)."""
+    import uvicorn
+
+    with suppress(KeyboardInterrupt):  # uvicorn raises Ctrl-C again once it has shut down (as uvicorn.run does)
+        uvicorn.Server(uvicorn_config(settings, host, port, log_level)).run()

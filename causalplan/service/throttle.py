@@ -66,7 +66,7 @@ class FailedAttempts:
             failures = self._clients.get(client)
             wait = self._wait(failures, self.max_failures, now) if failures is not None else None
             if wait is not None:
-                raise TooManyAttemptsError(f"Too many wrong tokens from this client: try again in {wait} s.", wait)
+                raise TooManyAttemptsError(f"Too many wrong tokens from this address: try again in {wait} s.", wait)
             wait = self._wait(self._total, self.max_total, now)
             if wait is not None:
                 raise TooManyAttemptsError(f"Too many wrong tokens lately: try again in {wait} s.", wait)
