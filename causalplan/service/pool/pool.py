@@ -185,6 +185,8 @@ class PlannerPool:
             except _NotTaken:
                 logger.warning("planner worker %s ended before taking its job; replacing it", worker.pid)
                 self._give_back(worker, None, replace=True)
+                if self._closed:  # closing: no replacement will come
+                    break
                 continue
             except TimeoutError:
                 self._give_back(worker, None, replace=True)
@@ -206,7 +208,7 @@ class PlannerPool:
             if failure is not None:
                 raise failure
             return _unwrap(result)
-        raise WorkerCrashedError("Two planner workers in a row ended before taking this request; try again.")
+        raise WorkerCrashedError("No planner worker could take this request (they ended or are closing); try again.")
 
     @staticmethod
     def _call(

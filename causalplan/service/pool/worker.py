@@ -22,9 +22,9 @@ from typing import Any
 from causalplan.errors import CausalPlanError
 from causalplan.service.errors import PlannerOutOfMemoryError
 from causalplan.service.pool.jobs import warm_up
+from causalplan.service.pool.pool import STARTED
 
 Job = tuple[Callable[..., Any], tuple[Any, ...]]
-STARTED = "started"  # as ``pool.STARTED``; not imported from there, so a worker does not import the pool
 
 
 def main() -> None:
