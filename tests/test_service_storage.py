@@ -244,3 +244,16 @@ def test_a_database_that_cannot_be_reached_at_start_is_a_clear_error() -> None:
         upgrade(engine)
     with pytest.raises(StorageError, match="not valid"):
         create_database_engine("not a url")
+
+
+def test_health_says_degraded_when_the_database_takes_no_writes(postgres_admin_url: str) -> None:
+    import psycopg
+
+    with postgres_database(postgres_admin_url) as url, running_client(settings_for(url, planning_workers=1)) as client:
+        assert client.get("/health").json()["database"]["problem"] is None
+        admin = make_url(postgres_admin_url).set(drivername="postgresql").render_as_string(hide_password=False)
+        with psycopg.connect(admin, autocommit=True) as connection:
+            connection.execute(f'ALTER DATABASE "{make_url(url).database}" SET default_transaction_read_only = on')
+        services_of(client).engine.dispose()  # new connections get the new default
+        health = client.get("/health").json()
+        assert health["status"] == "degraded" and health["database"]["problem"] == "the database server is read-only"
