@@ -37,7 +37,7 @@ import uvicorn
 from playwright.sync_api import Page, sync_playwright
 
 from causalplan.service.main import create_app
-from causalplan.service.settings import Settings
+from causalplan.settings import Settings
 from causalplan.service.web.drawings import forget_plan_pictures
 
 CHROMIUM = "/usr/bin/chromium"

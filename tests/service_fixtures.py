@@ -28,8 +28,8 @@ from fastapi.testclient import TestClient
 from sqlalchemy.engine import make_url
 
 from causalplan.service.deps import Services
-from causalplan.service.main import create_app
-from causalplan.service.settings import Settings
+from causalplan.service.main import create_app, uvicorn_config
+from causalplan.settings import Settings
 from tests.conftest import EXAMPLES
 
 POSTGRES_URL_VARIABLE = "CAUSALPLAN_TEST_POSTGRES_URL"
@@ -158,20 +158,6 @@ def sqlite_write_lock_for_a_moment(url: str, seconds: float = 0.3) -> Iterator[N
         holder.join()
 
 
-class ThreadHops:
-    """Counts a route module's hops to a worker thread (``run_in_threadpool``); it runs on the event loop otherwise."""
-
-    def __init__(self, monkeypatch: pytest.MonkeyPatch, route_module: Any) -> None:
-        self.count = 0
-        real = route_module.run_in_threadpool
-
-        async def counted(*args: Any, **kwargs: Any) -> Any:
-            self.count += 1
-            return await real(*args, **kwargs)
-
-        monkeypatch.setattr(route_module, "run_in_threadpool", counted)
-
-
 def services_of(client: TestClient) -> Services:
     """Return the running app's services (pool, cache, engine)."""
     services: Services = client.app.state.services  # type: ignore[attr-defined]
@@ -282,18 +268,12 @@ def storage_client(request: pytest.FixtureRequest, tmp_path_factory: pytest.Temp
         yield client
 
 
-@pytest.fixture(scope="module")
-def live_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
-    """A real uvicorn server (in a thread, on a free loopback port) on SQLite; yields its base URL."""
-    import threading
-
+@contextmanager
+def serving(settings: Settings) -> Iterator[str]:
+    """Run the app as ``causalplan serve`` does (``uvicorn_config``), in a thread on a free port; yield its URL."""
     import uvicorn
 
-    url = sqlite_url(tmp_path_factory.mktemp("db"))
-    settings = settings_for(url, default_time_limit=5.0, max_time_limit=10.0)
-    server = uvicorn.Server(
-        uvicorn.Config(create_app(settings), host="127.0.0.1", port=free_port(), log_level="warning")
-    )
+    server = uvicorn.Server(uvicorn_config(settings, "127.0.0.1", free_port(), log_level="warning"))
     thread = threading.Thread(target=server.run, name="uvicorn", daemon=True)
     thread.start()
     wait_until(lambda: server.started or not thread.is_alive(), seconds=60)
@@ -303,6 +283,14 @@ def live_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     finally:
         server.should_exit = True
         thread.join(30)
+
+
+@pytest.fixture(scope="module")
+def live_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """A real uvicorn server on SQLite, run as ``causalplan serve`` runs it; yields its base URL."""
+    url = sqlite_url(tmp_path_factory.mktemp("db"))
+    with serving(settings_for(url, default_time_limit=5.0, max_time_limit=10.0)) as base:
+        yield base
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ SLOW_JOB_SECONDS = 2.0
 
 def sleep_then_plan(*args: Any) -> dict[str, object]:
     """Sleep for ``SLOW_JOB_SECONDS``, then plan as usual (a slow solve)."""
-    from causalplan.service.worker import plan_job
+    from causalplan.service.pool.jobs import plan_job
 
     time.sleep(SLOW_JOB_SECONDS)
     return plan_job(*args)
@@ -41,22 +41,11 @@ def timed_sleep(seconds: float) -> tuple[float, float, int]:
     return began, time.monotonic(), os.getpid()
 
 
-def temp_folders() -> tuple[str, list[str]]:
-    """Return the worker's temp folder and the search folders in it, once its prestarted search is there.
-
-    The worker prestarts its search on a background thread while it starts, so this waits
-    (up to 20 s) for it rather than racing it.
-    """
+def temp_folders() -> tuple[str, str]:
+    """Make a folder in the worker's temp folder, as a search does; return both."""
     import tempfile
-    from pathlib import Path
 
-    from causalplan.planners import search_processes
-
-    deadline = time.monotonic() + 20
-    while not search_processes.idle_pids() and time.monotonic() < deadline:
-        time.sleep(0.01)
-    folder = tempfile.gettempdir()
-    return folder, sorted(str(path) for path in Path(folder).glob("causalplan-fd-*"))
+    return tempfile.gettempdir(), tempfile.mkdtemp(prefix="causalplan-fd-")
 
 
 def start_a_session_then_hang(pid_file: str) -> dict[str, object]:

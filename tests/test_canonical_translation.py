@@ -198,15 +198,3 @@ def test_a_kept_object_is_not_parsed_again_for_its_first_model(
     compiled = canonical_pddl(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
     assert compiled is not None
     assert _canonical_sas(compiled.domain, compiled.problem) is not None
-
-
-def test_a_service_worker_keeps_the_catalogs_objects_when_it_starts(catalog: Catalog) -> None:
-    from causalplan.planners import search_processes
-    from causalplan.service.worker import warm_up
-
-    try:
-        warm_up()
-        assert len(canonical_translation._halves) == len(catalog.objects)
-        assert all(half is not None for half in canonical_translation._halves.values())
-    finally:
-        search_processes.stop_idle()  # warm_up also starts a search process ahead

@@ -9,13 +9,9 @@ import pytest
 from fastapi.testclient import TestClient
 
 from causalplan.planners import pipeline
-from causalplan.service import submissions
-from causalplan.service.repeats import RepeatedPlans
-from causalplan.service.routes import plans
 from tests.service_fixtures import (
     DESK_LAMP,
     FLASHLIGHT_MAPPING,
-    ThreadHops,
     error_of,
     services_of,
     sqlite_write_lock_for_a_moment,
@@ -82,38 +78,25 @@ def test_an_identical_request_is_answered_from_the_cache(client: TestClient) -> 
 
 
 @pytest.mark.parametrize("mapping", [None, FLASHLIGHT_MAPPING], ids=["own object", "mapping"])
-def test_a_repeated_request_is_answered_on_the_event_loop_as_a_thread_answers_it(
-    client: TestClient, monkeypatch: pytest.MonkeyPatch, mapping: dict[str, Any] | None
+def test_a_repeated_request_gets_the_same_answer_and_a_record_of_its_own(
+    client: TestClient, mapping: dict[str, Any] | None
 ) -> None:
-    hops = ThreadHops(monkeypatch, plans)
     request = {"model": with_unique_effect(DESK_LAMP), "include_pddl": True} | ({"mapping": mapping} if mapping else {})
-    first = client.post("/v1/plans", json=request, headers={"X-Participant-Id": "loop"}).json()
-    assert first["cached"] is False and hops.count == 1  # a new document: read and solved in a thread
-    again = client.post("/v1/plans", json=request, headers={"X-Participant-Id": "loop"}).json()
-    assert again["cached"] is True and hops.count == 1  # read before, answer kept: no hop
-    with monkeypatch.context() as without:
-        without.setattr(submissions, "kept_answer", lambda *_: None)
-        without.setattr(services_of(client), "repeats", RepeatedPlans(0))  # nor answered before the route
-        threaded = client.post("/v1/plans", json=request, headers={"X-Participant-Id": "loop"}).json()
-    assert hops.count == 2
-    assert len({first["model_id"], again["model_id"], threaded["model_id"]}) == 3  # every submission is kept
-    assert {**again, "model_id": None} == {**threaded, "model_id": None}
+    first = client.post("/v1/plans", json=request, headers={"X-Participant-Id": "again"}).json()
+    again = client.post("/v1/plans", json=request, headers={"X-Participant-Id": "again"}).json()
+    assert first["cached"] is False and again["cached"] is True
+    assert first["model_id"] != again["model_id"]  # every submission is kept
     assert {**again, "model_id": None, "cached": False} == {**first, "model_id": None}
     stored = client.get(f"/v1/models/{again['model_id']}").json()
-    assert stored["participant_id"] == "loop" and stored["model"] == request["model"]
+    assert stored["participant_id"] == "again" and stored["model"] == request["model"]
 
 
-def test_a_repeated_request_goes_to_a_thread_while_the_database_is_locked(
-    client: TestClient, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """The event loop never waits for SQLite's write lock: the request waits for it in a thread."""
-    hops = ThreadHops(monkeypatch, plans)
+def test_a_repeated_request_waits_for_a_locked_database_and_is_stored(client: TestClient) -> None:
     model = with_unique_effect(DESK_LAMP)
     assert client.post("/v1/plans", json={"model": model}).json()["cached"] is False
     with sqlite_write_lock_for_a_moment(str(services_of(client).engine.url)):
         response = client.post("/v1/plans", json={"model": model})
     assert response.status_code == 200 and response.json()["cached"] is True
-    assert hops.count == 2  # the first request's, and this one's once the loop could not store it at once
     assert client.get(f"/v1/models/{response.json()['model_id']}").status_code == 200
 
 
@@ -225,3 +208,54 @@ def test_a_planner_timeout_is_an_answer_and_is_not_cached(client: TestClient) ->
     again = client.post("/v1/plans", json={"model": model, "planner": "fd"}).json()
     assert again["status"] == "solved" and again["cached"] is False
     assert services_of(client).cache.stats()["entries"] >= 1
+
+
+def test_the_exact_mdp_declining_a_tiny_time_limit_is_an_answer(client: TestClient) -> None:
+    # It was a 500: 'too_large' was not among PlanOut's statuses.
+    body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp", "time_limit": 1e-9}
+    response = client.post("/v1/plans", json=body)
+    assert response.status_code == 200, response.text
+    assert response.json()["status"] == "too_large" and response.json()["planner_used"] == "mdp"
+
+
+def _post_raw(client: TestClient, body: bytes) -> Any:
+    return client.post("/v1/plans", content=body, headers={"Content-Type": "application/json"})
+
+
+def test_a_key_twice_in_a_body_is_refused_with_the_key_and_its_line(client: TestClient) -> None:
+    body = b'{"model": {\n  "object": "desk_lamp",\n  "object": "candle",\n  "functions": {}, "rules": []}}'
+    error = error_of(_post_raw(client, body), 422)
+    assert error["code"] == "invalid_json"
+    assert '"object"' in error["message"] and "twice" in error["message"]
+    assert error["details"]["line"] == 3 and error["details"]["column"] == 3
+
+
+@pytest.mark.parametrize(
+    ("body", "words"),
+    [
+        (b"[" * 100_000, "nested more than 16 levels"),
+        (b'{"time_limit": ' + b"9" * 5000 + b"}", "5000 digits"),
+        (b'{"time_limit": NaN}', "NaN is not a JSON value"),
+        (b'{"model": "\xff"}', "not UTF-8"),
+        (b'{"model" 1}', "expecting ':'"),
+    ],
+    ids=["deep", "long integer", "NaN", "not UTF-8", "malformed"],
+)
+def test_a_body_that_is_not_readable_json_says_what_is_wrong(client: TestClient, body: bytes, words: str) -> None:
+    error = error_of(_post_raw(client, body), 422)
+    assert error["code"] == "invalid_json"
+    assert words in error["message"], error["message"]
+    assert "UTF-8" not in error["message"] or words == "not UTF-8"
+
+
+def test_a_wrong_method_names_every_method_of_the_path(client: TestClient) -> None:
+    response = client.put("/v1/experiments")
+    assert error_of(response, 405)["code"] == "method_not_allowed"
+    assert response.headers["Allow"] == "GET, POST"
+
+
+def test_a_trailing_slash_on_an_api_path_is_a_404_that_names_the_path(client: TestClient) -> None:
+    response = client.get("/v1/objects/", follow_redirects=False)
+    error = error_of(response, 404)
+    assert "/v1/objects" in error["message"]
+    assert client.get("/v1/objects").status_code == 200

@@ -3,16 +3,29 @@
 from __future__ import annotations
 
 import os
+import re
 import signal
+import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
 import httpx
 import pytest
+from fastapi.testclient import TestClient
 
-from tests.service_fixtures import DESK_LAMP, FLASHLIGHT_MAPPING, free_port, is_running
+from causalplan.service.main import create_app
+from tests.service_fixtures import (
+    DESK_LAMP,
+    FLASHLIGHT_MAPPING,
+    free_port,
+    is_running,
+    settings_for,
+    sqlite_url,
+    wait_until,
+)
 
 START_SECONDS = 60.0
 
@@ -109,3 +122,56 @@ def test_bad_settings_are_a_clear_error_not_a_traceback(tmp_path: Path) -> None:
     )
     assert result.returncode == 2
     assert "error[invalid_settings]" in result.stderr and "max_time_limit" in result.stderr
+
+
+def _exchange(connection: socket.socket, request: bytes) -> bytes:
+    """Send one HTTP/1.1 request on a kept-alive ``connection``; return the whole response it answers."""
+    connection.sendall(request)
+    received = b""
+    while b"\r\n\r\n" not in received:
+        chunk = connection.recv(65536)
+        assert chunk, "the server closed the connection"
+        received += chunk
+    head, _, body = received.partition(b"\r\n\r\n")
+    length = int(next(line for line in head.split(b"\r\n") if line.lower().startswith(b"content-length:")).split()[1])
+    while len(body) < length:
+        chunk = connection.recv(65536)
+        assert chunk, "the server closed the connection"
+        body += chunk
+    return head + b"\r\n\r\n" + body
+
+
+def test_a_bug_is_a_500_and_the_kept_alive_connection_still_serves(tmp_path: Path) -> None:
+    import uvicorn
+
+    app = create_app(settings_for(sqlite_url(tmp_path), planning_workers=1))
+
+    def broken() -> None:
+        raise RuntimeError("a bug in a route")
+
+    app.add_api_route("/broken", broken)
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=free_port(), log_level="critical"))
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    wait_until(lambda: server.started or not thread.is_alive(), seconds=60)
+    try:
+        with socket.create_connection(("127.0.0.1", server.config.port), timeout=30) as connection:
+            request = b"GET %s HTTP/1.1\r\nHost: test\r\n\r\n"
+            first = _exchange(connection, request % b"/broken")
+            assert first.startswith(b"HTTP/1.1 500") and b'"internal_error"' in first and b"a bug" not in first
+            second = _exchange(connection, request % b"/v1/objects")  # the same connection
+            assert second.startswith(b"HTTP/1.1 200") and b"desk_lamp" in second
+    finally:
+        server.should_exit = True
+        thread.join(30)
+
+
+@pytest.mark.parametrize("page", ["/docs", "/redoc"])
+def test_the_api_docs_load_nothing_from_outside(client: TestClient, page: str) -> None:
+    html = client.get(page)
+    assert html.status_code == 200
+    assert not re.findall(r"""(?:src|href)=["']?(?:https?:)?//""", html.text), html.text
+    assets = re.findall(r"""(?:src|href)=["']?(/[^"'\s>]+)""", html.text)
+    assert any(asset.endswith(".js") for asset in assets)
+    for asset in assets:
+        assert client.get(asset).status_code == 200, asset

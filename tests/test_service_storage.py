@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import time
 import uuid
 from pathlib import Path
 from typing import Any
@@ -12,13 +11,14 @@ import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.runtime.migration import MigrationContext
 from fastapi.testclient import TestClient
-from sqlalchemy import func, insert, inspect, select
+from sqlalchemy import func, inspect, select
+from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session
 
-from causalplan.service import crud
+from causalplan.service.db import crud
 from causalplan.service.db.migrate import current_revision, head_revision, upgrade
 from causalplan.service.db.models import Base, ModelRecord, TrialRecord
-from causalplan.service.db.session import create_database_engine
+from causalplan.service.db.session import WAL_SIZE_LIMIT_BYTES, create_database_engine
 from causalplan.service.errors import StorageError
 from tests.service_fixtures import (
     AUTH,
@@ -30,8 +30,6 @@ from tests.service_fixtures import (
     services_of,
     settings_for,
     sqlite_url,
-    sqlite_write_lock,
-    sqlite_write_lock_for_a_moment,
 )
 
 
@@ -78,44 +76,6 @@ def _records(participant: str) -> tuple[ModelRecord, TrialRecord]:
     return model, trial
 
 
-_DIFFERING = {"id", "participant_id", "model_id"}
-"""The columns in which the records of ``_records("fast")`` and ``_records("core")`` differ."""
-
-
-def _stored(engine: Any, record: ModelRecord | TrialRecord) -> dict[str, Any]:
-    """The record's row as the driver returns it (no SQLAlchemy type processing), but for ``_DIFFERING``.
-
-    The database is the test's own, so the participant finds the row.
-    """
-    with engine.connect() as connection:
-        rows = connection.exec_driver_sql(f"SELECT * FROM {record.__table__.name}").mappings().all()
-    [row] = [row for row in rows if row["participant_id"] == record.participant_id]
-    return {key: value for key, value in row.items() if key not in _DIFFERING}
-
-
-def test_saved_records_are_stored_exactly_as_core_stores_them(database_url: str) -> None:
-    """save() runs its INSERTs on the driver's connection, with the columns' own bind processors."""
-    engine = create_database_engine(database_url)
-    upgrade(engine)
-    fast_model, fast_trial = _records("fast")
-    crud.save(engine, [fast_model, fast_trial])
-    core_model, core_trial = _records("core")
-    core_model.created_at, core_trial.created_at = fast_model.created_at, fast_trial.created_at
-    with engine.begin() as connection:
-        connection.execute(insert(ModelRecord), [crud._row(core_model)])
-        connection.execute(insert(TrialRecord), [crud._row(core_trial)])
-    assert _stored(engine, fast_model) == _stored(engine, core_model)
-    assert _stored(engine, fast_trial) == _stored(engine, core_trial)
-    with Session(engine) as session:  # and read back through the ORM, the same values too
-        for fast, core in ((fast_model, core_model), (fast_trial, core_trial)):
-            fast_stored, core_stored = session.get(type(fast), fast.id), session.get(type(core), core.id)
-            assert fast_stored is not None and core_stored is not None
-            for column in fast.__table__.columns:
-                if column.key not in _DIFFERING:
-                    assert getattr(fast_stored, column.key) == getattr(core_stored, column.key), column.key
-    engine.dispose()
-
-
 def test_several_records_of_a_kind_are_stored_in_one_save(database_url: str) -> None:
     engine = create_database_engine(database_url)
     upgrade(engine)
@@ -153,110 +113,33 @@ def _count(engine: Any, participant: str) -> tuple[int, int]:
     return models or 0, trials or 0
 
 
-def test_saving_without_waiting_stores_on_sqlite_and_only_there(database_url: str) -> None:
-    engine = create_database_engine(database_url, background_checkpoints=True)
-    upgrade(engine)
-    writer = crud.NoWaitWriter.open(engine)
-    assert (writer is not None) is (engine.dialect.name == "sqlite")  # a server's round trips are never made at once
-    if writer is not None:
-        model, trial = _records("at-once")
-        assert writer.save([model, trial]) is True
-        assert _count(engine, "at-once") == (1, 1)
-        writer.close()
-    engine.dispose()
-
-
-def test_a_prepared_row_is_stored_as_core_stores_the_same_record(tmp_path: Path) -> None:
-    """A repeated request's record: the document and report converted once, id, time and client ids new."""
-    engine = create_database_engine(sqlite_url(tmp_path), background_checkpoints=True)
-    upgrade(engine)
-    writer = crud.NoWaitWriter.open(engine)
-    assert writer is not None
-    first, _ = _records("first")
-    row = crud.PreparedModelRow(engine, first)
-    ids = [writer.save_prepared(row, crud.ClientIds("fast", "séance ☃")) for _ in range(2)]
-    assert ids[0] is not None and ids[1] is not None and ids[0] != ids[1]  # a record per request
-    with Session(engine) as session:
-        stored = session.get(ModelRecord, ids[0])
-        assert stored is not None and stored.participant_id == "fast" and stored.session_id == "séance ☃"
-        assert stored.created_at > first.created_at.replace(tzinfo=None)  # its own time (SQLite's are naive)
-        created_at = stored.created_at
-    core, _ = _records("core")
-    core.created_at = created_at
-    with engine.begin() as connection:
-        connection.execute(insert(ModelRecord), [crud._row(core)])
-    [fast_row] = [row for row in _rows(engine, "models") if row["id"] == ids[0].hex]
-    [core_row] = [row for row in _rows(engine, "models") if row["participant_id"] == "core"]
-    assert {**fast_row, "id": None, "participant_id": None} == {**core_row, "id": None, "participant_id": None}
-    # A client id is stored cleaned and cut to length, as new_model_record stores it.
-    nul_id = writer.save_prepared(row, crud.ClientIds("a\x00b" + "x" * 300, None))
-    with Session(engine) as session:
-        stored = session.get(ModelRecord, nul_id)
-        assert stored is not None and stored.participant_id == ("a\ufffdb" + "x" * 300)[:128]
-        assert stored.session_id is None
-    writer.close()
-    engine.dispose()
-
-
-def _rows(engine: Any, table: str) -> list[dict[str, Any]]:
-    with engine.connect() as connection:
-        return [dict(row) for row in connection.exec_driver_sql(f"SELECT * FROM {table}").mappings().all()]
-
-
-def test_saving_without_waiting_gives_way_to_a_held_write_lock(tmp_path: Path) -> None:
+def test_the_sqlite_log_stays_bounded_after_many_writes(tmp_path: Path) -> None:
+    """SQLite checkpoints by itself, and journal_size_limit truncates the log after a burst of writes."""
     url = sqlite_url(tmp_path)
-    engine = create_database_engine(url, background_checkpoints=True)
-    upgrade(engine)
-    writer = crud.NoWaitWriter.open(engine)
-    assert writer is not None
-    model, _ = _records("locked")
-    with sqlite_write_lock(url):
-        assert writer.save([model]) is False  # at once, not after the 10 s busy timeout
-        assert writer.save_prepared(crud.PreparedModelRow(engine, model), crud.ClientIds("locked")) is None
-    assert _count(engine, "locked") == (0, 0)
-    assert writer.save([model]) is True  # the lock is free again: the same connection stores
-    assert _count(engine, "locked") == (1, 0)
-    # A failed write (NOT NULL) stores nothing, raises StorageError, and leaves the connection usable.
-    failed, failed_trial = _records("refused")
-    failed_trial.verdict = None  # type: ignore[assignment]
-    with pytest.raises(StorageError, match="nothing was stored"):
-        writer.save([failed, failed_trial])
-    assert _count(engine, "refused") == (0, 0)
-    after, _ = _records("after")
-    assert writer.save([after]) is True
-    # The pooled connections wait for a lock (their busy timeout is the engine's): a save made
-    # while another connection holds the lock for a moment succeeds once the lock is free.
-    model, _ = _records("waited")
-    with sqlite_write_lock_for_a_moment(url):
-        crud.save(engine, [model])
-    assert _count(engine, "waited") == (1, 0)
-    writer.close()
-    with engine.connect() as connection:
-        assert connection.exec_driver_sql("PRAGMA busy_timeout").scalar() == 10_000
-    engine.dispose()
+    with running_client(settings_for(url, planning_workers=1)) as client:
+        engine = services_of(client).engine
+        text = "x" * 20_000
+        for batch in range(100):  # 2,000 records of ~20 KB: about 40 MB written
+            records = []
+            for index in range(20):
+                model, _ = _records(f"bulk-{batch}-{index}")
+                model.document = {**model.document, "padding": text}
+                records.append(model)
+            crud.save(engine, records)
+        wal = Path(f"{make_url(url).database}-wal")
+        assert wal.stat().st_size <= WAL_SIZE_LIMIT_BYTES + 4 * 1024 * 1024  # the limit, and one checkpoint's worth
+        with engine.connect() as connection:
+            assert connection.exec_driver_sql("PRAGMA wal_autocheckpoint").scalar() > 0
 
 
-def test_the_service_checkpoints_sqlite_off_the_requests(tmp_path: Path) -> None:
-    """Its commits never checkpoint the log (autocheckpoint 0); its checkpointer does, in the background."""
-    url = sqlite_url(tmp_path)
-    with running_client(settings_for(url)) as client:
-        services = services_of(client)
-        with services.engine.connect() as connection:
-            assert connection.exec_driver_sql("PRAGMA wal_autocheckpoint").scalar() == 0
-        assert client.post("/v1/plans", json={"model": DESK_LAMP}).status_code == 200
-        checkpointer = services.checkpointer
-        assert checkpointer is not None
-        busy, frames, done = checkpointer.checkpoint()
-        assert busy == 0 and frames > 0 and done == frames  # the model's record was in the log, now in the file
-        ran = checkpointer.checkpoints
-        deadline = time.monotonic() + 10
-        while checkpointer.checkpoints == ran and time.monotonic() < deadline:  # its thread, once a second
-            time.sleep(0.05)
-        assert checkpointer.checkpoints > ran
-    plain = create_database_engine(url)  # other users of the database keep SQLite's own checkpoints
-    with plain.connect() as connection:
-        assert connection.exec_driver_sql("PRAGMA wal_autocheckpoint").scalar() == 1000
-    plain.dispose()
+def test_health_says_degraded_when_free_space_is_below_the_minimum(tmp_path: Path) -> None:
+    settings = settings_for(sqlite_url(tmp_path), planning_workers=1, min_free_disk_mb=10**12)  # more than any disk
+    with running_client(settings) as client:
+        health = client.get("/health").json()
+        assert health["status"] == "degraded"
+        assert health["storage"]["free_mb"] >= 0 and "MB free" in health["storage"]["problem"]
+    with running_client(settings_for(sqlite_url(tmp_path), planning_workers=1, min_free_disk_mb=0)) as client:
+        assert client.get("/health").json()["storage"]["problem"] is None
 
 
 def test_a_trial_and_its_inline_model_are_stored_together_or_not_at_all(
@@ -347,9 +230,12 @@ def test_an_unreachable_database_is_503_and_health_says_so(postgres_admin_url: s
             connection.execute(f'DROP DATABASE "{make_url(url).database}" WITH (FORCE)')
         error = error_of(client.post("/v1/models", json=DESK_LAMP), 503)
         assert error["code"] == "storage_unavailable"
+        server = make_url(url)
         health = client.get("/health").json()
         assert health["status"] == "degraded"
         assert health["database"]["reachable"] is False and health["database"]["problem"]
+        for said in (json.dumps(error), json.dumps(health["database"])):  # the driver's words stay in the log
+            assert str(server.host) not in said and str(server.port) not in said and "psycopg" not in said
         assert client.post("/v1/plans", json={"model_id": str(uuid.uuid4())}).status_code == 503
 
 
@@ -359,3 +245,16 @@ def test_a_database_that_cannot_be_reached_at_start_is_a_clear_error() -> None:
         upgrade(engine)
     with pytest.raises(StorageError, match="not valid"):
         create_database_engine("not a url")
+
+
+def test_health_says_degraded_when_the_database_takes_no_writes(postgres_admin_url: str) -> None:
+    import psycopg
+
+    with postgres_database(postgres_admin_url) as url, running_client(settings_for(url, planning_workers=1)) as client:
+        assert client.get("/health").json()["database"]["problem"] is None
+        admin = make_url(postgres_admin_url).set(drivername="postgresql").render_as_string(hide_password=False)
+        with psycopg.connect(admin, autocommit=True) as connection:
+            connection.execute(f'ALTER DATABASE "{make_url(url).database}" SET default_transaction_read_only = on')
+        services_of(client).engine.dispose()  # new connections get the new default
+        health = client.get("/health").json()
+        assert health["status"] == "degraded" and health["database"]["problem"] == "the database server is read-only"

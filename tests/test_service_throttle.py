@@ -12,13 +12,23 @@ import pytest
 from fastapi.testclient import TestClient
 from pydantic import ValidationError
 
-from causalplan.service.attempts import FailedAttempts
 from causalplan.service.errors import TooManyAttemptsError
-from causalplan.service.settings import Settings
-from tests.service_fixtures import AUTH, RESEARCH_TOKEN, error_of, running_client, services_of, settings_for, sqlite_url
+from causalplan.service.throttle import FailedAttempts
+from causalplan.settings import Settings
+from tests.service_fixtures import (
+    AUTH,
+    RESEARCH_TOKEN,
+    error_of,
+    running_client,
+    services_of,
+    serving,
+    settings_for,
+    sqlite_url,
+)
 
 MAX_FAILURES = 3
 WINDOW = 60.0
+TOTAL = 1000
 WRONG = {"Authorization": "Bearer wrong"}
 
 
@@ -66,7 +76,7 @@ def retry_after(attempts: FailedAttempts, address: str) -> int:
 
 def test_after_max_failures_an_address_is_refused_until_its_oldest_failure_leaves_the_window() -> None:
     clock = FakeClock()
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, clock=clock)
+    attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, clock=clock)
     fail(attempts, "a", 1)
     clock.now += 10
     fail(attempts, "a", MAX_FAILURES - 1)
@@ -80,7 +90,7 @@ def test_after_max_failures_an_address_is_refused_until_its_oldest_failure_leave
 
 
 def test_successes_do_not_count_and_do_not_reset() -> None:
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, clock=FakeClock())
+    attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, clock=FakeClock())
     fail(attempts, "a", MAX_FAILURES - 1)
     for _ in range(20):
         assert attempts.check("a", right) is True
@@ -89,7 +99,7 @@ def test_successes_do_not_count_and_do_not_reset() -> None:
 
 
 def test_addresses_are_counted_apart() -> None:
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, clock=FakeClock())
+    attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, clock=FakeClock())
     fail(attempts, "a", MAX_FAILURES)
     retry_after(attempts, "a")
     assert attempts.check("b", right) is True
@@ -97,26 +107,36 @@ def test_addresses_are_counted_apart() -> None:
     assert attempts.check("b", right) is True
 
 
-def test_memory_is_bounded_by_the_window_and_the_number_of_addresses() -> None:
+def test_memory_is_bounded_by_the_window_and_the_number_of_clients() -> None:
     clock = FakeClock()
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, max_addresses=3, clock=clock)
+    attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, max_clients=3, clock=clock)
     for address in ("a", "b", "c"):
         fail(attempts, address, MAX_FAILURES)
     clock.now += 1
-    retry_after(attempts, "a")  # a refusal is no failure: "a" is still the one that failed least recently
-    fail(attempts, "d", 1)  # a fourth address drops it
+    retry_after(attempts, "a")  # looked at: now the most recently used
+    fail(attempts, "d", 1)  # a fourth client drops the least recently used, "b"
     assert len(attempts) == 3
-    fail(attempts, "a", MAX_FAILURES)  # forgotten, so checked again (and now "b" is dropped)
+    fail(attempts, "b", MAX_FAILURES)  # forgotten, so checked again (and now "c" is dropped)
     assert len(attempts) == 3
-    assert attempts.check("b", right) is True
-    assert retry_after(attempts, "c") == 59
+    assert attempts.check("c", right) is True
+    assert retry_after(attempts, "a") == 59
     clock.now += WINDOW  # every failure has left the window: all are forgotten
     fail(attempts, "e", 1)
     assert len(attempts) == 1
 
 
+def test_failures_from_many_clients_together_are_limited_too() -> None:
+    clock = FakeClock()
+    attempts = FailedAttempts(MAX_FAILURES, WINDOW, 5, clock=clock)
+    for client in range(5):
+        fail(attempts, f"client-{client}", 1)
+    assert retry_after(attempts, "a new client") == 60  # even the right token, from anyone
+    clock.now += WINDOW
+    assert attempts.check("a new client", right) is True
+
+
 def test_concurrent_wrong_guesses_cannot_overshoot_the_limit() -> None:
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, clock=FakeClock())
+    attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, clock=FakeClock())
     start = threading.Barrier(16)
     compared: list[int] = []
     refused: list[int] = []
@@ -143,11 +163,13 @@ def test_concurrent_wrong_guesses_cannot_overshoot_the_limit() -> None:
 
 def test_limits_must_be_positive() -> None:
     with pytest.raises(ValueError, match="must be positive"):
-        FailedAttempts(0, WINDOW)
+        FailedAttempts(0, WINDOW, TOTAL)
     with pytest.raises(ValueError, match="must be positive"):
-        FailedAttempts(MAX_FAILURES, 0.0)
+        FailedAttempts(MAX_FAILURES, 0.0, TOTAL)
     with pytest.raises(ValueError, match="must be positive"):
-        FailedAttempts(MAX_FAILURES, WINDOW, max_addresses=0)
+        FailedAttempts(MAX_FAILURES, WINDOW, 0)
+    with pytest.raises(ValueError, match="must be positive"):
+        FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, max_clients=0)
     for setting in (
         {"research_max_failures": 0},
         {"research_max_failures": -1},
@@ -190,7 +212,7 @@ def clock(app_client: TestClient) -> Iterator[FakeClock]:
     services = services_of(app_client)
     own = services.failed_attempts
     clock = FakeClock()
-    services.failed_attempts = FailedAttempts(MAX_FAILURES, WINDOW, clock=clock)
+    services.failed_attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, clock=clock)
     yield clock
     services.failed_attempts = own
 
@@ -294,3 +316,51 @@ def test_without_a_token_configured_nothing_is_counted(tmp_path: Path) -> None:
             assert sign_in(client, "guess").status_code == 401
             assert error_of(client.get("/v1/trials", headers=WRONG), 403)["code"] == "research_disabled"
         assert len(services_of(client).failed_attempts) == 0
+
+
+def test_a_new_forwarded_address_per_request_does_not_reset_the_count(tmp_path: Path) -> None:
+    # Through uvicorn, as `causalplan serve` runs it, from 127.0.0.1: which uvicorn itself trusted
+    # by default, so each request was counted against the address its header made up.
+    settings = settings_for(
+        sqlite_url(tmp_path), planning_workers=1, research_max_failures=MAX_FAILURES, research_failure_window_seconds=60
+    )
+    with serving(settings) as base, httpx.Client(base_url=base) as client:
+        for attempt in range(MAX_FAILURES):
+            forwarded = {**WRONG, "X-Forwarded-For": f"10.0.0.{attempt}"}
+            assert client.get("/v1/trials", headers=forwarded).status_code == 401
+        refused = client.get("/v1/trials", headers={**AUTH, "X-Forwarded-For": "10.0.0.99"})
+        assert error_of(refused, 429)["code"] == "too_many_attempts"
+
+
+@pytest.fixture(scope="module")
+def behind_proxy(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+    """A running app whose operator named 192.0.2.10 as its reverse proxy."""
+    settings = settings_for(
+        sqlite_url(tmp_path_factory.mktemp("db")),
+        planning_workers=1,
+        research_max_failures=MAX_FAILURES,
+        research_failure_window_seconds=WINDOW,
+        trusted_proxies=["192.0.2.10"],
+    )
+    with running_client(settings) as client:
+        yield client
+
+
+def test_behind_a_trusted_proxy_the_forwarded_client_is_counted(behind_proxy: TestClient) -> None:
+    proxy = client_at(behind_proxy, "192.0.2.10")
+    for attempt in range(MAX_FAILURES):
+        # What the client sent comes first; the proxy appends the address it saw.
+        chain = f"10.9.9.{attempt}, 198.51.100.7"
+        assert proxy.get("/v1/trials", headers={**WRONG, "X-Forwarded-For": chain}).status_code == 401
+    refused = proxy.get("/v1/trials", headers={**AUTH, "X-Forwarded-For": "10.9.9.200, 198.51.100.7"})
+    assert error_of(refused, 429)["code"] == "too_many_attempts"
+    other = proxy.get("/v1/trials", headers={**AUTH, "X-Forwarded-For": "198.51.100.8"})
+    assert other.status_code == 200  # another client behind the same proxy
+
+
+def test_trusted_proxies_must_be_addresses_or_networks() -> None:
+    assert Settings(database_url="sqlite://", trusted_proxies=["10.0.0.0/8", "::1"]).is_trusted_proxy("10.1.2.3")
+    assert not Settings(database_url="sqlite://", trusted_proxies=["10.0.0.0/8"]).is_trusted_proxy("testclient")
+    for wrong in (["10.0.0.1/8"], ["not an address"]):
+        with pytest.raises(ValidationError):
+            Settings(database_url="sqlite://", trusted_proxies=wrong)

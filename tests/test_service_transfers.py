@@ -2,18 +2,14 @@
 
 from __future__ import annotations
 
-import pytest
 from fastapi.testclient import TestClient
 
-from causalplan.service import submissions
-from causalplan.service.routes import transfers
 from tests.service_fixtures import (
     AUTH,
     DESK_LAMP,
     FAILED_DESK_LAMP,
     FAILED_FLASHLIGHT_MAPPING,
     FLASHLIGHT_MAPPING,
-    ThreadHops,
     error_of,
     with_unique_effect,
 )
@@ -82,25 +78,16 @@ def test_a_repeated_trial_is_cached_and_stored_again(client: TestClient) -> None
     assert cached_flags == [False, True]
 
 
-def test_a_repeated_trial_is_answered_on_the_event_loop_as_a_thread_answers_it(
-    client: TestClient, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    hops = ThreadHops(monkeypatch, transfers)
+def test_a_repeated_trial_gets_the_same_verdict_and_records_of_its_own(client: TestClient) -> None:
     request = {"model": with_unique_effect(DESK_LAMP), "mapping": FLASHLIGHT_MAPPING}
-    headers = {"X-Participant-Id": "transfer-loop"}
+    headers = {"X-Participant-Id": "transfer-again"}
     first = client.post("/v1/transfers", json=request, headers=headers).json()
-    assert first["cached"] is False and hops.count == 1  # new documents: read and solved in a thread
     again = client.post("/v1/transfers", json=request, headers=headers).json()
-    assert again["cached"] is True and hops.count == 1  # read before, answer kept: no hop
-    with monkeypatch.context() as without:
-        without.setattr(submissions, "kept_transfer", lambda *_: None)
-        threaded = client.post("/v1/transfers", json=request, headers=headers).json()
-    assert hops.count == 2
+    assert first["cached"] is False and again["cached"] is True
     ids = {"model_id": None, "trial_id": None}
-    assert {**again, **ids} == {**threaded, **ids}
     assert {**again, **ids, "cached": False} == {**first, **ids}
-    trials = trials_of(client, "transfer-loop")
-    assert len(trials) == 3 and len({trial["model_id"] for trial in trials}) == 3  # each with its own model record
+    trials = trials_of(client, "transfer-again")
+    assert len(trials) == 2 and len({trial["model_id"] for trial in trials}) == 2  # each with its own model record
     stored = next(trial for trial in trials if trial["id"] == again["trial_id"])
     assert stored["cached"] is True and stored["model_id"] == again["model_id"]
     assert stored["mapping"] == FLASHLIGHT_MAPPING and stored["verdict"] == again["verdict"]

@@ -8,7 +8,6 @@ from causalplan.causal.documents import SourceMap
 from causalplan.inputs import model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.service.responses import csv_bytes
-from causalplan.service.settings import Settings
 from causalplan.service.web.auth import is_valid_cookie, session_cookie
 from causalplan.service.web.design import read_design
 from causalplan.service.web.diagram import diagram_svg
@@ -25,6 +24,7 @@ from causalplan.service.web.study import (
     rules_from_text,
 )
 from causalplan.service.web.tutorial import EXAMPLE_RULES, QUESTIONS, practice_model, wrong_answers
+from causalplan.settings import Settings
 
 SETTINGS = Settings(database_url="sqlite://")
 DESK_LAMP = {"base_with_cables": ["provide electricity"], "light_bulb": ["turn electricity into light"]}

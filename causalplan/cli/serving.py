@@ -2,17 +2,9 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import click
 
-from causalplan.cli.common import (
-    fail,
-    say,
-)
-
-if TYPE_CHECKING:
-    pass
+from causalplan.cli.common import fail, say
 
 
 @click.command(short_help="Run the HTTP planning service (JSON API and participant pages).")
@@ -28,7 +20,7 @@ if TYPE_CHECKING:
     "--database-url",
     show_default=False,
     help="SQLAlchemy URL, e.g. postgresql://user:password@host/db (default: CAUSALPLAN_DATABASE_URL, "
-    "else a SQLite file in ~/.local/share/causalplan, created on first start).",
+    "else a SQLite file in the user's data folder, ~/.local/share/causalplan on Linux, created on first start).",
 )
 @click.option(
     "--access-log/--no-access-log",
@@ -38,13 +30,15 @@ if TYPE_CHECKING:
 def serve(host: str, port: int, workers: int | None, database_url: str | None, access_log: bool | None) -> None:
     """Run the HTTP planning service: JSON API under /v1, OpenAPI docs at /docs, /health.
 
-    Other settings come from CAUSALPLAN_* environment variables (see causalplan/service/settings.py).
+    Other settings come from CAUSALPLAN_* environment variables (see causalplan/settings.py and
+    docs/service.md), e.g. CAUSALPLAN_RESEARCH_TOKEN to turn on the research endpoints and pages,
+    CAUSALPLAN_TRUSTED_PROXIES='["127.0.0.1"]' behind a reverse proxy on the same machine.
     The database is migrated to the newest schema on start. Stop with Ctrl-C.
     """
     from pydantic import ValidationError
 
     from causalplan.errors import CausalPlanError
-    from causalplan.service.settings import Settings
+    from causalplan.settings import Settings
 
     overrides: dict[str, object] = {}
     if workers is not None:

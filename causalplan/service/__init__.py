@@ -1,6 +1,9 @@
 """The HTTP planning service: FastAPI routes, a planner worker pool, and storage.
 
-Laid out like FastAPI's full-stack template: ``main`` (app factory), ``routes/<resource>.py``,
-``deps`` (``Annotated`` dependencies), ``settings`` (one ``Settings``), ``schemas`` (In/Out),
-``crud`` and ``db/`` (SQLAlchemy 2 records, Alembic migrations). Nothing below imports it.
+By role: ``main`` (app factory, error handlers, middleware), ``routes/<resource>.py``,
+``deps`` (``Annotated`` dependencies), ``documents`` (reads and checks what a request sends),
+``answers`` (answers it: the answer cache, or the pool), ``pool/`` (worker processes, their
+loop, their jobs), ``db/`` (records, sessions, CRUD, Alembic migrations), ``schemas/`` (In/Out
+per resource), ``throttle`` (wrong research tokens), ``web/`` (participant and research pages).
+Settings are ``causalplan.settings``. Nothing below the service imports it.
 """

@@ -14,15 +14,13 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import Session
 
 from causalplan.objects.catalog import Catalog
-from causalplan.service.attempts import FailedAttempts
-from causalplan.service.cache import LruCache, ResultCache
-from causalplan.service.crud import ClientIds, NoWaitWriter
-from causalplan.service.db.checkpoints import WalCheckpointer
+from causalplan.service.answers import Answerer, ResultCache
+from causalplan.service.db.crud import ClientIds
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH
 from causalplan.service.errors import NotAuthenticatedError, ResearchDisabledError
-from causalplan.service.planning import PlannerPool
-from causalplan.service.repeats import RepeatedPlans
-from causalplan.service.settings import Settings
+from causalplan.service.pool.pool import PlannerPool
+from causalplan.service.throttle import FailedAttempts
+from causalplan.settings import Settings
 
 
 @dataclass
@@ -35,24 +33,21 @@ class Services:
     pool: PlannerPool
     cache: ResultCache
     revision: str
-    reads: LruCache[object]
-    """What reading model and mapping documents gave, by the document's exact JSON."""
     catalog_key: str
     """The catalog's fingerprint, part of every answer's cache key."""
     failed_attempts: FailedAttempts
-    """Wrong research tokens by client address, to refuse guessing at full speed."""
-    checkpointer: WalCheckpointer | None = None
-    """SQLite's log checkpoints, off the requests (None for other databases)."""
-    no_wait_writer: NoWaitWriter | None = None
-    """The event loop's own SQLite connection, which stores only what needs no waiting (None for other databases)."""
-    repeats: RepeatedPlans = field(default_factory=lambda: RepeatedPlans(0))
-    """Answers of plan requests kept by their exact body (``RepeatedPlanMiddleware``)."""
+    """Wrong research tokens by client and in total, to refuse guessing at full speed."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
 
+    @property
+    def answers(self) -> Answerer:
+        """Return what answers valid requests (from the cache or a worker)."""
+        return Answerer(self.cache, self.pool, self.settings, self.catalog_key)
+
 
 # Dependencies that do not block are `async def`: FastAPI runs a plain `def` dependency in a
-# worker thread, and each hop there and back costs ~0.1-0.2 ms on every request.
+# worker thread, a hop there and back on every request.
 
 
 async def get_services(request: Request) -> Services:
@@ -109,18 +104,31 @@ def is_research_token(candidate: str, settings: Settings) -> bool:
     return token is not None and secrets.compare_digest(candidate.encode(), token.get_secret_value().encode())
 
 
-def client_address(request: Request) -> str:
-    """Return the client's address as the server saw it (empty when unknown, e.g. a Unix socket)."""
-    return request.client.host if request.client is not None else ""
+def client_address(request: Request, settings: Settings) -> str:
+    """Return the client's address: the peer's, or what X-Forwarded-For says when the peer is a trusted proxy.
+
+    Of the forwarded chain, the last address that is not itself a trusted proxy is the client
+    (the ones before it are whatever the client chose to send). Empty when unknown (a Unix socket).
+    """
+    peer = request.client.host if request.client is not None else ""
+    if not settings.is_trusted_proxy(peer):
+        return peer
+    chain = [hop.strip() for value in request.headers.getlist("x-forwarded-for") for hop in value.split(",")]
+    for hop in reversed(chain):
+        if hop and not settings.is_trusted_proxy(hop):
+            return hop
+    return peer
 
 
 def check_research_token(candidate: str, request: Request, services: Services) -> bool:
-    """Return whether ``candidate`` is the research token, counting a wrong one against the client's address.
+    """Return whether ``candidate`` is the research token, counting a wrong one against the client.
 
-    Raises ``TooManyAttemptsError`` without comparing while that address has too many recent failures.
+    Raises ``TooManyAttemptsError`` without comparing while the client, or all clients together,
+    have too many recent failures.
     """
+    settings = services.settings
     return services.failed_attempts.check(
-        client_address(request), lambda: is_research_token(candidate, services.settings)
+        client_address(request, settings), lambda: is_research_token(candidate, settings)
     )
 
 

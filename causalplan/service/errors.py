@@ -7,7 +7,6 @@ handler in ``main`` turn every one of them into ``{"error": {"code", "message", 
 from __future__ import annotations
 
 from causalplan.errors import CatalogError, CausalPlanError, InputFileError, PlannerUnavailableError, UnknownObjectError
-from causalplan.planners.pipeline import UnknownPlannerError
 
 
 class ServiceError(CausalPlanError):
@@ -158,9 +157,11 @@ class InternalError(ServiceError):
     status_code = 500
 
 
+_STATUS_BY_CODE = {"unknown_planner": 422}
+"""Errors of lower packages this module does not import (the planners'), by their stable code."""
+
 _LOWER_STATUS: dict[type[CausalPlanError], int] = {
     UnknownObjectError: 404,
-    UnknownPlannerError: 422,
     InputFileError: 422,
     PlannerUnavailableError: 503,
     CatalogError: 500,
@@ -171,6 +172,8 @@ def http_status(exc: CausalPlanError) -> int:
     """Return the HTTP status of any causalplan error (500 for ones no table knows)."""
     if isinstance(exc, ServiceError):
         return exc.status_code
+    if exc.code in _STATUS_BY_CODE:
+        return _STATUS_BY_CODE[exc.code]
     for cls in type(exc).__mro__:
         if cls in _LOWER_STATUS:
             return _LOWER_STATUS[cls]

@@ -1,4 +1,4 @@
-"""The app factory: routes, the one error handler, the body limit, and start-up/shutdown.
+"""The app factory: routes, the error handlers, the body limit, the offline docs, start-up and shutdown.
 
 ``create_app(settings)`` returns the ASGI app; ``serve`` runs it with uvicorn (what
 ``causalplan serve`` calls). Another ASGI server can use ``causalplan.service.main:create_app``
@@ -8,46 +8,43 @@ as a factory, with the settings from the environment.
 from __future__ import annotations
 
 import gc
+import json
 import logging
 import threading
-from collections.abc import AsyncIterator, Awaitable, Callable, MutableMapping
-from contextlib import asynccontextmanager
-from typing import Any
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager, suppress
+from typing import TYPE_CHECKING, Any
 
 import anyio.to_thread
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
+from fastapi.responses import RedirectResponse, Response
+from fastapi_offline import FastAPIOffline
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.routing import BaseRoute, Match
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 import causalplan
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import load_catalog
-from causalplan.service.attempts import FailedAttempts
-from causalplan.service.cache import LruCache, ResultCache, catalog_key
-from causalplan.service.crud import NoWaitWriter
-from causalplan.service.db.checkpoints import WalCheckpointer
+from causalplan.service.answers import ResultCache, catalog_key
 from causalplan.service.db.migrate import upgrade
 from causalplan.service.db.session import create_database_engine
 from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
-from causalplan.service.planning import PlannerPool
-from causalplan.service.repeats import RepeatedPlanMiddleware, RepeatedPlans
-from causalplan.service.replay import replaying
+from causalplan.service.pool.jobs import probe_job
+from causalplan.service.pool.pool import PlannerPool
 from causalplan.service.responses import SafeJSONResponse
 from causalplan.service.routes import health, models, objects, plans, research, simulations, transfers
-from causalplan.service.schemas import error_responses
-from causalplan.service.settings import Settings
-from causalplan.service.submissions import resolve_planner
+from causalplan.service.schemas.common import error_responses
+from causalplan.service.throttle import FailedAttempts
 from causalplan.service.web import routers as web_routers
-from causalplan.service.worker import probe_job
+from causalplan.settings import Settings
+
+if TYPE_CHECKING:
+    import uvicorn
 
 logger = logging.getLogger(__name__)
-
-Scope = MutableMapping[str, Any]
-Message = MutableMapping[str, Any]
-Receive = Callable[[], Awaitable[Message]]
-Send = Callable[[Message], Awaitable[None]]
-ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
 
 PROBE_TIMEOUT_SECONDS = 60.0
 _HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 413: "body_too_large"}
@@ -56,18 +53,14 @@ _HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 413: "body_too_large
 def start_services(settings: Settings) -> Services:
     """Prepare the database (migrations), load the catalog and start the planner pool."""
     catalog = load_catalog(settings.catalog_folders)
-    engine = create_database_engine(settings.database_url, background_checkpoints=True)
-    no_wait_writer = None
+    engine = create_database_engine(settings.database_url)
     try:
         revision = upgrade(engine)
-        no_wait_writer = NoWaitWriter.open(engine)
         pool = PlannerPool(
             settings.planning_workers, settings.queue_size, settings.worker_memory_mb, settings.queue_wait_seconds
         )
         pool.start()
     except BaseException:
-        if no_wait_writer is not None:
-            no_wait_writer.close()
         engine.dispose()
         raise
     services = Services(
@@ -77,15 +70,13 @@ def start_services(settings: Settings) -> Services:
         pool,
         ResultCache(settings.cache_size),
         revision,
-        reads=LruCache(settings.cache_size),
         catalog_key=catalog_key(catalog),
-        failed_attempts=FailedAttempts(settings.research_max_failures, settings.research_failure_window_seconds),
-        checkpointer=WalCheckpointer(engine) if engine.dialect.name == "sqlite" else None,
-        no_wait_writer=no_wait_writer,
-        repeats=RepeatedPlans(settings.cache_size),
+        failed_attempts=FailedAttempts(
+            settings.research_max_failures,
+            settings.research_failure_window_seconds,
+            settings.research_max_failures_total,
+        ),
     )
-    if services.checkpointer is not None:
-        services.checkpointer.start()
     threading.Thread(target=_probe, args=(services,), name="causalplan-probe", daemon=True).start()
     return services
 
@@ -126,10 +117,6 @@ def _probe(services: Services) -> None:
 def stop_services(services: Services) -> None:
     """Stop the workers and close the database connections."""
     services.pool.close()
-    if services.checkpointer is not None:
-        services.checkpointer.stop()
-    if services.no_wait_writer is not None:
-        services.no_wait_writer.close()
     services.engine.dispose()
 
 
@@ -162,14 +149,55 @@ class BodyLimitMiddleware:
                 return
             chunks.append(chunk)
             more = message.get("more_body", False)
-        body = {"type": "http.request", "body": b"".join(chunks), "more_body": False}
-        await self.app(scope, replaying(body, receive), send)
+        body: Message | None = {"type": "http.request", "body": b"".join(chunks), "more_body": False}
+
+        async def receive_body() -> Message:  # the body once, then whatever comes (a disconnect)
+            nonlocal body
+            if body is None:
+                return await receive()
+            message, body = body, None
+            return message
+
+        await self.app(scope, receive_body, send)
 
     async def _refuse(self, scope: Scope, receive: Receive, send: Send) -> None:
         error = BodyTooLargeError(
             f"The request body is over the limit of {self.max_bytes} bytes.", details={"limit": self.max_bytes}
         )
         await _error_response(error.code, error.message, error.status_code, error.details)(scope, receive, send)
+
+
+class UnexpectedErrorMiddleware:
+    """Answer a bug with 500 in the one error shape, and keep the connection.
+
+    Starlette's own last resort re-raises after answering, and uvicorn then drops the kept-alive
+    connection, so the client's next request on it fails too.
+    """
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        started = False
+
+        async def tracked_send(message: Message) -> None:
+            nonlocal started
+            started = started or message["type"] == "http.response.start"
+            await send(message)
+
+        try:
+            await self.app(scope, receive, tracked_send)
+        except Exception as exc:
+            logger.error("unexpected error", exc_info=exc)
+            if started:  # half an answer is out: nothing better can be said on this connection
+                raise
+            response = _error_response(
+                "internal_error", "Something went wrong on the server; the log has the details.", 500
+            )
+            await response(scope, receive, send)
 
 
 def _error_response(
@@ -196,8 +224,17 @@ def _location(loc: tuple[Any, ...]) -> str:
 
 
 async def handle_validation_error(_: Request, exc: Exception) -> SafeJSONResponse:
-    """Turn FastAPI's request validation errors into the one error shape."""
+    """Turn FastAPI's request validation errors into the one error shape (a JSON error says where)."""
     assert isinstance(exc, RequestValidationError)
+    cause = exc.__cause__
+    if isinstance(cause, json.JSONDecodeError):
+        where = {"line": cause.lineno, "column": cause.colno}
+        return _error_response(
+            "invalid_json",
+            f"The body is not JSON this service reads: {cause.msg} (line {cause.lineno}, column {cause.colno}).",
+            422,
+            {"errors": [{"location": f"line {cause.lineno}, column {cause.colno}", "message": cause.msg}], **where},
+        )
     errors = [
         {
             "location": _location(tuple(error.get("loc", ()))),
@@ -206,33 +243,44 @@ async def handle_validation_error(_: Request, exc: Exception) -> SafeJSONRespons
         }
         for error in exc.errors()
     ]
-    is_json = any(error["type"] == "json_invalid" for error in errors)
     summary = "; ".join(f"{error['location']}: {error['message']}" for error in errors[:3])
-    return _error_response(
-        "invalid_json" if is_json else "invalid_request",
-        ("The body is not valid JSON: " if is_json else "The request is invalid: ") + summary,
-        422,
-        {"errors": errors},
-    )
+    return _error_response("invalid_request", "The request is invalid: " + summary, 422, {"errors": errors})
 
 
-async def handle_http_error(_: Request, exc: Exception) -> SafeJSONResponse:
+_METHODS = ("GET", "HEAD", "POST", "PUT", "PATCH", "DELETE")
+
+
+def _methods_for(routes: list[BaseRoute], path: str) -> set[str]:
+    """Return the HTTP methods some route answers at ``path`` (empty: no route has this path)."""
+    methods = set()
+    for method in _METHODS:
+        scope = {"type": "http", "path": path, "method": method, "root_path": "", "headers": []}
+        if any(route.matches(scope)[0] == Match.FULL for route in routes):
+            methods.add(method)
+    return methods
+
+
+async def handle_http_error(request: Request, exc: Exception) -> Response:
     """Turn Starlette's HTTP errors (unknown route, wrong method) into the one error shape."""
     assert isinstance(exc, StarletteHTTPException)
-    if exc.status_code == 400:  # FastAPI's answer to a body it cannot decode (e.g. not UTF-8)
-        return _error_response("invalid_json", "The body could not be read: send UTF-8 JSON.", 422)
+    if exc.status_code == 400:  # a body FastAPI could not read that is not a JSON error (see documents)
+        return _error_response("invalid_json", "The body could not be read as JSON.", 422)
+    headers = dict(getattr(exc, "headers", None) or {})
+    message = str(exc.detail)
+    path = request.url.path
+    if exc.status_code == 404:
+        message = "There is no such route; the API is described at /docs."
+        stripped = path.rstrip("/")
+        if stripped and stripped != path and _methods_for(request.app.routes, stripped):
+            if not path.startswith("/v1/") and request.method in ("GET", "HEAD"):  # a page: take the reader there
+                return RedirectResponse(request.url.replace(path=stripped), status_code=307)
+            message = f"There is no such route; did you mean {stripped} (without the trailing slash)?"
+    if exc.status_code == 405:
+        # Starlette names the methods of the first route with this path; several routes may share it.
+        headers["Allow"] = ", ".join(sorted(_methods_for(request.app.routes, path)))
+        message = f"This route does not accept {request.method}; it accepts {headers['Allow']}."
     code = _HTTP_CODES.get(exc.status_code, "http_error")
-    message = {
-        404: "There is no such route; the API is described at /docs.",
-        405: "This route does not accept that method.",
-    }.get(exc.status_code, str(exc.detail))
-    return _error_response(code, message, exc.status_code, headers=getattr(exc, "headers", None))
-
-
-async def handle_unexpected_error(_: Request, exc: Exception) -> SafeJSONResponse:
-    """A bug: log the traceback, answer in the one error shape without it."""
-    logger.error("unexpected error", exc_info=exc)
-    return _error_response("internal_error", "Something went wrong on the server; the log has the details.", 500)
+    return _error_response(code, message, exc.status_code, headers=headers)
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
@@ -246,8 +294,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         limiter = anyio.to_thread.current_default_thread_limiter()
         limiter.total_tokens = max(limiter.total_tokens, settings.max_in_flight + 20)
         app.state.services = services
-        # What start-up made lives as long as the app: out of the collector's full passes, which
-        # take ~50 ms over its ~125k objects and would otherwise fall on some request.
+        # What start-up made lives as long as the app: out of the collector's full passes.
         gc.collect()
         gc.freeze()
         try:
@@ -256,7 +303,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             gc.unfreeze()
             await anyio.to_thread.run_sync(stop_services, services)
 
-    app = FastAPI(
+    # FastAPIOffline: /docs and /redoc load Swagger UI and ReDoc from the package, not a CDN.
+    app = FastAPIOffline(
         title="causalplan",
         version=causalplan.__version__,
         summary="Teach a robot why an object works, then plan with that knowledge.",
@@ -269,12 +317,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         lifespan=lifespan,
         default_response_class=SafeJSONResponse,
         responses=error_responses(413, 422),
+        redirect_slashes=False,
     )
     app.add_exception_handler(CausalPlanError, handle_causalplan_error)
     app.add_exception_handler(RequestValidationError, handle_validation_error)
     app.add_exception_handler(StarletteHTTPException, handle_http_error)
-    app.add_exception_handler(Exception, handle_unexpected_error)
-    app.add_middleware(RepeatedPlanMiddleware, resolve_planner=resolve_planner)  # inside the body limit
+    app.add_middleware(UnexpectedErrorMiddleware)
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
     for module in (models, plans, simulations, transfers, objects, research, health):
         app.include_router(module.router)
@@ -283,15 +331,28 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     return app
 
 
-def serve(settings: Settings, host: str, port: int, log_level: str = "info") -> None:
-    """Run the service with uvicorn until interrupted (what ``causalplan serve`` does)."""
+def uvicorn_config(settings: Settings, host: str, port: int, log_level: str = "info") -> uvicorn.Config:
+    """Return how ``serve`` runs the app with uvicorn.
+
+    uvicorn's own reading of X-Forwarded-For is off: ``deps.client_address`` trusts it only
+    from the proxies the settings name.
+    """
     import uvicorn
 
-    uvicorn.run(
+    return uvicorn.Config(
         create_app(settings),
         host=host,
         port=port,
         log_level=log_level,
         access_log=settings.access_log,
+        proxy_headers=False,
         timeout_graceful_shutdown=10,
     )
+
+
+def serve(settings: Settings, host: str, port: int, log_level: str = "info") -> None:
+    """Run the service with uvicorn until interrupted (what ``causalplan serve`` does)."""
+    import uvicorn
+
+    with suppress(KeyboardInterrupt):  # uvicorn raises Ctrl-C again once it has shut down (as uvicorn.run does)
+        uvicorn.Server(uvicorn_config(settings, host, port, log_level)).run()

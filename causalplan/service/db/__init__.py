@@ -1,1 +1,1 @@
-"""Storage: SQLAlchemy 2 records, the engine, and the Alembic migrations."""
+"""Storage: SQLAlchemy 2 records (``models``), the engine (``session``), ``crud``, and the Alembic migrations."""

@@ -10,6 +10,11 @@ from sqlalchemy.engine import make_url
 
 from causalplan.service.errors import StorageError
 
+WAL_SIZE_LIMIT_BYTES = 8 * 1024 * 1024
+"""What SQLite truncates its write-ahead log to after a checkpoint (``PRAGMA journal_size_limit``)."""
+WAL_CHECKPOINT_PAGES = 1000
+"""SQLite checkpoints the log when a commit brings it over this many pages (its default, said out loud)."""
+
 
 def sqlite_path(url: str) -> Path | None:
     """Return the file of a SQLite URL (None for other databases and in-memory SQLite)."""
@@ -19,29 +24,26 @@ def sqlite_path(url: str) -> Path | None:
     return Path(parsed.database)
 
 
-def _tune_sqlite(dbapi_connection: Any, _record: object, background_checkpoints: bool = False) -> None:
+def _tune_sqlite(dbapi_connection: Any, _record: object) -> None:
     cursor = dbapi_connection.cursor()
     # WAL lets readers work while one thread writes; the busy timeout makes writers queue up
     # instead of failing with "database is locked"; foreign keys are off by default in SQLite.
-    # synchronous=NORMAL (with WAL): a commit is not synced to disk by itself, only at WAL
-    # checkpoints, so storing a request costs ~0.1 ms rather than an fsync. A committed record
-    # survives the service crashing; an OS crash or power cut may lose the last commits (never
-    # corrupt the file). Use PostgreSQL where every commit must survive a power cut.
+    # synchronous=NORMAL (with WAL): a commit is synced at checkpoints, not by itself. A
+    # committed record survives the service crashing; an OS crash or power cut may lose the last
+    # commits (never corrupt the file). Use PostgreSQL where every commit must survive a power cut.
+    # SQLite checkpoints by itself; journal_size_limit keeps the log file from staying as large
+    # as its largest burst of writes.
     cursor.execute("PRAGMA journal_mode=WAL")
     cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.execute("PRAGMA busy_timeout=10000")
     cursor.execute("PRAGMA foreign_keys=ON")
-    if background_checkpoints:  # a WalCheckpointer checkpoints instead of the commits (see its module)
-        cursor.execute("PRAGMA wal_autocheckpoint=0")
+    cursor.execute(f"PRAGMA wal_autocheckpoint={WAL_CHECKPOINT_PAGES}")
+    cursor.execute(f"PRAGMA journal_size_limit={WAL_SIZE_LIMIT_BYTES}")
     cursor.close()
 
 
-def create_database_engine(url: str, background_checkpoints: bool = False) -> Engine:
-    """Return an engine for ``url``; a SQLite file's folder is created if it is missing.
-
-    ``background_checkpoints``: SQLite's commits never checkpoint its log; the caller runs a
-    ``WalCheckpointer`` (as the service does). Ignored for other databases.
-    """
+def create_database_engine(url: str) -> Engine:
+    """Return an engine for ``url``; a SQLite file's folder is created if it is missing."""
     try:
         parsed = make_url(url)
     except Exception as exc:  # noqa: BLE001 - SQLAlchemy raises several types for a bad URL
@@ -57,11 +59,7 @@ def create_database_engine(url: str, background_checkpoints: bool = False) -> En
     try:
         if parsed.get_backend_name() == "sqlite":
             engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 10})
-
-            def tune(dbapi_connection: Any, record: object) -> None:
-                _tune_sqlite(dbapi_connection, record, background_checkpoints)
-
-            event.listen(engine, "connect", tune)
+            event.listen(engine, "connect", _tune_sqlite)
         else:
             engine = create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20)
     except Exception as exc:  # noqa: BLE001 - a missing driver or a bad option, reported as such

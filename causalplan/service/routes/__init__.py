@@ -1,1 +1,1 @@
-"""One module per resource: models, plans, transfers, objects, research, health."""
+"""One module per resource: models, plans, simulations, transfers, objects, research, health."""

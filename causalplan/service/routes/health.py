@@ -1,7 +1,11 @@
-"""GET /health: planner binaries and versions, registries, database, pool, cache and limits."""
+"""GET /health: the planners, the database, free space, the pool, the cache and the limits."""
 
 from __future__ import annotations
 
+import logging
+import os
+import shutil
+from pathlib import Path
 from typing import Any
 
 from fastapi import APIRouter
@@ -9,60 +13,104 @@ from sqlalchemy import text
 from sqlalchemy.exc import SQLAlchemyError
 
 import causalplan
+from causalplan.service.answers import default_planner
 from causalplan.service.db.migrate import current_revision
+from causalplan.service.db.session import sqlite_path
 from causalplan.service.deps import Services, ServicesDep
-from causalplan.service.schemas import DatabaseHealthOut, FastDownwardHealthOut, HealthOut
-from causalplan.service.submissions import default_planner
+from causalplan.service.schemas.health import DatabaseHealthOut, FastDownwardHealthOut, HealthOut, StorageHealthOut
+
+logger = logging.getLogger(__name__)
 
 router = APIRouter(tags=["health"])
 
 PROBE_WAIT_SECONDS = 30.0
+MEGABYTE = 1024 * 1024
+
+
+def _write_problem(engine_backend: str, services: Services) -> str | None:
+    """Return why the database cannot be written (None when it can, as far as can be told without writing)."""
+    path = sqlite_path(services.settings.database_url)
+    if path is not None:
+        for place in (path, path.parent):
+            if place.exists() and not os.access(place, os.W_OK):
+                return f"the SQLite {'file' if place == path else 'folder'} is read-only"
+        return None
+    if engine_backend == "postgresql":
+        with services.engine.connect() as connection:
+            if connection.execute(text("SHOW transaction_read_only")).scalar() == "on":
+                return "the database server is read-only"
+    return None
 
 
 def database_health(services: Services) -> DatabaseHealthOut:
-    """Return whether the database answers, and its schema revision."""
+    """Return whether the database answers and takes writes, and its schema revision."""
     backend = services.engine.dialect.name
     expected = services.revision  # what start-up migrated to: the newest the package ships
     try:
         with services.engine.connect() as connection:
             connection.execute(text("SELECT 1"))
         revision = current_revision(services.engine)
+        read_only = _write_problem(backend, services)
     except SQLAlchemyError as exc:
-        reason = str(getattr(exc, "orig", None) or exc).strip().splitlines()[0]
+        logger.warning("/health: the database did not answer: %s", exc)  # the driver's words stay in the log
         return DatabaseHealthOut(
-            reachable=False, backend=backend, revision=None, expected_revision=expected, problem=reason
+            reachable=False,
+            backend=backend,
+            revision=None,
+            expected_revision=expected,
+            problem="the database did not answer; the server log says why",
         )
-    problem = None if revision == expected else f"schema revision {revision}, expected {expected}"
+    problem = read_only or (None if revision == expected else f"schema revision {revision}, expected {expected}")
     return DatabaseHealthOut(
         reachable=True, backend=backend, revision=revision, expected_revision=expected, problem=problem
     )
 
 
+def storage_health(services: Services) -> StorageHealthOut:
+    """Return the free space where data is stored (the SQLite file's folder, else the data folder)."""
+    settings = services.settings
+    path = sqlite_path(settings.database_url)
+    folder: Path = path.parent if path is not None else settings.data_folder
+    while not folder.exists() and folder != folder.parent:  # not made yet: the disk it will be on
+        folder = folder.parent
+    try:
+        free_mb = shutil.disk_usage(folder).free // MEGABYTE
+    except OSError:
+        return StorageHealthOut(free_mb=None, min_free_mb=settings.min_free_disk_mb, problem="free space unknown")
+    problem = None
+    if free_mb < settings.min_free_disk_mb:
+        problem = f"only {free_mb} MB free where data is stored (at least {settings.min_free_disk_mb} MB wanted)"
+    return StorageHealthOut(free_mb=free_mb, min_free_mb=settings.min_free_disk_mb, problem=problem)
+
+
 @router.get("/health", response_model=HealthOut, summary="Is the service able to plan and store?")
 def health(services: ServicesDep) -> HealthOut:
-    """Report the planner registry, Fast Downward's binary and versions, optional backends that
-    failed to import, the database, the worker pool, the cache and the request limits.
+    """Report the planner registry, Fast Downward, optional backends that failed to import, the
+    database, free space, the worker pool, the cache and the request limits.
 
-    `status` is 'ok' when Fast Downward is found and the database is reachable at the right
-    schema, else 'degraded' (the answer is still 200: the service is up).
+    `status` is 'ok' when Fast Downward can run, the database answers and takes writes at the
+    right schema, and there is enough free space; else 'degraded' (the answer is still 200:
+    the service is up).
     """
     services.probe_done.wait(PROBE_WAIT_SECONDS)
     probe: dict[str, Any] = services.probe or {}
     fast_downward = probe.get("fast_downward")
     database = database_health(services)
-    planner_ok = bool(fast_downward and fast_downward["search_binary_found"] and fast_downward["translator_found"])
+    storage = storage_health(services)
+    planner_ok = bool(fast_downward and fast_downward["available"])
+    is_ok = planner_ok and database.reachable and database.problem is None and storage.problem is None
     settings = services.settings
     return HealthOut(
-        status="ok" if planner_ok and database.reachable and database.problem is None else "degraded",
+        status="ok" if is_ok else "degraded",
         version=causalplan.__version__,
         planners=probe.get("planners"),
         default_planner=default_planner(),
         fast_downward=FastDownwardHealthOut.model_validate(fast_downward) if fast_downward else None,
         optional_backends_failed=probe.get("optional_backends_failed"),
         database=database,
+        storage=storage,
         pool=services.pool.stats().as_dict(),
         cache=services.cache.stats(),
-        repeats=services.repeats.stats(),
         limits={
             "max_body_bytes": settings.max_body_bytes,
             "max_label_length": settings.max_label_length,

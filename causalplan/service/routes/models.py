@@ -7,25 +7,28 @@ import uuid
 from pathlib import Path
 from typing import Annotated, Literal
 
+from cachetools import LRUCache
 from fastapi import APIRouter, Body, Query, Request, Response
 
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import CausalModel
 from causalplan.causal.render import DRAW_LOCK
 from causalplan.inputs import model_from_data
-from causalplan.service import crud
-from causalplan.service.cache import LruCache
+from causalplan.service.db import crud
 from causalplan.service.db.models import ModelRecord
 from causalplan.service.deps import CatalogDep, ClientIdsDep, ServicesDep, SessionDep
+from causalplan.service.documents import StrictJSONRoute, first_errors, read_model
 from causalplan.service.errors import InvalidModelError
 from causalplan.service.responses import SafeJSONResponse
-from causalplan.service.schemas import GraphOut, ModelDocument, ModelLinks, ModelOut, error_responses
-from causalplan.service.submissions import first_errors, read_model
+from causalplan.service.schemas.common import ModelDocument, error_responses
+from causalplan.service.schemas.models import GraphOut, ModelLinks, ModelOut, ModelView
 
-router = APIRouter(prefix="/v1/models", tags=["models"], responses=error_responses(404, 503))
+router = APIRouter(
+    prefix="/v1/models", tags=["models"], responses=error_responses(404, 503), route_class=StrictJSONRoute
+)
 
 SVG_CACHE_SIZE = 128
-_svg_cache: LruCache[bytes] = LruCache(SVG_CACHE_SIZE)  # by model id: stored models never change
+_svg_cache: LRUCache[str, bytes] = LRUCache(SVG_CACHE_SIZE)  # by model id: stored models never change
 
 SVG_SECURITY_HEADERS = {"Content-Security-Policy": "default-src 'none'; style-src 'unsafe-inline'"}
 
@@ -34,17 +37,8 @@ def model_out(record: ModelRecord, request: Request) -> ModelOut:
     """Return the API view of a stored model."""
     url = str(request.url_for("read_model", model_id=record.id).path)
     graph = str(request.url_for("read_model_graph", model_id=record.id).path)
-    return ModelOut(
-        id=record.id,
-        created_at=record.created_at,
-        participant_id=record.participant_id,
-        session_id=record.session_id,
-        object=record.object_id,
-        valid=record.is_valid,
-        report=record.report,  # type: ignore[arg-type]  # validated into ReportOut
-        model=record.document,
-        links=ModelLinks(self=url, graph_svg=graph, graph_dot=f"{graph}?format=dot", graph_json=f"{graph}?format=json"),
-    )
+    links = ModelLinks(self=url, graph_svg=graph, graph_dot=f"{graph}?format=dot", graph_json=f"{graph}?format=json")
+    return ModelOut.model_validate({**dict(ModelView.model_validate(record, from_attributes=True)), "links": links})
 
 
 @router.post(
@@ -108,7 +102,7 @@ def _svg(model_id: uuid.UUID, model: CausalModel) -> bytes:
             with matplotlib.rc_context({"svg.fonttype": "none"}):
                 draw(model, path)
             svg = path.read_bytes()
-        _svg_cache.put(str(model_id), svg, len(svg))
+        _svg_cache[str(model_id)] = svg
         return svg
 
 

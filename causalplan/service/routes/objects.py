@@ -6,71 +6,41 @@ from fastapi import APIRouter
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.deps import CatalogDep
-from causalplan.service.schemas import (
-    ConnectorOut,
-    FitOut,
-    MechanismOut,
-    ObjectOut,
-    ObjectPartOut,
-    ObjectSummaryOut,
-    PartOut,
-    RequirementOut,
-    error_responses,
-)
+from causalplan.service.schemas.common import error_responses
+from causalplan.service.schemas.objects import FitOut, MechanismOut, ObjectOut, ObjectSummaryOut, RequirementOut
 
 router = APIRouter(prefix="/v1/objects", tags=["objects"], responses=error_responses(404))
 
 
 def object_out(obj: AssemblyObject) -> ObjectOut:
     """Return the API view of a catalog object."""
-    return ObjectOut(
-        id=obj.id,
-        name=obj.name,
-        category=obj.category,
-        goal=obj.goal,
-        description=obj.description,
-        base=obj.base,
-        parts=[
-            PartOut(
-                id=part.id,
-                name=part.name,
-                connectors=[ConnectorOut(id=c.id, kind=c.kind, spec=c.spec) for c in part.connectors],
-            )
-            for part in obj.parts
-        ],
-        fits=[
-            FitOut(
-                id=fit.id,
-                primitive=fit.primitive,
-                moving=f"{fit.moving_part}.{fit.moving_connector}",
-                fixed=f"{fit.fixed_part}.{fit.fixed_connector}",
-                probability=fit.probability,
-                blocks=[".".join(block) for block in fit.blocks],
-                text=obj.step_text(fit),
-            )
-            for fit in obj.fits
-        ],
-        mechanism=MechanismOut(
-            explanation=obj.mechanism_explanation,
-            requires=[RequirementOut(any_of=list(r.any_of), says=r.says) for r in obj.mechanism],
-        ),
+    fits = [
+        FitOut(
+            id=fit.id,
+            primitive=fit.primitive,
+            moving=f"{fit.moving_part}.{fit.moving_connector}",
+            fixed=f"{fit.fixed_part}.{fit.fixed_connector}",
+            probability=fit.probability,
+            blocks=[".".join(block) for block in fit.blocks],
+            text=obj.step_text(fit),
+        )
+        for fit in obj.fits
+    ]
+    mechanism = MechanismOut(
+        explanation=obj.mechanism_explanation,
+        requires=[RequirementOut.model_validate(requirement, from_attributes=True) for requirement in obj.mechanism],
+    )
+    summary = ObjectSummaryOut.model_validate(obj, from_attributes=True)
+    return ObjectOut.model_validate(
+        {**dict(summary), "base": obj.base, "parts": obj.parts, "fits": fits, "mechanism": mechanism},
+        from_attributes=True,
     )
 
 
 @router.get("", response_model=list[ObjectSummaryOut], summary="The catalog")
 def list_objects(catalog: CatalogDep) -> list[ObjectSummaryOut]:
     """List the objects a model can be about: id, name, category, goal and parts."""
-    return [
-        ObjectSummaryOut(
-            id=obj.id,
-            name=obj.name,
-            category=obj.category,
-            goal=obj.goal,
-            description=obj.description,
-            parts=[ObjectPartOut(id=part.id, name=part.name) for part in obj.parts],
-        )
-        for obj in catalog.objects.values()
-    ]
+    return [ObjectSummaryOut.model_validate(obj, from_attributes=True) for obj in catalog.objects.values()]
 
 
 @router.get("/{object_id}", response_model=ObjectOut, summary="One catalog object")

@@ -8,11 +8,12 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Query
 from fastapi.responses import Response
 
-from causalplan.service import crud
+from causalplan.service.db import crud
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH, ModelRecord, TrialRecord
 from causalplan.service.deps import ResearchAccessDep, SessionDep
 from causalplan.service.responses import SafeJSONResponse, csv_bytes
-from causalplan.service.schemas import RESEARCH_ERROR_RESPONSES, ExportOut, StoredModelOut, TrialOut, TrialsOut
+from causalplan.service.schemas.common import RESEARCH_ERROR_RESPONSES
+from causalplan.service.schemas.research import ExportOut, StoredModelOut, TrialOut, TrialsOut
 
 router = APIRouter(prefix="/v1", tags=["research"], responses=RESEARCH_ERROR_RESPONSES)
 

@@ -5,19 +5,18 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter
-from pydantic import Field
 
-from causalplan.service import submissions
 from causalplan.service.deps import ClientIdsDep, ServicesDep
-from causalplan.service.schemas import PlanIn, error_responses
+from causalplan.service.documents import StrictJSONRoute, plan_inputs
+from causalplan.service.schemas.common import error_responses
+from causalplan.service.schemas.plans import SimulationIn
 
-router = APIRouter(prefix="/v1/simulations", tags=["simulations"], responses=error_responses(404, 429, 503, 504))
-
-
-class SimulationIn(PlanIn):
-    """POST /v1/simulations: what POST /v1/plans takes, and whether to draw the final assembly."""
-
-    picture: bool = Field(default=True, description="Also return a PNG of the final assembly as a data URL.")
+router = APIRouter(
+    prefix="/v1/simulations",
+    tags=["simulations"],
+    responses=error_responses(404, 429, 503, 504),
+    route_class=StrictJSONRoute,
+)
 
 
 @router.post("", summary="Plan a model and simulate the plan")
@@ -28,10 +27,13 @@ def create_simulation(body: SimulationIn, services: ServicesDep, client: ClientI
     figures, stability, the true mechanism on the simulated assembly, `produces_goal`) and
     `image` (a PNG data URL of the final assembly, when `picture` is true), plus `cached`.
     """
-    inputs = submissions.plan_inputs(body, services, client)
-    key = inputs.key(f"simulate:{body.picture}")
-    store = submissions.storing(services, inputs.submission)
-    answer = submissions.simulate(
-        services, inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, body.picture, key, store
+    inputs = plan_inputs(body, services, client)
+    answer = services.answers.simulate(
+        inputs.model,
+        inputs.mapping,
+        inputs.planner,
+        inputs.time_limit,
+        body.picture,
+        lambda: inputs.store(services),
     )
     return {**answer.data, "cached": answer.cached, "model_id": str(inputs.submission.record.id)}

@@ -17,7 +17,7 @@ from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import CausalModel, read_model
 from causalplan.errors import CausalPlanError
 from causalplan.objects.model import AssemblyObject
-from causalplan.service import submissions
+from causalplan.service.answers import default_planner
 from causalplan.service.deps import Services
 from causalplan.service.web.drawings import plan_picture
 
@@ -51,9 +51,7 @@ def needing(obj: AssemblyObject, parts: tuple[str, ...]) -> CausalModel:
 
 def plan_fits(services: Services, model: CausalModel) -> tuple[str, ...]:
     """Return the fits of the robot's plan of ``model``, in order (empty when there is no plan)."""
-    answer = submissions.plan(
-        services, model, None, submissions.default_planner(), services.settings.default_time_limit
-    )
+    answer = services.answers.plan(model, None, default_planner(), services.settings.default_time_limit)
     steps = answer.data.get("plan") or []
     fits = tuple(str(step.get("fit") or "") for step in steps)
     return fits if fits and all(fits) else ()

@@ -20,12 +20,12 @@ from fastapi import Depends, Request, Response
 from sqlalchemy import delete
 from sqlalchemy.orm import Session
 
-from causalplan.service.crud import storage_errors
+from causalplan.service.db.crud import storage_errors
 from causalplan.service.db.models import RevokedResearchSessionRecord
 from causalplan.service.deps import ServicesDep, SessionDep, check_research_token
 from causalplan.service.errors import ResearchDisabledError
-from causalplan.service.settings import Settings
 from causalplan.service.web.errors import CrossSiteRequestError, LoginRequiredError
+from causalplan.settings import Settings
 
 COOKIE_NAME = "causalplan_research"
 COOKIE_PATH = "/research"

@@ -17,7 +17,7 @@ from cachetools import TTLCache
 from sqlalchemy import delete, func, select
 from sqlalchemy.orm import Session
 
-from causalplan.service.crud import storage_errors
+from causalplan.service.db.crud import storage_errors
 from causalplan.service.db.models import (
     ExperimentRecord,
     ModelRecord,

@@ -13,10 +13,12 @@ from typing import Any
 from sqlalchemy.orm import Session
 
 from causalplan.inputs import LoadedModel
-from causalplan.service import crud, submissions
-from causalplan.service.crud import ClientIds
+from causalplan.service.answers import default_planner, model_hash
+from causalplan.service.db import crud
+from causalplan.service.db.crud import ClientIds
 from causalplan.service.db.models import ParticipantTrialRecord, utc_now
 from causalplan.service.deps import Services
+from causalplan.service.documents import first_errors
 from causalplan.service.errors import InvalidModelError
 from causalplan.service.web.errors import StepLockedError
 from causalplan.service.web.journey import Journey
@@ -31,7 +33,7 @@ def client_ids(journey: Journey) -> ClientIds:
 def invalid_model_error(check: LoadedModel) -> InvalidModelError:
     """Return the 422 error of an invalid draft model (details: the report, with `check`'s codes)."""
     return InvalidModelError(
-        "The model is not valid yet: " + submissions.first_errors(check.report),
+        "The model is not valid yet: " + first_errors(check.report),
         details={"model": check.report.as_dict()},
     )
 
@@ -44,11 +46,11 @@ def picture_url(code: str, object_id: str, steps: list[dict[str, Any]] | None) -
 
 def plans(services: Services, journey: Journey, participant_model: ParticipantModel) -> list[dict[str, Any]]:
     """Return the robot's plan of the (valid) model on each training object, with where its picture is."""
-    planner = submissions.default_planner()
+    planner = default_planner()
     found = []
     for obj in journey.training:
-        answer = submissions.plan(
-            services, model_on(participant_model, obj.id), None, planner, services.settings.default_time_limit
+        answer = services.answers.plan(
+            model_on(participant_model, obj.id), None, planner, services.settings.default_time_limit
         )
         steps = answer.data.get("plan") or []
         found.append(
@@ -76,7 +78,7 @@ def submit_model(session: Session, journey: Journey, participant_model: Particip
         first,
         True,
         check.report.as_dict(),
-        submissions.model_hash(model_on(participant_model, first)),
+        model_hash(model_on(participant_model, first)),
         client_ids(journey),
     )
     with crud.storage_errors(session):  # the model and the participant's move to step 3 together
@@ -99,9 +101,9 @@ def run_trial(services: Services, session: Session, journey: Journey, index: int
     if participant_model is None or model_id is None or mapping.mapping is None:
         raise StepLockedError("There is no submitted model or valid mapping to try.")
     test = journey.tests[index]
-    planner = submissions.default_planner()
+    planner = default_planner()
     model = model_on(participant_model, journey.training[0].id)
-    answer = submissions.transfer(services, model, mapping.mapping, planner, services.settings.default_time_limit)
+    answer = services.answers.transfer(model, mapping.mapping, planner, services.settings.default_time_limit)
     trial = crud.new_trial_record(
         model_id, mapping.document, planner, answer.data, answer.cached, answer.seconds, client_ids(journey)
     )

@@ -15,7 +15,7 @@ from xml.sax.saxutils import escape
 
 from cachetools import LRUCache
 
-from causalplan.service.worker import worker_catalog
+from causalplan.service.pool.jobs import worker_catalog
 
 PART_PICTURE_SIZE = (320, 240)
 PLAN_PICTURE_SIZE = (480, 360)
@@ -68,7 +68,7 @@ class PictureCache:
     """The ``size`` pictures last used (``cachetools.LRUCache``); one drawing per key at a time (others wait)."""
 
     def __init__(self, size: int) -> None:
-        self._pictures: LRUCache[str, bytes] = LRUCache(size)
+        self._pictures: LRUCache[str, bytes] = LRUCache(max(size, 1))
         self._lock = threading.Lock()
         self._drawing: dict[str, threading.Lock] = {}
 

@@ -7,7 +7,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import ConfigDict, Field
 
-from causalplan.service.schemas import DiagnosticOut, InputModel, OutputModel, UtcDatetime
+from causalplan.service.schemas.common import DiagnosticOut, InputModel, OutputModel, UtcDatetime
 
 ObjectId = Annotated[str, Field(min_length=1, max_length=200)]
 MAX_RULES_TEXT = 200_000

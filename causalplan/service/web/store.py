@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from sqlalchemy import Select, func, select
 from sqlalchemy.orm import Session
 
-from causalplan.service.crud import storage_errors
+from causalplan.service.db.crud import storage_errors
 from causalplan.service.db.models import (
     ExperimentRecord,
     ParticipantRecord,

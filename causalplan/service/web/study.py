@@ -26,9 +26,9 @@ from causalplan.causal.validation import ObjectSummary, validate_model
 from causalplan.inputs import LoadedMapping, LoadedModel, mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject
+from causalplan.service.documents import check_labelling_limits, check_model_limits
 from causalplan.service.errors import LimitExceededError
-from causalplan.service.limits import check_labelling_limits, check_model_limits
-from causalplan.service.settings import Settings
+from causalplan.settings import Settings
 
 
 class Stage(StrEnum):

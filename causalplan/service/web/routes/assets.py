@@ -7,7 +7,7 @@ from importlib import resources
 
 from fastapi import APIRouter, Request, Response
 
-from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, client_address
+from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep, client_address
 from causalplan.service.errors import NotFoundError
 from causalplan.service.web import store
 from causalplan.service.web.demo import DemoStarts
@@ -32,10 +32,10 @@ def start(request: Request, catalog: CatalogDep) -> Response:
 
 
 @pages.post("/try")
-def try_it(request: Request, session: SessionDep, catalog: CatalogDep) -> Response:
+def try_it(request: Request, session: SessionDep, catalog: CatalogDep, settings: SettingsDep) -> Response:
     """Make a participant of the demo experiment and go to their first page (a few a minute per client)."""
     demo_starts: DemoStarts = request.app.state.demo_starts
-    demo_starts.admit(client_address(request))
+    demo_starts.admit(client_address(request, settings))
     for object_id in ("desk_lamp", "flashlight"):
         catalog.get(object_id)
     experiment = store.demo_experiment(session, DEMO_DESIGN)

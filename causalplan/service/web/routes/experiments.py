@@ -11,7 +11,7 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, Query, Request, Response
 
 from causalplan.service.deps import CatalogDep, ResearchAccessDep, SessionDep
-from causalplan.service.schemas import RESEARCH_ERROR_RESPONSES, error_responses
+from causalplan.service.schemas.common import RESEARCH_ERROR_RESPONSES, error_responses
 from causalplan.service.web import experiments, store
 from causalplan.service.web.schemas import ExperimentIn, ExperimentOut, LinksIn, ParticipantsOut, ResultsOut
 

@@ -14,7 +14,6 @@ from pydantic import ValidationError
 
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep, check_research_token
 from causalplan.service.errors import TooManyAttemptsError
-from causalplan.service.settings import Settings
 from causalplan.service.web import experiments, store
 from causalplan.service.web.auth import ResearchPageDep, sign_in, sign_out
 from causalplan.service.web.drawings import SVG_HEADERS, rates_chart
@@ -22,6 +21,7 @@ from causalplan.service.web.errors import InvalidExperimentError
 from causalplan.service.web.forms import Form, read_form
 from causalplan.service.web.schemas import ExperimentIn
 from causalplan.service.web.templating import PageRoute, redirect, render
+from causalplan.settings import Settings
 
 router = APIRouter(prefix="/research", route_class=PageRoute, include_in_schema=False)
 

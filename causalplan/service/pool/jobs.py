@@ -1,96 +1,38 @@
-"""What runs inside a planner worker process: its loop, and the jobs the service sends it.
+"""The jobs the service sends its planner workers: plan, transfer, simulate, and the probe /health shows.
 
-A worker serves one job at a time over its socket: it receives ``(function, args)``, runs it
-and sends back ``("ok", value)``, ``("error", code, message, details)`` for a
-``CausalPlanError``, or ``("crash", text)`` for anything else. Fast Downward's translator
-forks from this process and its search binary starts from it, so the app's own process
-(with uvicorn's threads) never does either.
+Each runs inside a worker process (``pool.worker``); arguments and answers are pickled, so they
+are plain values (models, mappings, JSON-ready dicts).
 """
 
 from __future__ import annotations
 
-import gc
 import importlib
-import os
-import resource
-import signal
-import sys
-import traceback
-from collections.abc import Callable
+import re
 from contextlib import suppress
 from functools import cache
 from importlib import metadata
 from importlib.util import find_spec
-from multiprocessing.connection import Connection
 from pathlib import Path
-from typing import Any
 
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import Catalog, load_catalog
 from causalplan.pddl.task import build_task
-from causalplan.planners import canonical_translation, fast_downward, pipeline, search_processes
-from causalplan.service.errors import PlannerOutOfMemoryError
+from causalplan.planners import pipeline
 from causalplan.transfer.verdict import evaluate_transfer
 
-Job = tuple[Callable[..., Any], tuple[Any, ...]]
 OPTIONAL_BACKENDS = ("unified_planning", "up_fast_downward", "up_pyperplan", "up_tamer", "pybullet", "matplotlib")
 """Modules some planners or commands use; /health reports the ones that fail to import."""
-
-
-def main() -> None:
-    """Run as a worker: ``argv`` holds the socket's file descriptor and the memory limit in MB."""
-    descriptor, memory_mb = int(sys.argv[1]), int(sys.argv[2])
-    serve(Connection(descriptor), memory_mb)
-
-
-def serve(connection: Connection, memory_mb: int) -> None:
-    """Say hello, then run jobs from ``connection`` until it closes or sends None."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C stops the server, which then stops us
-    limit = memory_mb * 1024 * 1024
-    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-    warm_up()
-    gc.collect()
-    gc.freeze()  # what the worker imported stays: its collections then skip all of it
-    connection.send(("ready", os.getpid()))
-    while True:
-        try:
-            job: Job | None = connection.recv()
-        except (EOFError, OSError):
-            return
-        if job is None:
-            return
-        function, args = job
-        # What a used search process leaves to do waits until the answer is sent (see retirements_held).
-        with search_processes.retirements_held():
-            try:
-                reply: tuple[Any, ...] = ("ok", function(*args))
-            except CausalPlanError as exc:
-                reply = ("error", exc.code, exc.message, exc.details)
-            except MemoryError:
-                reply = ("error", PlannerOutOfMemoryError.code, "The planner worker ran out of memory.", {})
-            except Exception:  # noqa: BLE001 - reported to the service, which logs it and answers clearly
-                reply = ("crash", traceback.format_exc())
-            try:
-                connection.send(reply)
-            except (BrokenPipeError, OSError):
-                return
+FAST_DOWNWARD = "fd"
+"""The registry's Fast Downward planner, whose availability /health reports."""
 
 
 def warm_up() -> None:
-    """Do once, before the first job, what solves need: FD's translator imported, a search started.
-
-    And the built-in catalog read (~20 ms), and each of its objects' half of a canonical
-    translation parsed (0.7-0.8 ms each): work that would otherwise fall on each worker's first
-    request (on that object). A planner that cannot run says so in its own answers (and /health), not here.
-    """
-    with suppress(Exception):
+    """Do once, before the first job, what every solve needs: FD's translator imported, the catalog read."""
+    with suppress(Exception):  # a translator that cannot run says so in the answers (and /health)
         importlib.import_module("fast_downward.translate.main")
-    fast_downward.prestart()  # the default search, waiting for its first task
     with suppress(CausalPlanError):
-        for obj in worker_catalog(()).objects.values():
-            with suppress(Exception):  # a translator that cannot run says so in the answers
-                canonical_translation.keep_object(obj)
+        worker_catalog(())
 
 
 @cache
@@ -134,13 +76,19 @@ def _version(distribution: str) -> str | None:
         return None
 
 
+_PATH = re.compile(r"(?:/[^/\s'\"]+)+/([^/\s'\"]+)")
+
+
+def without_paths(text: str | None) -> str | None:
+    """Return ``text`` with each absolute path cut to its last part (/health says what, not where on disk)."""
+    return None if text is None else _PATH.sub(r"\1", text)
+
+
 def probe_job() -> dict[str, object]:
-    """Return what this worker can run: planner binaries, their versions, failed optional imports."""
-    try:
-        binary: str | None = str(fast_downward.search_binary())
-        binary_problem = None
-    except CausalPlanError as exc:
-        binary, binary_problem = None, exc.message
+    """Return what this worker can run: the planner registry, Fast Downward, failed optional imports.
+
+    Fast Downward is reported by whether its planner can run, never by where its binary is.
+    """
     failed: dict[str, str] = {}
     for module in OPTIONAL_BACKENDS:
         if find_spec(module) is None:
@@ -149,20 +97,19 @@ def probe_job() -> dict[str, object]:
         try:
             __import__(module)
         except Exception as exc:  # noqa: BLE001 - any import failure is what /health reports
-            failed[module] = f"{exc.__class__.__name__}: {exc}"
+            failed[module] = f"{exc.__class__.__name__}: {without_paths(str(exc))}"
     # The registry's own availability check imports unified-planning's engines, which is why
     # the probe runs in a throwaway process.
-    problems = pipeline.planner_availability()
+    problems = {name: without_paths(problem) for name, problem in pipeline.planner_availability().items()}
+    fd_problem = problems.get(FAST_DOWNWARD, f"the planner registry has no '{FAST_DOWNWARD}'")
     return {
         "planners": [
             {"name": name, "available": problems.get(name) is None, "problem": problems.get(name)}
             for name in pipeline.PLANNERS
         ],
         "fast_downward": {
-            "search_binary": binary,
-            "search_binary_found": binary is not None,
-            "problem": binary_problem,
-            "translator_found": fast_downward.translator_available(),
+            "available": fd_problem is None,
+            "problem": fd_problem,
             "versions": {
                 "up-fast-downward": _version("up-fast-downward"),
                 "fast-downward-translate": _version("fast-downward.translate") or _version("fast-downward-translate"),

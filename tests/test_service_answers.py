@@ -16,7 +16,7 @@ from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import build_task
 from causalplan.planners.pipeline import plan_task
-from causalplan.service.cache import LruCache, ResultCache, document_key
+from causalplan.service.answers import MAX_ANSWER_BYTES, ResultCache
 from tests.service_fixtures import (
     AUTH,
     DESK_LAMP,
@@ -229,33 +229,15 @@ def test_the_caches_stay_bounded(tmp_path: Path) -> None:
             for i in range(4)
         ]
         first = [post_plan(client, body) for body in bodies]
-        assert len(services.cache) == 2 and len(services.reads) == 2
-        again = post_plan(client, bodies[0])  # dropped from both caches: read and planned again
+        assert len(services.cache) == 2
+        again = post_plan(client, bodies[0])  # dropped from the cache: planned again
         assert again["cached"] is False and answer_of(again) == answer_of(first[0])
         assert post_plan(client, bodies[0])["cached"] is True
-        assert len(services.cache) == 2 and len(services.reads) == 2
+        assert len(services.cache) == 2
 
 
-def test_an_lru_cache_is_bounded_by_entries_and_by_bytes() -> None:
-    cache: LruCache[str] = LruCache(3, max_bytes=100)
-    for key in "abc":
-        cache.put(key, key.upper(), 30)
-    assert len(cache) == 3 and cache.bytes == 90
-    assert cache.get("a") == "A"  # now the most recently used
-    cache.put("d", "D", 30)  # over both bounds: 'b' goes
-    assert cache.get("b") is None and len(cache) == 3 and cache.bytes == 90
-    cache.put("e", "E", 70)  # over the bytes: the two least recently used go
-    assert [cache.get(key) for key in "acde"] == [None, None, "D", "E"] and cache.bytes == 100
-    cache.put("e", "E2", 10)  # replacing an entry counts its new weight only
-    assert cache.get("e") == "E2" and cache.bytes == 40
-    cache.put("huge", "H", 101)  # heavier than the whole cache: not kept, nothing dropped
-    assert cache.get("huge") is None and len(cache) == 2
-    LruCache[str](0).put("x", "X")
-    assert len(LruCache[str](0)) == 0
-
-
-def test_answers_come_out_as_copies_and_documents_are_keyed_exactly() -> None:
-    cache = ResultCache(4)
+def test_answers_come_out_as_copies_and_the_cache_keeps_the_recently_used() -> None:
+    cache = ResultCache(2)
     answer: dict[str, Any] = {"plan": [{"action": "screw", "args": ["a", "b"]}], "status": "solved"}
     cache.put("k", answer)
     answer["plan"][0]["args"].append("changed")  # the caller's dict is not the stored one
@@ -264,9 +246,12 @@ def test_answers_come_out_as_copies_and_documents_are_keyed_exactly() -> None:
     assert out is not None
     out["plan"].clear()
     assert cache.get("k") == {"plan": [{"action": "screw", "args": ["a", "b"]}], "status": "solved"}
-    key, _ = document_key("model", {"a": 1, "b": [1]})
-    assert key == document_key("model", {"a": 1, "b": [1]})[0]
-    for other in ({"b": [1], "a": 1}, {"a": 1.0, "b": [1]}, {"a": True, "b": [1]}, {"a": "1", "b": [1]}):
-        assert document_key("model", other)[0] != key, other
-    assert document_key("mapping", {"a": 1, "b": [1]})[0] != key
-    assert document_key("model", {"a": "\ud800"})[0] != document_key("model", {"a": "\ufffd"})[0]
+    cache.put("l", {})
+    assert cache.get("k") is not None  # now the most recently used
+    cache.put("m", {})
+    assert cache.get("l") is None and len(cache) == 2
+    cache.put("huge", {"text": "x" * (MAX_ANSWER_BYTES + 1)})  # larger than an answer may be: not kept
+    assert cache.get("huge") is None and cache.get("k") is not None
+    off = ResultCache(0)
+    off.put("x", {})
+    assert off.get("x") is None and len(off) == 0

@@ -1,21 +1,31 @@
-"""The service's settings: one ``Settings``, read from ``CAUSALPLAN_*`` environment variables."""
+"""Every ``CAUSALPLAN_*`` setting: one ``Settings``, the only reader of the environment.
+
+The service, its workers and ``causalplan serve`` all take their settings from here; a field
+``name`` is the variable ``CAUSALPLAN_NAME``. Folders default to the user's data folder
+(``platformdirs``: ``~/.local/share/causalplan`` on Linux).
+"""
 
 from __future__ import annotations
 
-import os
+import ipaddress
 from pathlib import Path
 
-from pydantic import Field, SecretStr, field_validator, model_validator
+import platformdirs
+from pydantic import Field, SecretStr, ValidationInfo, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from causalplan.causal.model import MAX_LABEL_LENGTH
-from causalplan.planners.fast_downward import DEFAULT_MEMORY_LIMIT_MB
+
+APP_NAME = "causalplan"
+MIN_WORKER_MEMORY_MB = 2560
+"""A worker's address space must hold its planner children's own limit (2048 MB) and itself."""
+
+IpNetwork = ipaddress.IPv4Network | ipaddress.IPv6Network
 
 
-def default_database_url() -> str:
-    """Return the SQLite file in the user's data folder (``$XDG_DATA_HOME/causalplan``)."""
-    data_home = Path(os.environ.get("XDG_DATA_HOME") or Path.home() / ".local" / "share")
-    return f"sqlite:///{data_home / 'causalplan' / 'causalplan.sqlite3'}"
+def data_folder() -> Path:
+    """Return the user's data folder for causalplan (created by whoever writes there first)."""
+    return Path(platformdirs.user_data_dir(APP_NAME, appauthor=False))
 
 
 class Settings(BaseSettings):
@@ -23,9 +33,14 @@ class Settings(BaseSettings):
 
     model_config = SettingsConfigDict(env_prefix="CAUSALPLAN_", extra="ignore", frozen=True)
 
+    data_folder: Path = Field(
+        default_factory=data_folder, description="Where the default SQLite file lives; /health checks its free space."
+    )
     database_url: str = Field(
-        default_factory=default_database_url,
-        description="SQLAlchemy URL: sqlite:///PATH (created on first start) or postgresql://USER:PASSWORD@HOST/DB.",
+        default="",
+        validate_default=True,
+        description="SQLAlchemy URL: sqlite:///PATH (created on first start) or postgresql://USER:PASSWORD@HOST/DB; "
+        "empty: causalplan.sqlite3 in data_folder.",
     )
     research_token: SecretStr | None = Field(
         default=None, description="Bearer token for GET /v1/trials and /v1/export; unset, they are disabled."
@@ -34,11 +49,23 @@ class Settings(BaseSettings):
         default=10,
         ge=1,
         le=1000,
-        description="Wrong research tokens one client address may send within research_failure_window_seconds; "
+        description="Wrong research tokens one client may send within research_failure_window_seconds; "
         "its further attempts get 429 until the oldest failure leaves the window.",
     )
+    research_max_failures_total: int = Field(
+        default=100,
+        ge=1,
+        le=100_000,
+        description="Wrong research tokens all clients together may send within the window; then every "
+        "attempt gets 429 (guessing from many addresses is slowed too).",
+    )
     research_failure_window_seconds: float = Field(
-        default=60.0, gt=0, le=86_400, description="The window, in seconds, in which research_max_failures counts."
+        default=60.0, gt=0, le=86_400, description="The window, in seconds, in which failures are counted."
+    )
+    trusted_proxies: list[IpNetwork] = Field(
+        default_factory=list,
+        description="Addresses or networks of reverse proxies whose X-Forwarded-For names the client "
+        '(e.g. ["127.0.0.1"]); from any other peer the header is ignored.',
     )
     catalog_folders: list[Path] = Field(default_factory=list, description="Folders of extra object files.")
 
@@ -52,12 +79,13 @@ class Settings(BaseSettings):
     )
     worker_memory_mb: int = Field(
         default=4096,
-        ge=DEFAULT_MEMORY_LIMIT_MB + 512,
+        ge=MIN_WORKER_MEMORY_MB,
         description="Address-space limit of each worker process (its planner children get less).",
     )
     cache_size: int = Field(default=512, ge=0, description="Answers kept for identical requests (0: no cache).")
-    access_log: bool = Field(
-        default=True, description="Log one line per request (method, path, status); ~0.07 ms per request here."
+    access_log: bool = Field(default=True, description="Log one line per request (method, path, status).")
+    min_free_disk_mb: int = Field(
+        default=100, ge=0, description="Below this much free space where data is stored, /health says 'degraded'."
     )
 
     max_body_bytes: int = Field(default=262_144, ge=1024, description="Largest request body.")
@@ -79,9 +107,19 @@ class Settings(BaseSettings):
         default=True, description="Draw the pictures of the catalog objects' likely plans in the background at start."
     )
 
+    @field_validator("trusted_proxies", mode="before")
+    @classmethod
+    def _networks(cls, value: object) -> object:
+        # "10.0.0.1" is the network of that one address; a host part in "10.0.0.1/8" is an error.
+        if isinstance(value, list):
+            return [ipaddress.ip_network(str(item), strict=True) for item in value]
+        return value
+
     @field_validator("database_url")
     @classmethod
-    def _use_psycopg(cls, value: str) -> str:
+    def _database_url(cls, value: str, info: ValidationInfo) -> str:
+        if not value:
+            return f"sqlite:///{info.data['data_folder'] / 'causalplan.sqlite3'}"
         # SQLAlchemy's default PostgreSQL driver is psycopg2; the package ships psycopg 3.
         for prefix in ("postgres://", "postgresql://"):
             if value.startswith(prefix):
@@ -106,3 +144,11 @@ class Settings(BaseSettings):
     def max_in_flight(self) -> int:
         """Return how many solves may be running or waiting at once before requests get 429."""
         return self.planning_workers + self.queue_size
+
+    def is_trusted_proxy(self, address: str) -> bool:
+        """Return whether ``address`` (a peer's IP) is one of the operator's reverse proxies."""
+        try:
+            ip = ipaddress.ip_address(address)
+        except ValueError:  # e.g. a Unix socket, or the test client's "testclient"
+            return False
+        return any(ip in network for network in self.trusted_proxies)

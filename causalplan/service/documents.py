@@ -1,0 +1,371 @@
+"""Reading and checking a request's documents: limits first, then the reader the CLI uses.
+
+The service's limits bound the work one request can cause (parts, labels, rules); the model
+reader checks meaning and reports with the CLI's codes. What a request gives is read once here,
+into ``PlanInputs``: a valid model (and the record to store if it came inline), mapping,
+planner and time limit. Routes then ask ``answers`` for the answer.
+"""
+
+from __future__ import annotations
+
+import json
+import json.decoder
+import json.scanner
+import re
+import uuid
+from collections.abc import Callable, Coroutine, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from fastapi import Request, Response
+from fastapi.routing import APIRoute
+
+from causalplan.causal.diagnostics import Diagnostic, Report
+from causalplan.causal.documents import SourceMap
+from causalplan.causal.model import CausalModel, Labelling
+from causalplan.inputs import mapping_from_data, model_from_data
+from causalplan.objects.catalog import Catalog
+from causalplan.service.answers import model_text, resolve_planner, resolve_time_limit, text_hash
+from causalplan.service.db.crud import MAX_NESTING, ClientIds, clean_json, get_model, new_model_record, save
+from causalplan.service.db.models import ModelRecord
+from causalplan.service.deps import Services, open_session
+from causalplan.service.errors import InvalidMappingError, InvalidModelError, LimitExceededError
+from causalplan.service.schemas.plans import PlanIn
+from causalplan.settings import Settings
+
+RULE_LENGTH_FACTOR = 4
+"""A rule may be this many labels long (as in ``causalplan.causal.model``)."""
+MAX_NUMBER_DIGITS = 100
+"""No document needs a longer integer; Python refuses ones over 4,300 digits anyway."""
+
+
+class BodyJSONError(json.JSONDecodeError):
+    """A request body this service does not read as JSON, with what is wrong and where (line, column)."""
+
+
+_WHITESPACE = re.compile(r"[ \t\n\r]*")
+# The pure-Python scanner's parts (not in the stubs): it takes our object and array parsers.
+_make_scanner: Callable[[json.JSONDecoder], Any] = json.scanner.py_make_scanner  # type: ignore[attr-defined]
+_scan_string: Callable[[str, int, bool], tuple[str, int]] = json.decoder.scanstring  # type: ignore[attr-defined]
+_scan_array: Callable[[tuple[str, int], Any], tuple[list[Any], int]] = json.decoder.JSONArray  # type: ignore[attr-defined]
+
+
+def _skip(text: str, at: int) -> int:
+    match = _WHITESPACE.match(text, at)
+    assert match is not None  # it matches the empty string too
+    return match.end()
+
+
+class _StrictDecoder(json.JSONDecoder):
+    """``json``'s own pure-Python scanner, refusing what ``json.loads`` takes silently or fails on obscurely.
+
+    A key twice in one object (``json.loads`` keeps the last), nesting deeper than the documents
+    need, integers longer than any document needs, and NaN or Infinity.
+    """
+
+    def __init__(self, text: str) -> None:
+        super().__init__(strict=True)
+        self.text = text
+        self.depth = 0
+        self.parse_object = self._object
+        self.parse_array = self._array
+        self.parse_int = self._integer
+        self.parse_constant = self._constant
+        self.memo: dict[str, str] = {}
+        self.scan_once = _make_scanner(self)
+
+    def _enter(self, text: str, at: int) -> None:
+        self.depth += 1
+        if self.depth > MAX_NESTING:
+            raise BodyJSONError(f"nested more than {MAX_NESTING} levels deep", text, at)
+
+    def _object(
+        self, text_and_end: tuple[str, int], strict: bool, scan_once: Any, *_: Any
+    ) -> tuple[dict[str, Any], int]:
+        text, end = text_and_end
+        self._enter(text, end - 1)
+        result: dict[str, Any] = {}
+        end = _skip(text, end)
+        if text[end : end + 1] == "}":
+            self.depth -= 1
+            return result, end + 1
+        while True:
+            if text[end : end + 1] != '"':
+                raise BodyJSONError("expecting a key in double quotes", text, end)
+            key_at = end
+            key, end = _scan_string(text, end + 1, strict)
+            if key in result:
+                raise BodyJSONError(f"the key {json.dumps(key)} appears twice in one object", text, key_at)
+            end = _skip(text, end)
+            if text[end : end + 1] != ":":
+                raise BodyJSONError("expecting ':' after a key", text, end)
+            end = _skip(text, end + 1)
+            try:
+                result[key], end = scan_once(text, end)
+            except StopIteration as stop:
+                raise BodyJSONError("expecting a value", text, stop.value) from None
+            end = _skip(text, end)
+            delimiter = text[end : end + 1]
+            if delimiter == "}":
+                self.depth -= 1
+                return result, end + 1
+            if delimiter != ",":
+                raise BodyJSONError("expecting ',' or '}'", text, end)
+            end = _skip(text, end + 1)
+
+    def _array(self, text_and_end: tuple[str, int], scan_once: Any) -> tuple[list[Any], int]:
+        self._enter(text_and_end[0], text_and_end[1] - 1)
+        values, end = _scan_array(text_and_end, scan_once)
+        self.depth -= 1
+        return values, end
+
+    def _integer(self, digits: str) -> int:
+        if len(digits.lstrip("-")) > MAX_NUMBER_DIGITS:
+            raise BodyJSONError(
+                f"a number of {len(digits.lstrip('-'))} digits (at most {MAX_NUMBER_DIGITS})",
+                self.text,
+                max(self.text.find(digits), 0),
+            )
+        return int(digits)
+
+    def _constant(self, name: str) -> Any:
+        raise BodyJSONError(f"{name} is not a JSON value", self.text, max(self.text.find(name), 0))
+
+
+def parse_json(body: bytes) -> Any:
+    """Return the JSON value of a request body; BodyJSONError says what is wrong and at which line and column."""
+    try:
+        text = body.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        shown = body.decode("utf-8", "replace")
+        at = len(body[: exc.start].decode("utf-8", "replace"))
+        raise BodyJSONError(f"not UTF-8 (byte {exc.start})", shown, at) from None
+    return _StrictDecoder(text).decode(text)
+
+
+class StrictJSONRequest(Request):
+    """A request whose JSON body is read by ``parse_json``."""
+
+    async def json(self) -> Any:
+        if not hasattr(self, "_json"):
+            self._json = parse_json(await self.body())
+        return self._json
+
+
+class StrictJSONRoute(APIRoute):
+    """A route that reads its JSON body with ``parse_json`` (FastAPI's custom-request pattern)."""
+
+    def get_route_handler(self) -> Callable[[Request], Coroutine[Any, Any, Response]]:
+        handler = super().get_route_handler()
+
+        async def strict_handler(request: Request) -> Response:
+            return await handler(StrictJSONRequest(request.scope, request.receive))
+
+        return strict_handler
+
+
+def _too_long(settings: Settings, label: object) -> bool:
+    return isinstance(label, str) and len(label) > settings.max_label_length
+
+
+def check_labelling_limits(document: Mapping[str, Any], settings: Settings, what: str) -> None:
+    """Raise LimitExceededError when a model's or mapping's ``functions`` are over the limits."""
+    functions = document.get("functions")
+    if not isinstance(functions, Mapping):
+        return  # the reader reports the wrong type with its own code
+    if len(functions) > settings.max_parts:
+        raise LimitExceededError(
+            "too_many_parts",
+            f"The {what} labels {len(functions)} parts; the limit is {settings.max_parts}.",
+            details={"limit": settings.max_parts, "actual": len(functions), "field": "functions"},
+        )
+    for part, labels in functions.items():
+        items = labels if isinstance(labels, list) else [labels]
+        if len(items) > settings.max_labels_per_part:
+            raise LimitExceededError(
+                "too_many_labels",
+                f"Part '{part}' of the {what} has {len(items)} function labels; the limit is "
+                f"{settings.max_labels_per_part}.",
+                details={"limit": settings.max_labels_per_part, "actual": len(items), "part": str(part)},
+            )
+        for label in items:
+            if _too_long(settings, label):
+                raise LimitExceededError(
+                    "label_too_long",
+                    f"A function label of part '{part}' is {len(label)} characters long; the limit is "
+                    f"{settings.max_label_length}.",
+                    details={"limit": settings.max_label_length, "actual": len(label), "part": str(part)},
+                )
+
+
+def check_model_limits(document: Mapping[str, Any], settings: Settings) -> None:
+    """Raise LimitExceededError when a model document is over the service's limits."""
+    check_labelling_limits(document, settings, "model")
+    goal = document.get("goal")
+    if isinstance(goal, str) and _too_long(settings, goal):
+        raise LimitExceededError(
+            "label_too_long",
+            f"The goal is {len(goal)} characters long; the limit is {settings.max_label_length}.",
+            details={"limit": settings.max_label_length, "actual": len(goal), "field": "goal"},
+        )
+    rules = document.get("rules")
+    if isinstance(rules, str):
+        rules = [line for line in rules.splitlines() if line.strip()]
+    if not isinstance(rules, list):
+        return
+    if len(rules) > settings.max_rules:
+        raise LimitExceededError(
+            "too_many_rules",
+            f"The model has {len(rules)} rules; the limit is {settings.max_rules}.",
+            details={"limit": settings.max_rules, "actual": len(rules), "field": "rules"},
+        )
+    longest = RULE_LENGTH_FACTOR * settings.max_label_length
+    for index, rule in enumerate(rules, start=1):
+        if isinstance(rule, str) and len(rule) > longest:
+            raise LimitExceededError(
+                "label_too_long",
+                f"Rule {index} is {len(rule)} characters long; the limit is {longest}.",
+                details={"limit": longest, "actual": len(rule), "rule": index},
+            )
+
+
+@dataclass
+class ModelSubmission:
+    """A model from a request: read and validated, with its record (to store, if it came inline)."""
+
+    model: CausalModel | None
+    report: Report
+    record: ModelRecord
+    is_new: bool
+    """Whether the model came inline (and so is to be stored with the request)."""
+
+    @property
+    def is_valid(self) -> bool:
+        return self.model is not None and self.report.is_valid
+
+
+def _read(document: dict[str, Any], catalog: Catalog) -> tuple[CausalModel | None, Report]:
+    # The reader sees the text as sent, so a NUL or a lone surrogate is reported as the CLI would.
+    loaded = model_from_data(document, SourceMap(), catalog)
+    return loaded.model, loaded.report
+
+
+def read_model(document: dict[str, Any], services: Services, client: ClientIds) -> ModelSubmission:
+    """Check an inline model (limits first, then the reader); return it with its unsaved record."""
+    storable = clean_json(document, "the model")  # refuses NaN and deep nesting
+    check_model_limits(document, services.settings)
+    model, report = _read(document, services.catalog)
+    is_valid = model is not None and report.is_valid
+    record = new_model_record(
+        storable,
+        model.object_id if model is not None else "",
+        is_valid,
+        clean_json(report.as_dict()),
+        model_hash_or_none(model) if is_valid else None,
+        client,
+        cleaned=True,
+    )
+    return ModelSubmission(model, report, record, is_new=True)
+
+
+def model_hash_or_none(model: CausalModel | None) -> str | None:
+    """Return the stored hash of a model's canonical form (None without a model)."""
+    return text_hash(model_text(model)) if model is not None else None
+
+
+def stored_model(record: ModelRecord, catalog: Catalog) -> ModelSubmission:
+    """Re-read a stored model against the catalog the server has now."""
+    model, report = _read(record.document, catalog)
+    return ModelSubmission(model, report, record, is_new=False)
+
+
+@dataclass(frozen=True)
+class MappingRead:
+    """What reading a step-3 mapping gave: the mapping when it is valid, its report, and the cleaned document."""
+
+    mapping: Labelling | None
+    report: Report
+    document: dict[str, Any]
+
+
+def read_mapping(document: dict[str, Any], services: Services) -> MappingRead:
+    """Check an inline step-3 mapping (limits first, then the reader)."""
+    storable = clean_json(document, "the mapping")
+    check_labelling_limits(document, services.settings, "mapping")
+    loaded = mapping_from_data(document, SourceMap(), services.catalog)
+    mapping = loaded.mapping if loaded.is_valid else None
+    return MappingRead(mapping, loaded.report, storable)
+
+
+def model_for_request(
+    document: dict[str, Any] | None, model_id: uuid.UUID | None, services: Services, client: ClientIds
+) -> ModelSubmission:
+    """Return the request's model: the inline one, or the stored one ``model_id`` names."""
+    if document is not None:
+        return read_model(document, services, client)
+    assert model_id is not None  # the request schema allows exactly one of the two
+    with open_session(services) as session:
+        record = get_model(session, model_id)
+    return stored_model(record, services.catalog)
+
+
+def first_errors(report: Report) -> str:
+    """Return the report's first three errors with their codes, for an error message."""
+    return "; ".join(f"[{d.code}] {d.message}" for d in report.errors[:3])
+
+
+def invalid_input_error(
+    submission: ModelSubmission, mapping_report: Report | None
+) -> InvalidModelError | InvalidMappingError | None:
+    """Return the 422 error for an invalid model or mapping (None when both are valid)."""
+    if submission.is_valid and (mapping_report is None or mapping_report.is_valid):
+        return None
+    details: dict[str, object] = {
+        "model": submission.report.as_dict(),
+        "mapping": mapping_report.as_dict() if mapping_report is not None else None,
+        "model_id": str(submission.record.id),
+    }
+    if submission.is_valid and mapping_report is not None:
+        return InvalidMappingError("The step-3 mapping is invalid: " + first_errors(mapping_report), details=details)
+    return InvalidModelError(
+        "The model is invalid, so there is nothing to plan: " + first_errors(submission.report), details=details
+    )
+
+
+@dataclass(frozen=True)
+class PlanInputs:
+    """A plan-like request, read and valid: its model (and the record to store), mapping, planner and time limit."""
+
+    submission: ModelSubmission
+    model: CausalModel
+    mapping: Labelling | None
+    mapping_report: Report | None
+    planner: str
+    time_limit: float
+
+    @property
+    def warnings(self) -> list[Diagnostic]:
+        """Return the validation warnings of the model and the mapping."""
+        return [*self.submission.report.warnings, *(self.mapping_report.warnings if self.mapping_report else [])]
+
+    def store(self, services: Services) -> None:
+        """Store an inline model's record (a stored model's is stored already)."""
+        if self.submission.is_new:
+            save(services.engine, [self.submission.record])
+
+
+def plan_inputs(body: PlanIn, services: Services, client: ClientIds) -> PlanInputs:
+    """Read a plan-like request; an invalid model or mapping raises the 422 error (an inline model is stored first)."""
+    planner = resolve_planner(body.planner)
+    time_limit = resolve_time_limit(body.time_limit, services.settings)
+    submission = model_for_request(body.model, body.model_id, services, client)
+    mapping_read = read_mapping(body.mapping, services) if body.mapping is not None else None
+    mapping_report = mapping_read.report if mapping_read is not None else None
+    problem = invalid_input_error(submission, mapping_report)
+    if problem is not None:
+        if submission.is_new:
+            save(services.engine, [submission.record])
+        raise problem
+    assert submission.model is not None
+    mapping = mapping_read.mapping if mapping_read is not None else None
+    return PlanInputs(submission, submission.model, mapping, mapping_report, planner, time_limit)
