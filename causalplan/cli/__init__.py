@@ -11,7 +11,7 @@ One module per family of commands; `common` holds what they share. A new command
 
 import click
 
-from causalplan.cli import comparison, models, planning, serving, simulation
+from causalplan.cli import comparison, crowd, models, planning, serving, simulation
 
 
 @click.group(
@@ -43,6 +43,7 @@ for command in (
     serving.serve,
     simulation.simulate,
     models.objects,
+    crowd.consensus,
 ):
     app.add_command(command)
 

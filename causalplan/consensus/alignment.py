@@ -1,0 +1,104 @@
+"""Label alignment: labels that mean the same across people become one node of the consensus.
+
+Two labels are alike by their words (cosine of sentence embeddings) and by where they sit:
+for a function, the parts that carry it; for an intermediate effect, the aligned nodes that
+cause it. Both weigh the same by default (``TEXT_WEIGHT`` 0.5), because words alone mislead:
+"supply power" and "provide electricity" are far apart in words yet sit on the same part.
+Labels are grouped by average linkage, never putting two different labels of one person into
+one node (a person who wrote two labels meant two things). Hand-written: scipy's hierarchical
+clustering has no such cannot-link constraint.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+
+from causalplan.consensus.embedding import text_similarity
+
+TEXT_WEIGHT = 0.5
+"""The share of a label's words in its similarity; the rest is where it sits (parts, causes)."""
+THRESHOLD = 0.55
+"""Labels at least this alike (on average, cluster to cluster) are one node; chosen on the paraphrase set."""
+
+
+@dataclass(frozen=True)
+class LabelUse:
+    """One way a label was used: its key, as written, where it sits, and who used it so."""
+
+    key: str
+    text: str
+    context: frozenset[str]
+    holders: frozenset[str]
+
+
+def jaccard(first: frozenset[str], second: frozenset[str]) -> float:
+    """Return |A & B| / |A | B| (1.0 for two empty sets: nothing tells them apart)."""
+    union = first | second
+    return len(first & second) / len(union) if union else 1.0
+
+
+WordSimilarity = Callable[[str, str], float]
+
+
+def similarity(
+    first: LabelUse, second: LabelUse, text_weight: float = TEXT_WEIGHT, words: WordSimilarity = text_similarity
+) -> float:
+    """Return how alike two label uses are, in [0, 1]: words and context, weighted."""
+    alike = words(first.key, second.key)
+    return text_weight * alike + (1.0 - text_weight) * jaccard(first.context, second.context)
+
+
+def cluster_uses(
+    uses: Sequence[LabelUse],
+    threshold: float = THRESHOLD,
+    text_weight: float = TEXT_WEIGHT,
+    words: WordSimilarity = text_similarity,
+) -> list[list[int]]:
+    """Return groups of indices into ``uses`` that mean the same, each sorted, groups by first index.
+
+    Average linkage weighted by how many people used each label; two groups never merge when
+    one person used different labels in each.
+    """
+    count = len(uses)
+    weights = np.array([max(1, len(use.holders)) for use in uses], dtype=np.float64)
+    pairwise = np.eye(count)
+    for i, j in combinations(range(count), 2):
+        pairwise[i, j] = pairwise[j, i] = similarity(uses[i], uses[j], text_weight, words)
+    groups: list[list[int]] = [[index] for index in range(count)]
+    holders: list[frozenset[str]] = [use.holders for use in uses]
+    while len(groups) > 1:
+        best, pair = threshold, None
+        for a, b in combinations(range(len(groups)), 2):
+            if holders[a] & holders[b]:
+                continue
+            rows, columns = groups[a], groups[b]
+            block = pairwise[np.ix_(rows, columns)]
+            mass = np.outer(weights[rows], weights[columns])
+            linkage = float((block * mass).sum() / mass.sum())
+            if linkage >= best:
+                best, pair = linkage, (a, b)
+        if pair is None:
+            break
+        a, b = pair
+        groups[a] = sorted(groups[a] + groups[b])
+        holders[a] = holders[a] | holders[b]
+        del groups[b], holders[b]
+    return sorted(groups, key=lambda group: group[0])
+
+
+def pair_precision_recall(groups: Sequence[Sequence[int]], meanings: Sequence[str]) -> tuple[float, float]:
+    """Return the precision and recall of "same group" over all pairs, against the true meanings."""
+    group_of = {index: number for number, group in enumerate(groups) for index in group}
+    true_positive = predicted = actual = 0
+    for i, j in combinations(range(len(meanings)), 2):
+        same_group, same_meaning = group_of[i] == group_of[j], meanings[i] == meanings[j]
+        predicted += same_group
+        actual += same_meaning
+        true_positive += same_group and same_meaning
+    precision = true_positive / predicted if predicted else 1.0
+    recall = true_positive / actual if actual else 1.0
+    return precision, recall
