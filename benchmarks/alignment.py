@@ -29,13 +29,14 @@ WORD_MODELS: dict[str, Callable[[str, str], float]] = {
 
 
 def read_set(path: Path) -> dict[str, tuple[list[LabelUse], list[str]]]:
-    """Return, per object, its labels as uses (one holder each) and their meanings."""
+    """Return, per object, its labels as uses (held by who wrote them) and their meanings."""
     per_object: dict[str, tuple[list[LabelUse], list[str]]] = {}
     for group in yaml.safe_load(path.read_text(encoding="utf-8")):
         uses, meanings = per_object.setdefault(group["object"], ([], []))
         for item in group["labels"]:
             key = " ".join(item["label"].split()).casefold()
-            uses.append(LabelUse(key, item["label"], frozenset(item["parts"]), frozenset({f"l{len(uses)}"})))
+            person = item.get("person", f"alone-{len(uses)}")
+            uses.append(LabelUse(key, item["label"], frozenset(item["parts"]), frozenset({person})))
             meanings.append(group["meaning"])
     return per_object
 

@@ -31,6 +31,9 @@ def _draw_model(axes: Axes, model: CausalModel, widths: dict[int, float], title:
     goal = f"n:{model.goal_key}"
     if goal in column:
         column[goal] = max(column.values())
+    for node in graph.nodes:  # a function stands just left of what it feeds, so no arrow crosses a junction
+        if graph.nodes[node]["kind"] == "function" and graph.out_degree(node):
+            column[node] = min(column[successor] for successor in graph.successors(node)) - 1
     rows: dict[int, list[str]] = {}
     for node in sorted(graph.nodes, key=lambda n: (column[n], str(n))):
         rows.setdefault(column[node], []).append(node)

@@ -18,7 +18,7 @@ Vector = npt.NDArray[np.float64]
 
 @lru_cache(maxsize=4096)
 def _embedding(text: str) -> Vector:
-    from static_model import get_embeddings  # type: ignore[import-untyped]  # the wheel ships no type hints
+    from static_model import get_embeddings
 
     vector = np.asarray(get_embeddings([text])[0], dtype=np.float64)
     norm = float(np.linalg.norm(vector))
