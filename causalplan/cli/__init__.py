@@ -44,6 +44,8 @@ for command in (
     simulation.simulate,
     models.objects,
     crowd.consensus,
+    crowd.population,
+    crowd.crowd_curve,
 ):
     app.add_command(command)
 
