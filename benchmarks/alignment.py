@@ -4,8 +4,10 @@
 
 Each object's labels are aligned on their own (a crowd shares one training object). A pair of
 labels is a true match when both have the same meaning; precision and recall count pairs.
-Word models: ``static`` (tokenlearn-static-model, the one shipped), ``difflib`` (character
-overlap, no model) and ``none`` (parts only). The part a label sits on weighs 1 - weight.
+Word measures: ``shipped`` (what the consensus uses: the larger of the next two), ``static``
+(tokenlearn-static-model cosine), ``difflib`` (character overlap, no model) and ``none`` (parts
+only). The part a label sits on weighs 1 - weight. Prints the best threshold per measure and
+weight, then every threshold at weight 0.5 (words and part alike).
 """
 
 from __future__ import annotations
@@ -17,11 +19,12 @@ from pathlib import Path
 
 import yaml
 
-from causalplan.consensus.alignment import LabelUse, cluster_uses, pair_precision_recall
+from causalplan.consensus.alignment import LabelUse, cluster_uses, pair_counts, word_similarity
 from causalplan.consensus.embedding import text_similarity
 
 ROOT = Path(__file__).resolve().parent.parent
 WORD_MODELS: dict[str, Callable[[str, str], float]] = {
+    "shipped": word_similarity,
     "static": text_similarity,
     "difflib": lambda a, b: difflib.SequenceMatcher(None, a, b).ratio(),
     "none": lambda a, b: 0.0,
@@ -41,21 +44,18 @@ def read_set(path: Path) -> dict[str, tuple[list[LabelUse], list[str]]]:
     return per_object
 
 
-def score(per_object: dict[str, tuple[list[LabelUse], list[str]]], words: Callable[[str, str], float],
-          weight: float, threshold: float) -> tuple[float, float]:
+def score(
+    per_object: dict[str, tuple[list[LabelUse], list[str]]],
+    words: Callable[[str, str], float],
+    weight: float,
+    threshold: float,
+) -> tuple[float, float]:
     """Return precision and recall over all objects' pairs (pairs pooled)."""
-    tp = predicted = actual = 0.0
+    true_positive = predicted = actual = 0
     for uses, meanings in per_object.values():
-        groups = cluster_uses(uses, threshold, weight, words)
-        precision, recall = pair_precision_recall(groups, meanings)
-        group_of = {i: n for n, g in enumerate(groups) for i in g}
-        pairs = [(i, j) for i in range(len(uses)) for j in range(i + 1, len(uses))]
-        same_group = sum(group_of[i] == group_of[j] for i, j in pairs)
-        same_meaning = sum(meanings[i] == meanings[j] for i, j in pairs)
-        tp += precision * same_group
-        predicted += same_group
-        actual += same_meaning
-    return (tp / predicted if predicted else 1.0), (tp / actual if actual else 1.0)
+        counts = pair_counts(cluster_uses(uses, threshold, weight, words), meanings)
+        true_positive, predicted, actual = true_positive + counts[0], predicted + counts[1], actual + counts[2]
+    return (true_positive / predicted if predicted else 1.0), (true_positive / actual if actual else 1.0)
 
 
 def main() -> None:
@@ -79,6 +79,13 @@ def main() -> None:
                     best[(name, weight)] = (threshold, precision, recall, f1)
     for (name, weight), (threshold, precision, recall, f1) in best.items():
         print(f"{name:8} {weight:6.2f} {threshold:9.2f} {precision:9.3f} {recall:7.3f} {f1:6.3f}")
+    print("\nweight 0.50, precision/recall by threshold")
+    for name, words in WORD_MODELS.items():
+        cells = []
+        for step in range(40, 71, 5):
+            precision, recall = score(per_object, words, 0.5, step / 100)
+            cells.append(f"{step / 100:.2f} {precision:.2f}/{recall:.2f}")
+        print(f"{name:8} " + "  ".join(cells))
 
 
 if __name__ == "__main__":

@@ -12,7 +12,9 @@ from causalplan.objects.catalog import Catalog
 FLASHLIGHT = "flashlight"
 
 
-def desk_lamp(power: str, close: str, convert: str, flows: str = "electricity flows", diffuse: str | None = None) -> dict[str, object]:
+def desk_lamp(
+    power: str, close: str, convert: str, flows: str = "electricity flows", diffuse: str | None = None
+) -> dict[str, object]:
     """Return the paper's desk-lamp model in these words, optionally with 'diffuse light' made necessary."""
     functions: dict[str, list[str]] = {"base_with_cables": [power], "light_bulb": [convert, close]}
     last = f"{flows} AND {convert}"
@@ -56,7 +58,10 @@ def test_three_paraphrases_of_one_model_give_that_model(catalog: Catalog) -> Non
 
 
 def test_a_minority_error_does_not_enter(catalog: Catalog) -> None:
-    crowd = [*PARAPHRASES, person("dee", desk_lamp("provide electricity", "close the circuit", "glow", diffuse="diffuse light"))]
+    crowd = [
+        *PARAPHRASES,
+        person("dee", desk_lamp("provide electricity", "close the circuit", "glow", diffuse="diffuse light")),
+    ]
     consensus = build_consensus(crowd, catalog)
     assert "diffuse light" not in str(consensus.model_data)
     left_out = [rule for rule in consensus.rules if not rule.entered]
@@ -111,7 +116,11 @@ def test_participants_trained_on_another_object_are_left_out(catalog: Catalog) -
         "functions": {"wax": ["provide fuel"], "wick": ["burn"], "match": ["start a flame"]},
         "rules": ["provide fuel AND burn AND start a flame CAUSES light"],
     }
-    crowd = [*PARAPHRASES, Participant("eve", candle, where="eve"), Participant("fay", None, where="fay", problems=["x"])]
+    crowd = [
+        *PARAPHRASES,
+        Participant("eve", candle, where="eve"),
+        Participant("fay", None, where="fay", problems=["x"]),
+    ]
     consensus = build_consensus(crowd, catalog)
     assert consensus.members == ("ann", "bob", "cy")
     assert consensus.left_out == {"eve": "trained on candle, the crowd on desk_lamp", "fay": "x"}

@@ -27,6 +27,7 @@ from causalplan.cli.common import (
 
 if TYPE_CHECKING:
     from causalplan.consensus.judging import Judged
+    from causalplan.objects.catalog import Catalog
 
 support_option = click.option(
     "--min-support",
@@ -110,15 +111,17 @@ def consensus(
     data = report(judged)
     (out / "report.json").write_text(json.dumps(data, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     draw_consensus(crowd, crowd.models, out)
-    _print_summary(judged, out)
+    _print_summary(judged, out, objects)
     if not crowd.loaded.is_valid:
         exit_with(EXIT_INVALID)
     if crowd.mappings and not any(judged.consensus_transfers(test) for test in crowd.mappings):
         exit_with(EXIT_NO_PLAN)
 
 
-def _print_summary(judged: Judged, out: Path) -> None:
+def _print_summary(judged: Judged, out: Path, objects: Catalog) -> None:
     from rich.table import Table
+
+    from causalplan.transfer.verdict import generalization
 
     crowd = judged.consensus
     console = make_console()
@@ -140,7 +143,7 @@ def _print_summary(judged: Judged, out: Path) -> None:
     for test, result in judged.consensus_results.items():
         rate = judged.individual_rate(test)
         verdicts.add_row(
-            f"{test} ({result.verdict.generalization})",
+            f"{test} ({generalization(objects.get(crowd.training_object), objects.get(test))})",
             "-" if rate is None else f"{rate:.0%} of {len(crowd.mappings[test].mappers)}",
             result.verdict.verdict.value,
         )
