@@ -1,6 +1,6 @@
 """Label alignment on the labelled paraphrase set: precision and recall by word model, weight, threshold.
 
-    python benchmarks/alignment.py [--set tests/data/paraphrases.yaml]
+    python benchmarks/alignment.py [--set tests/data/paraphrases.yaml] [--minilm FOLDER]
 
 Each object's labels are aligned on their own (a crowd shares one training object). A pair of
 labels is a true match when both have the same meaning; precision and recall count pairs.
@@ -61,7 +61,18 @@ def score(
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--set", type=Path, default=ROOT / "tests" / "data" / "paraphrases.yaml")
+    parser.add_argument(
+        "--minilm",
+        type=Path,
+        help="also measure all-MiniLM-L6-v2 from this folder (model.safetensors, tokenizer.json; see minilm_numpy.py)",
+    )
     args = parser.parse_args()
+    if args.minilm:
+        from minilm_numpy import MiniLM
+
+        minilm = MiniLM(args.minilm)
+        WORD_MODELS["minilm"] = minilm.similarity
+        WORD_MODELS["minilm+difflib"] = lambda a, b: max(minilm.similarity(a, b), WORD_MODELS["difflib"](a, b))
     per_object = read_set(args.set)
     count = sum(len(uses) for uses, _ in per_object.values())
     print(f"{count} labels on {len(per_object)} objects from {args.set}")
