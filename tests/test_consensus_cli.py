@@ -106,3 +106,27 @@ def test_crowd_curve_rejects_sizes_that_are_not_numbers(tmp_path: Path) -> None:
     result = runner.invoke(app, ["crowd-curve", "--sizes", "1,a", "--out", str(tmp_path)])
     assert result.exit_code == 2
     assert "--sizes must be whole numbers" in result.output
+
+
+def test_consensus_reads_an_experiment_export(tmp_path: Path) -> None:
+    from causalplan.consensus.population import ERROR_KINDS, population
+
+    lines = population("desk_lamp", 3, seed=4, rates=dict.fromkeys(ERROR_KINDS, 0.0), tests=("flashlight",))
+    export = {  # the research page's JSON export (service/web/results.py): participants, then trials
+        "experiment": {"id": "e1", "name": "pilot"},
+        "participants": [
+            {"participant_id": f"u{n}", "code": f"P-{n}", "model": line["model"]} for n, line in enumerate(lines)
+        ],
+        "trials": [
+            {"participant_id": f"u{n}", "test_object": "flashlight", "mapping": line["mapping"]}
+            for n, line in enumerate(lines)
+        ],
+    }
+    path = tmp_path / "export.json"
+    path.write_text(json.dumps(export))
+    result = runner.invoke(app, ["consensus", str(path), "--out", str(tmp_path / "out"), "--no-simulate"])
+    assert result.exit_code == 0, result.output
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert [rule["participants"] for rule in report["rules"]] == [["P-0", "P-1", "P-2"]] * 2
+    assert report["consensus_verdict"]["flashlight"]["verdict"] == "transfers"
+    assert report["individual_transfer_rate"] == 1.0
