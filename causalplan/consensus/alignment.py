@@ -74,30 +74,29 @@ def cluster_uses(
     one person used different labels in each.
     """
     count = len(uses)
-    weights = np.array([max(1, len(use.holders)) for use in uses], dtype=np.float64)
-    pairwise = np.eye(count)
+    mass = np.array([max(1, len(use.holders)) for use in uses], dtype=np.float64)
+    linkage = np.eye(count)
     for i, j in combinations(range(count), 2):
-        pairwise[i, j] = pairwise[j, i] = similarity(uses[i], uses[j], text_weight, words)
-    groups: list[list[int]] = [[index] for index in range(count)]
-    holders: list[frozenset[str]] = [use.holders for use in uses]
+        linkage[i, j] = linkage[j, i] = similarity(uses[i], uses[j], text_weight, words)
+    holders = [use.holders for use in uses]
+    apart = np.array([[bool(a & b) for b in holders] for a in holders]).reshape(count, count)
+    np.fill_diagonal(apart, True)
+    groups: dict[int, list[int]] = {index: [index] for index in range(count)}
     while len(groups) > 1:
-        best, pair = threshold, None
-        for a, b in combinations(range(len(groups)), 2):
-            if holders[a] & holders[b]:
-                continue
-            rows, columns = groups[a], groups[b]
-            block = pairwise[np.ix_(rows, columns)]
-            mass = np.outer(weights[rows], weights[columns])
-            linkage = float((block * mass).sum() / mass.sum())
-            if linkage >= best:
-                best, pair = linkage, (a, b)
-        if pair is None:
+        # Average linkage, updated in place (Lance-Williams): a merged group's row is the
+        # mass-weighted mean of its two rows; pairs that share a person stay apart.
+        candidates = np.where(apart, -np.inf, linkage)
+        row, column = (int(index) for index in np.unravel_index(int(np.argmax(candidates)), candidates.shape))
+        if candidates[row, column] < threshold:
             break
-        a, b = pair
-        groups[a] = sorted(groups[a] + groups[b])
-        holders[a] = holders[a] | holders[b]
-        del groups[b], holders[b]
-    return sorted(groups, key=lambda group: group[0])
+        a, b = min(row, column), max(row, column)
+        merged = (mass[a] * linkage[a] + mass[b] * linkage[b]) / (mass[a] + mass[b])
+        linkage[a, :] = linkage[:, a] = merged
+        apart[a, :] = apart[:, a] = apart[a] | apart[b]
+        apart[b, :] = apart[:, b] = True
+        mass[a] += mass[b]
+        groups[a] = sorted(groups[a] + groups.pop(b))
+    return sorted(groups.values(), key=lambda group: group[0])
 
 
 def pair_counts(groups: Sequence[Sequence[int]], meanings: Sequence[str]) -> tuple[int, int, int]:
