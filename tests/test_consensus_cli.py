@@ -130,3 +130,11 @@ def test_consensus_reads_an_experiment_export(tmp_path: Path) -> None:
     assert [rule["participants"] for rule in report["rules"]] == [["P-0", "P-1", "P-2"]] * 2
     assert report["consensus_verdict"]["flashlight"]["verdict"] == "transfers"
     assert report["individual_transfer_rate"] == 1.0
+
+
+def test_the_commands_default_min_support_is_the_builders() -> None:
+    from causalplan.consensus.build import MIN_SUPPORT
+
+    for name in ("consensus", "crowd-curve"):
+        (option,) = [param for param in app.commands[name].params if param.name == "min_support"]
+        assert option.default == MIN_SUPPORT

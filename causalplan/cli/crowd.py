@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from causalplan.consensus.judging import Judged
     from causalplan.objects.catalog import Catalog
 
+# The default is consensus.build.MIN_SUPPORT, written out: importing build here would load numpy on every start.
 support_option = click.option(
     "--min-support",
     type=click.FloatRange(0.0, 1.0, min_open=True),
@@ -72,7 +73,8 @@ def consensus(
     support and holders, the label clusters, every verdict, individual_transfer_rate,
     consensus_verdict) and consensus_graph.png/.svg (line width = support).
 
-    Example: causalplan consensus examples/batch/trials.jsonl --out out/consensus
+    Example: causalplan population desk_lamp --n 30 --out crowd.jsonl &&
+    causalplan consensus crowd.jsonl --out out/consensus
     """
     from causalplan.consensus.build import build_consensus
     from causalplan.consensus.drawing import draw_consensus
