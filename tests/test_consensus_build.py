@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import networkx as nx
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from causalplan.causal.graph import causal_graph
 from causalplan.consensus.build import RuleSupport, _select, build_consensus
@@ -124,3 +126,56 @@ def test_participants_trained_on_another_object_are_left_out(catalog: Catalog) -
     consensus = build_consensus(crowd, catalog)
     assert consensus.members == ("ann", "bob", "cy")
     assert consensus.left_out == {"eve": "trained on candle, the crowd on desk_lamp", "fay": "x"}
+
+
+def test_a_label_both_carried_and_produced_is_aligned_as_an_effect(catalog: Catalog) -> None:
+    odd = {
+        "object": "desk_lamp",
+        "functions": {"base_with_cables": ["provide electricity", "electricity flows"], "light_bulb": ["glow"]},
+        "rules": ["provide electricity CAUSES electricity flows", "electricity flows AND glow CAUSES light"],
+    }
+    consensus = build_consensus([person("ann", odd)], catalog)
+    assert [node.kind for node in consensus.nodes.values()] == ["function", "function", "effect", "goal"]
+    assert [d.code for d in consensus.loaded.report.errors] == []
+
+
+LABELS = ["provide electricity", "glow", "close the circuit", "electricity flows", "light"]
+PARTS = ["base_with_cables", "light_bulb", "shade"]
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.dictionaries(st.sampled_from(PARTS), st.lists(st.sampled_from(LABELS), max_size=3), max_size=3),
+            st.lists(
+                st.tuples(st.lists(st.sampled_from(LABELS), min_size=1, max_size=3), st.sampled_from(LABELS)),
+                max_size=4,
+            ),
+        ),
+        min_size=1,
+        max_size=5,
+    )
+)
+def test_any_crowd_of_small_models_gives_a_consensus_or_says_why(
+    crowd: list[tuple[dict[str, list[str]], list[tuple[list[str], str]]]],
+) -> None:
+    from tests.conftest import builtin_catalog
+
+    people = [
+        Participant(
+            f"p{number}",
+            {
+                "object": "desk_lamp",
+                "functions": functions,
+                "rules": [" AND ".join(causes) + f" CAUSES {effect}" for causes, effect in rules],
+            },
+            where=f"p{number}",
+        )
+        for number, (functions, rules) in enumerate(crowd)
+    ]
+    consensus = build_consensus(people, builtin_catalog())
+    assert consensus.loaded.model is not None
+    assert consensus.loaded.is_valid or consensus.loaded.report.errors
+    if consensus.loaded.is_valid:
+        assert nx.is_directed_acyclic_graph(causal_graph(consensus.loaded.model))

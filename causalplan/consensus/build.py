@@ -111,7 +111,8 @@ def _representative(writings: Counter[str]) -> str:
 
 def _levels(model: CausalModel) -> dict[str, int]:
     """Return each non-function node's level: 1 + the highest level of its causes (functions are 0)."""
-    carried = set(model.labelling.carriers())
+    effects = {rule.effect_key for rule in model.rules}
+    carried = set(model.labelling.carriers()) - effects  # a label both carried and produced is an effect
     level = {key: 0 for key in carried}
     nodes = {rule.effect_key for rule in model.rules} | {key for rule in model.rules for key in rule.cause_keys}
     for key in nodes - carried:
