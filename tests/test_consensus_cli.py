@@ -68,6 +68,7 @@ def test_a_crowd_split_three_ways_has_no_consensus_and_the_command_says_why(tmp_
     )
     assert result.exit_code == 2
     assert "The consensus model is not valid: No rule produces the goal 'light'." in result.output
+    assert "the most held: 33%" in result.output and "--min-support 0.33" in result.output
     report = json.loads((tmp_path / "report.json").read_text())
     assert report["training_object"] == "desk_lamp"
     assert report["left_out"]["p0004"] == "trained on candle, the crowd on desk_lamp"

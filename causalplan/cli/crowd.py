@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -136,11 +137,22 @@ def _print_summary(judged: Judged, out: Path, objects: Catalog) -> None:
     if len(crowd.rules) > 15:
         table.caption = f"and {len(crowd.rules) - 15} more rules held by fewer people (report.json has all)"
     console.print(table)
-    if crowd.left_out:
-        console.print(f"Left out: {'; '.join(f'{who}: {why}' for who, why in crowd.left_out.items())}")
+    by_reason: dict[str, list[str]] = {}
+    for who, why in crowd.left_out.items():
+        by_reason.setdefault(why, []).append(who)
+    for why, people in by_reason.items():
+        names = ", ".join(people[:5]) + (f" and {len(people) - 5} more" if len(people) > 5 else "")
+        console.print(f"Left out ({why}): {names}")
     if not crowd.loaded.is_valid:
         for problem in crowd.loaded.report.errors:
             console.print(f"[red]The consensus model is not valid:[/red] {problem.message}")
+        best = max((rule.share for rule in crowd.rules), default=0.0)
+        if best < crowd.min_support:
+            lower = math.floor(best * 100) / 100
+            console.print(
+                f"No rule is held by {crowd.min_support:.0%} of the crowd (the most held: {best:.0%}): the crowd "
+                f"is split between models. --min-support {lower:.2f} lets the most held rules in."
+            )
     verdicts = Table("test object", "individuals who transfer", "consensus", title="Transfer")
     for test, result in judged.consensus_results.items():
         rate = judged.individual_rate(test)

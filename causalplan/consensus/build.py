@@ -263,9 +263,10 @@ def build_consensus(
     readable: dict[str, CausalModel] = {}
     left_out: dict[str, str] = {}
     for person in participants:
-        model, _problems = read_model(person.model, SourceMap(person.where or person.id))
+        model, problems = read_model(person.model, SourceMap(person.where or person.id))
         if person.model is None or model is None or not model.object_id:
-            left_out[person.id] = "; ".join(person.problems) or "the model could not be read"
+            why = person.problems or [problem.message for problem in problems[:1]] or ["the model could not be read"]
+            left_out[person.id] = "; ".join(why)
             continue
         if model.object_id not in catalog.objects:
             left_out[person.id] = f"the model's object '{model.object_id}' is not in the catalog"
