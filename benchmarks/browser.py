@@ -37,8 +37,8 @@ import uvicorn
 from playwright.sync_api import Page, sync_playwright
 
 from causalplan.service.main import create_app
-from causalplan.settings import Settings
 from causalplan.service.web.drawings import forget_plan_pictures
+from causalplan.settings import Settings
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [

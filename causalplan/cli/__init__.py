@@ -11,7 +11,7 @@ One module per family of commands; `common` holds what they share. A new command
 
 import click
 
-from causalplan.cli import comparison, models, planning, serving, simulation, studies
+from causalplan.cli import comparison, crowd, models, planning, serving, simulation, studies
 
 
 @click.group(
@@ -44,6 +44,9 @@ for command in (
     simulation.simulate,
     models.objects,
     studies.analyze,
+    crowd.consensus,
+    crowd.population,
+    crowd.crowd_curve,
 ):
     app.add_command(command)
 
