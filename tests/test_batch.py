@@ -11,11 +11,11 @@ import pytest
 from click.testing import CliRunner
 
 from causalplan.cli import app
+from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult
-from causalplan.planners.synthetic import synthetic_task
 from causalplan.transfer import verdict as verdict_module
 from causalplan.transfer.batch import evaluate_trial, read_trials, run_batch
 from causalplan.transfer.verdict import Verdict, clear_caches

@@ -8,6 +8,7 @@ import pytest
 
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import read_model
+from causalplan.comparison.synthetic import synthetic_object, synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl import canonical
 from causalplan.pddl.canonical import MAX_MINIMAL_SETS, canonical_pddl, minimal_part_sets
@@ -16,7 +17,6 @@ from causalplan.pddl.writer import actions_text, compile_task, problem_text, req
 from causalplan.planners import fast_downward
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanStatus
-from causalplan.planners.synthetic import synthetic_object, synthetic_task
 from tests.conftest import example_mapping, example_model
 from tests.test_search_processes import _example_tasks
 

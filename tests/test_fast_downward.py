@@ -10,6 +10,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+from causalplan.planners.fast_downward import CONFIGS, parse_plan, solve, status_of_exit_code
 
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import read_model
@@ -18,7 +19,6 @@ from causalplan.objects.schema import ObjectSchema
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.pddl.writer import compile_task
 from causalplan.planners import fast_downward, search_processes
-from causalplan.planners.fast_downward import CONFIGS, parse_plan, solve, status_of_exit_code
 from causalplan.planners.result import PlanStatus
 from tests.conftest import example_mapping, example_model
 
@@ -196,7 +196,7 @@ def _sas_of_the_translators_own_process(task: PlanningTask, tmp_path: Path) -> s
 def test_translation_writes_exactly_what_the_translators_own_process_writes(
     size: int, seed: int, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
-    from causalplan.planners.synthetic import synthetic_task
+    from causalplan.comparison.synthetic import synthetic_task
 
     task = synthetic_task(size, seed=seed)
     first = _sas(task, "in-process", monkeypatch)
@@ -219,7 +219,7 @@ def test_translation_of_every_golden_case_matches_the_translators_own_process(
 
 
 def test_an_in_process_translation_stops_at_its_deadline_and_the_next_solve_works(catalog: Catalog) -> None:
-    from causalplan.planners.synthetic import synthetic_task
+    from causalplan.comparison.synthetic import synthetic_task
 
     big = compile_task(synthetic_task(320, seed=0))
     outcome = solve(big.domain, big.problem, CONFIGS["fd"], time_limit=0.05)
@@ -283,8 +283,8 @@ def test_without_invariant_synthesis_every_example_and_synthetic_task_translates
     """Skipping invariant synthesis (TRANSLATOR_ARGUMENTS) changes nothing in causalplan's tasks: all binary."""
     from fast_downward.translate import options
 
+    from causalplan.comparison.synthetic import synthetic_task
     from causalplan.pddl.canonical import canonical_pddl
-    from causalplan.planners.synthetic import synthetic_task
     from tests.test_search_processes import _example_tasks
 
     assert "--invariant-generation-max-candidates" in fast_downward.TRANSLATOR_ARGUMENTS

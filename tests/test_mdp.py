@@ -8,6 +8,7 @@ import time
 
 import pytest
 
+from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners import fast_downward
@@ -15,7 +16,6 @@ from causalplan.planners.mdp import MAX_RELEVANT_FITS, MdpSolution, relevant_fit
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanStatus
-from causalplan.planners.synthetic import synthetic_task
 from tests.conftest import example_mapping, example_model
 from tests.test_pipeline import PAPER_PLANS
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import click
 
@@ -18,10 +17,8 @@ from causalplan.cli.common import (
     planner_option,
     progress_bar,
     time_limit_option,
+    val_option,
 )
-
-if TYPE_CHECKING:
-    pass
 
 
 def _int_list(text: str, what: str) -> list[int]:
@@ -43,6 +40,7 @@ def _int_list(text: str, what: str) -> list[int]:
 @click.option("--timeout", type=click.FloatRange(0.5, 3600), default=60.0, help="Seconds per run.")
 @click.option("--memory", type=click.IntRange(min=256), default=4096, help="Memory limit per run, in MB.")
 @click.option("--repeat", type=click.IntRange(1, 50), default=1, help="Runs per pair; medians are reported.")
+@val_option
 @click.option(
     "--out", type=FILE, default=Path("out/compare"), help="Folder for compare.csv, compare.json and compare.png."
 )
@@ -54,6 +52,7 @@ def compare(
     timeout: float,
     memory: int,
     repeat: int,
+    val: bool,
     out: Path,
     catalog: tuple[Path, ...],
 ) -> None:
@@ -62,7 +61,10 @@ def compare(
     TASKS are model files, or task files (YAML with model:, mapping:, catalog:); the default is
     the paper's examples (found under the current folder's examples/). Prints a table (status,
     plan length, time, success probability, valid), and writes CSV, JSON and a plot of time
-    against the number of parts. A planner that fails is a row.
+    against the number of parts. A planner that fails is a row. Every plan is checked by
+    replay, unified-planning's validator and (unless --no-val) VAL, outside the timed part.
+
+    Example: causalplan compare --planners fd,mdp --synthetic 10,40 --out out/compare
     """
     from rich.table import Table
 
@@ -95,7 +97,7 @@ def compare(
         def advance(what: str) -> None:
             progress.update(bar, advance=1, description=what)
 
-        rows = run_comparison(selected, chosen, timeout, memory, repeat, advance)
+        rows = run_comparison(selected, chosen, timeout, memory, repeat, advance, val=val)
     table = Table(
         "task",
         "parts",
@@ -122,7 +124,7 @@ def compare(
             valid,
         )
     console.print(table)
-    settings = {"planners": chosen, "timeout": timeout, "memory_mb": memory, "repeat": repeat}
+    settings = {"planners": chosen, "timeout": timeout, "memory_mb": memory, "repeat": repeat, "val": val}
     report.write_csv(rows, out / "compare.csv")
     report.write_json(rows, out / "compare.json", settings)
     report.plot(rows, out / "compare.png", timeout)
@@ -134,17 +136,25 @@ def compare(
 @planner_option
 @time_limit_option
 @click.option("--simulate/--no-simulate", default=True, help="Check plans in the physics simulator (as transfer does).")
+@val_option
 @click.option("--out", type=FILE, default=Path("out/batch"), help="Folder for verdicts.csv and verdicts.json.")
 @catalog_option
 def batch(
-    trials_file: Path, planner: str, time_limit: float, simulate: bool, out: Path, catalog: tuple[Path, ...]
+    trials_file: Path,
+    planner: str,
+    time_limit: float,
+    simulate: bool,
+    val: bool,
+    out: Path,
+    catalog: tuple[Path, ...],
 ) -> None:
     """Judge many transfer trials (e.g. a study's participants) and write their verdicts and reasons.
 
     TRIALS is a JSON Lines file, one {"id", "model", "mapping"} per line (or a JSON/YAML list).
     What can be decided without the planner is (a line that cannot be read, an invalid model
     or mapping, a function no part carries); equal planning problems are solved once. The
-    verdicts are those `causalplan transfer` gives one trial at a time.
+    verdicts are those `causalplan transfer` gives one trial at a time; VAL checks each
+    distinct plan once (--no-val skips it), and a trial whose plan VAL rejects is undecided.
     """
     import csv
     import time
@@ -165,7 +175,7 @@ def batch(
     started = time.perf_counter()
     with progress_bar() as progress:
         bar = progress.add_task("judging trials", total=len(trials))
-        results = run_batch(trials, objects, planner, time_limit, simulate, lambda: progress.advance(bar))
+        results = run_batch(trials, objects, planner, time_limit, simulate, lambda: progress.advance(bar), val=val)
     seconds = time.perf_counter() - started
     with (out / "verdicts.csv").open("w", newline="", encoding="utf-8") as handle:
         writer = csv.DictWriter(handle, fieldnames=CSV_COLUMNS)

@@ -9,7 +9,7 @@ from pydantic import Field, SecretStr, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from causalplan.causal.model import MAX_LABEL_LENGTH
-from causalplan.planners.fast_downward import DEFAULT_MEMORY_LIMIT_MB
+from causalplan.planners.fd import DEFAULT_MEMORY_LIMIT_MB
 
 
 def default_database_url() -> str:

@@ -29,7 +29,7 @@ from causalplan.causal.model import CausalModel, Labelling
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import Catalog, load_catalog
 from causalplan.pddl.task import build_task
-from causalplan.planners import canonical_translation, fast_downward, pipeline, search_processes
+from causalplan.planners import fd, pipeline
 from causalplan.service.errors import PlannerOutOfMemoryError
 from causalplan.transfer.verdict import evaluate_transfer
 
@@ -61,36 +61,33 @@ def serve(connection: Connection, memory_mb: int) -> None:
         if job is None:
             return
         function, args = job
-        # What a used search process leaves to do waits until the answer is sent (see retirements_held).
-        with search_processes.retirements_held():
-            try:
-                reply: tuple[Any, ...] = ("ok", function(*args))
-            except CausalPlanError as exc:
-                reply = ("error", exc.code, exc.message, exc.details)
-            except MemoryError:
-                reply = ("error", PlannerOutOfMemoryError.code, "The planner worker ran out of memory.", {})
-            except Exception:  # noqa: BLE001 - reported to the service, which logs it and answers clearly
-                reply = ("crash", traceback.format_exc())
-            try:
-                connection.send(reply)
-            except (BrokenPipeError, OSError):
-                return
+        try:
+            reply: tuple[Any, ...] = ("ok", function(*args))
+        except CausalPlanError as exc:
+            reply = ("error", exc.code, exc.message, exc.details)
+        except MemoryError:
+            reply = ("error", PlannerOutOfMemoryError.code, "The planner worker ran out of memory.", {})
+        except Exception:  # noqa: BLE001 - reported to the service, which logs it and answers clearly
+            reply = ("crash", traceback.format_exc())
+        try:
+            connection.send(reply)
+        except (BrokenPipeError, OSError):
+            return
 
 
 def warm_up() -> None:
-    """Do once, before the first job, what solves need: FD's translator imported, a search started.
+    """Do once, before the first job, what solves need: FD's translator imported, the catalog read.
 
-    And the built-in catalog read (~20 ms), and each of its objects' half of a canonical
-    translation parsed (0.7-0.8 ms each): work that would otherwise fall on each worker's first
-    request (on that object). A planner that cannot run says so in its own answers (and /health), not here.
+    Work that would otherwise fall on each worker's first request. A planner that cannot run
+    says so in its own answers (and /health), not here.
     """
+    override = os.environ.get("CAUSALPLAN_FD_BINARY")  # for the settings module to take over
+    if override:
+        fd.use_search_binary(Path(override))
     with suppress(Exception):
         importlib.import_module("fast_downward.translate.main")
-    fast_downward.prestart()  # the default search, waiting for its first task
     with suppress(CausalPlanError):
-        for obj in worker_catalog(()).objects.values():
-            with suppress(Exception):  # a translator that cannot run says so in the answers
-                canonical_translation.keep_object(obj)
+        worker_catalog(())
 
 
 @cache
@@ -137,7 +134,7 @@ def _version(distribution: str) -> str | None:
 def probe_job() -> dict[str, object]:
     """Return what this worker can run: planner binaries, their versions, failed optional imports."""
     try:
-        binary: str | None = str(fast_downward.search_binary())
+        binary: str | None = str(fd.search_binary())
         binary_problem = None
     except CausalPlanError as exc:
         binary, binary_problem = None, exc.message
@@ -162,7 +159,7 @@ def probe_job() -> dict[str, object]:
             "search_binary": binary,
             "search_binary_found": binary is not None,
             "problem": binary_problem,
-            "translator_found": fast_downward.translator_available(),
+            "translator_found": fd.translator_available(),
             "versions": {
                 "up-fast-downward": _version("up-fast-downward"),
                 "fast-downward-translate": _version("fast-downward.translate") or _version("fast-downward-translate"),
