@@ -42,19 +42,11 @@ def timed_sleep(seconds: float) -> tuple[float, float, int]:
 
 
 def temp_folders() -> tuple[str, list[str]]:
-    """Return the worker's temp folder and the search folders in it, once its prestarted search is there.
-
-    The worker prestarts its search on a background thread while it starts, so this waits
-    (up to 20 s) for it rather than racing it.
-    """
+    """Return the worker's temp folder and the solve folders in it, after leaving one as a killed solve would."""
     import tempfile
     from pathlib import Path
 
-    from causalplan.planners import search_processes
-
-    deadline = time.monotonic() + 20
-    while not search_processes.idle_pids() and time.monotonic() < deadline:
-        time.sleep(0.01)
+    tempfile.mkdtemp(prefix="causalplan-fd-")  # a solve's private folder, not yet removed
     folder = tempfile.gettempdir()
     return folder, sorted(str(path) for path in Path(folder).glob("causalplan-fd-*"))
 
