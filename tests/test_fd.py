@@ -327,3 +327,15 @@ def test_every_example_solves_the_same_in_canonical_and_readable_form(user_catal
         assert len(plan_actions(ours.actions)) == len(theirs.actions), name
         compared += 1
     assert compared >= 10
+
+
+def test_answers_are_kept_and_none_when_told_to_keep_none(catalog: Catalog) -> None:
+    compiled = compile_task(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
+    try:
+        solve(compiled.domain, compiled.problem, CONFIGS["fd"])
+        assert set(solve(compiled.domain, compiled.problem, CONFIGS["fd"]).timing) == {"cached"}
+        fd.keep_answers(0)
+        solve(compiled.domain, compiled.problem, CONFIGS["fd"])
+        assert set(solve(compiled.domain, compiled.problem, CONFIGS["fd"]).timing) == {"translate", "search"}
+    finally:
+        fd.keep_answers(fd.SOLVE_CACHE_SIZE)

@@ -75,6 +75,34 @@ def test_a_task_val_cannot_read_is_a_validator_error_not_a_verdict() -> None:
         val.check(domain, "(define (problem broken", [BATTERIES])
 
 
+def test_a_verdict_is_kept_by_task_key_so_other_wordings_of_one_task_run_val_once(
+    catalog: Catalog, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    runs: list[str] = []
+    real = val._run_validate
+
+    def counted(domain: str, problem: str, plan: str) -> val.ValReport:
+        runs.append(domain)
+        return real(domain, problem, plan)
+
+    monkeypatch.setattr(val, "_run_validate", counted)
+    from causalplan.causal.documents import SourceMap
+    from causalplan.causal.model import read_model
+
+    for words in ("give power", "supply electricity"):
+        model, _ = read_model(
+            {
+                "object": "desk_lamp",
+                "functions": {"base_with_cables": [words], "light_bulb": ["glow"]},
+                "rules": [f"{words} AND glow CAUSES light"],
+            },
+            SourceMap(),
+        )
+        assert model is not None
+        assert plan_task(build_task(model, catalog.get("desk_lamp")), "fd", val=True).validated_by["val"] == "valid"
+    assert len(runs) == 1 and "give-power" in runs[0]
+
+
 def test_a_verdict_is_kept_so_a_repeated_plan_runs_val_once(monkeypatch: pytest.MonkeyPatch) -> None:
     val.clear_verdicts()
     runs: list[str] = []
@@ -112,5 +140,6 @@ def test_plan_task_with_val_says_so_and_a_plan_val_rejects_is_never_returned(
         return replace(compiled, problem=compiled.problem.replace("(:goal (n-light))", "(:goal (not (n-light)))"))
 
     monkeypatch.setattr(pipeline, "compile_task", negated_goal)
+    val.clear_verdicts()  # the verdict is kept by canonical form, which the wrong goal leaves as it was
     with pytest.raises(PlanRejectedError, match="Goal not satisfied"):
         plan_task(task, "fd", val=True)

@@ -143,8 +143,11 @@ def _validations(
         from causalplan.planners import val
 
         started = time.perf_counter()
+        # Named by its canonical form (the answer cache's key): one VAL run per distinct plan.
+        canonical = canonical_pddl(task)
+        task_key = (canonical.domain, canonical.problem) if canonical is not None else None
         readable = compile_task(task)  # the person's rules as written: one derived clause per rule
-        validated_by["val"] = val.check(readable.domain, readable.problem, actions).value
+        validated_by["val"] = val.check(readable.domain, readable.problem, actions, task_key).value
         timing["val"] = time.perf_counter() - started
     if asked.validate_up or planner.startswith("up:"):
         from causalplan.planners.up_problem import validate_with_up

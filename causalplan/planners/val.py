@@ -4,13 +4,14 @@
 its ``libVAL.so``) runs in a private folder under the limits of ``processes``. It reads
 ``:derived`` predicates, which no Python validator here does, so it checks the plan against
 the person's rules as written (one derived clause per rule), not the canonical form FD solved.
-Verdicts are cached by the exact texts, so a batch runs VAL once per distinct task and plan.
+Verdicts are cached by task and plan; the pipeline names a task by its canonical form (the
+answer cache's key), so a batch runs VAL once per distinct plan, not once per wording.
 """
 
 from __future__ import annotations
 
 import threading
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from functools import cache
@@ -102,27 +103,36 @@ def _run_validate(domain: str, problem: str, plan: str) -> ValReport:
     return ValReport(ValVerdict.ERROR, f"VAL exit code {run.returncode}: {_words(run.output)}")
 
 
-_verdicts: LRUCache[tuple[str, str, str], ValReport] = LRUCache(maxsize=VERDICTS_KEPT)
+_verdicts: LRUCache[tuple[Hashable, str], ValReport] = LRUCache(maxsize=VERDICTS_KEPT)
 _verdicts_lock = threading.Lock()
 
 
-def validate(domain: str, problem: str, actions: Sequence[tuple[str, Sequence[str]]]) -> ValReport:
-    """Return VAL's verdict on ``actions`` for the PDDL texts ``domain`` and ``problem``."""
-    key = (domain, problem, plan_text(actions))
+def validate(
+    domain: str, problem: str, actions: Sequence[tuple[str, Sequence[str]]], task_key: Hashable = None
+) -> ValReport:
+    """Return VAL's verdict on ``actions`` for the PDDL texts ``domain`` and ``problem``.
+
+    ``task_key`` names the task in the verdict cache (by default: the two texts); tasks with
+    one key must be the same planning problem.
+    """
+    plan = plan_text(actions)
+    key = (task_key if task_key is not None else (domain, problem), plan)
     with _verdicts_lock:
         known = _verdicts.get(key)
     if known is not None:
         return known
-    report = _run_validate(*key)
+    report = _run_validate(domain, problem, plan)
     if report.verdict is not ValVerdict.ERROR:
         with _verdicts_lock:
             _verdicts[key] = report
     return report
 
 
-def check(domain: str, problem: str, actions: Sequence[tuple[str, Sequence[str]]]) -> ValVerdict:
+def check(
+    domain: str, problem: str, actions: Sequence[tuple[str, Sequence[str]]], task_key: Hashable = None
+) -> ValVerdict:
     """Return ``VALID`` when VAL accepts the plan; raise ``PlanRejectedError`` or ``ValidatorError`` otherwise."""
-    report = validate(domain, problem, actions)
+    report = validate(domain, problem, actions, task_key)
     if report.verdict is ValVerdict.INVALID:
         raise PlanRejectedError(
             f"VAL rejected the planner's plan, so it is not returned: {report.words}", details={"val": report.words}

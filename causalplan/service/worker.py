@@ -81,9 +81,11 @@ def warm_up() -> None:
     Work that would otherwise fall on each worker's first request. A planner that cannot run
     says so in its own answers (and /health), not here.
     """
-    override = os.environ.get("CAUSALPLAN_FD_BINARY")  # for the settings module to take over
+    # Planners read no environment; these two wait for the settings module to take them over.
+    override = os.environ.get("CAUSALPLAN_FD_BINARY")
     if override:
         fd.use_search_binary(Path(override))
+    fd.keep_answers(int(os.environ.get("CAUSALPLAN_SOLVE_CACHE_SIZE", fd.SOLVE_CACHE_SIZE)))
     with suppress(Exception):
         importlib.import_module("fast_downward.translate.main")
     with suppress(CausalPlanError):

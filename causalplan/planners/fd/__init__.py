@@ -8,6 +8,7 @@ from causalplan.planners.fd.solve import (
     DEFAULT_TIME_LIMIT,
     SOLVE_CACHE_SIZE,
     clear_solve_cache,
+    keep_answers,
     solve,
 )
 from causalplan.planners.fd.translate import translator_available
@@ -20,6 +21,7 @@ __all__ = [
     "ExitCode",
     "SearchConfig",
     "clear_solve_cache",
+    "keep_answers",
     "parse_plan",
     "search_binary",
     "solve",

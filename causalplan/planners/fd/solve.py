@@ -25,10 +25,17 @@ from causalplan.planners.result import PlanStatus, SearchOutcome
 DEFAULT_TIME_LIMIT = 30.0
 DEFAULT_MEMORY_LIMIT_MB = 2048
 SOLVE_CACHE_SIZE = 512
-"""How many answers are kept in memory (least recently used first out)."""
+"""How many answers are kept in memory by default (least recently used first out)."""
 
-_answers: LRUCache[tuple[str, str, str], SearchOutcome] = LRUCache(maxsize=SOLVE_CACHE_SIZE)
+_answers: list[LRUCache[tuple[str, str, str], SearchOutcome]] = [LRUCache(maxsize=SOLVE_CACHE_SIZE)]
+"""The answer cache, in a list so ``keep_answers`` can replace it without a ``global`` statement."""
 _answers_lock = threading.Lock()  # cachetools' caches are not thread-safe
+
+
+def keep_answers(count: int) -> None:
+    """Keep at most ``count`` answers from now on (0: none, every solve runs FD); forgets those kept."""
+    with _answers_lock:
+        _answers[0] = LRUCache(maxsize=count)
 
 
 def _tail(output: str, lines: int = 8) -> str:
@@ -97,17 +104,18 @@ def solve(
     key = (config.search, domain, problem)
     started = time.perf_counter()
     with _answers_lock:
-        known = _answers.get(key)
+        known = _answers[0].get(key)
     if known is not None:
         return replace(known, timing={"cached": time.perf_counter() - started})
     outcome = _solve_uncached(domain, problem, config, time_limit, memory_limit_mb)
     if outcome.status.is_final():
         with _answers_lock:
-            _answers[key] = outcome
+            if _answers[0].maxsize > 0:
+                _answers[0][key] = outcome
     return outcome
 
 
 def clear_solve_cache() -> None:
     """Forget every cached answer (tests and benchmarks that time real runs use it)."""
     with _answers_lock:
-        _answers.clear()
+        _answers[0].clear()
