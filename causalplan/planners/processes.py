@@ -69,25 +69,10 @@ def kill_group(process: subprocess.Popen[bytes]) -> None:
     process.wait()
 
 
-def run_limited(
-    command: Sequence[str],
-    *,
-    folder: Path,
-    time_limit: float,
-    memory_mb: int,
-    stdin: bytes = b"",
-) -> Finished:
-    """Run ``command`` in ``folder`` with ``stdin`` as its input; kill its group at ``time_limit`` seconds.
-
-    Output (stdout and stderr together) is captured and returned. The memory limit is set right
-    after the start rather than by a ``preexec_fn``, which would make Python fork instead of
-    vfork; the programs run here read their input before they allocate anything large.
-    """
+def start(command: Sequence[str], *, folder: Path) -> subprocess.Popen[bytes]:
+    """Start ``command`` in ``folder`` and a process group of its own, stdin piped, output captured."""
     logger.debug("running (cwd %s): %s", folder, shlex.join(command))
-    started = time.perf_counter()
-    if time_limit <= 0:
-        return Finished(None, "", 0.0)
-    process = subprocess.Popen(
+    return subprocess.Popen(
         command,
         cwd=folder,
         stdin=subprocess.PIPE,
@@ -95,9 +80,18 @@ def run_limited(
         stderr=subprocess.STDOUT,
         start_new_session=True,
     )
+
+
+def finish(process: subprocess.Popen[bytes], *, time_limit: float, memory_mb: int, stdin: bytes = b"") -> Finished:
+    """Limit a started process's memory, give it ``stdin``, and wait for its end; kill its group at ``time_limit``.
+
+    The memory limit is set now rather than by a ``preexec_fn``, which would make Python fork
+    instead of vfork; the programs run here read their input before they allocate much.
+    """
+    started = time.perf_counter()
     limit_memory(process.pid, memory_mb)
     try:
-        output, _ = process.communicate(stdin, timeout=time_limit)
+        output, _ = process.communicate(stdin, timeout=max(time_limit, 0.001))
     except subprocess.TimeoutExpired:
         kill_group(process)
         output, _ = process.communicate()
@@ -106,3 +100,19 @@ def run_limited(
         kill_group(process)
         raise
     return Finished(process.returncode, output.decode("utf-8", "replace"), time.perf_counter() - started)
+
+
+def run_limited(
+    command: Sequence[str],
+    *,
+    folder: Path,
+    time_limit: float,
+    memory_mb: int,
+    stdin: bytes = b"",
+) -> Finished:
+    """Run ``command`` in ``folder`` with ``stdin`` as its input; kill its group at ``time_limit`` seconds."""
+    if time_limit <= 0:
+        return Finished(None, "", 0.0)
+    started = time.perf_counter()
+    finished = finish(start(command, folder=folder), time_limit=time_limit, memory_mb=memory_mb, stdin=stdin)
+    return Finished(finished.returncode, finished.output, time.perf_counter() - started)

@@ -76,7 +76,7 @@ def serve(connection: Connection, memory_mb: int) -> None:
 
 
 def warm_up() -> None:
-    """Do once, before the first job, what solves need: FD's translator imported, the catalog read.
+    """Do once, before the first job, what solves need: the translator imported, a search started, the catalog read.
 
     Work that would otherwise fall on each worker's first request. A planner that cannot run
     says so in its own answers (and /health), not here.
@@ -88,6 +88,7 @@ def warm_up() -> None:
     fd.keep_answers(int(os.environ.get("CAUSALPLAN_SOLVE_CACHE_SIZE", fd.SOLVE_CACHE_SIZE)))
     with suppress(Exception):
         importlib.import_module("fast_downward.translate.main")
+    fd.prestart(fd.CONFIGS["fd"])  # the default search, waiting for its first task
     with suppress(CausalPlanError):
         worker_catalog(())
 

@@ -9,6 +9,7 @@ from causalplan.planners.fd.solve import (
     SOLVE_CACHE_SIZE,
     clear_solve_cache,
     keep_answers,
+    prestart,
     solve,
 )
 from causalplan.planners.fd.translate import translator_available
@@ -23,6 +24,7 @@ __all__ = [
     "clear_solve_cache",
     "keep_answers",
     "parse_plan",
+    "prestart",
     "search_binary",
     "solve",
     "status_of_exit_code",

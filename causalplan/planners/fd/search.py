@@ -1,4 +1,7 @@
-"""FD's search binary (the one shipped in ``up-fast-downward``'s wheel), one process per search."""
+"""FD's search binary (the one shipped in ``up-fast-downward``'s wheel), one process per search.
+
+The process is an idle one started ahead (``idle``) when this process asked for them, else a new one.
+"""
 
 from __future__ import annotations
 
@@ -10,6 +13,7 @@ from pathlib import Path
 
 from causalplan.errors import PlannerUnavailableError
 from causalplan.planners import processes
+from causalplan.planners.fd import idle
 from causalplan.planners.processes import Finished
 
 PLAN_FILE = "plan"
@@ -44,10 +48,38 @@ def search_binary() -> Path:
     return path
 
 
-def search(sas: bytes, search_options: str, folder: Path, time_limit: float, memory_mb: int) -> Finished:
-    """Run one search on the SAS task ``sas`` (its stdin) in ``folder``; the plan lands in ``PLAN_FILE``."""
-    command = [str(search_binary()), "--search", search_options, "--internal-plan-file", PLAN_FILE]
-    return processes.run_limited(command, folder=folder, time_limit=time_limit, memory_mb=memory_mb, stdin=sas)
+def search_command(search_options: str) -> list[str]:
+    """Return the command line of a search with ``search_options``; it reads its task from stdin."""
+    return [str(search_binary()), "--search", search_options, "--internal-plan-file", PLAN_FILE]
+
+
+def search(
+    sas: bytes, search_options: str, folder: Path, time_limit: float, memory_mb: int
+) -> tuple[Finished, str | None]:
+    """Run one search on the SAS task ``sas`` (its stdin); return how it ended and its plan file's text, if any.
+
+    A new process runs in ``folder``; a prestarted one in its own folder, removed afterwards.
+    """
+    command = search_command(search_options)
+    ready = idle.take(command)
+    if ready is None:
+        finished = processes.run_limited(command, folder=folder, time_limit=time_limit, memory_mb=memory_mb, stdin=sas)
+        return finished, _read_plan(folder)
+    try:
+        if time_limit <= 0:
+            return Finished(None, "", 0.0), None
+        finished = processes.finish(ready.process, time_limit=time_limit, memory_mb=memory_mb, stdin=sas)
+        return finished, _read_plan(ready.folder)
+    finally:
+        idle.discard(ready)
+        idle.replace_used(command)
+
+
+def _read_plan(folder: Path) -> str | None:
+    try:
+        return (folder / PLAN_FILE).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return None
 
 
 def parse_plan(text: str) -> tuple[Action, ...]:

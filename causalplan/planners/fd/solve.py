@@ -7,6 +7,7 @@ an LRU cache keyed by the exact PDDL texts and the search configuration.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 from dataclasses import replace
@@ -15,9 +16,10 @@ from cachetools import LRUCache
 
 from causalplan.errors import PlannerUnavailableError
 from causalplan.planners import processes
+from causalplan.planners.fd import idle
 from causalplan.planners.fd.configs import COMPLETE, SearchConfig
 from causalplan.planners.fd.returncodes import ExitCode, status_of_exit_code
-from causalplan.planners.fd.search import PLAN_FILE, parse_plan, search, search_binary
+from causalplan.planners.fd.search import parse_plan, search, search_binary, search_command
 from causalplan.planners.fd.translate import SAS_FILE, translate
 from causalplan.planners.processes import Finished
 from causalplan.planners.result import PlanStatus, SearchOutcome
@@ -75,17 +77,15 @@ def _solve_uncached(
             return SearchOutcome(
                 PlanStatus.ERROR, timing=timing, message="The translator ended well but wrote no task."
             )
-        searched = search(sas, config.search, folder, deadline - time.monotonic(), memory_mb)
+        searched, plan = search(sas, config.search, folder, deadline - time.monotonic(), memory_mb)
         timing["search"] = searched.seconds
         if searched.returncode == ExitCode.SEARCH_UNSOLVED_INCOMPLETE:
             # The search gave up without proof (its heuristics may prune); a blind A* proves it.
-            searched = search(sas, COMPLETE, folder, deadline - time.monotonic(), memory_mb)
+            searched, plan = search(sas, COMPLETE, folder, deadline - time.monotonic(), memory_mb)
             timing["confirm"] = searched.seconds
         if searched.returncode is None or status_of_exit_code(searched.returncode) is not PlanStatus.SOLVED:
             return _failure("search", searched, time_limit, timing)
-        try:
-            plan = (folder / PLAN_FILE).read_text(encoding="utf-8")
-        except FileNotFoundError:
+        if plan is None:
             return SearchOutcome(PlanStatus.ERROR, timing=timing, message="FD reported a plan but wrote none.")
     return SearchOutcome(PlanStatus.SOLVED, parse_plan(plan), timing)
 
@@ -113,6 +113,12 @@ def solve(
             if _answers[0].maxsize > 0:
                 _answers[0][key] = outcome
     return outcome
+
+
+def prestart(config: SearchConfig) -> None:
+    """Keep a search process for ``config`` started ahead from now on (a service worker calls it once)."""
+    with contextlib.suppress(PlannerUnavailableError):  # the solve that needs it reports that
+        idle.prestart(search_command(config.search))
 
 
 def clear_solve_cache() -> None:
