@@ -2,8 +2,9 @@
 
 Each run gets a private temp folder as its working directory (FD's search writes its plan
 there, so concurrent runs never share files), its own process group (killed whole at the
-deadline), an address-space limit (``RLIMIT_AS``) and captured output; the command is logged
-shell-quoted. The service pool can use ``memory_limit`` and ``kill_group`` for its workers.
+deadline), an address-space limit (``RLIMIT_AS``) and its output captured in ``OUTPUT_FILE``
+there (a file, not a pipe: a reader of a pipe wakes for every line a program logs); the
+command is logged shell-quoted. The service pool can use ``memory_limit`` and ``kill_group`` for its workers.
 """
 
 from __future__ import annotations
@@ -22,6 +23,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 logger = logging.getLogger(__name__)
+
+OUTPUT_FILE = "output.log"
+"""Where a run's stdout and stderr go, in its folder."""
 
 
 @dataclass(frozen=True)
@@ -70,19 +74,24 @@ def kill_group(process: subprocess.Popen[bytes]) -> None:
 
 
 def start(command: Sequence[str], *, folder: Path) -> subprocess.Popen[bytes]:
-    """Start ``command`` in ``folder`` and a process group of its own, stdin piped, output captured."""
+    """Start ``command`` in ``folder`` and a process group of its own, stdin piped, output to ``OUTPUT_FILE``."""
     logger.debug("running (cwd %s): %s", folder, shlex.join(command))
-    return subprocess.Popen(
-        command,
-        cwd=folder,
-        stdin=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        start_new_session=True,
-    )
+    with (folder / OUTPUT_FILE).open("wb") as output:
+        return subprocess.Popen(
+            command, cwd=folder, stdin=subprocess.PIPE, stdout=output, stderr=subprocess.STDOUT, start_new_session=True
+        )
 
 
-def finish(process: subprocess.Popen[bytes], *, time_limit: float, memory_mb: int, stdin: bytes = b"") -> Finished:
+def _output(folder: Path) -> str:
+    try:
+        return (folder / OUTPUT_FILE).read_text(encoding="utf-8", errors="replace")
+    except FileNotFoundError:
+        return ""
+
+
+def finish(
+    process: subprocess.Popen[bytes], *, folder: Path, time_limit: float, memory_mb: int, stdin: bytes = b""
+) -> Finished:
     """Limit a started process's memory, give it ``stdin``, and wait for its end; kill its group at ``time_limit``.
 
     The memory limit is set now rather than by a ``preexec_fn``, which would make Python fork
@@ -91,15 +100,15 @@ def finish(process: subprocess.Popen[bytes], *, time_limit: float, memory_mb: in
     started = time.perf_counter()
     limit_memory(process.pid, memory_mb)
     try:
-        output, _ = process.communicate(stdin, timeout=max(time_limit, 0.001))
+        process.communicate(stdin, timeout=max(time_limit, 0.001))
     except subprocess.TimeoutExpired:
         kill_group(process)
-        output, _ = process.communicate()
-        return Finished(None, output.decode("utf-8", "replace"), time.perf_counter() - started)
+        process.communicate()
+        return Finished(None, _output(folder), time.perf_counter() - started)
     except BaseException:
         kill_group(process)
         raise
-    return Finished(process.returncode, output.decode("utf-8", "replace"), time.perf_counter() - started)
+    return Finished(process.returncode, _output(folder), time.perf_counter() - started)
 
 
 def run_limited(
@@ -114,5 +123,6 @@ def run_limited(
     if time_limit <= 0:
         return Finished(None, "", 0.0)
     started = time.perf_counter()
-    finished = finish(start(command, folder=folder), time_limit=time_limit, memory_mb=memory_mb, stdin=stdin)
+    process = start(command, folder=folder)
+    finished = finish(process, folder=folder, time_limit=time_limit, memory_mb=memory_mb, stdin=stdin)
     return Finished(finished.returncode, finished.output, time.perf_counter() - started)

@@ -57,9 +57,8 @@ def _start(command: Command) -> Started:
 def discard(started: Started) -> None:
     """Kill ``started``'s group if it still runs, reap it and remove its folder."""
     processes.kill_group(started.process)
-    for stream in (started.process.stdin, started.process.stdout):
-        if stream is not None:
-            stream.close()
+    if started.process.stdin is not None:
+        started.process.stdin.close()
     shutil.rmtree(started.folder, ignore_errors=True)
 
 

@@ -68,7 +68,9 @@ def search(
     try:
         if time_limit <= 0:
             return Finished(None, "", 0.0), None
-        finished = processes.finish(ready.process, time_limit=time_limit, memory_mb=memory_mb, stdin=sas)
+        finished = processes.finish(
+            ready.process, folder=ready.folder, time_limit=time_limit, memory_mb=memory_mb, stdin=sas
+        )
         return finished, _read_plan(ready.folder)
     finally:
         idle.discard(ready)
