@@ -633,3 +633,10 @@ def test_compile_without_out_is_a_usage_error() -> None:
     result = run("compile", DESK_LAMP)
     assert result.exit_code == 2
     assert "--out" in result.output
+
+
+def test_planners_lists_every_planner_and_says_whether_val_can_run() -> None:
+    result = run("planners")
+    assert result.exit_code == 0
+    assert "fd-opt" in result.stdout and "up:pyperplan" in result.stdout
+    assert "VAL, which checks every plan (--no-val skips it): yes" in result.stdout

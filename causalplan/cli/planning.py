@@ -171,4 +171,17 @@ def planners(as_json: bool) -> None:
     table = Table("planner", "what it does", "available")
     for name, problem in availability.items():
         table.add_row(name, DESCRIPTIONS[name], "yes" if problem is None else f"no: {problem}")
-    make_console().print(table)
+    console = make_console()
+    console.print(table)
+    console.print(f"VAL, which checks every plan (--no-val skips it): {_val_availability()}")
+
+
+def _val_availability() -> str:
+    from causalplan.errors import CausalPlanError
+    from causalplan.planners.val import validate_binary
+
+    try:
+        validate_binary()
+    except CausalPlanError as exc:
+        return f"no: {exc.message}"
+    return "yes"
