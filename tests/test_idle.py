@@ -112,3 +112,13 @@ def test_idle_processes_and_their_folders_are_gone_when_the_owner_exits(tmp_path
     pid, folder = completed.stdout.split()
     assert not Path(folder).exists()
     assert not Path(f"/proc/{pid}").exists() or "Z" in Path(f"/proc/{pid}/stat").read_text().split()[2]
+
+
+def test_an_idle_process_that_died_is_not_used_and_is_replaced(catalog: Catalog) -> None:
+    fd.prestart(CONFIGS["fd"])
+    dead = _ready()
+    dead.process.kill()
+    dead.process.wait()
+    assert fd.solve(*_desk_lamp(catalog), CONFIGS["fd"]).status is PlanStatus.SOLVED  # on a new process
+    assert not dead.folder.exists()
+    assert _ready().process.poll() is None

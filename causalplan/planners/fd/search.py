@@ -62,10 +62,12 @@ def search(
     """
     command = search_command(search_options)
     ready = idle.take(command)
-    if ready is None:
-        finished = processes.run_limited(command, folder=folder, time_limit=time_limit, memory_mb=memory_mb, stdin=sas)
-        return finished, _read_plan(folder)
     try:
+        if ready is None:
+            finished = processes.run_limited(
+                command, folder=folder, time_limit=time_limit, memory_mb=memory_mb, stdin=sas
+            )
+            return finished, _read_plan(folder)
         if time_limit <= 0:
             return Finished(None, "", 0.0), None
         finished = processes.finish(
@@ -73,8 +75,9 @@ def search(
         )
         return finished, _read_plan(ready.folder)
     finally:
-        idle.discard(ready)
-        idle.replace_used(command)
+        if ready is not None:
+            idle.discard(ready)
+        idle.replace_used(command)  # also when none was ready (it died, or was not started yet)
 
 
 def _read_plan(folder: Path) -> str | None:
