@@ -2,9 +2,10 @@
 
 On the main thread it runs in this process: ``options.set_options([...]); main.main()``, with
 no Python process to start (most of a translation's time when it runs as its own); an alarm
-stops it at the deadline and ``RLIMIT_AS`` bounds its memory. Alarms only reach the main thread, so elsewhere (a server's
-threads) it runs as its own process (``python -m fast_downward.translate``), under the same
-limits. Both ways get FD's default options and write ``task.sas`` into the solve's folder.
+stops it at the deadline and ``RLIMIT_AS`` bounds its memory. Alarms only reach the main
+thread, so elsewhere (a server's threads) it runs as its own process (``python -m
+fast_downward.translate``), under the same limits. Both ways get FD's default options and
+write ``task.sas`` into the solve's folder.
 """
 
 from __future__ import annotations
