@@ -1,6 +1,6 @@
 """Batch transfer speed: 1,000 simulated participants' trials through ``causalplan batch``.
 
-    python benchmarks/batch.py [--trials 1000] [--seed 0] [--keep FILE]
+    python benchmarks/batch.py [--trials 1000] [--seed 0] [--keep FILE] [--base CHECKOUT] [--rounds 3]
 
 Participants are simulated from the paper's scenarios (desk lamp -> flashlight, candle ->
 kerosene lamp, an energy model -> candle, the paper's failed model): each words the functions
@@ -10,13 +10,21 @@ judged twice in the same run: by ``causalplan batch`` (one process, the fast pat
 reference, by the plain path: one ``evaluate_transfer`` per trial with every cache emptied
 first, on a sample. It prints trials per second for both, the ratio, and checks that both
 paths gave the same verdicts on the sample. Target: >= 200 trials per second.
+
+With ``--base CHECKOUT`` (another checkout of causalplan, e.g. ``git worktree add /tmp/base
+96c4986``), that checkout's ``causalplan batch`` judges the same trials too, with this Python
+and the checkout first on ``PYTHONPATH``, the two interleaved over ``--rounds`` rounds; the
+ratio of their median throughputs is checked against ``BASE_RATIO``. Ours runs as a user
+runs it (VAL on every plan) and once more with ``--no-val``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import random
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -25,6 +33,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGET = 200.0
+BASE_RATIO = 0.8
+"""Our throughput must be at least this fraction of the base checkout's, measured in the same run."""
 
 PHRASES = {
     "power": ["provide electricity", "supply power", "give energy", "power source", "electricity"],
@@ -134,12 +144,34 @@ def plain_path(path: Path, sample: int) -> tuple[float, dict[str, str]]:
     return len(trials) / (time.perf_counter() - started), verdicts
 
 
+def batch_seconds(trials: Path, out: Path, base: Path | None = None, *options: str) -> float:
+    """Return the wall time of one ``causalplan batch`` process on ``trials`` (ours, or ``base``'s code)."""
+    if base is None:
+        command = [str(Path(sys.executable).with_name("causalplan")), "batch", str(trials), "--out", str(out)]
+        environment = None
+    else:
+        command = [sys.executable, "-m", "causalplan.cli", "batch", str(trials), "--out", str(out)]
+        environment = {**os.environ, "PYTHONPATH": str(base)}
+    started = time.perf_counter()
+    subprocess.run(
+        [*command, *options],
+        check=True,
+        cwd=base or ROOT,
+        env=environment,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    return time.perf_counter() - started
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--trials", type=int, default=1000)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--sample", type=int, default=100, help="trials judged by the plain path")
     parser.add_argument("--keep", type=Path, help="also keep the generated trials in this file")
+    parser.add_argument("--base", type=Path, help="a checkout of the code to compare with (same trials, same run)")
+    parser.add_argument("--rounds", type=int, default=3, help="interleaved runs of each with --base")
     parser.add_argument("--output", type=Path, default=ROOT / "benchmarks" / "results" / "batch.json")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
@@ -147,11 +179,19 @@ def main() -> None:
         write_trials(trials, args.trials, args.seed)
         if args.keep:
             args.keep.write_text(trials.read_text())
-        command = [str(Path(sys.executable).with_name("causalplan")), "batch", str(trials), "--out", folder]
-        started = time.perf_counter()
-        subprocess.run(command, check=True, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        fast_seconds = time.perf_counter() - started
-        fast = json.loads((Path(folder) / "verdicts.json").read_text())
+        ours_out, base_out = Path(folder) / "ours", Path(folder) / "base"
+        ours_seconds, base_seconds = [], []
+        for _ in range(args.rounds if args.base else 1):
+            ours_seconds.append(batch_seconds(trials, ours_out))
+            if args.base:
+                base_seconds.append(batch_seconds(trials, base_out, args.base.resolve()))
+        no_val_seconds = batch_seconds(trials, Path(folder) / "no-val", None, "--no-val")
+        fast_seconds = statistics.median(ours_seconds)
+        fast = json.loads((ours_out / "verdicts.json").read_text())
+        base_same = None
+        if args.base:
+            base_verdicts = {row["id"]: row["verdict"] for row in json.loads((base_out / "verdicts.json").read_text())}
+            base_same = all(row["verdict"] == base_verdicts[row["id"]] for row in fast)
         plain_rate, plain = plain_path(trials, args.sample)
     fast_rate = args.trials / fast_seconds
     counts: dict[str, int] = {}
@@ -161,22 +201,39 @@ def main() -> None:
         deciders[row["decided_by"]] = deciders.get(row["decided_by"], 0) + 1
     same = all(row["verdict"] == plain[row["id"]] for row in fast if row["id"] in plain)
     print(f"{args.trials} trials: {counts}; decided by {deciders}")
-    print(f"causalplan batch (whole process, fast path): {fast_seconds:.2f} s = {fast_rate:.0f} trials/s")
+    print(f"causalplan batch (whole process, VAL on): {fast_seconds:.2f} s = {fast_rate:.0f} trials/s")
+    print(f"causalplan batch --no-val: {no_val_seconds:.2f} s = {args.trials / no_val_seconds:.0f} trials/s")
     print(f"plain path (one trial at a time, caches emptied, {args.sample} trials): {plain_rate:.1f} trials/s")
     print(f"ratio fast/plain: {fast_rate / plain_rate:.1f}x; same verdicts on the sample: {same}")
     print(f"target >= {TARGET:.0f} trials/s: {'met' if fast_rate >= TARGET else 'NOT met'}")
+    base_ratio = None
+    if args.base:
+        base_rate = args.trials / statistics.median(base_seconds)
+        base_ratio = fast_rate / base_rate
+        print(
+            f"base checkout {args.base}: {base_rate:.0f} trials/s (median of {args.rounds}, interleaved); "
+            f"ours/base {base_ratio:.2f} (target >= {BASE_RATIO}: {'met' if base_ratio >= BASE_RATIO else 'NOT met'}); "
+            f"same verdicts as the base: {base_same}"
+        )
     report = {
         "trials": args.trials,
         "seed": args.seed,
         "verdicts": counts,
         "decided_by": deciders,
         "fast_seconds": fast_seconds,
+        "fast_seconds_each": ours_seconds,
         "fast_trials_per_s": fast_rate,
+        "no_val_trials_per_s": args.trials / no_val_seconds,
         "plain_sample": args.sample,
         "plain_trials_per_s": plain_rate,
         "same_verdicts_on_sample": same,
         "target_trials_per_s": TARGET,
-        "met": fast_rate >= TARGET and same,
+        "base": str(args.base) if args.base else None,
+        "base_seconds_each": base_seconds,
+        "base_ratio": base_ratio,
+        "base_ratio_target": BASE_RATIO,
+        "same_verdicts_as_base": base_same,
+        "met": fast_rate >= TARGET and same and (base_ratio is None or (base_ratio >= BASE_RATIO and bool(base_same))),
     }
     args.output.parent.mkdir(parents=True, exist_ok=True)
     args.output.write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")

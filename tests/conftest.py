@@ -59,7 +59,8 @@ def example_mapping(relative: str, catalog: Catalog) -> Labelling:
 
 @pytest.fixture(autouse=True)
 def _fresh_solve_cache() -> None:
-    """Start every test with Fast Downward's answer cache empty, so runs are real unless a test repeats them."""
-    from causalplan.planners import fast_downward
+    """Start every test with FD's answers and VAL's verdicts forgotten, so runs are real unless a test repeats them."""
+    from causalplan.planners import fd, val
 
-    fast_downward.clear_solve_cache()
+    fd.clear_solve_cache()
+    val.clear_verdicts()

@@ -16,6 +16,7 @@ def test_the_readme_example_plans_and_transfers_the_desk_lamp() -> None:
     result = causalplan.plan(model)
     assert [step.text for step in result.steps] == ["Screw the light bulb into the base with cables."]
     assert result.valid_under_true_mechanism
+    assert result.validated_by == {"replay": "valid", "val": "valid"}
     mapping = causalplan.load_mapping(PAPER / "flashlight_mapping.yaml")
     verdict = causalplan.transfer_verdict(model, mapping)
     assert verdict.verdict.value == "transfers"

@@ -11,11 +11,11 @@ import pytest
 from click.testing import CliRunner
 
 from causalplan.cli import app
+from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult
-from causalplan.planners.synthetic import synthetic_task
 from causalplan.transfer import verdict as verdict_module
 from causalplan.transfer.batch import evaluate_trial, read_trials, run_batch
 from causalplan.transfer.verdict import Verdict, clear_caches
@@ -144,6 +144,33 @@ def test_batch_command_writes_csv_and_json(tmp_path: Path) -> None:
         ("line-41", "invalid", "unreadable_trial"),
         ("no-mapping", "invalid", "unreadable_trial"),
     ]
-    assert len(json.loads((tmp_path / "verdicts.json").read_text())) == 42
+    verdicts = json.loads((tmp_path / "verdicts.json").read_text())
+    assert len(verdicts) == 42
+    planned = [verdict["planning"] for verdict in verdicts if verdict["plan"] is not None]
+    assert planned and all(plan["validated_by"]["val"] == "valid" for plan in planned)
     missing = CliRunner().invoke(app, ["batch", str(tmp_path / "none.jsonl")])
     assert missing.exit_code == 2 and "There is no file" in missing.stderr
+
+
+def test_a_trial_whose_plan_val_rejects_is_undecided_and_the_batch_goes_on(
+    catalog: Catalog, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from dataclasses import replace
+
+    from causalplan.pddl.writer import CompiledTask
+    from causalplan.planners import pipeline
+
+    real_compile = pipeline.compile_task
+
+    def negated_goal(task: PlanningTask) -> CompiledTask:  # as a mistranslated rule would read to VAL
+        compiled = real_compile(task)
+        return replace(compiled, problem=compiled.problem.replace("(:goal (n-light))", "(:goal (not (n-light)))"))
+
+    monkeypatch.setattr(pipeline, "compile_task", negated_goal)
+    trials = list(read_trials(TRIALS))
+    results = run_batch(trials, catalog, simulate=False, val=True)
+    assert len(results) == len(trials)
+    rejected = [result.verdict for result in results if result.verdict.decided_by == "validator"]
+    assert rejected and all(verdict.verdict is Verdict.UNDECIDED for verdict in rejected)
+    assert all(verdict.reasons[0].code == "plan_rejected_by_val" for verdict in rejected)
+    assert "Goal not satisfied" in rejected[0].reasons[0].message

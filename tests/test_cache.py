@@ -69,3 +69,11 @@ def test_the_cache_can_be_turned_off_or_unwritable(monkeypatch: pytest.MonkeyPat
     blocker.write_text("a file where the folder should be")
     monkeypatch.setenv("CAUSALPLAN_CACHE_DIR", str(blocker / "cache"))
     assert parse_object(LAMP, "lamp.yaml").id == "bedside_lamp"
+
+
+def test_without_a_setting_the_folder_is_the_users_cache_folder(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.delenv("CAUSALPLAN_CACHE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))  # what platformdirs honours on Linux
+    assert cache.cache_folder() == tmp_path / "causalplan"

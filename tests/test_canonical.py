@@ -8,17 +8,17 @@ import pytest
 
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import read_model
+from causalplan.comparison.synthetic import synthetic_object, synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl import canonical
 from causalplan.pddl.canonical import MAX_MINIMAL_SETS, canonical_pddl, minimal_part_sets
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.pddl.writer import actions_text, compile_task, problem_text, requirements_line
-from causalplan.planners import fast_downward
+from causalplan.planners import fd
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanStatus
-from causalplan.planners.synthetic import synthetic_object, synthetic_task
 from tests.conftest import example_mapping, example_model
-from tests.test_search_processes import _example_tasks
+from tests.test_fd import example_tasks as _example_tasks
 
 
 def _task(functions: dict[str, list[str]], rules: list[str], catalog: Catalog) -> PlanningTask:
@@ -111,9 +111,9 @@ def test_canonical_and_readable_forms_give_the_same_answers(seed: int) -> None:
     task = synthetic_task(8 + 3 * seed, seed)
     readable, canonical = compile_task(task), canonical_pddl(task)
     assert canonical is not None
-    config = fast_downward.CONFIGS["fd-opt"]
-    first = fast_downward.solve(readable.domain, readable.problem, config)
-    second = fast_downward.solve(canonical.domain, canonical.problem, config)
+    config = fd.CONFIGS["fd-opt"]
+    first = fd.solve(readable.domain, readable.problem, config)
+    second = fd.solve(canonical.domain, canonical.problem, config)
     assert first.status is second.status is PlanStatus.SOLVED
     assert len(first.actions) == len(second.actions)
 
@@ -132,9 +132,9 @@ def test_a_repeated_solve_comes_from_the_cache_with_the_same_plan(catalog: Catal
 
 def test_timeouts_are_not_cached() -> None:
     big = compile_task(synthetic_task(320, seed=0))
-    config = fast_downward.CONFIGS["fd"]
-    assert fast_downward.solve(big.domain, big.problem, config, time_limit=0.05).status is PlanStatus.TIMEOUT
-    assert fast_downward.solve(big.domain, big.problem, config, time_limit=60).status is PlanStatus.SOLVED
+    config = fd.CONFIGS["fd"]
+    assert fd.solve(big.domain, big.problem, config, time_limit=0.05).status is PlanStatus.TIMEOUT
+    assert fd.solve(big.domain, big.problem, config, time_limit=60).status is PlanStatus.SOLVED
 
 
 def _per_primitive_form(task: PlanningTask) -> tuple[str, str]:
@@ -160,9 +160,13 @@ def _per_primitive_form(task: PlanningTask) -> tuple[str, str]:
 
 
 def _sas(domain: str, problem: str) -> str:
-    code, sas = fast_downward._run_translator(domain, problem)
-    assert code == 0 and sas is not None
-    return sas
+    from causalplan.planners import processes
+    from causalplan.planners.fd import translate
+
+    with processes.private_folder() as folder:
+        finished = translate.translate(domain, problem, folder, 60, 2048)
+        assert finished.returncode == 0, finished.output
+        return (folder / translate.SAS_FILE).read_text(encoding="utf-8")
 
 
 def _per_primitive_names(sas: str) -> str:
@@ -200,16 +204,16 @@ def test_one_schema_translates_to_the_per_primitive_task_but_for_operator_names(
     capsys.readouterr()  # the translator's log
 
 
-@pytest.mark.parametrize("config", sorted(fast_downward.CONFIGS))
+@pytest.mark.parametrize("config", sorted(fd.CONFIGS))
 def test_plans_of_one_schema_are_those_of_the_per_primitive_form(config: str, user_catalog: Catalog) -> None:
     tasks = _tasks_to_compare(user_catalog)
     statuses = set()
     for name, task in tasks.items():
         compiled = canonical_pddl(task)
         assert compiled is not None
-        fast_downward.clear_solve_cache()
-        one = fast_downward.solve(compiled.domain, compiled.problem, fast_downward.CONFIGS[config])
-        per_primitive = fast_downward.solve(*_per_primitive_form(task), fast_downward.CONFIGS[config])
+        fd.clear_solve_cache()
+        one = fd.solve(compiled.domain, compiled.problem, fd.CONFIGS[config])
+        per_primitive = fd.solve(*_per_primitive_form(task), fd.CONFIGS[config])
         assert one.status is per_primitive.status, name
         assert all(action == canonical.ASSEMBLE for action, _ in one.actions)
         assert canonical.plan_actions(one.actions) == per_primitive.actions, name
@@ -231,5 +235,5 @@ def test_an_object_without_fits_has_no_kinds_and_its_goal_is_unsolvable_or_holds
     task = build_task(example_model("paper/desk_lamp.yaml", catalog), bare)
     compiled = canonical_pddl(task)
     assert compiled is not None and "- kind" not in compiled.domain.split("(:predicates")[0]
-    outcome = fast_downward.solve(compiled.domain, compiled.problem, fast_downward.CONFIGS["fd"])
+    outcome = fd.solve(compiled.domain, compiled.problem, fd.CONFIGS["fd"])
     assert outcome.status is PlanStatus.UNSOLVABLE

@@ -263,6 +263,17 @@ def test_plan_json_keys() -> None:
     timing = data["timing"]
     assert isinstance(timing, dict) and "total" in timing
     assert all(isinstance(seconds, float) and seconds >= 0 for seconds in timing.values())
+    assert data["validated_by"] == {"replay": "valid", "val": "valid"}
+
+
+def test_plan_and_transfer_check_with_val_unless_told_not_to() -> None:
+    _code, unchecked = run_json("plan", DESK_LAMP, "--no-val")
+    assert unchecked["validated_by"] == {"replay": "valid"} and "val" not in unchecked["timing"]
+    assert "Checked by val valid." in run("plan", DESK_LAMP).stdout
+    code, verdict = run_json("transfer", DESK_LAMP, FLASHLIGHT_MAPPING)
+    assert code == 0 and verdict["planning"]["validated_by"] == {"replay": "valid", "val": "valid"}
+    _code, verdict = run_json("transfer", DESK_LAMP, FLASHLIGHT_MAPPING, "--no-val")
+    assert verdict["planning"]["validated_by"] == {"replay": "valid"}
 
 
 def test_plan_failed_desk_lamp_also_clips_the_shade() -> None:
@@ -622,3 +633,10 @@ def test_compile_without_out_is_a_usage_error() -> None:
     result = run("compile", DESK_LAMP)
     assert result.exit_code == 2
     assert "--out" in result.output
+
+
+def test_planners_lists_every_planner_and_says_whether_val_can_run() -> None:
+    result = run("planners")
+    assert result.exit_code == 0
+    assert "fd-opt" in result.stdout and "up:pyperplan" in result.stdout
+    assert "VAL, which checks every plan (--no-val skips it): yes" in result.stdout

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import signal
@@ -75,3 +76,43 @@ def test_a_worker_killed_mid_batch_loses_nothing_and_counts_nothing_twice(catalo
 def test_an_unreachable_scheduler_is_a_clear_error(catalog: Catalog) -> None:
     with pytest.raises(ClusterError, match=r"Cannot reach the Dask scheduler at tcp://127\.0\.0\.1:9"):
         run_batch_on_cluster([], catalog, address="tcp://127.0.0.1:9")
+
+
+def test_the_batch_command_on_two_local_workers_writes_what_a_local_run_writes(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from causalplan.cli import app
+
+    runner = CliRunner()
+    local = runner.invoke(app, ["batch", str(TRIALS), "--no-simulate", "--no-val", "--out", str(tmp_path / "local")])
+    on_cluster = runner.invoke(
+        app,
+        [
+            "batch",
+            str(TRIALS),
+            "--no-simulate",
+            "--no-val",
+            "--workers",
+            "2",
+            "--chunk-size",
+            "10",
+            "--out",
+            str(tmp_path / "cluster"),
+        ],
+    )
+    assert local.exit_code == 0 and on_cluster.exit_code == 0, on_cluster.output
+    local_rows = (tmp_path / "local" / "verdicts.csv").read_text().splitlines()
+    cluster_rows = (tmp_path / "cluster" / "verdicts.csv").read_text().splitlines()
+    assert [row.rsplit(",", 1)[0] for row in cluster_rows] == [row.rsplit(",", 1)[0] for row in local_rows]
+    streamed = (tmp_path / "cluster" / "verdicts.jsonl").read_text().splitlines()
+    assert sorted(json.loads(line)["id"] for line in streamed) == sorted(row.split(",")[0] for row in local_rows[1:])
+
+
+def test_cluster_and_workers_together_are_refused(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from causalplan.cli import app
+
+    result = CliRunner().invoke(app, ["batch", str(TRIALS), "--cluster", "tcp://127.0.0.1:9", "--workers", "2"])
+    assert result.exit_code == 2
+    assert "not both" in result.output

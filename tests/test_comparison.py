@@ -46,7 +46,14 @@ def test_compare_writes_table_csv_json_and_plot(tmp_path: Path, monkeypatch: pyt
     assert {row["plan_length"] for row in rows[:3]} == {"1"}
     data = json.loads((tmp_path / "compare.json").read_text())
     assert data["settings"]["planners"] == ["fd", "mdp", "up:pyperplan"]
+    assert data["settings"]["val"] is True
     assert (tmp_path / "compare.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_every_plan_of_a_comparison_is_checked_by_replay_up_and_val() -> None:
+    record = run_once(tasks.synthetic(6), "fd", time_limit=30.0, memory_mb=4096, val=True)
+    assert record["validated_by"] == {"replay": "valid", "up": "valid", "val": "valid"}
+    assert "val" not in run_once(tasks.synthetic(6), "fd", 30.0, 4096)["validated_by"]  # type: ignore[operator]
 
 
 def test_a_planner_that_runs_out_of_time_is_a_row_not_a_crash() -> None:

@@ -5,17 +5,18 @@ from __future__ import annotations
 import dataclasses
 import random
 import time
+from pathlib import Path
 
 import pytest
 
+from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
-from causalplan.planners import fast_downward
+from causalplan.planners import fd
 from causalplan.planners.mdp import MAX_RELEVANT_FITS, MdpSolution, relevant_fits, solve_mdp
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanStatus
-from causalplan.planners.synthetic import synthetic_task
 from tests.conftest import example_mapping, example_model
 from tests.test_pipeline import PAPER_PLANS
 
@@ -110,13 +111,11 @@ def test_auto_uses_fd_when_every_fit_is_certain(catalog: Catalog) -> None:
 
 
 def test_auto_falls_back_to_the_mdp_when_fd_is_unavailable(catalog: Catalog, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("CAUSALPLAN_FD_BINARY", "/nonexistent/downward")
-    fast_downward.search_binary.cache_clear()
+    fd.use_search_binary(Path("/nonexistent/downward"))
     try:
         result = plan_task(_paper_task("paper/desk_lamp.yaml", None, catalog), "auto")
     finally:
-        monkeypatch.delenv("CAUSALPLAN_FD_BINARY")
-        fast_downward.search_binary.cache_clear()
+        fd.use_search_binary(None)
     assert result.status is PlanStatus.SOLVED and result.planner_used == "mdp"
     assert result.fallback_reason is not None and "error" in result.fallback_reason
 

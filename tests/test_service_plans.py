@@ -259,3 +259,11 @@ def test_a_trailing_slash_on_an_api_path_is_a_404_that_names_the_path(client: Te
     error = error_of(response, 404)
     assert "/v1/objects" in error["message"]
     assert client.get("/v1/objects").status_code == 200
+
+
+def test_validate_asks_val_and_the_answer_says_so(client: TestClient) -> None:
+    plain = client.post("/v1/plans", json={"model": DESK_LAMP})
+    checked = client.post("/v1/plans", json={"model": DESK_LAMP, "validate": True})
+    assert plain.status_code == checked.status_code == 200, checked.text
+    assert plain.json()["validated_by"] == {"replay": "valid"}
+    assert checked.json()["validated_by"] == {"replay": "valid", "val": "valid"}

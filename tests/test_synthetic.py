@@ -6,6 +6,13 @@ import pytest
 
 from causalplan.causal.graph import goal_holds
 from causalplan.causal.validation import ObjectSummary, validate_model
+from causalplan.comparison.synthetic import (
+    GOAL,
+    object_as_dict,
+    synthetic_model,
+    synthetic_object,
+    synthetic_task,
+)
 from causalplan.objects.catalog import build_object
 from causalplan.objects.model import AssemblyObject
 from causalplan.objects.schema import ObjectSchema
@@ -13,13 +20,6 @@ from causalplan.pddl.task import PlanningTask
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanStatus
-from causalplan.planners.synthetic import (
-    GOAL,
-    object_as_dict,
-    synthetic_model,
-    synthetic_object,
-    synthetic_task,
-)
 
 
 def _primary_parents(obj: AssemblyObject) -> dict[str, str]:

@@ -9,13 +9,13 @@ import pytest
 from causalplan.causal.diagnostics import Location
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.causal.rules import Rule, parse_rule
+from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject, Connector, Fit, Part, Requirement
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners.pipeline import UP_ENGINES, plan_task
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanStatus
-from causalplan.planners.synthetic import synthetic_task
 from causalplan.planners.up_problem import (
     build_up_problem,
     engine_problem,

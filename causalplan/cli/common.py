@@ -45,6 +45,14 @@ time_limit_option = click.option(
     help="Seconds the planner may run before it is stopped.",
 )
 
+val_option = click.option(
+    "--val/--no-val",
+    default=True,
+    show_default=True,
+    help="Check every plan with VAL (KCL's plan validator) on the PDDL as you wrote it, one derived clause "
+    "per rule, beside the replay. A plan VAL rejects is an error that quotes VAL.",
+)
+
 
 def exit_with(code: int) -> NoReturn:
     raise SystemExit(code)
@@ -197,8 +205,9 @@ def print_plan(result: PlanResult) -> None:
             f"Success probability {result.success_probability:.4f} (some fits may fail); expected attempts "
             f"{result.expected_actions:.2f}."
         )
-    if result.validated_by_up is not None:
-        say(f"unified-planning's validator: {mark(result.validated_by_up, 'valid', 'INVALID')}")
+    checked = ", ".join(f"{name} {verdict}" for name, verdict in result.validated_by.items() if name != "replay")
+    if checked:
+        say(dim(f"Checked by {checked}."))
     if result.fallback_reason:
         say(dim(f"Used {result.planner_used} because {result.fallback_reason}."))
     if result.message:

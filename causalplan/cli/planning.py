@@ -24,6 +24,7 @@ from causalplan.cli.common import (
     print_plan,
     say,
     time_limit_option,
+    val_option,
     write_pddl,
 )
 
@@ -43,6 +44,7 @@ if TYPE_CHECKING:
 @time_limit_option
 @click.option("--pddl-out", type=FILE, help="Also write domain.pddl and problem.pddl to this folder.")
 @click.option("--up-validate", is_flag=True, help="Also check the plan with unified-planning's plan validator.")
+@val_option
 @json_option
 @catalog_option
 def plan(
@@ -52,14 +54,18 @@ def plan(
     time_limit: float,
     pddl_out: Path | None,
     up_validate: bool,
+    val: bool,
     as_json: bool,
     catalog: tuple[Path, ...],
 ) -> None:
     """Plan how to assemble the object so the model's goal holds, and print the steps.
 
     MODEL is the causal model file (YAML or JSON). Every plan is replayed on the object before
-    it is shown: against the model, and against the object's true mechanism. Exit 0 with a
-    plan, 1 without one, 2 for invalid input.
+    it is shown: against the model, and against the object's true mechanism; VAL checks it on
+    the PDDL as written (--no-val skips that). Exit 0 with a plan, 1 without one, 2 for
+    invalid input or a plan VAL rejects.
+
+    Example: causalplan plan examples/paper/desk_lamp.yaml --pddl-out out/desk_lamp
     """
     from causalplan.errors import CausalPlanError
     from causalplan.planners.pipeline import plan_task
@@ -74,6 +80,7 @@ def plan(
             time_limit,
             include_pddl=pddl_out is not None,
             validate_up=up_validate,
+            val=val,
         )
     except CausalPlanError as exc:
         fail(exc.code, exc.message)
@@ -107,16 +114,24 @@ def _print_verdict(verdict: TransferVerdict) -> None:
 @click.argument("mapping", type=FILE)
 @planner_option
 @time_limit_option
+@val_option
 @json_option
 @catalog_option
 def transfer(
-    model: Path, mapping: Path, planner: str, time_limit: float, as_json: bool, catalog: tuple[Path, ...]
+    model: Path,
+    mapping: Path,
+    planner: str,
+    time_limit: float,
+    val: bool,
+    as_json: bool,
+    catalog: tuple[Path, ...],
 ) -> None:
     """Test whether a model transfers to a new object (step 3), and say why or why not.
 
     MODEL is the causal model of the training object (steps 1-2); MAPPING maps a new object's
     parts to the model's functions (step 3). Exit 0 when it transfers, 1 when it fails, 2 when
-    the model or mapping is invalid, 3 when the planner could not decide (e.g. it timed out).
+    the model or mapping is invalid or VAL rejects the plan, 3 when the planner could not
+    decide (e.g. it timed out).
     """
     from causalplan.errors import CausalPlanError
     from causalplan.inputs import load_mapping, load_model
@@ -126,7 +141,7 @@ def transfer(
     objects = catalog_from(catalog)
     loaded_model, loaded_mapping = load_model(model, objects), load_mapping(mapping, objects)
     try:
-        verdict = transfer_verdict(loaded_model, loaded_mapping, objects, planner, time_limit)
+        verdict = transfer_verdict(loaded_model, loaded_mapping, objects, planner, time_limit, val=val)
     except CausalPlanError as exc:
         fail(exc.code, exc.message)
     if as_json:
@@ -156,4 +171,17 @@ def planners(as_json: bool) -> None:
     table = Table("planner", "what it does", "available")
     for name, problem in availability.items():
         table.add_row(name, DESCRIPTIONS[name], "yes" if problem is None else f"no: {problem}")
-    make_console().print(table)
+    console = make_console()
+    console.print(table)
+    console.print(f"VAL, which checks every plan (--no-val skips it): {_val_availability()}")
+
+
+def _val_availability() -> str:
+    from causalplan.errors import CausalPlanError
+    from causalplan.planners.val import validate_binary
+
+    try:
+        validate_binary()
+    except CausalPlanError as exc:
+        return f"no: {exc.message}"
+    return "yes"

@@ -1,4 +1,4 @@
-"""Runs every planner on every task, each run in its own process with a time and memory limit.
+"""Runs every planner on every task, each run in its own process with a time and memory limit (``processes``).
 
 A run that crashes, is killed at its limit or prints nonsense becomes a row with that status;
 it never stops the comparison.
@@ -7,17 +7,15 @@ it never stops the comparison.
 from __future__ import annotations
 
 import json
-import os
-import resource
-import signal
 import statistics
-import subprocess
 import sys
 from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass
 
 from causalplan.comparison.tasks import ComparisonTask
+from causalplan.comparison.worker import RECORD_FILE
+from causalplan.planners import processes
 
 GRACE_SECONDS = 20.0
 """Time a worker gets beyond the planner's limit: its imports, the replay and UP's validator."""
@@ -44,40 +42,34 @@ class RunRecord:
         return asdict(self)
 
 
-def _limit_memory(megabytes: int) -> Callable[[], None]:
-    def apply() -> None:
-        limit = megabytes * 1024 * 1024
-        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-
-    return apply
-
-
-def run_once(task: ComparisonTask, planner: str, time_limit: float, memory_mb: int) -> dict[str, object]:
+def run_once(
+    task: ComparisonTask, planner: str, time_limit: float, memory_mb: int, val: bool = False
+) -> dict[str, object]:
     """Run one planner on one task in a fresh worker process; return its raw record."""
-    request = json.dumps({"task": task.spec, "planner": planner, "time_limit": time_limit})
-    process = subprocess.Popen(
-        [sys.executable, "-m", "causalplan.comparison.worker"],
-        stdin=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        start_new_session=True,
-        preexec_fn=_limit_memory(memory_mb),
-    )
-    try:
-        output, errors = process.communicate(request.encode(), timeout=time_limit + GRACE_SECONDS)
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
-        process.communicate()
+    request = json.dumps({"task": task.spec, "planner": planner, "time_limit": time_limit, "val": val})
+    command = [sys.executable, "-m", "causalplan.comparison.worker"]
+    with processes.private_folder("causalplan-compare-") as folder:
+        run = processes.run_limited(
+            command, folder=folder, time_limit=time_limit + GRACE_SECONDS, memory_mb=memory_mb, stdin=request.encode()
+        )
+        try:
+            record = json.loads((folder / RECORD_FILE).read_text(encoding="utf-8"))
+        except (OSError, json.JSONDecodeError):
+            record = None
+    if run.timed_out:
         return {"status": "timeout", "message": f"killed after {time_limit + GRACE_SECONDS:g} s"}
-    try:
-        record = json.loads(output.decode() or "null")
-    except json.JSONDecodeError:
-        record = None
     if not isinstance(record, dict):
-        tail = errors.decode(errors="replace").strip().splitlines()[-1:] or [f"exit code {process.returncode}"]
+        tail = run.output.strip().splitlines()[-1:] or [f"exit code {run.returncode}"]
         status = "out_of_memory" if "MemoryError" in tail[0] else "error"
         return {"status": status, "message": f"the worker failed: {tail[0]}"}
     return record
+
+
+def _is_valid(record: dict[str, object]) -> bool:
+    """Return whether every check of a solved run passed: replay, UP's validator, and VAL if it ran."""
+    verdicts = record.get("validated_by")
+    checked = all(verdict == "valid" for verdict in verdicts.values()) if isinstance(verdicts, dict) else True
+    return bool(record.get("valid_under_model")) and record.get("validated_by_up") is not False and checked
 
 
 def _summary(task: ComparisonTask, planner: str, records: list[dict[str, object]]) -> RunRecord:
@@ -88,7 +80,7 @@ def _summary(task: ComparisonTask, planner: str, records: list[dict[str, object]
     times = [float(str(record["seconds"])) for record in same if record.get("seconds") is not None]
     valid: bool | None = None
     if status == "solved":
-        valid = all(bool(r.get("valid_under_model")) and r.get("validated_by_up") is not False for r in same)
+        valid = all(_is_valid(record) for record in same)
     length = first.get("plan_length")
     probability = first.get("success_probability")
     return RunRecord(
@@ -113,14 +105,18 @@ def compare(
     memory_mb: int,
     repeat: int,
     progress: Callable[[str], None] | None = None,
+    val: bool = False,
 ) -> list[RunRecord]:
-    """Run every planner on every task ``repeat`` times; return one median record per pair."""
+    """Run every planner on every task ``repeat`` times; return one median record per pair.
+
+    ``val`` has VAL check every plan too (outside the timed part of each run).
+    """
     rows: list[RunRecord] = []
     for task in tasks:
         for planner in planners:
             records: list[dict[str, object]] = []
             for _ in range(repeat):
-                records.append(run_once(task, planner, time_limit, memory_mb))
+                records.append(run_once(task, planner, time_limit, memory_mb, val))
                 if progress is not None:
                     progress(f"{planner} on {task.name}")
             rows.append(_summary(task, planner, records))

@@ -57,7 +57,7 @@ def _read(path: Path) -> object:
 def build(spec: dict[str, object]) -> PlanningTask:
     """Rebuild a task from its spec (in a worker process); CausalPlanError says what is wrong."""
     if "synthetic" in spec:
-        from causalplan.planners.synthetic import synthetic_task
+        from causalplan.comparison.synthetic import synthetic_task
 
         return synthetic_task(int(str(spec["synthetic"])), int(str(spec.get("seed", 0))))
     from causalplan.inputs import load_mapping, load_model
@@ -81,11 +81,14 @@ def build(spec: dict[str, object]) -> PlanningTask:
 
 
 def from_files(model: Path, mapping: Path | None, catalog_folders: list[Path]) -> ComparisonTask:
-    """Return the task of a model (and mapping), checking now that it builds."""
+    """Return the task of a model (and mapping), checking now that it builds.
+
+    Paths are made absolute: the worker that rebuilds the task runs in a folder of its own.
+    """
     spec: dict[str, object] = {
-        "model": str(model),
-        "mapping": str(mapping) if mapping else None,
-        "catalog": [str(folder) for folder in catalog_folders],
+        "model": str(model.resolve()),
+        "mapping": str(mapping.resolve()) if mapping else None,
+        "catalog": [str(folder.resolve()) for folder in catalog_folders],
     }
     task = build(spec)
     return ComparisonTask(_name(model, mapping), len(task.obj.parts), spec)
@@ -114,7 +117,7 @@ def from_argument(path: Path, catalog_folders: list[Path]) -> ComparisonTask:
 
 def synthetic(parts: int, seed: int = 0) -> ComparisonTask:
     """Return a synthetic task of ``parts`` parts."""
-    from causalplan.planners.synthetic import MAX_PARTS, MIN_PARTS
+    from causalplan.comparison.synthetic import MAX_PARTS, MIN_PARTS
 
     if not MIN_PARTS <= parts <= MAX_PARTS:
         raise CausalPlanError(f"Synthetic tasks have {MIN_PARTS} to {MAX_PARTS} parts, not {parts}.")

@@ -3,9 +3,10 @@
 Each entry is the pickled ``AssemblyObject`` of one object file, named by a hash of the file's
 exact text, the causalplan version and the code that builds objects: an edited file, a new
 causalplan, or an edit to that code (an editable install keeps its version) misses the cache.
-Only files that passed every check are stored. The folder is ``CAUSALPLAN_CACHE_DIR``, else
-``$XDG_CACHE_HOME/causalplan``, else ``~/.cache/causalplan``; ``CAUSALPLAN_CACHE_DIR=off``
-turns it off. A cache that cannot be read or written is ignored (it only costs time).
+Only files that passed every check are stored. The folder is ``CAUSALPLAN_CACHE_DIR``, else the
+user cache folder ``platformdirs`` gives (``~/.cache/causalplan`` on Linux, honouring
+``XDG_CACHE_HOME``); ``CAUSALPLAN_CACHE_DIR=off`` turns it off. A cache that cannot be read or
+written is ignored (it only costs time).
 """
 
 from __future__ import annotations
@@ -19,21 +20,27 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
+import platformdirs
+
 from causalplan import __version__
 from causalplan.objects.model import AssemblyObject
 
 logger = logging.getLogger(__name__)
 
 
+def configured_folder() -> str | None:
+    """Return ``CAUSALPLAN_CACHE_DIR`` (a folder, or "off"), if set: the one place this module reads it."""
+    return os.environ.get("CAUSALPLAN_CACHE_DIR") or None
+
+
 def cache_folder() -> Path | None:
     """Return the cache folder, or None when caching is off."""
-    configured = os.environ.get("CAUSALPLAN_CACHE_DIR")
+    configured = configured_folder()
     if configured == "off":
         return None
     if configured:
         return Path(configured)
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "causalplan"
+    return Path(platformdirs.user_cache_dir("causalplan", appauthor=False))
 
 
 BUILDING_MODULES = ("catalog.py", "model.py", "schema.py", "shapes.py")

@@ -12,15 +12,10 @@ People still see the readable compilation (``writer.compile_task``), which is eq
 
 Its assembly steps are one action schema, ``assemble``, whose first parameter is the fit's kind
 (a constant ``kind-screw``, ``kind-clip``...; a hyphen is never in a part's or fit's id), where
-the readable form has one schema per primitive. FD's translator does its work per schema:
-measured interleaved against the per-primitive form, translation took ~1.1 ms less on the desk
-lamp and ~3.8 ms less on the kerosene lamp (four primitives). The translated task is the
-same, operator for operator and in the same order, but for the operators' names (tests check
-it byte for byte), so FD's searches are too; ``plan_actions`` gives the plan back in the
-per-primitive names.
-
-Everything but the goal clauses (one line each, ``GOAL_CLAUSE_START``) depends only on the
-object, which lets ``planners.canonical_translation`` parse and ground that part once per object.
+the readable form has one schema per primitive. FD's translator does its work per schema, so
+one schema translates faster than several. The translated task is the same, operator for
+operator and in the same order, but for the operators' names (tests check it byte for byte),
+so FD's searches are too; ``plan_actions`` gives the plan back in the per-primitive names.
 """
 
 from __future__ import annotations

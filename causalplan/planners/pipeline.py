@@ -1,37 +1,79 @@
-"""The planning pipeline: choose a planner, search, replay the plan, and say what came of it.
+"""The planning pipeline: choose a planner, search, check the plan, and say what came of it.
 
-Planners (a plain registry): ``fd`` and ``fd-opt`` run Fast Downward on our PDDL with derived
-predicates; ``mdp`` solves the paper's probabilistic MDP exactly; ``up:<engine>`` solves the
-axiom-free unified-planning formulation with that engine; ``auto`` (the default) runs FD and
-falls back to the MDP when a fit in play may fail (FD's plans are blind to risk) or when FD
-ends with an error, a timeout or is unavailable. Every plan, whatever its route, is replayed
-on the object before it is returned.
+Planners (a plain registry, ``SEARCHES``): ``fd`` and ``fd-opt`` run Fast Downward on our PDDL
+with derived predicates; ``mdp`` solves the paper's probabilistic MDP exactly; ``up:<engine>``
+solves the axiom-free unified-planning formulation with that engine; ``auto`` (the default)
+runs FD and falls back to the MDP when a fit in play may fail (FD's plans are blind to risk)
+or when FD ends with an error, a timeout or is unavailable. Every plan, whatever its route, is
+replayed on the object before it is returned, and checked by VAL on the readable PDDL when
+asked (``val=True``).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from functools import partial
 
 from causalplan.causal.graph import goal_holds
 from causalplan.errors import CausalPlanError
 from causalplan.pddl.canonical import canonical_pddl, plan_actions
 from causalplan.pddl.task import PlanningTask
 from causalplan.pddl.writer import compile_task
-from causalplan.planners import fast_downward
+from causalplan.planners import fd
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanResult, PlanStatus, PlanStep, SearchOutcome
 
 UP_ENGINES = ("fast-downward", "fast-downward-opt", "pyperplan", "pyperplan-opt", "tamer", "enhsp", "enhsp-opt")
 """unified-planning engines installed with causalplan (``up-*`` packages)."""
 
-PLANNERS: tuple[str, ...] = ("auto", *fast_downward.CONFIGS, "mdp", *(f"up:{engine}" for engine in UP_ENGINES))
+Actions = tuple[tuple[str, tuple[str, ...]], ...]
+Search = Callable[[PlanningTask, float, dict[str, float]], SearchOutcome]
+"""A planner: the task, its time limit and a dict for stage times in; its outcome out."""
+
+
+def _fd_search(
+    config: fd.SearchConfig, task: PlanningTask, time_limit: float, timing: dict[str, float]
+) -> SearchOutcome:
+    started = time.perf_counter()
+    # FD solves the label-free canonical form: equal problems give identical runs and plans,
+    # and one cached solve serves them all. Too big a goal function: the readable form.
+    canonical = canonical_pddl(task)
+    compiled = canonical or compile_task(task)
+    timing["compile"] = time.perf_counter() - started
+    outcome = fd.solve(compiled.domain, compiled.problem, config, time_limit)
+    return replace(outcome, actions=plan_actions(outcome.actions)) if canonical is not None else outcome
+
+
+def _mdp_search(task: PlanningTask, time_limit: float, timing: dict[str, float]) -> SearchOutcome:
+    from causalplan.planners.mdp import search_outcome, solve_mdp
+
+    started = time.perf_counter()
+    solution = solve_mdp(task, time_limit)
+    return search_outcome(solution, time.perf_counter() - started)
+
+
+def _up_search(engine: str, task: PlanningTask, time_limit: float, timing: dict[str, float]) -> SearchOutcome:
+    from causalplan.planners.up_problem import solve_with_up
+
+    return solve_with_up(task, engine, time_limit)
+
+
+SEARCHES: dict[str, Search] = {
+    **{name: partial(_fd_search, config) for name, config in fd.CONFIGS.items()},
+    "mdp": _mdp_search,
+    **{f"up:{engine}": partial(_up_search, engine) for engine in UP_ENGINES},
+}
+"""Every planner by name (``auto`` is not one: it chooses among them)."""
+
+PLANNERS: tuple[str, ...] = ("auto", *SEARCHES)
 """Every planner name ``plan_task`` accepts."""
 
 DESCRIPTIONS: dict[str, str] = {
     "auto": "Fast Downward; the MDP when a fit may fail or FD fails (the default)",
-    **{name: config.description for name, config in fast_downward.CONFIGS.items()},
+    **{name: config.description for name, config in fd.CONFIGS.items()},
     "mdp": "the paper's probabilistic MDP, solved exactly (most reliable plan)",
     **{f"up:{engine}": f"unified-planning engine '{engine}' on the axiom-free formulation" for engine in UP_ENGINES},
 }
@@ -58,12 +100,12 @@ def planner_availability() -> dict[str, str | None]:
     """Return each planner with None when it can run here, or why it cannot."""
     result: dict[str, str | None] = {}
     try:
-        fast_downward.search_binary()
-        fd_problem = None if fast_downward.translator_available() else "fast-downward.translate is not installed"
+        fd.search_binary()
+        fd_problem = None if fd.translator_available() else "fast-downward.translate is not installed"
     except CausalPlanError as exc:
         fd_problem = exc.message
     for name in PLANNERS:
-        result[name] = fd_problem if name in fast_downward.CONFIGS else None
+        result[name] = fd_problem if name in fd.CONFIGS else None
     try:
         from causalplan.planners.up_problem import engine_problem
     except ImportError as exc:  # pragma: no cover - unified-planning is a dependency
@@ -71,27 +113,6 @@ def planner_availability() -> dict[str, str | None]:
     for engine in UP_ENGINES:
         result[f"up:{engine}"] = engine_problem(engine)
     return result
-
-
-def _search(task: PlanningTask, planner: str, time_limit: float, timing: dict[str, float]) -> SearchOutcome:
-    if planner in fast_downward.CONFIGS:
-        started = time.perf_counter()
-        # FD solves the label-free canonical form: equal problems give identical runs and plans,
-        # and one cached solve serves them all. Too big a goal function: the readable form.
-        canonical = canonical_pddl(task)
-        compiled = canonical or compile_task(task)
-        timing["compile"] = time.perf_counter() - started
-        outcome = fast_downward.solve(compiled.domain, compiled.problem, fast_downward.CONFIGS[planner], time_limit)
-        return replace(outcome, actions=plan_actions(outcome.actions)) if canonical is not None else outcome
-    if planner == "mdp":
-        from causalplan.planners.mdp import search_outcome, solve_mdp
-
-        started = time.perf_counter()
-        solution = solve_mdp(task, time_limit)
-        return search_outcome(solution, time.perf_counter() - started)
-    from causalplan.planners.up_problem import solve_with_up
-
-    return solve_with_up(task, planner.removeprefix("up:"), time_limit)
 
 
 def _failure_message(status: PlanStatus, task: PlanningTask, time_limit: float) -> str:
@@ -104,12 +125,45 @@ def _failure_message(status: PlanStatus, task: PlanningTask, time_limit: float) 
     }.get(status, "The planner failed.")
 
 
-def _run(task: PlanningTask, planner: str, time_limit: float, include_pddl: bool, validate_up: bool) -> PlanResult:
+@dataclass(frozen=True)
+class _Asked:
+    """What the caller asked for beyond a replayed plan."""
+
+    include_pddl: bool
+    validate_up: bool
+    val: bool
+
+
+def _validations(
+    task: PlanningTask, planner: str, actions: Actions, asked: _Asked, timing: dict[str, float]
+) -> dict[str, str]:
+    """Return each validator's verdict on a replayed plan (replay's is "valid"); raise if VAL rejects it."""
+    validated_by = {"replay": "valid"}
+    if asked.val:
+        from causalplan.planners import val
+
+        started = time.perf_counter()
+        # Named by its canonical form (the answer cache's key): one VAL run per distinct plan.
+        canonical = canonical_pddl(task)
+        task_key = (canonical.domain, canonical.problem) if canonical is not None else None
+        readable = compile_task(task)  # the person's rules as written: one derived clause per rule
+        validated_by["val"] = val.check(readable.domain, readable.problem, actions, task_key).value
+        timing["val"] = time.perf_counter() - started
+    if asked.validate_up or planner.startswith("up:"):
+        from causalplan.planners.up_problem import validate_with_up
+
+        started = time.perf_counter()
+        validated_by["up"] = "valid" if validate_with_up(task, actions) else "invalid"
+        timing["up_validate"] = time.perf_counter() - started
+    return validated_by
+
+
+def _run(task: PlanningTask, planner: str, time_limit: float, asked: _Asked) -> PlanResult:
     started = time.perf_counter()
     obj = task.obj
     timing: dict[str, float] = {}
     pddl = None
-    if include_pddl:
+    if asked.include_pddl:
         compiled = compile_task(task)
         pddl = {"domain": compiled.domain, "problem": compiled.problem}
 
@@ -129,7 +183,7 @@ def _run(task: PlanningTask, planner: str, time_limit: float, include_pddl: bool
             f"produce '{task.goal}': no part carries some function the rules need.",
             probability=0.0,
         )
-    outcome = _search(task, planner, time_limit, timing)
+    outcome = SEARCHES[planner](task, time_limit, timing)
     timing.update(outcome.timing)
     timing.pop("total", None)
     if outcome.status is not PlanStatus.SOLVED:
@@ -142,13 +196,7 @@ def _run(task: PlanningTask, planner: str, time_limit: float, include_pddl: bool
     if not (checked.executable and checked.valid_under_model):
         why = checked.failure or "the goal does not hold under the model after the last step"
         return without_plan(PlanStatus.ERROR, planner, f"The planner's plan failed replay ({why}); it is not returned.")
-    validated: bool | None = None
-    if validate_up or planner.startswith("up:"):
-        from causalplan.planners.up_problem import validate_with_up
-
-        validate_started = time.perf_counter()
-        validated = validate_with_up(task, outcome.actions)
-        timing["up_validate"] = time.perf_counter() - validate_started
+    validated_by = _validations(task, planner, outcome.actions, asked, timing)
     timing["total"] = time.perf_counter() - started
     fits = {fit.id: fit for fit in obj.fits}
     steps = tuple(PlanStep(action, args[:2], args[2], obj.step_text(fits[args[2]])) for action, args in outcome.actions)
@@ -179,7 +227,8 @@ def _run(task: PlanningTask, planner: str, time_limit: float, include_pddl: bool
         outcome.expected_actions if outcome.expected_actions is not None else float(len(steps)),
         outcome.policy,
         None,
-        validated,
+        validated_by["up"] == "valid" if "up" in validated_by else None,
+        validated_by,
     )
 
 
@@ -191,52 +240,56 @@ def _with_fallback(result: PlanResult, reason: str, started: float, first: PlanR
     return replace(result, fallback_reason=reason, timing=timing)
 
 
-def _auto(task: PlanningTask, time_limit: float, include_pddl: bool, validate_up: bool) -> PlanResult:
+def _auto(task: PlanningTask, time_limit: float, asked: _Asked) -> PlanResult:
     from causalplan.planners.mdp import relevant_fits  # here: what never plans need not import the MDP
 
     started = time.perf_counter()
     risky = sorted(fit.id for fit in relevant_fits(task) if fit.probability < 1.0)
     if risky:
-        mdp = _run(task, "mdp", min(time_limit, MDP_TIME_LIMIT), include_pddl, validate_up)
+        mdp = _run(task, "mdp", min(time_limit, MDP_TIME_LIMIT), asked)
         if mdp.status.is_final():
             return _with_fallback(
                 mdp,
                 f"fit(s) {', '.join(risky)} may fail (probability below 1); Fast Downward's plans are blind to risk",
                 started,
             )
-        fd = _run(task, "fd", time_limit, include_pddl, validate_up)
+        first = _run(task, "fd", time_limit, asked)
         return _with_fallback(
-            fd,
+            first,
             f"the MDP could not be used ({mdp.status.value}: {mdp.message}); this classical "
             f"plan ignores that fit(s) {', '.join(risky)} may fail",
             started,
             mdp,
         )
-    fd = _run(task, "fd", time_limit, include_pddl, validate_up)
-    if fd.status not in FALLBACK_STATUSES:
-        return fd
-    mdp = _run(task, "mdp", min(time_limit, MDP_TIME_LIMIT), include_pddl, validate_up)
+    first = _run(task, "fd", time_limit, asked)
+    if first.status not in FALLBACK_STATUSES:
+        return first
+    mdp = _run(task, "mdp", min(time_limit, MDP_TIME_LIMIT), asked)
     if not mdp.status.is_final():
-        return fd
-    return _with_fallback(mdp, f"Fast Downward ended with '{fd.status.value}': {fd.message}", started, fd)
+        return first
+    return _with_fallback(mdp, f"Fast Downward ended with '{first.status.value}': {first.message}", started, first)
 
 
 def plan_task(
     task: PlanningTask,
     planner: str = "auto",
-    time_limit: float = fast_downward.DEFAULT_TIME_LIMIT,
+    time_limit: float = fd.DEFAULT_TIME_LIMIT,
     include_pddl: bool = False,
     validate_up: bool = False,
+    val: bool = False,
 ) -> PlanResult:
     """Return a replayed plan for ``task`` (or the status saying why there is none).
 
-    ``validate_up`` also checks the plan with unified-planning's sequential plan validator
-    (always done for ``up:`` planners); the result says so in ``validated_by_up``.
+    ``val`` also checks the plan with VAL on the readable PDDL (one derived clause per rule);
+    a plan VAL rejects raises ``PlanRejectedError`` with VAL's words. ``validate_up`` also
+    checks it with unified-planning's sequential plan validator (always done for ``up:``
+    planners). ``validated_by`` in the result has each validator's verdict.
     """
     if planner not in PLANNERS:
         raise UnknownPlannerError(
             f"Unknown planner '{planner}'; choose one of: {', '.join(PLANNERS)}.", details={"planner": planner}
         )
+    asked = _Asked(include_pddl, validate_up, val)
     if planner == "auto":
-        return _auto(task, time_limit, include_pddl, validate_up)
-    return _run(task, planner, time_limit, include_pddl, validate_up)
+        return _auto(task, time_limit, asked)
+    return _run(task, planner, time_limit, asked)

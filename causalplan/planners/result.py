@@ -67,6 +67,8 @@ class PlanResult:
     policy: tuple[dict[str, object], ...] = ()
     fallback_reason: str | None = None
     validated_by_up: bool | None = None
+    validated_by: dict[str, str] = field(default_factory=dict)
+    """Each validator's verdict on the plan: replay always, ``val`` and ``up`` when asked."""
 
     @property
     def has_plan(self) -> bool:
@@ -87,6 +89,7 @@ class PlanResult:
             "expected_actions": None if self.expected_actions is None else round(self.expected_actions, 6),
             "fallback_reason": self.fallback_reason,
             "validated_by_up": self.validated_by_up,
+            "validated_by": dict(self.validated_by) if self.has_plan else None,
             "timing": {stage: round(seconds, 6) for stage, seconds in self.timing.items()},
             "message": self.message,
         }

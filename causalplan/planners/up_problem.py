@@ -264,7 +264,7 @@ def solve_with_up(
     ``timing`` holds ``build`` (problem construction, the first time also importing UP),
     ``solve`` (the engine, all its processes included) and ``total``. The time limit covers
     the build and the engine's processes, but not UP's own PDDL writing before it starts them
-    (about 2 s at 400 parts), so a run can overshoot it by that much; UP stops its processes
+    (seconds on the largest synthetic tasks), so a run can overshoot it by that much; UP stops its processes
     (SIGTERM to their process group) at the limit.
     """
     started = time.perf_counter()

@@ -234,18 +234,21 @@ class Answerer:
         planner: str,
         time_limit: float,
         meanwhile: Callable[[], None] | None = None,
+        val: bool = False,
     ) -> Answer:
-        """Return the plan of ``model`` (on ``mapping``'s object), as ``causalplan plan --json``."""
-        key = self.key("plan", model, mapping, planner, time_limit)
+        """Return the plan of ``model`` (on ``mapping``'s object), as ``plan --json``; ``val``: VAL checks it too."""
+        key = self.key("plan:val" if val else "plan", model, mapping, planner, time_limit)
         seconds = time_limit + self.settings.solve_grace_seconds
-        args = self._args(model, mapping, planner, time_limit)
+        args = (*self._args(model, mapping, planner, time_limit), val)
         return self._answer(key, jobs.plan_job, args, seconds, _is_final_plan, meanwhile)
 
-    def transfer(self, model: CausalModel, mapping: Labelling, planner: str, time_limit: float) -> Answer:
+    def transfer(
+        self, model: CausalModel, mapping: Labelling, planner: str, time_limit: float, val: bool = False
+    ) -> Answer:
         """Return the transfer verdict of ``model`` through ``mapping``, as ``causalplan transfer --json``."""
-        key = self.key("transfer", model, mapping, planner, time_limit)
+        key = self.key("transfer:val" if val else "transfer", model, mapping, planner, time_limit)
         seconds = time_limit + self.settings.solve_grace_seconds
-        args = self._args(model, mapping, planner, time_limit)
+        args = (*self._args(model, mapping, planner, time_limit), val)
         return self._answer(key, jobs.transfer_job, args, seconds, _is_final_verdict, None)
 
     def simulate(

@@ -157,7 +157,11 @@ class InternalError(ServiceError):
     status_code = 500
 
 
-_STATUS_BY_CODE = {"unknown_planner": 422}
+_STATUS_BY_CODE = {
+    "unknown_planner": 422,
+    "plan_rejected_by_val": 500,  # our compilation and VAL disagree: a fault of ours, with VAL's words
+    "validator_error": 503,
+}
 """Errors of lower packages this module does not import (the planners'), by their stable code."""
 
 _LOWER_STATUS: dict[type[CausalPlanError], int] = {

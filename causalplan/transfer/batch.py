@@ -26,6 +26,7 @@ from causalplan.causal.diagnostics import Location, Report, Severity, error
 from causalplan.causal.documents import SourceMap, read_document
 from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
+from causalplan.planners.val import PlanRejectedError, ValidatorError
 from causalplan.transfer.verdict import Reason, TransferVerdict, Verdict, transfer_verdict
 
 TRIAL_FIELDS = ("model", "mapping")
@@ -174,8 +175,17 @@ def _unreadable_verdict(problem: str, line: int | None) -> TransferVerdict:
     )
 
 
-def evaluate_trial(trial: Trial, catalog: Catalog, planner: str, time_limit: float, simulate: bool) -> TrialResult:
-    """Return the verdict of one trial (never raises for bad input)."""
+def _unchecked_verdict(exc: PlanRejectedError | ValidatorError, training: str, test: str) -> TransferVerdict:
+    """Return the verdict of a trial whose plan VAL rejected or could not check: ``undecided``, with VAL's words."""
+    return TransferVerdict(
+        Verdict.UNDECIDED, training, test, None, "validator", (Reason(exc.code, Severity.ERROR, exc.message),)
+    )
+
+
+def evaluate_trial(
+    trial: Trial, catalog: Catalog, planner: str, time_limit: float, simulate: bool, val: bool = False
+) -> TrialResult:
+    """Return the verdict of one trial (never raises for bad input; a plan VAL rejects is ``undecided``)."""
     started = time.perf_counter()
     if trial.problem is not None:
         verdict = _unreadable_verdict(trial.problem, trial.line)
@@ -183,7 +193,11 @@ def evaluate_trial(trial: Trial, catalog: Catalog, planner: str, time_limit: flo
         source = SourceMap(f"line {trial.line}" if trial.line else None)
         loaded_model = model_from_data(trial.model, source, catalog)
         loaded_mapping = mapping_from_data(trial.mapping, source, catalog)
-        verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit, simulate)
+        try:
+            verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit, simulate, val=val)
+        except (PlanRejectedError, ValidatorError) as exc:
+            assert loaded_model.model is not None and loaded_mapping.mapping is not None  # only valid ones plan
+            verdict = _unchecked_verdict(exc, loaded_model.model.object_id, loaded_mapping.mapping.object_id)
     return TrialResult(trial.id, verdict, time.perf_counter() - started)
 
 
@@ -194,11 +208,12 @@ def run_batch(
     time_limit: float = 30.0,
     simulate: bool = True,
     progress: Callable[[], None] | None = None,
+    val: bool = False,
 ) -> list[TrialResult]:
-    """Return the results of every trial, in order."""
+    """Return the results of every trial, in order; ``val`` checks every plan with VAL too."""
     results = []
     for trial in trials:
-        results.append(evaluate_trial(trial, catalog, planner, time_limit, simulate))
+        results.append(evaluate_trial(trial, catalog, planner, time_limit, simulate, val))
         if progress is not None:
             progress()
     return results

@@ -41,11 +41,12 @@ class JudgeOptions:
     planner: str = "auto"
     time_limit: float = 30.0
     simulate: bool = True
+    val: bool = False
 
 
 def judge_chunk(trials: list[Trial], catalog: Catalog, options: JudgeOptions) -> list[TrialResult]:
     """Return the results of one chunk of trials (the task a worker runs)."""
-    return run_batch(trials, catalog, options.planner, options.time_limit, options.simulate)
+    return run_batch(trials, catalog, options.planner, options.time_limit, options.simulate, val=options.val)
 
 
 def chunks(trials: Sequence[Trial], size: int) -> list[list[Trial]]:

@@ -20,8 +20,8 @@ from causalplan.causal.model import CausalModel, Labelling
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject
 from causalplan.pddl.task import build_task
-from causalplan.planners import fast_downward
-from causalplan.planners.fast_downward import DEFAULT_TIME_LIMIT
+from causalplan.planners import fd
+from causalplan.planners.fd import DEFAULT_TIME_LIMIT
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult, PlanStatus, PlanStep
 
@@ -183,11 +183,17 @@ def transfer_verdict(
     planner: str = "auto",
     time_limit: float = DEFAULT_TIME_LIMIT,
     simulate: bool = True,
+    val: bool = False,
 ) -> TransferVerdict:
-    """Return the verdict of a model and a mapping as read: ``invalid`` unless both validated."""
+    """Return the verdict of a model and a mapping as read: ``invalid`` unless both validated.
+
+    ``val`` checks the plan with VAL too (see ``plan_task``).
+    """
     if loaded_model.is_valid and loaded_mapping.is_valid:
         assert loaded_model.model is not None and loaded_mapping.mapping is not None
-        return evaluate_transfer(loaded_model.model, loaded_mapping.mapping, catalog, planner, time_limit, simulate)
+        return evaluate_transfer(
+            loaded_model.model, loaded_mapping.mapping, catalog, planner, time_limit, simulate, val=val
+        )
     return invalid_verdict(
         loaded_model.report,
         loaded_mapping.report,
@@ -198,7 +204,10 @@ def transfer_verdict(
 
 def clear_caches() -> None:
     """Forget the planner's cached answers and the cached simulations, so verdicts are computed afresh."""
-    fast_downward.clear_solve_cache()
+    from causalplan.planners import val
+
+    fd.clear_solve_cache()
+    val.clear_verdicts()
     _simulated.cache_clear()
 
 
@@ -217,18 +226,20 @@ def evaluate_transfer(
     planner: str = "auto",
     time_limit: float = DEFAULT_TIME_LIMIT,
     simulate: bool = True,
+    val: bool = False,
 ) -> TransferVerdict:
     """Return the verdict of trying a valid ``model`` on the object of a valid ``mapping``.
 
     A plan that replay finds valid under the true mechanism (the fast pre-check) is then run
     in the physics simulator, unless ``simulate`` is False, and the simulator has the last word.
+    ``val`` checks the plan with VAL too; a plan VAL rejects raises ``PlanRejectedError``.
     """
     training, test = catalog.get(model.object_id), catalog.get(mapping.object_id)
     kind = generalization(training, test)
     reasons, reachable = _mapping_reasons(model, mapping, test)
     if not reachable:
         return TransferVerdict(Verdict.FAILS, training.id, test.id, kind, "precheck", tuple(reasons))
-    result = plan_task(build_task(model, test, mapping), planner, time_limit)
+    result = plan_task(build_task(model, test, mapping), planner, time_limit, val=val)
     if result.status is PlanStatus.SOLVED and result.valid_under_true_mechanism:
         simulation = _simulated(test, result.steps) if simulate else None
         if simulation is None or simulation.produces_goal:

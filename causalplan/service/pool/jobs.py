@@ -18,7 +18,8 @@ from causalplan.causal.model import CausalModel, Labelling
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import Catalog, load_catalog
 from causalplan.pddl.task import build_task
-from causalplan.planners import pipeline
+from causalplan.planners import fd, pipeline
+from causalplan.settings import Settings
 from causalplan.transfer.verdict import evaluate_transfer
 
 OPTIONAL_BACKENDS = ("unified_planning", "up_fast_downward", "up_pyperplan", "up_tamer", "pybullet", "matplotlib")
@@ -28,9 +29,17 @@ FAST_DOWNWARD = "fd"
 
 
 def warm_up() -> None:
-    """Do once, before the first job, what every solve needs: FD's translator imported, the catalog read."""
+    """Do once, before the first job, what solves need: settings applied, translator imported, a search started.
+
+    The catalog is read too. A planner that cannot run says so in its own answers (and /health).
+    """
+    settings = Settings()
+    if settings.fd_binary is not None:
+        fd.use_search_binary(settings.fd_binary)
+    fd.keep_answers(settings.solve_cache_size)
     with suppress(Exception):  # a translator that cannot run says so in the answers (and /health)
         importlib.import_module("fast_downward.translate.main")
+    fd.prestart(fd.CONFIGS["fd"])  # the default search, waiting for its first task
     with suppress(CausalPlanError):
         worker_catalog(())
 
@@ -47,6 +56,7 @@ def plan_job(
     planner: str,
     time_limit: float,
     catalog_folders: tuple[Path, ...],
+    val: bool = False,
 ) -> dict[str, object]:
     """Plan ``model`` (on the mapping's object if given); return ``PlanResult.as_dict()``.
 
@@ -54,7 +64,7 @@ def plan_job(
     """
     catalog = worker_catalog(catalog_folders)
     target = catalog.get((mapping or model.labelling).object_id)
-    result = pipeline.plan_task(build_task(model, target, mapping), planner, time_limit)
+    result = pipeline.plan_task(build_task(model, target, mapping), planner, time_limit, val=val)
     return result.as_dict()
 
 
@@ -64,9 +74,11 @@ def transfer_job(
     planner: str,
     time_limit: float,
     catalog_folders: tuple[Path, ...],
+    val: bool = False,
 ) -> dict[str, object]:
     """Return the transfer verdict of ``model`` through ``mapping``, as ``causalplan transfer --json``."""
-    return evaluate_transfer(model, mapping, worker_catalog(catalog_folders), planner, time_limit).as_dict()
+    catalog = worker_catalog(catalog_folders)
+    return evaluate_transfer(model, mapping, catalog, planner, time_limit, val=val).as_dict()
 
 
 def _version(distribution: str) -> str | None:

@@ -30,7 +30,12 @@ def create_plan(body: PlanIn, services: ServicesDep, client: ClientIdsDep) -> di
     """
     inputs = plan_inputs(body, services, client)
     answer = services.answers.plan(
-        inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, lambda: inputs.store(services)
+        inputs.model,
+        inputs.mapping,
+        inputs.planner,
+        inputs.time_limit,
+        lambda: inputs.store(services),
+        val=body.validate_plan,
     )
     pddl = compiled_pddl(services.catalog, inputs.model, inputs.mapping) if body.include_pddl else None
     return {

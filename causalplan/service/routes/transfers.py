@@ -47,7 +47,7 @@ def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDe
         problem.details.update({"verdict": verdict, "trial_id": str(trial.id)})
         raise problem
     assert submission.model is not None and mapping.mapping is not None
-    answer = services.answers.transfer(submission.model, mapping.mapping, planner, time_limit)
+    answer = services.answers.transfer(submission.model, mapping.mapping, planner, time_limit, val=body.validate_plan)
     trial = crud.new_trial_record(
         submission.record.id, mapping.document, planner, answer.data, answer.cached, answer.seconds, client
     )

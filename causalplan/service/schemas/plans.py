@@ -33,6 +33,12 @@ class _Solve(InputModel):
         allow_inf_nan=False,
         description="Seconds the planner may run; at most the server's maximum (GET /health, 'limits').",
     )
+    validate_plan: bool = Field(
+        default=False,
+        alias="validate",
+        description="Also check the plan with VAL on the readable PDDL (the answer's 'validated_by'); "
+        "a plan VAL rejects is an error, never an answer.",
+    )
 
     @model_validator(mode="after")
     def _one_model(self) -> _Solve:
@@ -79,6 +85,11 @@ class PlanOut(OutputModel):
     valid_under_true_mechanism: bool
     unmet_requirements: list[str]
     timing: dict[str, float]
+    validated_by: dict[str, str] | None = Field(
+        default=None,
+        description="Each validator's verdict on the plan, e.g. {'replay': 'valid', 'val': 'valid'} "
+        "(VAL only when the request asked for 'validate'); null without a plan.",
+    )
     message: str
     pddl: PddlOut | None = None
     planner_requested: str = Field(description="The planner asked for ('auto' included).")

@@ -1,4 +1,4 @@
-"""Fast Downward run directly: statuses, limits that really stop it, isolation of concurrent solves."""
+"""Fast Downward run directly: exit codes, the translator, limits that really stop it, isolated solves."""
 
 from __future__ import annotations
 
@@ -13,14 +13,17 @@ import pytest
 
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import read_model
+from causalplan.inputs import load_mapping, load_model
 from causalplan.objects.catalog import Catalog, build_object
 from causalplan.objects.schema import ObjectSchema
+from causalplan.pddl.canonical import canonical_pddl
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.pddl.writer import compile_task
-from causalplan.planners import fast_downward, search_processes
-from causalplan.planners.fast_downward import CONFIGS, parse_plan, solve, status_of_exit_code
+from causalplan.planners import fd
+from causalplan.planners.fd import CONFIGS, ExitCode, parse_plan, solve, status_of_exit_code
+from causalplan.planners.fd import translate as fd_translate
 from causalplan.planners.result import PlanStatus
-from tests.conftest import example_mapping, example_model
+from tests.conftest import EXAMPLES, example_mapping, example_model
 
 
 def star_task(n_parts: int) -> PlanningTask:
@@ -81,6 +84,17 @@ def test_exit_codes_map_to_one_closed_status(code: int, status: PlanStatus) -> N
     assert status_of_exit_code(code) is status
 
 
+def test_exit_codes_are_named_as_fast_downward_names_them() -> None:
+    assert ExitCode(12) is ExitCode.SEARCH_UNSOLVED_INCOMPLETE
+    assert ExitCode.SEARCH_PLAN_FOUND_AND_OUT_OF_TIME.found_plan()
+    assert not ExitCode.SEARCH_UNSOLVABLE.found_plan()
+    assert [code.name for code in ExitCode if code.is_unrecoverable()][:2] == [
+        "TRANSLATE_CRITICAL_ERROR",
+        "TRANSLATE_INPUT_ERROR",
+    ]
+    assert not ExitCode.SEARCH_OUT_OF_MEMORY.is_unrecoverable()
+
+
 def test_parse_plan_reads_actions_and_skips_the_cost_comment() -> None:
     text = "(screw light_bulb base_with_cables bulb_into_socket)\n; cost = 1 (unit cost)\n"
     assert parse_plan(text) == (("screw", ("light_bulb", "base_with_cables", "bulb_into_socket")),)
@@ -89,8 +103,8 @@ def test_parse_plan_reads_actions_and_skips_the_cost_comment() -> None:
 
 
 def test_search_binary_is_found_in_the_wheel() -> None:
-    assert fast_downward.search_binary().name == "downward"
-    assert fast_downward.translator_available()
+    assert fd.search_binary().name == "downward"
+    assert fd.translator_available()
 
 
 def test_a_paper_task_solves_with_both_configurations(catalog: Catalog) -> None:
@@ -108,7 +122,6 @@ def test_the_time_limit_stops_the_search_and_leaves_no_process() -> None:
     outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd-opt"], time_limit=1.0)
     assert outcome.status is PlanStatus.TIMEOUT
     assert time.monotonic() - started < 10
-    search_processes.stop_idle()  # the killed search's replacement, waiting for the next task
     assert _children() == set()
 
 
@@ -159,27 +172,33 @@ def test_no_output_sas_is_left_in_the_working_directory(
     assert list(tmp_path.iterdir()) == []
 
 
-def test_a_missing_binary_is_an_error_not_a_crash(monkeypatch: pytest.MonkeyPatch, catalog: Catalog) -> None:
-    monkeypatch.setenv("CAUSALPLAN_FD_BINARY", "/nonexistent/downward")
-    fast_downward.search_binary.cache_clear()
+def test_a_missing_binary_is_an_error_not_a_crash(catalog: Catalog) -> None:
+    fd.use_search_binary(Path("/nonexistent/downward"))
     try:
         compiled = compile_task(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
         outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd"])
     finally:
-        monkeypatch.delenv("CAUSALPLAN_FD_BINARY")
-        fast_downward.search_binary.cache_clear()
+        fd.use_search_binary(None)
     assert outcome.status is PlanStatus.ERROR
     assert "/nonexistent/downward" in outcome.message
 
 
-def _sas(task: PlanningTask, mode: str, monkeypatch: pytest.MonkeyPatch) -> str:
-    """Return the SAS task the translator writes for ``task`` in ``mode`` (in-process or fork)."""
-    monkeypatch.setenv("CAUSALPLAN_TRANSLATOR", mode)
+def _sas(task: PlanningTask, where: str, tmp_path: Path) -> str:
+    """Return the SAS task the translator writes for ``task``, on the main thread or off it."""
     compiled = compile_task(task)
-    run = fast_downward._translate(compiled.domain, compiled.problem, time.monotonic() + 60, 2048)
-    assert run.returncode == 0, run.output
-    assert run.product is not None
-    return run.product
+    folder = tmp_path / f"{where}-{len(list(tmp_path.iterdir()))}"
+    folder.mkdir()
+
+    def run() -> fd_translate.Finished:
+        return fd_translate.translate(compiled.domain, compiled.problem, folder, 60, 2048)
+
+    if where == "main":
+        finished = run()
+    else:
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            finished = pool.submit(run).result()
+    assert finished.returncode == 0, finished.output
+    return (folder / fd_translate.SAS_FILE).read_text(encoding="utf-8")
 
 
 def _sas_of_the_translators_own_process(task: PlanningTask, tmp_path: Path) -> str:
@@ -194,20 +213,18 @@ def _sas_of_the_translators_own_process(task: PlanningTask, tmp_path: Path) -> s
 
 @pytest.mark.parametrize(("size", "seed"), [(3, 2), (12, 5), (40, 2)])
 def test_translation_writes_exactly_what_the_translators_own_process_writes(
-    size: int, seed: int, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+    size: int, seed: int, tmp_path: Path
 ) -> None:
-    from causalplan.planners.synthetic import synthetic_task
+    from causalplan.comparison.synthetic import synthetic_task
 
     task = synthetic_task(size, seed=seed)
-    first = _sas(task, "in-process", monkeypatch)
-    again = _sas(task, "in-process", monkeypatch)  # translator state left from the first
-    forked = _sas(task, "fork", monkeypatch)
-    assert first == again == forked == _sas_of_the_translators_own_process(task, tmp_path)
+    first = _sas(task, "main", tmp_path)
+    again = _sas(task, "main", tmp_path)  # translator state left from the first
+    off_main = _sas(task, "thread", tmp_path)  # its own process
+    assert first == again == off_main == _sas_of_the_translators_own_process(task, tmp_path)
 
 
-def test_translation_of_every_golden_case_matches_the_translators_own_process(
-    catalog: Catalog, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
-) -> None:
+def test_translation_of_every_golden_case_matches_the_translators_own_process(catalog: Catalog, tmp_path: Path) -> None:
     from tests.test_golden import CASES
 
     for case, (model_file, mapping_file) in sorted(CASES.items()):
@@ -215,11 +232,11 @@ def test_translation_of_every_golden_case_matches_the_translators_own_process(
         mapping = example_mapping(mapping_file, catalog) if mapping_file else None
         task = build_task(model, catalog.get(mapping.object_id if mapping else model.object_id), mapping)
         (tmp_path / case).mkdir()
-        assert _sas(task, "in-process", monkeypatch) == _sas_of_the_translators_own_process(task, tmp_path / case), case
+        assert _sas(task, "main", tmp_path) == _sas_of_the_translators_own_process(task, tmp_path / case), case
 
 
 def test_an_in_process_translation_stops_at_its_deadline_and_the_next_solve_works(catalog: Catalog) -> None:
-    from causalplan.planners.synthetic import synthetic_task
+    from causalplan.comparison.synthetic import synthetic_task
 
     big = compile_task(synthetic_task(320, seed=0))
     outcome = solve(big.domain, big.problem, CONFIGS["fd"], time_limit=0.05)
@@ -228,20 +245,20 @@ def test_an_in_process_translation_stops_at_its_deadline_and_the_next_solve_work
     assert solve(small.domain, small.problem, CONFIGS["fd"]).status is PlanStatus.SOLVED
 
 
-def test_the_forked_translator_is_still_available(monkeypatch: pytest.MonkeyPatch, catalog: Catalog) -> None:
-    monkeypatch.setenv("CAUSALPLAN_TRANSLATOR", "fork")
-    compiled = compile_task(build_task(example_model("near/candle.yaml", catalog), catalog.get("candle")))
-    outcome = solve(compiled.domain, compiled.problem, CONFIGS["fd"])
-    assert outcome.status is PlanStatus.SOLVED and len(outcome.actions) == 2
+def test_a_solve_off_the_main_thread_translates_in_its_own_process_under_the_deadline() -> None:
+    from causalplan.comparison.synthetic import synthetic_task
+
+    big = compile_task(synthetic_task(320, seed=0))
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        outcome = pool.submit(solve, big.domain, big.problem, CONFIGS["fd"], 0.2).result()
+    assert outcome.status is PlanStatus.TIMEOUT
+    assert "translator" in outcome.message
+    assert _children() == set()
 
 
-def test_solves_work_when_the_process_has_more_than_1024_open_files(
-    monkeypatch: pytest.MonkeyPatch, catalog: Catalog
-) -> None:
+def test_solves_work_when_the_process_has_more_than_1024_open_files(catalog: Catalog) -> None:
     """A busy server holds many sockets: waiting for a translator or a search must not use select()."""
-    monkeypatch.setenv("CAUSALPLAN_TRANSLATOR", "fork")
-    monkeypatch.setenv("CAUSALPLAN_SEARCH_PRESTART", "0")
-    fast_downward.clear_solve_cache()
+    fd.clear_solve_cache()
     compiled = compile_task(build_task(example_model("near/candle.yaml", catalog), catalog.get("candle")))
     held: list[int] = []
     try:
@@ -254,86 +271,71 @@ def test_solves_work_when_the_process_has_more_than_1024_open_files(
     assert outcome.status is PlanStatus.SOLVED, outcome.message
 
 
-def test_a_lost_translator_timeout_is_raised_again(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_lost_translator_timeout_is_raised_again(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     """The deadline's exception can be lost (raised in a GC callback, or under a broad except):
     the alarm fires again until the translation stops, instead of letting it run on."""
     lost: list[bool] = []
 
-    def translator_that_loses_the_first_timeout(domain: str, problem: str) -> tuple[int, str | None]:
+    def translator_that_loses_the_first_timeout(folder: Path) -> int:
         finish = time.monotonic() + 5.0
         while time.monotonic() < finish:
             try:
                 while time.monotonic() < finish:
                     pass
-            except fast_downward._TranslatorTimeout:
+            except fd_translate._TranslatorTimeout:
                 if lost:
                     raise
                 lost.append(True)  # swallowed, as the interpreter does inside a GC callback
-        return 0, "begin_version"  # ran to its end: the deadline did not hold
+        return 0  # ran to its end: the deadline did not hold
 
-    monkeypatch.setattr(fast_downward, "_run_translator", translator_that_loses_the_first_timeout)
-    run = fast_downward._translate_here("", "", time.monotonic() + 0.05, 2048)
+    monkeypatch.setattr(fd_translate, "_run_main", translator_that_loses_the_first_timeout)
+    finished = fd_translate.translate("", "", tmp_path, 0.05, 2048)
     assert lost == [True]
-    assert run.returncode is None
+    assert finished.returncode is None
 
 
-def test_without_invariant_synthesis_every_example_and_synthetic_task_translates_the_same(
-    user_catalog: Catalog, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """Skipping invariant synthesis (TRANSLATOR_ARGUMENTS) changes nothing in causalplan's tasks: all binary."""
-    from fast_downward.translate import options
-
-    from causalplan.pddl.canonical import canonical_pddl
-    from causalplan.planners.synthetic import synthetic_task
-    from tests.test_search_processes import _example_tasks
-
-    assert "--invariant-generation-max-candidates" in fast_downward.TRANSLATOR_ARGUMENTS
-    tasks = _example_tasks(user_catalog)
-    for seed in range(3):
-        tasks |= {f"synthetic {size}, seed {seed}": synthetic_task(size, seed=seed) for size in (5, 21, 60)}
-    compared = 0
-    for name, task in tasks.items():
-        for compiled in (canonical_pddl(task), compile_task(task)):
-            if compiled is None:
-                continue
-            ours = fast_downward._run_translator(compiled.domain, compiled.problem)
-            with monkeypatch.context() as patch:
-                patch.setattr(fast_downward, "translator_options", lambda: options.parse_args(["d.pddl", "p.pddl"]))
-                defaults = fast_downward._run_translator(compiled.domain, compiled.problem)
-            assert ours == defaults and ours[0] == 0, name
-            compared += 1
-    assert compared >= 90
-    capsys.readouterr()  # the translator's log
-
-
-_ROOMS_DOMAIN = """(define (domain rooms) (:requirements :strips :typing) (:types room)
-  (:predicates (at ?r - room))
-  (:action move :parameters (?from ?to - room) :precondition (at ?from)
-   :effect (and (not (at ?from)) (at ?to))))"""
-_ROOMS_PROBLEM = """(define (problem two) (:domain rooms) (:objects a b - room) (:init (at a)) (:goal (at b)))"""
-
-
-def test_the_invariant_shortcut_finds_nothing_only_when_no_candidate_is_allowed(
-    capsys: pytest.CaptureFixture[str],
-) -> None:
-    """A domain with a real invariant (one room at a time): FD's own search finds it under any other limit."""
-    from fast_downward.translate import invariant_finder, normalize, options
-    from fast_downward.translate.pddl_parser import parsing_functions
-
-    fast_downward.install_invariant_shortcut()
-    fast_downward.install_invariant_shortcut()  # once is enough; again changes nothing
-    assert invariant_finder.find_invariants.is_causalplan_shortcut  # type: ignore[attr-defined]
-    saved = options.options
-    try:
-        groups = {}
-        for name, arguments in (("none allowed", fast_downward.TRANSLATOR_ARGUMENTS), ("defaults", ())):
-            options.options = options.parse_args(["d.pddl", "p.pddl", *arguments])
-            task = parsing_functions.parse_task(
-                fast_downward.parse_pddl("domain", _ROOMS_DOMAIN), fast_downward.parse_pddl("problem", _ROOMS_PROBLEM)
+def example_tasks(catalog: Catalog) -> dict[str, PlanningTask]:
+    """Every example model, on its own object and through every example mapping that builds a task."""
+    files = sorted(EXAMPLES.rglob("*.yaml"))
+    models = {path: loaded.model for path in files if (loaded := load_model(path, catalog)).model and loaded.is_valid}
+    mappings = {path: read.mapping for path in files if (read := load_mapping(path, catalog)).mapping and read.is_valid}
+    tasks: dict[str, PlanningTask] = {}
+    for model_path, model in models.items():
+        assert model is not None
+        tasks[model_path.name] = build_task(model, catalog.get(model.object_id))
+        for mapping_path, mapping in mappings.items():
+            assert mapping is not None
+            tasks[f"{model_path.name} on {mapping_path.name}"] = build_task(
+                model, catalog.get(mapping.object_id), mapping
             )
-            normalize.normalize(task)
-            groups[name] = [[str(atom) for atom in group] for group in invariant_finder.get_groups(task)]
+    return tasks
+
+
+def test_every_example_solves_the_same_in_canonical_and_readable_form(user_catalog: Catalog) -> None:
+    """The canonical form FD solves gives the plan the person's own PDDL gives, on every example."""
+    from causalplan.pddl.canonical import plan_actions
+
+    compared = 0
+    for name, task in example_tasks(user_catalog).items():
+        canonical = canonical_pddl(task)
+        if canonical is None:
+            continue
+        readable = compile_task(task)
+        ours = solve(canonical.domain, canonical.problem, CONFIGS["fd-opt"])
+        theirs = solve(readable.domain, readable.problem, CONFIGS["fd-opt"])
+        assert ours.status is theirs.status, name
+        assert len(plan_actions(ours.actions)) == len(theirs.actions), name
+        compared += 1
+    assert compared >= 10
+
+
+def test_answers_are_kept_and_none_when_told_to_keep_none(catalog: Catalog) -> None:
+    compiled = compile_task(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
+    try:
+        solve(compiled.domain, compiled.problem, CONFIGS["fd"])
+        assert set(solve(compiled.domain, compiled.problem, CONFIGS["fd"]).timing) == {"cached"}
+        fd.keep_answers(0)
+        solve(compiled.domain, compiled.problem, CONFIGS["fd"])
+        assert set(solve(compiled.domain, compiled.problem, CONFIGS["fd"]).timing) == {"translate", "search"}
     finally:
-        options.options = saved
-    assert groups == {"none allowed": [], "defaults": [["Atom at(?X)"]]}  # at most one room
-    assert "0 initial candidates" in capsys.readouterr().out  # what FD itself prints with the limit
+        fd.keep_answers(fd.SOLVE_CACHE_SIZE)
