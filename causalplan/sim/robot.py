@@ -1,0 +1,438 @@
+"""The robot doing a step: fetch the part, carry it to its approach, follow the connector axis, let go.
+
+``Robot`` moves a kinematic Panda (``sim.panda``) through one step's motions and writes them
+into a ``Trajectory``: transit (a collision-free joint path from OMPL, then straight down to
+the grasp), grasp, carry (lift, then a collision-free path to the approach pose, the part
+riding on the gripper), approach and the primitive (straight Cartesian lines along the
+connector axis by IK; a screw turns the wrist and regrasps when joint 7 runs out), release,
+retreat. A held part is attached to the gripper kinematically, as PyBullet TAMP code does:
+wherever the gripper goes, the part is put at the same pose relative to it. A motion that
+cannot be done returns a ``RobotFailure`` naming the cause.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from causalplan.objects.model import Grasp, Part, Vector
+from causalplan.sim.checks import PENETRATION_TOLERANCE_MM
+from causalplan.sim.geometry import Solid
+from causalplan.sim.motion_planning import plan_path
+from causalplan.sim.panda import (
+    FINGER_BELOW_TARGET,
+    FINGER_GAP_OPEN,
+    FINGER_OPEN,
+    HAND_LINKS,
+    HOME,
+    Configuration,
+    Contact,
+    Panda,
+)
+from causalplan.sim.poses import (
+    Pose,
+    about_axis,
+    angle_between,
+    cross,
+    difference,
+    multiply,
+    rotate,
+    scale,
+    shortest_arc,
+)
+from causalplan.sim.report import Check, Failure
+from causalplan.sim.scene import Scene
+from causalplan.sim.trajectory import Gripper, Segment, Trajectory
+
+PREGRASP = 0.08
+"""Metres the gripper stays back from a grasp before going straight in (and after letting go)."""
+LIFT = 0.06
+"""Metres a part is lifted off the table before it is carried."""
+LINE_STEP = 0.002
+"""Metres between two commanded poses of a straight line."""
+SCREW_STEP = math.radians(10)
+"""Largest wrist turn between two commanded poses of a screw."""
+GRASP_DEPTH = 0.01
+"""How far below a part's top the fingertips' middle holds it, by default."""
+GRASP_TOLERANCE_MM = 3.0
+GRASP_TOLERANCE_DEG = 5.0
+"""How far a part may sit from its grasp in the gripper before the grasp counts as lost."""
+CLOSE_POSITIONS = 10
+"""Commands (at the control rate) the fingers take to close or open."""
+IK_SEEDS: tuple[Configuration, ...] = (
+    HOME,
+    (0.0, 0.2, 0.0, -1.8, 0.0, 2.0, 0.785),
+    (0.8, -0.3, 0.0, -2.2, 0.0, 1.9, 0.8),
+)
+RANDOM_SEEDS = 12
+"""Further starting configurations for the IK (drawn once, from a fixed seed) when the first ones fail."""
+
+
+def _arrange(approach: Vector, fingers: Vector) -> Pose:
+    """Return the orientation that points the gripper along ``approach`` with fingers closing along ``fingers``."""
+    turn = shortest_arc((0.0, 0.0, 1.0), approach)
+    current = rotate(turn, (0.0, 1.0, 0.0))
+    angle = angle_between(current, fingers)
+    if sum(a * b for a, b in zip(cross(current, fingers), approach, strict=True)) < 0:
+        angle = -angle
+    return Pose(orientation=multiply(about_axis(approach, angle), turn))
+
+
+def grasp_of(part: Part, solid: Solid) -> tuple[Pose, float] | str:
+    """Return the gripper's pose in the part's frame and its closed finger gap, or why the part cannot be held."""
+    if part.grasp is not None:
+        grasp: Grasp = part.grasp
+        width = grasp.width
+        if width is None:
+            index = max(range(3), key=lambda i: abs(grasp.fingers[i]))
+            width = solid.upper[index] - solid.lower[index]
+        if width > FINGER_GAP_OPEN:
+            return f"its grasp is {width * 1000:.0f} mm across; the gripper opens {FINGER_GAP_OPEN * 1000:.0f} mm"
+        return Pose(grasp.position, _arrange(grasp.approach, grasp.fingers).orientation), width
+    (x0, y0, z0), (x1, y1, z1) = solid.lower, solid.upper
+    along_y = (y1 - y0) <= (x1 - x0)
+    width = (y1 - y0) if along_y else (x1 - x0)
+    if width > FINGER_GAP_OPEN:
+        return (
+            f"it is {width * 1000:.0f} mm across at its narrowest and the gripper opens "
+            f"{FINGER_GAP_OPEN * 1000:.0f} mm; give it a grasp in the catalog"
+        )
+    height = max(z1 - GRASP_DEPTH, z0 + FINGER_BELOW_TARGET + 0.001)
+    fingers = (0.0, 1.0, 0.0) if along_y else (1.0, 0.0, 0.0)
+    orientation = _arrange((0.0, 0.0, -1.0), fingers).orientation
+    return Pose(((x0 + x1) / 2, (y0 + y1) / 2, height), orientation), width
+
+
+@dataclass(frozen=True)
+class RobotFailure:
+    """Why the robot could not do a motion: the failure code and the check that says so."""
+
+    failure: Failure
+    check: Check
+
+
+@dataclass
+class Held:
+    """The part in the gripper: the grasp the robot believes in, and where the part really sits."""
+
+    part: str
+    believed: Pose  # the gripper in the part's frame
+    actual: Pose
+
+
+@dataclass
+class Robot:
+    """A Panda building in a scene, writing what it does into ``trajectory``.
+
+    ``observe`` is called after every commanded position (a video draws frames from it);
+    ``grasp_noise`` moves every part in the gripper by that pose (fit-probability trials).
+    """
+
+    scene: Scene
+    trajectory: Trajectory = field(default_factory=Trajectory)
+    observe: Callable[[], None] | None = None
+    grasp_noise: Pose | None = None
+    panda: Panda = field(init=False)
+    held: Held | None = None
+    step: int = 0
+    ignored: set[str] = field(default_factory=set)
+    """Parts the arm may touch during the current motion (the one it is closing its fingers on)."""
+
+    def __post_init__(self) -> None:
+        self.panda = Panda(self.scene)
+
+    # --- the world as the robot sees it -----------------------------------------------------
+
+    def _others(self) -> list[int]:
+        skip = {self.held.part} if self.held else set()
+        skip |= self.ignored
+        bodies = [body for part, body in self.scene.bodies.items() if part not in skip]
+        return [self.scene.ground, *bodies]
+
+    def _place_held(self) -> None:
+        if self.held is not None:
+            self.scene.place(self.held.part, self.panda.gripper_pose() * self.held.actual.inverse())
+
+    def _contact(self, allowed: frozenset[str] = frozenset()) -> Contact | None:
+        """Return the deepest touch of the arm or its part with anything else beyond tolerance, if any."""
+        tolerance = PENETRATION_TOLERANCE_MM / 1000
+        touch = self.panda.deepest_contact(self._others())
+        if touch is not None and touch.depth > tolerance and touch.other not in allowed:
+            return touch
+        if self.held is not None:
+            others = [body for body in self._others() if self.scene.names.get(body) not in allowed]
+            depth, hit = self.scene.deepest_overlap(self.held.part, others)
+            if depth > tolerance and hit is not None:
+                return Contact(f"held {self.scene.solids[self.held.part].name}", hit, depth)
+        return None
+
+    def _is_clear(self, configuration: Configuration) -> bool:
+        self.panda.set(configuration)
+        self._place_held()
+        return self._contact() is None
+
+    # --- writing commands --------------------------------------------------------------------
+
+    def _command(self, kind: str, gripper: Gripper, positions: Sequence[Configuration]) -> None:
+        segment = Segment(self.step, kind, gripper)
+        self.trajectory.segments.append(segment)
+        fingers = FINGER_OPEN if gripper == "open" else None
+        for position in positions:
+            self.panda.set(position, fingers)
+            self._place_held()
+            segment.positions.append(position)
+            if self.observe is not None:
+                self.observe()
+
+    def _fingers(self, kind: str, gripper: Gripper, width: float) -> None:
+        """Close (or open) the fingers where the arm stands."""
+        start, end = self.panda.fingers, FINGER_OPEN if gripper == "open" else max(0.0, width / 2)
+        segment = Segment(self.step, kind, gripper)
+        self.trajectory.segments.append(segment)
+        for k in range(1, CLOSE_POSITIONS + 1):
+            self.panda.set(self.panda.configuration, start + (end - start) * k / CLOSE_POSITIONS)
+            segment.positions.append(self.panda.configuration)
+            if self.observe is not None:
+                self.observe()
+
+    # --- motions -----------------------------------------------------------------------------
+
+    def _unreachable(self, what: str) -> RobotFailure:
+        detail = f"no arm pose puts the gripper {what} (inverse kinematics)"
+        return RobotFailure(Failure.UNREACHABLE, Check("robot", False, detail))
+
+    def _collision(self, what: str, touch: Contact) -> RobotFailure:
+        detail = f"{what}: the {touch.robot_part} touched the {touch.other} ({touch.depth * 1000:.1f} mm deep)"
+        return RobotFailure(
+            Failure.COLLISION,
+            Check("robot", False, detail, round(touch.depth * 1000, 2), PENETRATION_TOLERANCE_MM, "mm"),
+        )
+
+    def _go(
+        self, kind: str, gripper: Gripper, target: Pose, what: str, then: Sequence[Pose] = ()
+    ) -> RobotFailure | None:
+        """Move along a collision-free joint path (OMPL) to a configuration reaching ``target``.
+
+        Of the arm poses that reach it, the first from which the gripper can then follow the
+        poses ``then`` (a straight line) by IK is taken.
+        """
+        start = self.panda.configuration
+        if not self._is_clear(start):
+            touch = self._contact()
+            assert touch is not None
+            return self._collision(f"before moving {what}", touch)
+        reaching: list[Configuration] = []
+        clear: list[Configuration] = []
+        for seeds in ((start, *IK_SEEDS), self._random_seeds()):
+            solutions = [self.panda.solve(target, seed) for seed in seeds]
+            reaching += [solution for solution in solutions if solution is not None]
+            # The clear pose farthest from the joint limits leaves the most room for the line that follows.
+            clear = sorted((s for s in reaching if self._is_clear(s)), key=lambda s: -self.panda.limit_margin(s))
+            if clear:
+                break
+        if not reaching:
+            self.panda.set(start)
+            self._place_held()
+            return self._unreachable(what)
+        goal = next((c for c in clear if self._can_follow(c, then)), clear[0]) if clear else None
+        self.panda.set(start)
+        self._place_held()
+        if goal is None:
+            touch = self._contact_at(reaching[0])
+            detail = f"every arm pose that puts the gripper {what} touches the {touch}"
+            return RobotFailure(Failure.NO_COLLISION_FREE_PATH, Check("robot", False, detail))
+        path = plan_path(start, goal, self._is_clear, self.panda.lower, self.panda.upper)
+        self.panda.set(start)
+        self._place_held()
+        if path is None:
+            detail = f"the motion planner (OMPL RRTConnect) found no collision-free path {what}"
+            return RobotFailure(Failure.NO_COLLISION_FREE_PATH, Check("robot", False, detail))
+        self._command(kind, gripper, path[1:])
+        return None
+
+    def _can_follow(self, configuration: Configuration, targets: Sequence[Pose]) -> bool:
+        """Return whether IK can follow ``targets`` from ``configuration`` without a jump (collisions unchecked)."""
+        saved = self.panda.configuration
+        try:
+            for target in targets:
+                solution = self.panda.solve(target, configuration)
+                if solution is None or max(abs(a - b) for a, b in zip(solution, configuration, strict=True)) > 0.5:
+                    return False
+                configuration = solution
+            return True
+        finally:
+            self.panda.set(saved)
+
+    def _random_seeds(self) -> list[Configuration]:
+        chance = random.Random(RANDOM_SEEDS)
+        return [
+            tuple(chance.uniform(low, high) for low, high in zip(self.panda.lower, self.panda.upper, strict=True))
+            for _ in range(RANDOM_SEEDS)
+        ]
+
+    def _contact_at(self, configuration: Configuration) -> str:
+        self.panda.set(configuration)
+        self._place_held()
+        touch = self._contact()
+        return touch.other if touch else "scene"
+
+    def _line(
+        self, kind: str, gripper: Gripper, targets: Sequence[Pose], what: str, allowed: frozenset[str] = frozenset()
+    ) -> RobotFailure | None:
+        """Follow gripper poses one after the other by IK (a straight line), checking every one."""
+        return self._line_part(kind, gripper, targets, what, allowed)[0]
+
+    def _line_part(
+        self, kind: str, gripper: Gripper, targets: Sequence[Pose], what: str, allowed: frozenset[str] = frozenset()
+    ) -> tuple[RobotFailure | None, int]:
+        """Follow gripper poses by IK; return the failure, if any, and how many poses were reached."""
+        positions: list[Configuration] = []
+        configuration = self.panda.configuration
+        for target in targets:
+            solution = self.panda.solve(target, configuration)
+            if solution is None or max(abs(a - b) for a, b in zip(solution, configuration, strict=True)) > 0.5:
+                self._command(kind, gripper, positions)
+                return self._unreachable(what), len(positions)
+            configuration = solution
+            self.panda.set(configuration)
+            self._place_held()
+            touch = self._contact(allowed)
+            if touch is not None:
+                self._command(kind, gripper, [*positions, configuration])
+                return self._collision(what, touch), len(positions)
+            positions.append(configuration)
+        self._command(kind, gripper, positions)
+        return None, len(positions)
+
+    def fetch(self, part_id: str, part: Part) -> RobotFailure | None:
+        """Transit to the part, go straight to its grasp, and close the fingers on it."""
+        name = self.scene.solids[part_id].name
+        found = grasp_of(part, self.scene.solids[part_id])
+        if isinstance(found, str):
+            return RobotFailure(Failure.UNREACHABLE, Check("robot", False, f"the {name} cannot be grasped: {found}"))
+        believed, width = found
+        actual = believed if self.grasp_noise is None else believed * self.grasp_noise
+        grasp = self.scene.pose(part_id) * believed
+        backed = grasp.translated(scale(grasp.turn((0.0, 0.0, 1.0)), -PREGRASP))
+        self.ignored = {part_id}
+        try:
+            failure = self._go("transit", "open", backed, f"above the {name}")
+            if failure is None:
+                failure = self._line("transit", "open", line_poses(backed, grasp), f"at the {name}'s grasp")
+        finally:
+            self.ignored = set()
+        if failure is not None:
+            return failure
+        self._fingers("grasp", "closed", width)
+        self.held = Held(part_id, believed, actual)
+        moved, turned = difference(believed, actual)
+        if moved * 1000 > GRASP_TOLERANCE_MM or math.degrees(turned) > GRASP_TOLERANCE_DEG:
+            detail = f"the {name} sits {moved * 1000:.1f} mm and {math.degrees(turned):.1f}° off its grasp"
+            return RobotFailure(
+                Failure.GRASP_LOST, Check("grasp", False, detail, round(moved * 1000, 2), GRASP_TOLERANCE_MM, "mm")
+            )
+        self._place_held()
+        return None
+
+    def carry(self, part_pose: Pose, what: str, then: Sequence[Pose] = ()) -> RobotFailure | None:
+        """Lift the held part and carry it along a collision-free path until it is at ``part_pose``.
+
+        ``then`` are the part's poses after it (a line to follow), which choose the arm pose.
+        """
+        assert self.held is not None
+        held = self.held
+        here = self.panda.gripper_pose()
+        lifted = here.translated((0.0, 0.0, LIFT))
+        failure = self._line("carry", "closed", line_poses(here, lifted), "lifting the part")
+        if failure is None:
+            targets = [pose * held.believed for pose in then]
+            failure = self._go("carry", "closed", part_pose * held.believed, what, targets)
+        return failure
+
+    def follow(self, kind: str, part_poses: Sequence[Pose], what: str, mate: str) -> RobotFailure | None:
+        """Move the held part through ``part_poses`` (a straight line along the connector axis) by IK.
+
+        The part may touch ``mate`` (it is being joined to it: the simulator's own path check judges that).
+        """
+        assert self.held is not None
+        targets = [pose * self.held.believed for pose in part_poses]
+        return self._line(kind, "closed", targets, what, frozenset({mate}))
+
+    def screw(self, part_poses: Sequence[Pose], what: str, mate: str) -> RobotFailure | None:
+        """Turn the held part down its thread, regrasping (a half turn back) whenever joint 7 runs out."""
+        index, regrasped = 0, False
+        while index < len(part_poses):
+            assert self.held is not None
+            targets = [pose * self.held.believed for pose in part_poses[index:]]
+            failure, done = self._line_part("screw", "closed", targets, what, frozenset({mate}))
+            index += done
+            if failure is None:
+                return None
+            if failure.failure is not Failure.UNREACHABLE or (regrasped and done == 0):
+                return failure
+            failure = self._regrasp(what)
+            if failure is not None:
+                return failure
+            regrasped = True
+        return None
+
+    def _regrasp(self, what: str) -> RobotFailure | None:
+        """Let go, turn the wrist half a turn back, and take hold again (the gripper is symmetric)."""
+        assert self.held is not None
+        held = self.held
+        lower, upper = self.panda.lower[6], self.panda.upper[6]
+        wrist = self.panda.configuration[6]
+        back = math.pi if wrist - math.pi < lower else -math.pi
+        if not lower <= wrist + back <= upper:
+            return self._unreachable(f"{what}: the wrist cannot turn back to regrasp")
+        self.held = None
+        width = 2 * self.panda.fingers
+        self._fingers("release", "open", width)
+        start = self.panda.configuration
+        turned = (*start[:6], wrist + back)
+        count = max(1, math.ceil(abs(back) / SCREW_STEP))
+        self.ignored = {held.part}
+        try:
+            path = [(*start[:6], wrist + back * k / count) for k in range(1, count + 1)]
+            self._command("transit", "open", path)
+        finally:
+            self.ignored = set()
+        self.panda.set(turned)
+        self._fingers("grasp", "closed", width)
+        spin = Pose(orientation=about_axis((0.0, 0.0, 1.0), back))
+        self.held = Held(held.part, held.believed * spin, held.actual * spin)
+        return None
+
+    def release(self, retreat: bool = True) -> RobotFailure | None:
+        """Open the fingers and back away along the gripper's axis."""
+        held, self.held = self.held, None
+        self._fingers("release", "open", 0.0)
+        if not retreat or held is None:
+            return None
+        here = self.panda.gripper_pose()
+        backed = here.translated(scale(here.turn((0.0, 0.0, 1.0)), -PREGRASP))
+        self.ignored = {held.part}
+        try:
+            return self._line("retreat", "open", line_poses(here, backed), "backing away")
+        finally:
+            self.ignored = set()
+
+    def go_home(self) -> RobotFailure | None:
+        """Return to the resting pose along a collision-free path."""
+        path = plan_path(self.panda.configuration, HOME, self._is_clear, self.panda.lower, self.panda.upper)
+        if path is None:
+            return RobotFailure(Failure.NO_COLLISION_FREE_PATH, Check("robot", False, "no collision-free path home"))
+        self._command("retreat", "open", path[1:])
+        return None
+
+
+def line_poses(start: Pose, end: Pose) -> list[Pose]:
+    """Return poses every ``LINE_STEP`` on the straight line from ``start`` to ``end`` (same orientation as end)."""
+    length = math.dist(start.position, end.position)
+    count = max(1, math.ceil(length / LINE_STEP))
+    return [
+        Pose(tuple(a + (b - a) * k / count for a, b in zip(start.position, end.position, strict=True)), end.orientation)  # type: ignore[arg-type]
+        for k in range(1, count + 1)
+    ]
