@@ -60,7 +60,6 @@ class _Run:
     attached_at: dict[str, int] = field(default_factory=dict)
     arm: Arm | None = None
     robot: Robot | None = None
-    placed: dict[str, Pose] = field(default_factory=dict)
 
     def name(self, part_or_ground: str) -> str:
         return "table" if part_or_ground == GROUND else self.obj.part(part_or_ground).name
@@ -178,7 +177,7 @@ def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
     if robot is not None:
         robot.step = number
         scene.place(request.moving, run.homes[request.moving])
-        failed = bring(robot, request.moving, obj.part(request.moving), motion, path, start)
+        failed = bring(robot, request.moving, obj.part(request.moving), motion, path, start, request.fixed)
         if failed is not None:
             return step.fail(failed.failure, failed.check)
     went = approach(scene, request.moving, path, start)
@@ -212,7 +211,6 @@ def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
             return step.fail(Failure.MISALIGNED, alignment, short if went.hit else "")
         step.passed(alignment)
     if robot is not None:
-        run.placed[request.moving] = scene.pose(request.moving)
         failed = let_go(robot, motion, path, start, run.homes[request.moving], moving_name, request.fixed)
         if failed is not None:
             return step.fail(failed.failure, failed.check)
@@ -235,13 +233,14 @@ def _specs(obj: AssemblyObject, part_id: str) -> str:
     return ", ".join(f"{c.kind} {c.spec}" for c in obj.part(part_id).connectors) or "no connectors"
 
 
-def _layout(
+def layout(
     obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...], gap: float = ROW_GAP
 ) -> tuple[dict[str, Pose], Box]:
     """Return where each part starts, and the bounds of the assembly the plan means to build.
 
     The base stands at the origin; the other parts wait in a row behind where the assembly
-    will be (for the robot, in two rows, behind and in front, so that all are in its reach). The designed bounds (every part at its seat, lights included) frame the camera.
+    will be (for the robot, in two rows, behind and in front, so that all are in its reach).
+    The designed bounds (every part at its seat, lights included) frame the camera.
     """
     base = parts[obj.base]
     homes = {
@@ -297,7 +296,7 @@ def simulate_plan(
     timing: dict[str, float] = {}
     clock = time.perf_counter()
     parts = solids(obj)
-    homes, design = _layout(obj, parts, requests, ROBOT_ROW_GAP if robot else ROW_GAP)
+    homes, design = layout(obj, parts, requests, ROBOT_ROW_GAP if robot else ROW_GAP)
     frames: list[Picture] = []
     video = video and robot
     with Scene(parts, drawn=render is not RenderMode.NONE or video) as scene:
@@ -316,6 +315,8 @@ def simulate_plan(
             if reports and reports[-1].status is not StepStatus.PASSED:
                 reports.append(_StepChecks(run, number, request).report(not_run=True))
                 continue
+            if recorder is not None:
+                recorder.caption = f"{number}/{len(requests)} {request.text(obj)}"
             reports.append(_step(run, number, request))
             if run.robot is not None:
                 reports[-1] = replace(reports[-1], motions=step_motions(run.robot.trajectory, number))
@@ -359,7 +360,7 @@ def simulate_plan(
         frames=tuple(frames),
         robot=robot,
         trajectory=run.robot.trajectory if run.robot else None,
-        placed=dict(run.placed),
+        placed=dict(run.robot.released) if run.robot else {},
         video=tuple(recorder.frames) if recorder else (),
     )
 

@@ -9,6 +9,7 @@ before every query, so the same query gives the same path.
 from __future__ import annotations
 
 import importlib
+import itertools
 import math
 from collections.abc import Callable, Sequence
 from types import ModuleType
@@ -37,7 +38,7 @@ def _ompl() -> tuple[ModuleType, ModuleType, ModuleType]:
 def densify(path: Sequence[Configuration], step: float = CHECK_STEP) -> list[Configuration]:
     """Return ``path`` with configurations added so no joint moves more than ``step`` between two."""
     dense: list[Configuration] = [tuple(path[0])]
-    for a, b in zip(path, path[1:], strict=False):
+    for a, b in itertools.pairwise(path):
         count = max(1, math.ceil(max(abs(y - x) for x, y in zip(a, b, strict=True)) / step))
         dense.extend(tuple(x + (y - x) * k / count for x, y in zip(a, b, strict=True)) for k in range(1, count + 1))
     return dense

@@ -94,7 +94,7 @@ class Panda:
     def limit_margin(self, configuration: Sequence[float]) -> float:
         """Return how close ``configuration`` comes to a joint limit, as a fraction of that joint's range."""
         return min(
-            min(angle - low, high - angle) / (high - low)
+            float(min(angle - low, high - angle) / (high - low))
             for angle, low, high in zip(configuration, self.lower, self.upper, strict=True)
         )
 

@@ -24,8 +24,8 @@ from causalplan.sim.motion_planning import plan_path
 from causalplan.sim.panda import (
     FINGER_BELOW_TARGET,
     FINGER_GAP_OPEN,
+    FINGER_JOINTS,
     FINGER_OPEN,
-    HAND_LINKS,
     HOME,
     Configuration,
     Contact,
@@ -43,7 +43,7 @@ from causalplan.sim.poses import (
     shortest_arc,
 )
 from causalplan.sim.report import Check, Failure
-from causalplan.sim.scene import Scene
+from causalplan.sim.scene import GROUND, Scene
 from causalplan.sim.trajectory import Gripper, Segment, Trajectory
 
 PREGRASP = 0.08
@@ -61,6 +61,8 @@ GRASP_TOLERANCE_DEG = 5.0
 """How far a part may sit from its grasp in the gripper before the grasp counts as lost."""
 CLOSE_POSITIONS = 10
 """Commands (at the control rate) the fingers take to close or open."""
+HELD = "held "
+"""How a contact of the held part (rather than of the arm) is named."""
 IK_SEEDS: tuple[Configuration, ...] = (
     HOME,
     (0.0, 0.2, 0.0, -1.8, 0.0, 2.0, 0.785),
@@ -137,6 +139,8 @@ class Robot:
     panda: Panda = field(init=False)
     held: Held | None = None
     step: int = 0
+    released: dict[str, Pose] = field(default_factory=dict)
+    """Where the robot last let go of each part."""
     ignored: set[str] = field(default_factory=set)
     """Parts the arm may touch during the current motion (the one it is closing its fingers on)."""
 
@@ -155,18 +159,30 @@ class Robot:
         if self.held is not None:
             self.scene.place(self.held.part, self.panda.gripper_pose() * self.held.actual.inverse())
 
-    def _contact(self, allowed: frozenset[str] = frozenset()) -> Contact | None:
-        """Return the deepest touch of the arm or its part with anything else beyond tolerance, if any."""
+    def _contact(self, allowed: frozenset[str] = frozenset(), with_held: bool = True) -> Contact | None:
+        """Return the deepest touch of the arm (and its part) with anything else beyond tolerance, if any."""
         tolerance = PENETRATION_TOLERANCE_MM / 1000
-        touch = self.panda.deepest_contact(self._others())
-        if touch is not None and touch.depth > tolerance and touch.other not in allowed:
+        # Only the fingertips may brush the part being joined to (pushing a part home); the arm may not.
+        brushed = frozenset(
+            (finger, self.scene.bodies[part])
+            for part in allowed
+            if part in self.scene.bodies
+            for finger in FINGER_JOINTS
+        )
+        touch = self.panda.deepest_contact(self._others(), brushed)
+        if touch is not None and touch.depth > tolerance:
             return touch
-        if self.held is not None:
+        if self.held is not None and with_held:
             others = [body for body in self._others() if self.scene.names.get(body) not in allowed]
             depth, hit = self.scene.deepest_overlap(self.held.part, others)
             if depth > tolerance and hit is not None:
-                return Contact(f"held {self.scene.solids[self.held.part].name}", hit, depth)
+                return Contact(f"{HELD}{self.scene.solids[self.held.part].name}", hit, depth)
         return None
+
+    def called(self, name: str) -> str:
+        """Return what a contact's body is called in words: a part's name, or 'table'."""
+        solid = self.scene.solids.get(name)
+        return solid.name if solid is not None else "table" if name == GROUND else name
 
     def _is_clear(self, configuration: Configuration) -> bool:
         self.panda.set(configuration)
@@ -204,19 +220,28 @@ class Robot:
         return RobotFailure(Failure.UNREACHABLE, Check("robot", False, detail))
 
     def _collision(self, what: str, touch: Contact) -> RobotFailure:
-        detail = f"{what}: the {touch.robot_part} touched the {touch.other} ({touch.depth * 1000:.1f} mm deep)"
+        detail = (
+            f"{what}: the {touch.robot_part} touched the {self.called(touch.other)} ({touch.depth * 1000:.1f} mm deep)"
+        )
         return RobotFailure(
             Failure.COLLISION,
             Check("robot", False, detail, round(touch.depth * 1000, 2), PENETRATION_TOLERANCE_MM, "mm"),
         )
 
     def _go(
-        self, kind: str, gripper: Gripper, target: Pose, what: str, then: Sequence[Pose] = ()
+        self,
+        kind: str,
+        gripper: Gripper,
+        target: Pose,
+        what: str,
+        then: Sequence[Pose] = (),
+        allowed: frozenset[str] = frozenset(),
     ) -> RobotFailure | None:
         """Move along a collision-free joint path (OMPL) to a configuration reaching ``target``.
 
         Of the arm poses that reach it, the first from which the gripper can then follow the
-        poses ``then`` (a straight line) by IK is taken.
+        poses ``then`` (a straight line) by IK without touching anything but ``allowed`` is
+        taken; when the line can be followed only by touching something, there is no path.
         """
         start = self.panda.configuration
         if not self._is_clear(start):
@@ -236,12 +261,24 @@ class Robot:
             self.panda.set(start)
             self._place_held()
             return self._unreachable(what)
-        goal = next((c for c in clear if self._can_follow(c, then)), clear[0]) if clear else None
+        goal, touched = (clear[0] if clear else None), None
+        for candidate in clear:
+            outcome = self._can_follow(candidate, then, allowed)
+            if outcome is True:
+                goal, touched = candidate, None
+                break
+            if isinstance(outcome, Contact) and touched is None:
+                touched = outcome
         self.panda.set(start)
         self._place_held()
+        if touched is not None:
+            detail = (
+                f"no arm pose {what} lets the gripper go on along the connector axis without the "
+                f"{touched.robot_part} touching the {self.called(touched.other)} ({touched.depth * 1000:.1f} mm deep)"
+            )
+            return RobotFailure(Failure.NO_COLLISION_FREE_PATH, Check("robot", False, detail))
         if goal is None:
-            touch = self._contact_at(reaching[0])
-            detail = f"every arm pose that puts the gripper {what} touches the {touch}"
+            detail = f"every arm pose that puts the gripper {what} touches the {self._contact_at(reaching[0])}"
             return RobotFailure(Failure.NO_COLLISION_FREE_PATH, Check("robot", False, detail))
         path = plan_path(start, goal, self._is_clear, self.panda.lower, self.panda.upper)
         self.panda.set(start)
@@ -252,8 +289,10 @@ class Robot:
         self._command(kind, gripper, path[1:])
         return None
 
-    def _can_follow(self, configuration: Configuration, targets: Sequence[Pose]) -> bool:
-        """Return whether IK can follow ``targets`` from ``configuration`` without a jump (collisions unchecked)."""
+    def _can_follow(
+        self, configuration: Configuration, targets: Sequence[Pose], allowed: frozenset[str]
+    ) -> bool | Contact:
+        """Return whether IK follows ``targets`` from ``configuration`` without a jump (or what the arm touches)."""
         saved = self.panda.configuration
         try:
             for target in targets:
@@ -261,9 +300,17 @@ class Robot:
                 if solution is None or max(abs(a - b) for a, b in zip(solution, configuration, strict=True)) > 0.5:
                     return False
                 configuration = solution
+                self.panda.set(configuration)
+                self._place_held()
+                touch = self._contact(allowed)
+                if touch is not None and touch.robot_part.startswith(HELD):
+                    return True  # the part stops here, and the simulator's path check says why
+                if touch is not None:
+                    return touch
             return True
         finally:
             self.panda.set(saved)
+            self._place_held()
 
     def _random_seeds(self) -> list[Configuration]:
         chance = random.Random(RANDOM_SEEDS)
@@ -276,18 +323,34 @@ class Robot:
         self.panda.set(configuration)
         self._place_held()
         touch = self._contact()
-        return touch.other if touch else "scene"
+        return self.called(touch.other) if touch else "scene"
 
     def _line(
-        self, kind: str, gripper: Gripper, targets: Sequence[Pose], what: str, allowed: frozenset[str] = frozenset()
+        self,
+        kind: str,
+        gripper: Gripper,
+        targets: Sequence[Pose],
+        what: str,
+        allowed: frozenset[str] = frozenset(),
+        with_held: bool = True,
     ) -> RobotFailure | None:
         """Follow gripper poses one after the other by IK (a straight line), checking every one."""
-        return self._line_part(kind, gripper, targets, what, allowed)[0]
+        return self._line_part(kind, gripper, targets, what, allowed, with_held)[0]
 
     def _line_part(
-        self, kind: str, gripper: Gripper, targets: Sequence[Pose], what: str, allowed: frozenset[str] = frozenset()
+        self,
+        kind: str,
+        gripper: Gripper,
+        targets: Sequence[Pose],
+        what: str,
+        allowed: frozenset[str] = frozenset(),
+        with_held: bool = True,
     ) -> tuple[RobotFailure | None, int]:
-        """Follow gripper poses by IK; return the failure, if any, and how many poses were reached."""
+        """Follow gripper poses by IK; return the failure, if any, and how many poses were reached.
+
+        ``with_held``: whether the held part's touches count too (not along the connector axis,
+        where the simulator's own path check judges the part).
+        """
         positions: list[Configuration] = []
         configuration = self.panda.configuration
         for target in targets:
@@ -298,7 +361,7 @@ class Robot:
             configuration = solution
             self.panda.set(configuration)
             self._place_held()
-            touch = self._contact(allowed)
+            touch = self._contact(allowed, with_held)
             if touch is not None:
                 self._command(kind, gripper, [*positions, configuration])
                 return self._collision(what, touch), len(positions)
@@ -336,10 +399,13 @@ class Robot:
         self._place_held()
         return None
 
-    def carry(self, part_pose: Pose, what: str, then: Sequence[Pose] = ()) -> RobotFailure | None:
+    def carry(
+        self, part_pose: Pose, what: str, then: Sequence[Pose] = (), mate: str | None = None
+    ) -> RobotFailure | None:
         """Lift the held part and carry it along a collision-free path until it is at ``part_pose``.
 
-        ``then`` are the part's poses after it (a line to follow), which choose the arm pose.
+        ``then`` are the part's poses after it (a line to follow, on which it may touch ``mate``),
+        which choose the arm pose.
         """
         assert self.held is not None
         held = self.held
@@ -348,7 +414,8 @@ class Robot:
         failure = self._line("carry", "closed", line_poses(here, lifted), "lifting the part")
         if failure is None:
             targets = [pose * held.believed for pose in then]
-            failure = self._go("carry", "closed", part_pose * held.believed, what, targets)
+            allowed = frozenset({mate}) if mate else frozenset()
+            failure = self._go("carry", "closed", part_pose * held.believed, what, targets, allowed)
         return failure
 
     def follow(self, kind: str, part_poses: Sequence[Pose], what: str, mate: str) -> RobotFailure | None:
@@ -358,7 +425,7 @@ class Robot:
         """
         assert self.held is not None
         targets = [pose * self.held.believed for pose in part_poses]
-        return self._line(kind, "closed", targets, what, frozenset({mate}))
+        return self._line(kind, "closed", targets, what, frozenset({mate}), with_held=False)
 
     def screw(self, part_poses: Sequence[Pose], what: str, mate: str) -> RobotFailure | None:
         """Turn the held part down its thread, regrasping (a half turn back) whenever joint 7 runs out."""
@@ -366,7 +433,7 @@ class Robot:
         while index < len(part_poses):
             assert self.held is not None
             targets = [pose * self.held.believed for pose in part_poses[index:]]
-            failure, done = self._line_part("screw", "closed", targets, what, frozenset({mate}))
+            failure, done = self._line_part("screw", "closed", targets, what, frozenset({mate}), with_held=False)
             index += done
             if failure is None:
                 return None
@@ -405,9 +472,11 @@ class Robot:
         self.held = Held(held.part, held.believed * spin, held.actual * spin)
         return None
 
-    def release(self, retreat: bool = True) -> RobotFailure | None:
-        """Open the fingers and back away along the gripper's axis."""
+    def release(self, retreat: bool = True, mate: str | None = None) -> RobotFailure | None:
+        """Open the fingers and back away along the gripper's axis (the fingers may brush ``mate`` as they leave)."""
         held, self.held = self.held, None
+        if held is not None:
+            self.released[held.part] = self.scene.pose(held.part)
         self._fingers("release", "open", 0.0)
         if not retreat or held is None:
             return None
@@ -415,7 +484,8 @@ class Robot:
         backed = here.translated(scale(here.turn((0.0, 0.0, 1.0)), -PREGRASP))
         self.ignored = {held.part}
         try:
-            return self._line("retreat", "open", line_poses(here, backed), "backing away")
+            allowed = frozenset({mate}) if mate else frozenset()
+            return self._line("retreat", "open", line_poses(here, backed), "backing away", allowed)
         finally:
             self.ignored = set()
 

@@ -23,14 +23,14 @@ PUSH_DEPTH = 0.005
 
 
 def bring(
-    robot: Robot, part_id: str, part: Part, motion: Motion, path: Callable[[float], Pose], start: float
+    robot: Robot, part_id: str, part: Part, motion: Motion, path: Callable[[float], Pose], start: float, mate: str
 ) -> RobotFailure | None:
     """Fetch the part from the table and carry it to the start of its approach."""
     failure = robot.fetch(part_id, part)
     if failure is None:
         end = min(start, ENGAGEMENT) if motion.turns > 0 else 0.0
         line = [path(d) for d in _distances(start, end, LINE_STEP)]
-        failure = robot.carry(path(start), f"to the approach of the {part.name}", line)
+        failure = robot.carry(path(start), f"at the approach of the {part.name}", line, mate)
     return failure
 
 
@@ -80,7 +80,7 @@ def let_go(
         )
         if failure is not None:
             return failure
-    return robot.release()
+    return robot.release(mate=None if motion.touches_only else mate)
 
 
 def step_motions(trajectory: Trajectory, step: int) -> tuple[str, ...]:

@@ -45,6 +45,7 @@ class VideoRecorder:
     frames: list[Picture] = field(default_factory=list)
     count: int = 0
     caption: str = ""
+    """What the frames say at the top now (the step being done); the title when empty."""
 
     def __post_init__(self) -> None:
         table = self.scene.bounds(self.scene.bodies)
@@ -55,7 +56,7 @@ class VideoRecorder:
     def observe(self) -> None:
         """Draw a frame when it is time for one."""
         if self.count % FRAME_EVERY == 0:
-            self.frames.append(draw(self.scene, self.camera, (), self.title))
+            self.frames.append(draw(self.scene, self.camera, (), self.caption or self.title))
         self.count += 1
 
     def finish(self, lit_parts: Sequence[str], caption: str) -> None:
