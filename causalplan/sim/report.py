@@ -238,6 +238,16 @@ class SimulationReport:
             "mechanism": [requirement.as_dict() for requirement in self.requirements],
             "tolerances": dict(self.tolerances),
             "arm": self.arm,
-            "robot": self.robot,
             "timing_ms": {stage: round(seconds * 1000, 2) for stage, seconds in self.timing.items()},
+            **({"robot": self._robot_summary()} if self.robot else {}),
+        }
+
+    def _robot_summary(self) -> dict[str, object]:
+        """Return what the robot did overall: how long it moved, at what control rate, in how many motions."""
+        if self.trajectory is None:
+            return {"seconds": 0.0, "rate_hz": None, "motions": 0}
+        return {
+            "seconds": round(self.trajectory.seconds, 2),
+            "rate_hz": self.trajectory.rate_hz,
+            "motions": len(self.trajectory.segments),
         }
