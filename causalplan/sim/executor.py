@@ -233,20 +233,12 @@ def _specs(obj: AssemblyObject, part_id: str) -> str:
     return ", ".join(f"{c.kind} {c.spec}" for c in obj.part(part_id).connectors) or "no connectors"
 
 
-def layout(
-    obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...], gap: float = ROW_GAP
-) -> tuple[dict[str, Pose], Box]:
-    """Return where each part starts, and the bounds of the assembly the plan means to build.
-
-    The base stands at the origin; the other parts wait in a row behind where the assembly
-    will be (for the robot, in two rows, behind and in front, so that all are in its reach).
-    The designed bounds (every part at its seat, lights included) frame the camera.
-    """
+def designed_poses(obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...]) -> dict[str, Pose]:
+    """Return where the plan means each part it joins to end up: the base at the origin, the rest at their seats."""
     base = parts[obj.base]
-    homes = {
+    design = {
         obj.base: Pose((-(base.lower[0] + base.upper[0]) / 2, -(base.lower[1] + base.upper[1]) / 2, -base.lower[2]))
     }
-    design = {obj.base: homes[obj.base]}
     joints: list[Joint] = []
     for request in requests:
         pair = _connectors(obj, request, joints)
@@ -257,6 +249,20 @@ def layout(
         relative = mating_pose(parts[request.moving].frames[pair[0].id], parts[request.fixed].frames[pair[1].id])
         design[request.moving] = design[request.fixed] * relative
         joints.append(Joint(0, None, request.moving, pair[0].id, request.fixed, pair[1].id))
+    return design
+
+
+def layout(
+    obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...], gap: float = ROW_GAP
+) -> tuple[dict[str, Pose], Box]:
+    """Return where each part starts, and the bounds of the assembly the plan means to build.
+
+    The base stands at the origin; the other parts wait in a row behind where the assembly
+    will be (for the robot, in two rows, behind and in front, so that all are in its reach).
+    The designed bounds (every part at its seat, lights included) frame the camera.
+    """
+    design = designed_poses(obj, parts, requests)
+    homes = {obj.base: design[obj.base]}
     lower, upper = bounding_box(
         pose.apply(corner) for part, pose in design.items() for corner in corners(parts[part].drawn_bounds)
     )

@@ -1,0 +1,206 @@
+"""Fit probabilities measured in physics: many robot insertions of each fit with the part held a little off.
+
+For each fit of an object, the robot makes just that joint once: the fixed part stands where
+the assembly puts it (with the parts that hold it to the base), the moving part waits on the
+table, and the Panda fetches it, carries it and
+drives it home along the connector axis (``sim.robot``). The robot does not feel where the
+part sits in its fingers, so its commands are the same in every trial; what changes is the
+grasp: each trial moves the part in the gripper by a random offset (a normal distribution
+of ``noise_mm`` per axis) and turn (``noise_deg`` about a random axis). The trial then puts
+the part where those commands take it and measures how far its connector is from the seat
+across the axis (the push home takes up the error along it) and how tilted. It succeeds when
+both are within the fit's own tolerance (``tolerance_mm``/``tolerance_deg`` in the catalog,
+how forgiving the connector is: a thread less than a clip), else it fails ``misaligned``; a
+part more than the grasp tolerance off fails ``grasp_lost``, and when the robot cannot do the
+joint at all, every trial fails with the robot's code.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from causalplan.objects.model import AssemblyObject, Fit
+from causalplan.sim.checks import ALIGNMENT_TOLERANCE_DEG, ALIGNMENT_TOLERANCE_MM
+from causalplan.sim.executor import ROBOT_ROW_GAP, designed_poses, layout
+from causalplan.sim.geometry import Solid, solids
+from causalplan.sim.motions import MOTIONS, approach_path, approach_start
+from causalplan.sim.plan_steps import StepRequest
+from causalplan.sim.poses import Pose, about_axis, angle_between, dot, normalized, scale
+from causalplan.sim.report import Failure
+from causalplan.sim.robot import GRASP_TOLERANCE_DEG, GRASP_TOLERANCE_MM, Robot
+from causalplan.sim.robot_steps import bring, drive
+from causalplan.sim.scene import Scene
+
+DEFAULT_TRIALS = 200
+DEFAULT_NOISE_MM = 1.0
+DEFAULT_NOISE_DEG = 1.0
+CONFIDENCE = 0.95
+
+
+@dataclass(frozen=True)
+class FitEstimate:
+    """A fit's measured success rate, its 95% Wilson interval, and how the failed trials failed."""
+
+    fit: str
+    trials: int
+    successes: int
+    interval: tuple[float, float]
+    failures: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def probability(self) -> float:
+        return self.successes / self.trials
+
+    def as_dict(self) -> dict[str, object]:
+        """Return the JSON-ready form: id, trials, successes, probability, interval, failures."""
+        return {
+            "id": self.fit,
+            "trials": self.trials,
+            "successes": self.successes,
+            "probability": round(self.probability, 4),
+            "interval": [round(self.interval[0], 4), round(self.interval[1], 4)],
+            "failures": dict(sorted(self.failures.items(), key=lambda item: (-item[1], item[0]))),
+        }
+
+
+def wilson_interval(successes: int, trials: int) -> tuple[float, float]:
+    """Return the 95% Wilson score interval of a success rate (statsmodels' ``proportion_confint``)."""
+    from statsmodels.stats.proportion import proportion_confint
+
+    low, high = proportion_confint(successes, trials, alpha=1 - CONFIDENCE, method="wilson")
+    return float(low), float(high)
+
+
+def _noise(chance: random.Random, noise_mm: float, noise_deg: float) -> Pose:
+    """Return a random grasp error: an offset (metres) and a turn about a random axis."""
+    offset = tuple(chance.gauss(0.0, noise_mm / 1000) for _ in range(3))
+    axis = normalized(tuple(chance.gauss(0.0, 1.0) for _ in range(3)))  # type: ignore[arg-type]
+    angle = math.radians(chance.gauss(0.0, noise_deg)) if noise_deg > 0 else 0.0
+    return Pose(offset, about_axis(axis, angle))  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class _Joined:
+    """The robot's nominal run of one fit: where the gripper ended, and the grasp it believed in."""
+
+    gripper: Pose
+    believed: Pose
+    failure: str | None
+
+
+def _prerequisites(obj: AssemblyObject, fit: Fit) -> list[Fit]:
+    """Return fits that put the fit's fixed part in the assembly, from the base out (catalog order decides)."""
+    chain: list[Fit] = []
+    part = fit.fixed_part
+    while part != obj.base:
+        before = next(
+            (f for f in obj.fits if f.moving_part == part and not MOTIONS[f.primitive].touches_only and f not in chain),
+            None,
+        )
+        if before is None:
+            break
+        chain.insert(0, before)
+        part = before.fixed_part
+    return chain
+
+
+def _request(fit: Fit) -> StepRequest:
+    return StepRequest(fit.primitive, fit.moving_part, fit.fixed_part, fit.id)
+
+
+def _nominal_run(obj: AssemblyObject, fit: Fit, parts: dict[str, Solid]) -> tuple[_Joined, Pose]:
+    """Have the robot make the fit once, without noise, on the assembly it needs; return where its gripper ended.
+
+    The parts the fit needs in place (its fixed part and what holds it to the base) stand at
+    their seats; the moving part waits on the table. Also returns the fixed part's pose.
+    """
+    built = [_request(before) for before in _prerequisites(obj, fit)]
+    requests = (*built, _request(fit))
+    homes, _ = layout(obj, parts, requests, ROBOT_ROW_GAP)
+    seats = designed_poses(obj, parts, requests)
+    present = {obj.base, *(request.moving for request in built), fit.fixed_part}
+    scene_parts = {part: parts[part] for part in (*present, fit.moving_part)}
+    moving, fixed = parts[fit.moving_part], parts[fit.fixed_part]
+    motion = MOTIONS[fit.primitive]
+    fixed_pose = seats.get(fit.fixed_part, homes[fit.fixed_part])
+    with Scene(scene_parts, drawn=False) as scene:
+        for part in present:
+            scene.add_part(part, seats.get(part, homes[part]), dynamic=False)
+        scene.add_part(fit.moving_part, homes[fit.moving_part], dynamic=False)
+        path = approach_path(fixed_pose, moving.frames[fit.moving_connector], fixed.frames[fit.fixed_connector], motion)
+        scene.place(fit.moving_part, path(0.0))
+        direction = fixed_pose.turn(fixed.frames[fit.fixed_connector].axis)
+        start = approach_start(scene.bounds([fit.moving_part]), scene.bounds(present), direction)
+        scene.place(fit.moving_part, homes[fit.moving_part])
+        robot = Robot(scene)
+        robot.step = 1
+        failed = bring(robot, fit.moving_part, obj.part(fit.moving_part), motion, path, start, fit.fixed_part)
+        if failed is None:
+            failed = drive(robot, motion, path, start, 0.0, moving.name, fit.fixed_part)
+        if failed is not None or robot.held is None:
+            code = failed.failure.value if failed else Failure.GRASP_LOST.value
+            return _Joined(Pose(), Pose(), code), fixed_pose
+        return _Joined(robot.panda.gripper_pose(), robot.held.believed, None), fixed_pose
+
+
+def _trial(fit: Fit, parts: dict[str, Solid], joined: _Joined, noise: Pose, fixed_pose: Pose) -> str | None:
+    """Return how one noisy insertion failed, or None when the connector engaged."""
+    moved, turned = noise.position, 2 * math.acos(min(1.0, abs(noise.orientation[3])))
+    if math.sqrt(dot(moved, moved)) * 1000 > GRASP_TOLERANCE_MM or math.degrees(turned) > GRASP_TOLERANCE_DEG:
+        return Failure.GRASP_LOST.value
+    part_pose = joined.gripper * (joined.believed * noise).inverse()
+    moving_frame = parts[fit.moving_part].frames[fit.moving_connector]
+    fixed_frame = parts[fit.fixed_part].frames[fit.fixed_connector]
+    axis = fixed_pose.turn(fixed_frame.axis)
+    gap = [
+        a - b
+        for a, b in zip(part_pose.apply(moving_frame.position), fixed_pose.apply(fixed_frame.position), strict=True)
+    ]
+    along = dot(gap, axis)  # type: ignore[arg-type]
+    across = math.sqrt(max(0.0, dot(gap, gap) - along * along)) * 1000  # type: ignore[arg-type]
+    tilt = math.degrees(angle_between(part_pose.turn(moving_frame.axis), scale(axis, -1.0)))
+    tolerance_mm = fit.tolerance_mm if fit.tolerance_mm is not None else ALIGNMENT_TOLERANCE_MM
+    tolerance_deg = fit.tolerance_deg if fit.tolerance_deg is not None else ALIGNMENT_TOLERANCE_DEG
+    return None if across <= tolerance_mm and tilt <= tolerance_deg else Failure.MISALIGNED.value
+
+
+def estimate_fit(
+    obj: AssemblyObject,
+    fit: Fit,
+    trials: int = DEFAULT_TRIALS,
+    seed: int = 0,
+    noise_mm: float = DEFAULT_NOISE_MM,
+    noise_deg: float = DEFAULT_NOISE_DEG,
+) -> FitEstimate:
+    """Return the fit's success rate over ``trials`` noisy insertions (the same seed, the same numbers)."""
+    parts = solids(obj)
+    joined, fixed_pose = _nominal_run(obj, fit, parts)
+    failures: dict[str, int] = {}
+    if joined.failure is not None:
+        failures[joined.failure] = trials
+        return FitEstimate(fit.id, trials, 0, wilson_interval(0, trials), failures)
+    chance = random.Random(f"{seed}:{obj.id}:{fit.id}")
+    successes = 0
+    for _ in range(trials):
+        failed = _trial(fit, parts, joined, _noise(chance, noise_mm, noise_deg), fixed_pose)
+        if failed is None:
+            successes += 1
+        else:
+            failures[failed] = failures.get(failed, 0) + 1
+    return FitEstimate(fit.id, trials, successes, wilson_interval(successes, trials), failures)
+
+
+def estimate_fits(
+    obj: AssemblyObject,
+    trials: int = DEFAULT_TRIALS,
+    seed: int = 0,
+    noise_mm: float = DEFAULT_NOISE_MM,
+    noise_deg: float = DEFAULT_NOISE_DEG,
+    fit_ids: Sequence[str] = (),
+) -> list[FitEstimate]:
+    """Return the estimate of every fit of ``obj`` (or of ``fit_ids``), in catalog order."""
+    chosen = [fit for fit in obj.fits if not fit_ids or fit.id in fit_ids]
+    return [estimate_fit(obj, fit, trials, seed, noise_mm, noise_deg) for fit in chosen]
