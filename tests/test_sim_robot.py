@@ -84,7 +84,7 @@ def test_the_same_plan_gives_the_same_trajectory() -> None:
 
 
 def test_a_part_out_of_the_arms_reach_fails_unreachable_at_step_1() -> None:
-    bench = load_catalog([EXAMPLES / "robot"]).get("long_bench")
+    bench = load_catalog([EXAMPLES / "robot" / "catalog"]).get("long_bench")
     report = simulate_plan(bench, steps("insert peg bench peg_onto_bench"), render=RenderMode.NONE, robot=True)
     failed = report.failed_step
     assert failed is not None and failed.number == 1
@@ -93,7 +93,7 @@ def test_a_part_out_of_the_arms_reach_fails_unreachable_at_step_1() -> None:
 
 
 def test_a_seat_walled_in_fails_with_no_collision_free_path() -> None:
-    plate = load_catalog([EXAMPLES / "robot"]).get("walled_plate")
+    plate = load_catalog([EXAMPLES / "robot" / "catalog"]).get("walled_plate")
     report = simulate_plan(plate, steps("insert peg plate peg_onto_seat"), render=RenderMode.NONE, robot=True)
     failed = report.failed_step
     assert failed is not None and failed.number == 1

@@ -40,7 +40,7 @@ from causalplan.sim.report import (
 from causalplan.sim.robot import Robot
 from causalplan.sim.robot_steps import bring, drive, let_go, step_motions
 from causalplan.sim.scene import GROUND, Scene
-from causalplan.sim.video import VideoRecorder
+from causalplan.sim.video import VIDEO_SIZE, VideoRecorder
 
 ROW_GAP = 0.04
 """Metres between parts waiting on the table, and between them and the assembly."""
@@ -288,6 +288,7 @@ def simulate_plan(
     size: tuple[int, int] = DEFAULT_SIZE,
     robot: bool = False,
     video: bool = False,
+    video_size: tuple[int, int] = VIDEO_SIZE,
 ) -> SimulationReport:
     """Return the report of running ``steps`` on the target's object in a fresh headless PyBullet world.
 
@@ -295,7 +296,7 @@ def simulate_plan(
     when PyBullet cannot start. ``render`` picks the pictures (none, the final assembly, or a
     frame per step too); ``arm`` adds the Panda's reachability per step; ``robot`` has the
     Panda carry out every step (its motor commands are in the report's ``trajectory``), and
-    ``video`` films it doing so (the report's ``video`` frames).
+    ``video`` films it doing so (the report's ``video`` frames, ``video_size`` pixels).
     """
     obj = target.obj if isinstance(target, PlanningTask) else target
     requests = check_steps(steps, obj)
@@ -310,7 +311,7 @@ def simulate_plan(
             scene.add_part(part, pose, dynamic=part == obj.base)
         run = _Run(obj, scene, homes, {obj.base}, arm=Arm(scene) if arm else None)
         camera = Camera.around(scene, *design, size=size) if render is not RenderMode.NONE else None
-        recorder = VideoRecorder(scene, design, obj.name) if video else None
+        recorder = VideoRecorder(scene, design, obj.name, video_size) if video else None
         if robot:
             run.robot = Robot(scene, observe=recorder.observe if recorder else None)
         timing["scene"], clock = time.perf_counter() - clock, time.perf_counter()

@@ -42,6 +42,7 @@ class VideoRecorder:
     scene: Scene
     design: Box
     title: str
+    size: tuple[int, int] = VIDEO_SIZE
     frames: list[Picture] = field(default_factory=list)
     count: int = 0
     caption: str = ""
@@ -51,7 +52,7 @@ class VideoRecorder:
         table = self.scene.bounds(self.scene.bodies)
         lower = tuple(min(a, b, c) for a, b, c in zip(self.design[0], table[0], ROBOT_BOX[0], strict=True))
         upper = tuple(max(a, b, c) for a, b, c in zip(self.design[1], table[1], ROBOT_BOX[1], strict=True))
-        self.camera = Camera.around(self.scene, lower, upper, size=VIDEO_SIZE)  # type: ignore[arg-type]
+        self.camera = Camera.around(self.scene, lower, upper, size=self.size)  # type: ignore[arg-type]
 
     def observe(self) -> None:
         """Draw a frame when it is time for one."""
