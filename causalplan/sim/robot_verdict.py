@@ -1,0 +1,78 @@
+"""The robot's word on a plan, for callers above the simulator: transfer verdicts and the web service.
+
+``robot_video(obj, steps)`` films the Panda carrying out a plan (MP4 or GIF bytes) for the
+service's "Watch the robot"; ``robot_transfer_verdict(...)`` is ``transfer_verdict`` with the
+robot as the last judge: a plan that transfers on paper and in physics but that the robot
+cannot carry out fails with the reason ``robot_cannot_execute``, naming the step and the code.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+from causalplan.causal.diagnostics import Severity
+from causalplan.objects.model import AssemblyObject
+from causalplan.planners.result import PlanStep
+from causalplan.sim.executor import simulate_plan
+from causalplan.sim.plan_steps import StepRequest
+from causalplan.sim.report import RenderMode, SimulationReport
+from causalplan.sim.video import VIDEO_SIZE, encode
+from causalplan.transfer.verdict import Reason, TransferVerdict, Verdict, transfer_verdict
+
+if TYPE_CHECKING:
+    from causalplan.inputs import LoadedMapping, LoadedModel
+    from causalplan.objects.catalog import Catalog
+
+ROBOT_CANNOT_EXECUTE = "robot_cannot_execute"
+
+
+def robot_video(
+    obj: AssemblyObject,
+    steps: Sequence[StepRequest | PlanStep],
+    suffix: str = ".mp4",
+    size: tuple[int, int] = VIDEO_SIZE,
+) -> tuple[bytes, SimulationReport]:
+    """Return a film of the robot carrying out ``steps`` (".mp4" or ".gif" bytes) and the run's report."""
+    report = simulate_plan(obj, steps, render=RenderMode.NONE, robot=True, video=True, video_size=size)
+    return encode(report.video, suffix), report
+
+
+def robot_reason(report: SimulationReport) -> Reason | None:
+    """Return why the robot could not carry out the plan of ``report`` (None when it could)."""
+    failed = report.failed_step
+    if failed is None and report.produces_goal:
+        return None
+    if failed is None:
+        message = f"The robot carried out every step, but {report.explanation()}."
+        return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, report.unmet_requirements)
+    code = failed.failure.value if failed.failure else "failed"
+    message = f"The robot cannot carry out step {failed.number} ({failed.text}): {code}: {failed.message}."
+    return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, (f"step {failed.number}", code))
+
+
+def robot_transfer_verdict(
+    loaded_model: LoadedModel,
+    loaded_mapping: LoadedMapping,
+    catalog: Catalog,
+    planner: str = "auto",
+    time_limit: float | None = None,
+) -> TransferVerdict:
+    """Return ``transfer_verdict`` with the robot as the last judge (``decided_by`` "robot" when it fails).
+
+    ``time_limit`` None is the planner's own default.
+    """
+    if time_limit is None:
+        verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner)
+    else:
+        verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit)
+    if verdict.verdict is not Verdict.TRANSFERS or verdict.plan is None or verdict.test_object is None:
+        return verdict
+    report = simulate_plan(catalog.get(verdict.test_object), verdict.plan.steps, render=RenderMode.NONE, robot=True)
+    reason = robot_reason(report)
+    if reason is None:
+        return replace(verdict, simulation=report)
+    return replace(
+        verdict, verdict=Verdict.FAILS, decided_by="robot", reasons=(*verdict.reasons, reason), simulation=report
+    )
