@@ -331,12 +331,15 @@ def simulate_plan(
                 lit = _lit_parts(run, evaluate(obj, scene, run.joints))
                 caption = f"{number}/{len(requests)} {reports[-1].text} {reports[-1].status.value}"
                 frames.append(draw(scene, camera, lit, caption))
+        if run.robot is not None:
+            run.robot.step = len(requests)
+            if not reports or reports[-1].status is StepStatus.PASSED:
+                run.robot.go_home()
+            timing["robot_ik"] = run.robot.panda.ik_seconds
+            timing["robot_planning"] = run.robot.planning_seconds
         timing["steps"], clock = time.perf_counter() - clock, time.perf_counter()
         if run.arm is not None:
             run.arm.go_home()
-        if run.robot is not None and (not reports or reports[-1].status is StepStatus.PASSED):
-            run.robot.step = len(requests)
-            run.robot.go_home()
         stability, culprit = _settle(run, checks.FINAL_SETTLE_SECONDS)
         timing["settle"], clock = time.perf_counter() - clock, time.perf_counter()
         requirements = evaluate(obj, scene, run.joints)

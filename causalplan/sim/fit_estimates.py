@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import random
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -49,6 +50,8 @@ class FitEstimate:
     successes: int
     interval: tuple[float, float]
     failures: dict[str, int] = field(default_factory=dict)
+    timing: dict[str, float] = field(default_factory=dict, compare=False)
+    """Seconds of the robot's nominal run ("robot") and of the trials ("trials")."""
 
     @property
     def probability(self) -> float:
@@ -177,11 +180,14 @@ def estimate_fit(
 ) -> FitEstimate:
     """Return the fit's success rate over ``trials`` noisy insertions (the same seed, the same numbers)."""
     parts = solids(obj)
+    started = time.perf_counter()
     joined, fixed_pose = _nominal_run(obj, fit, parts)
+    timing = {"robot": time.perf_counter() - started}
     failures: dict[str, int] = {}
     if joined.failure is not None:
         failures[joined.failure] = trials
-        return FitEstimate(fit.id, trials, 0, wilson_interval(0, trials), failures)
+        return FitEstimate(fit.id, trials, 0, wilson_interval(0, trials), failures, {**timing, "trials": 0.0})
+    started = time.perf_counter()
     chance = random.Random(f"{seed}:{obj.id}:{fit.id}")
     successes = 0
     for _ in range(trials):
@@ -190,7 +196,8 @@ def estimate_fit(
             successes += 1
         else:
             failures[failed] = failures.get(failed, 0) + 1
-    return FitEstimate(fit.id, trials, successes, wilson_interval(successes, trials), failures)
+    timing["trials"] = time.perf_counter() - started
+    return FitEstimate(fit.id, trials, successes, wilson_interval(successes, trials), failures, timing)
 
 
 def estimate_fits(

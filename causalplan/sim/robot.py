@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import random
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -139,6 +140,8 @@ class Robot:
     panda: Panda = field(init=False)
     held: Held | None = None
     step: int = 0
+    planning_seconds: float = 0.0
+    """Time spent planning collision-free paths so far (the benchmark's breakdown)."""
     released: dict[str, Pose] = field(default_factory=dict)
     """Where the robot last let go of each part."""
     ignored: set[str] = field(default_factory=set)
@@ -280,7 +283,9 @@ class Robot:
         if goal is None:
             detail = f"every arm pose that puts the gripper {what} touches the {self._contact_at(reaching[0])}"
             return RobotFailure(Failure.NO_COLLISION_FREE_PATH, Check("robot", False, detail))
+        planned = time.perf_counter()
         path = plan_path(start, goal, self._is_clear, self.panda.lower, self.panda.upper)
+        self.planning_seconds += time.perf_counter() - planned
         self.panda.set(start)
         self._place_held()
         if path is None:
@@ -491,7 +496,9 @@ class Robot:
 
     def go_home(self) -> RobotFailure | None:
         """Return to the resting pose along a collision-free path."""
+        planned = time.perf_counter()
         path = plan_path(self.panda.configuration, HOME, self._is_clear, self.panda.lower, self.panda.upper)
+        self.planning_seconds += time.perf_counter() - planned
         if path is None:
             return RobotFailure(Failure.NO_COLLISION_FREE_PATH, Check("robot", False, "no collision-free path home"))
         self._command("retreat", "open", path[1:])
