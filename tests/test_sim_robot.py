@@ -7,14 +7,15 @@ from functools import cache
 
 import pytest
 
+from causalplan.errors import CatalogError
 from causalplan.objects.catalog import load_catalog
 from causalplan.sim import SimulationReport, simulate_plan
 from causalplan.sim.geometry import solids
+from causalplan.sim.grasps import grasp_of
 from causalplan.sim.panda import JOINT_NAMES
 from causalplan.sim.poses import difference
 from causalplan.sim.replay import replay
 from causalplan.sim.report import RenderMode, StepStatus
-from causalplan.sim.robot import grasp_of
 from causalplan.sim.trajectory import SEGMENT_KINDS, read_trajectory
 from tests.conftest import EXAMPLES, builtin_catalog
 from tests.sim_fixtures import CORRECT_PLANS, PEG_BOARD, TOY_CAR_PLAN, parsed_object, steps
@@ -127,3 +128,35 @@ def test_a_default_part_is_held_from_above_at_its_top() -> None:
     pose, width = found
     assert pose.position == pytest.approx((0.0, 0.0, 0.04))  # 10 mm below the top of a 50 mm peg
     assert width == pytest.approx(0.016)
+
+
+def test_a_grasp_beside_the_part_holds_nothing_and_the_grasp_is_lost() -> None:
+    text = PEG_BOARD.replace(
+        "  - id: thin_peg\n    name: thin peg\n",
+        "  - id: thin_peg\n    name: thin peg\n    grasp: {at: [0.06, 0, 0.04], fingers: [1, 0, 0]}\n",
+    )
+    report = simulate_plan(
+        parsed_object(text), steps("insert thin_peg board thin_peg_into_hole"), render=RenderMode.NONE, robot=True
+    )
+    failed = report.failed_step
+    assert failed is not None and failed.failure is not None
+    assert failed.failure.value == "grasp_lost"
+    assert "the grasp holds nothing" in failed.message
+
+
+@pytest.mark.parametrize(
+    ("grasp", "says"),
+    [
+        ("{at: [0, 0, 0.04], approach: [0, 0, 0]}", "the grasp's approach must not be [0, 0, 0]"),
+        ("{at: [0, 0, 0.04], fingers: [0, 0, 1]}", "the grasp's fingers must close at right angles to its approach"),
+        ("{at: [0, 0, 0.04], width: 0.2}", "less than or equal to 0.08"),
+        ("{approach: [0, 0, -1]}", "grasp > at: Field required"),
+    ],
+)
+def test_a_wrong_catalog_grasp_says_what_is_wrong(grasp: str, says: str) -> None:
+    text = PEG_BOARD.replace(
+        "  - id: thin_peg\n    name: thin peg\n", f"  - id: thin_peg\n    name: thin peg\n    grasp: {grasp}\n"
+    )
+    with pytest.raises(CatalogError) as raised:
+        parsed_object(text)
+    assert says in raised.value.message

@@ -18,13 +18,11 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-from causalplan.objects.model import Grasp, Part, Vector
+from causalplan.objects.model import Part
 from causalplan.sim.checks import PENETRATION_TOLERANCE_MM
-from causalplan.sim.geometry import Solid
+from causalplan.sim.grasps import FINGER_REACH, finger_gap, grasp_of
 from causalplan.sim.motion_planning import plan_path
 from causalplan.sim.panda import (
-    FINGER_BELOW_TARGET,
-    FINGER_GAP_OPEN,
     FINGER_JOINTS,
     FINGER_OPEN,
     HOME,
@@ -35,13 +33,7 @@ from causalplan.sim.panda import (
 from causalplan.sim.poses import (
     Pose,
     about_axis,
-    angle_between,
-    cross,
-    difference,
-    multiply,
-    rotate,
     scale,
-    shortest_arc,
 )
 from causalplan.sim.report import Check, Failure
 from causalplan.sim.scene import GROUND, Scene
@@ -55,13 +47,13 @@ LINE_STEP = 0.002
 """Metres between two commanded poses of a straight line."""
 SCREW_STEP = math.radians(10)
 """Largest wrist turn between two commanded poses of a screw."""
-GRASP_DEPTH = 0.01
-"""How far below a part's top the fingertips' middle holds it, by default."""
 GRASP_TOLERANCE_MM = 3.0
 GRASP_TOLERANCE_DEG = 5.0
-"""How far a part may sit from its grasp in the gripper before the grasp counts as lost."""
-CLOSE_POSITIONS = 10
+"""How far a part may sit from its grasp in the gripper before the grasp counts as lost (estimate-fits)."""
+CLOSE_POSITIONS = 20
 """Commands (at the control rate) the fingers take to close or open."""
+TOUCH = 0.0005
+"""Metres at which a closing finger counts as touching the part."""
 HELD = "held "
 """How a contact of the held part (rather than of the arm) is named."""
 IK_SEEDS: tuple[Configuration, ...] = (
@@ -71,41 +63,6 @@ IK_SEEDS: tuple[Configuration, ...] = (
 )
 RANDOM_SEEDS = 12
 """Further starting configurations for the IK (drawn once, from a fixed seed) when the first ones fail."""
-
-
-def _arrange(approach: Vector, fingers: Vector) -> Pose:
-    """Return the orientation that points the gripper along ``approach`` with fingers closing along ``fingers``."""
-    turn = shortest_arc((0.0, 0.0, 1.0), approach)
-    current = rotate(turn, (0.0, 1.0, 0.0))
-    angle = angle_between(current, fingers)
-    if sum(a * b for a, b in zip(cross(current, fingers), approach, strict=True)) < 0:
-        angle = -angle
-    return Pose(orientation=multiply(about_axis(approach, angle), turn))
-
-
-def grasp_of(part: Part, solid: Solid) -> tuple[Pose, float] | str:
-    """Return the gripper's pose in the part's frame and its closed finger gap, or why the part cannot be held."""
-    if part.grasp is not None:
-        grasp: Grasp = part.grasp
-        width = grasp.width
-        if width is None:
-            index = max(range(3), key=lambda i: abs(grasp.fingers[i]))
-            width = solid.upper[index] - solid.lower[index]
-        if width > FINGER_GAP_OPEN:
-            return f"its grasp is {width * 1000:.0f} mm across; the gripper opens {FINGER_GAP_OPEN * 1000:.0f} mm"
-        return Pose(grasp.position, _arrange(grasp.approach, grasp.fingers).orientation), width
-    (x0, y0, z0), (x1, y1, z1) = solid.lower, solid.upper
-    along_y = (y1 - y0) <= (x1 - x0)
-    width = (y1 - y0) if along_y else (x1 - x0)
-    if width > FINGER_GAP_OPEN:
-        return (
-            f"it is {width * 1000:.0f} mm across at its narrowest and the gripper opens "
-            f"{FINGER_GAP_OPEN * 1000:.0f} mm; give it a grasp in the catalog"
-        )
-    height = max(z1 - GRASP_DEPTH, z0 + FINGER_BELOW_TARGET + 0.001)
-    fingers = (0.0, 1.0, 0.0) if along_y else (1.0, 0.0, 0.0)
-    orientation = _arrange((0.0, 0.0, -1.0), fingers).orientation
-    return Pose(((x0 + x1) / 2, (y0 + y1) / 2, height), orientation), width
 
 
 @dataclass(frozen=True)
@@ -118,25 +75,22 @@ class RobotFailure:
 
 @dataclass
 class Held:
-    """The part in the gripper: the grasp the robot believes in, and where the part really sits."""
+    """The part in the gripper, and the grasp: the gripper's pose in the part's frame."""
 
     part: str
-    believed: Pose  # the gripper in the part's frame
-    actual: Pose
+    believed: Pose
 
 
 @dataclass
 class Robot:
     """A Panda building in a scene, writing what it does into ``trajectory``.
 
-    ``observe`` is called after every commanded position (a video draws frames from it);
-    ``grasp_noise`` moves every part in the gripper by that pose (fit-probability trials).
+    ``observe`` is called after every commanded position (a video draws frames from it).
     """
 
     scene: Scene
     trajectory: Trajectory = field(default_factory=Trajectory)
     observe: Callable[[], None] | None = None
-    grasp_noise: Pose | None = None
     panda: Panda = field(init=False)
     held: Held | None = None
     step: int = 0
@@ -160,7 +114,7 @@ class Robot:
 
     def _place_held(self) -> None:
         if self.held is not None:
-            self.scene.place(self.held.part, self.panda.gripper_pose() * self.held.actual.inverse())
+            self.scene.place(self.held.part, self.panda.gripper_pose() * self.held.believed.inverse())
 
     def _contact(self, allowed: frozenset[str] = frozenset(), with_held: bool = True) -> Contact | None:
         """Return the deepest touch of the arm (and its part) with anything else beyond tolerance, if any."""
@@ -205,9 +159,11 @@ class Robot:
             if self.observe is not None:
                 self.observe()
 
-    def _fingers(self, kind: str, gripper: Gripper, width: float) -> None:
-        """Close (or open) the fingers where the arm stands."""
+    def _fingers(self, kind: str, gripper: Gripper, width: float, on: str | None = None) -> None:
+        """Open the fingers, or close them to ``width`` (on the part ``on``: until both touch it)."""
         start, end = self.panda.fingers, FINGER_OPEN if gripper == "open" else max(0.0, width / 2)
+        if on is not None:
+            end = 0.0
         segment = Segment(self.step, kind, gripper)
         self.trajectory.segments.append(segment)
         for k in range(1, CLOSE_POSITIONS + 1):
@@ -215,6 +171,8 @@ class Robot:
             segment.positions.append(self.panda.configuration)
             if self.observe is not None:
                 self.observe()
+            if on is not None and finger_gap(self.scene, self.panda.body, on) <= TOUCH:
+                break
 
     # --- motions -----------------------------------------------------------------------------
 
@@ -381,7 +339,6 @@ class Robot:
         if isinstance(found, str):
             return RobotFailure(Failure.UNREACHABLE, Check("robot", False, f"the {name} cannot be grasped: {found}"))
         believed, width = found
-        actual = believed if self.grasp_noise is None else believed * self.grasp_noise
         grasp = self.scene.pose(part_id) * believed
         backed = grasp.translated(scale(grasp.turn((0.0, 0.0, 1.0)), -PREGRASP))
         self.ignored = {part_id}
@@ -393,14 +350,14 @@ class Robot:
             self.ignored = set()
         if failure is not None:
             return failure
-        self._fingers("grasp", "closed", width)
-        self.held = Held(part_id, believed, actual)
-        moved, turned = difference(believed, actual)
-        if moved * 1000 > GRASP_TOLERANCE_MM or math.degrees(turned) > GRASP_TOLERANCE_DEG:
-            detail = f"the {name} sits {moved * 1000:.1f} mm and {math.degrees(turned):.1f}° off its grasp"
+        self._fingers("grasp", "closed", width, on=part_id)
+        gap = finger_gap(self.scene, self.panda.body, part_id)
+        if gap > FINGER_REACH:
+            detail = f"the fingers closed {gap * 1000:.1f} mm from the {name}: the grasp holds nothing"
             return RobotFailure(
-                Failure.GRASP_LOST, Check("grasp", False, detail, round(moved * 1000, 2), GRASP_TOLERANCE_MM, "mm")
+                Failure.GRASP_LOST, Check("grasp", False, detail, round(gap * 1000, 2), FINGER_REACH * 1000, "mm")
             )
+        self.held = Held(part_id, believed)
         self._place_held()
         return None
 
@@ -474,7 +431,7 @@ class Robot:
         self.panda.set(turned)
         self._fingers("grasp", "closed", width)
         spin = Pose(orientation=about_axis((0.0, 0.0, 1.0), back))
-        self.held = Held(held.part, held.believed * spin, held.actual * spin)
+        self.held = Held(held.part, held.believed * spin)
         return None
 
     def release(self, retreat: bool = True, mate: str | None = None) -> RobotFailure | None:
