@@ -23,6 +23,7 @@ from causalplan.cli.common import (
     mark,
     print_json,
     print_plan,
+    progress_bar,
     say,
 )
 
@@ -141,7 +142,16 @@ def simulate(
                     print_plan(result)
                 exit_with(EXIT_NO_PLAN if result.status.is_final() else EXIT_UNDECIDED)
             steps = read_plan_steps([step.as_dict() for step in result.steps], target)
-        report = simulate_plan(target, steps, render=render, arm=arm, robot=robot, video=video is not None)
+        if video is None:
+            report = simulate_plan(target, steps, render=render, arm=arm, robot=robot)
+        else:
+            with progress_bar() as progress:
+                filming = progress.add_task("filming the robot", total=None)
+
+                def drawn(frames: int) -> None:
+                    progress.update(filming, description=f"filming the robot: {frames} frames")
+
+                report = simulate_plan(target, steps, render=render, arm=arm, robot=True, video=True, on_frame=drawn)
     except CausalPlanError as exc:
         fail(exc.code, exc.message)
     written: list[str] = []

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 from causalplan.objects.model import AssemblyObject, Connector
@@ -289,6 +289,7 @@ def simulate_plan(
     robot: bool = False,
     video: bool = False,
     video_size: tuple[int, int] = VIDEO_SIZE,
+    on_frame: Callable[[int], None] | None = None,
 ) -> SimulationReport:
     """Return the report of running ``steps`` on the target's object in a fresh headless PyBullet world.
 
@@ -296,7 +297,8 @@ def simulate_plan(
     when PyBullet cannot start. ``render`` picks the pictures (none, the final assembly, or a
     frame per step too); ``arm`` adds the Panda's reachability per step; ``robot`` has the
     Panda carry out every step (its motor commands are in the report's ``trajectory``), and
-    ``video`` films it doing so (the report's ``video`` frames, ``video_size`` pixels).
+    ``video`` films it doing so (the report's ``video`` frames, ``video_size`` pixels;
+    ``on_frame`` hears of every frame drawn).
     """
     obj = target.obj if isinstance(target, PlanningTask) else target
     requests = check_steps(steps, obj)
@@ -311,7 +313,7 @@ def simulate_plan(
             scene.add_part(part, pose, dynamic=part == obj.base)
         run = _Run(obj, scene, homes, {obj.base}, arm=Arm(scene) if arm else None)
         camera = Camera.around(scene, *design, size=size) if render is not RenderMode.NONE else None
-        recorder = VideoRecorder(scene, design, obj.name, video_size) if video else None
+        recorder = VideoRecorder(scene, design, obj.name, video_size, on_frame) if video else None
         if robot:
             run.robot = Robot(scene, observe=recorder.observe if recorder else None)
         timing["scene"], clock = time.perf_counter() - clock, time.perf_counter()

@@ -8,7 +8,7 @@ for a moment. ``encode`` writes the frames with imageio: MP4 through the ffmpeg 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from causalplan.errors import CausalPlanError
@@ -43,6 +43,8 @@ class VideoRecorder:
     design: Box
     title: str
     size: tuple[int, int] = VIDEO_SIZE
+    on_frame: Callable[[int], None] | None = None
+    """Called with the number of frames drawn so far, after each (a progress display)."""
     frames: list[Picture] = field(default_factory=list)
     count: int = 0
     caption: str = ""
@@ -58,6 +60,8 @@ class VideoRecorder:
         """Draw a frame when it is time for one."""
         if self.count % FRAME_EVERY == 0:
             self.frames.append(draw(self.scene, self.camera, (), self.caption or self.title))
+            if self.on_frame is not None:
+                self.on_frame(len(self.frames))
         self.count += 1
 
     def finish(self, lit_parts: Sequence[str], caption: str) -> None:
