@@ -31,7 +31,7 @@ from causalplan.sim.motions import MOTIONS, approach_path, approach_start
 from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.poses import Pose, about_axis, angle_between, dot, normalized, scale
 from causalplan.sim.report import Failure
-from causalplan.sim.robot import GRASP_TOLERANCE_DEG, GRASP_TOLERANCE_MM, Robot
+from causalplan.sim.robot import Robot
 from causalplan.sim.robot_steps import bring, drive
 from causalplan.sim.scene import Scene
 
@@ -39,6 +39,9 @@ DEFAULT_TRIALS = 200
 DEFAULT_NOISE_MM = 1.0
 DEFAULT_NOISE_DEG = 1.0
 CONFIDENCE = 0.95
+GRASP_TOLERANCE_MM = 3.0
+GRASP_TOLERANCE_DEG = 5.0
+"""How far a part may sit off its grasp in the gripper before the fingers lose it."""
 
 
 @dataclass(frozen=True)
@@ -87,10 +90,10 @@ def _noise(chance: random.Random, noise_mm: float, noise_deg: float) -> Pose:
 
 @dataclass(frozen=True)
 class _Joined:
-    """The robot's nominal run of one fit: where the gripper ended, and the grasp it believed in."""
+    """The robot's nominal run of one fit: where the gripper ended, and the grasp it held the part by."""
 
     gripper: Pose
-    believed: Pose
+    grasp: Pose
     failure: str | None
 
 
@@ -146,7 +149,7 @@ def _nominal_run(obj: AssemblyObject, fit: Fit, parts: dict[str, Solid]) -> tupl
         if failed is not None or robot.held is None:
             code = failed.failure.value if failed else Failure.GRASP_LOST.value
             return _Joined(Pose(), Pose(), code), fixed_pose
-        return _Joined(robot.panda.gripper_pose(), robot.held.believed, None), fixed_pose
+        return _Joined(robot.panda.gripper_pose(), robot.held.grasp, None), fixed_pose
 
 
 def _trial(fit: Fit, parts: dict[str, Solid], joined: _Joined, noise: Pose, fixed_pose: Pose) -> str | None:
@@ -154,7 +157,7 @@ def _trial(fit: Fit, parts: dict[str, Solid], joined: _Joined, noise: Pose, fixe
     moved, turned = noise.position, 2 * math.acos(min(1.0, abs(noise.orientation[3])))
     if math.sqrt(dot(moved, moved)) * 1000 > GRASP_TOLERANCE_MM or math.degrees(turned) > GRASP_TOLERANCE_DEG:
         return Failure.GRASP_LOST.value
-    part_pose = joined.gripper * (joined.believed * noise).inverse()
+    part_pose = joined.gripper * (joined.grasp * noise).inverse()
     moving_frame = parts[fit.moving_part].frames[fit.moving_connector]
     fixed_frame = parts[fit.fixed_part].frames[fit.fixed_connector]
     axis = fixed_pose.turn(fixed_frame.axis)

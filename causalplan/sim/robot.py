@@ -22,19 +22,8 @@ from causalplan.objects.model import Part
 from causalplan.sim.checks import PENETRATION_TOLERANCE_MM
 from causalplan.sim.grasps import FINGER_REACH, finger_gap, grasp_of
 from causalplan.sim.motion_planning import plan_path
-from causalplan.sim.panda import (
-    FINGER_JOINTS,
-    FINGER_OPEN,
-    HOME,
-    Configuration,
-    Contact,
-    Panda,
-)
-from causalplan.sim.poses import (
-    Pose,
-    about_axis,
-    scale,
-)
+from causalplan.sim.panda import FINGER_JOINTS, FINGER_OPEN, HOME, Configuration, Contact, Panda
+from causalplan.sim.poses import Pose, about_axis, scale
 from causalplan.sim.report import Check, Failure
 from causalplan.sim.scene import GROUND, Scene
 from causalplan.sim.trajectory import Gripper, Segment, Trajectory
@@ -47,9 +36,6 @@ LINE_STEP = 0.002
 """Metres between two commanded poses of a straight line."""
 SCREW_STEP = math.radians(10)
 """Largest wrist turn between two commanded poses of a screw."""
-GRASP_TOLERANCE_MM = 3.0
-GRASP_TOLERANCE_DEG = 5.0
-"""How far a part may sit from its grasp in the gripper before the grasp counts as lost (estimate-fits)."""
 CLOSE_POSITIONS = 20
 """Commands (at the control rate) the fingers take to close or open."""
 TOUCH = 0.0005
@@ -78,7 +64,7 @@ class Held:
     """The part in the gripper, and the grasp: the gripper's pose in the part's frame."""
 
     part: str
-    believed: Pose
+    grasp: Pose
 
 
 @dataclass
@@ -114,7 +100,7 @@ class Robot:
 
     def _place_held(self) -> None:
         if self.held is not None:
-            self.scene.place(self.held.part, self.panda.gripper_pose() * self.held.believed.inverse())
+            self.scene.place(self.held.part, self.panda.gripper_pose() * self.held.grasp.inverse())
 
     def _contact(self, allowed: frozenset[str] = frozenset(), with_held: bool = True) -> Contact | None:
         """Return the deepest touch of the arm (and its part) with anything else beyond tolerance, if any."""
@@ -338,8 +324,8 @@ class Robot:
         found = grasp_of(part, self.scene.solids[part_id])
         if isinstance(found, str):
             return RobotFailure(Failure.UNREACHABLE, Check("robot", False, f"the {name} cannot be grasped: {found}"))
-        believed, width = found
-        grasp = self.scene.pose(part_id) * believed
+        grasp_pose, width = found
+        grasp = self.scene.pose(part_id) * grasp_pose
         backed = grasp.translated(scale(grasp.turn((0.0, 0.0, 1.0)), -PREGRASP))
         self.ignored = {part_id}
         try:
@@ -357,7 +343,7 @@ class Robot:
             return RobotFailure(
                 Failure.GRASP_LOST, Check("grasp", False, detail, round(gap * 1000, 2), FINGER_REACH * 1000, "mm")
             )
-        self.held = Held(part_id, believed)
+        self.held = Held(part_id, grasp_pose)
         self._place_held()
         return None
 
@@ -375,9 +361,9 @@ class Robot:
         lifted = here.translated((0.0, 0.0, LIFT))
         failure = self._line("carry", "closed", line_poses(here, lifted), "lifting the part")
         if failure is None:
-            targets = [pose * held.believed for pose in then]
+            targets = [pose * held.grasp for pose in then]
             allowed = frozenset({mate}) if mate else frozenset()
-            failure = self._go("carry", "closed", part_pose * held.believed, what, targets, allowed)
+            failure = self._go("carry", "closed", part_pose * held.grasp, what, targets, allowed)
         return failure
 
     def follow(self, kind: str, part_poses: Sequence[Pose], what: str, mate: str) -> RobotFailure | None:
@@ -386,7 +372,7 @@ class Robot:
         The part may touch ``mate`` (it is being joined to it: the simulator's own path check judges that).
         """
         assert self.held is not None
-        targets = [pose * self.held.believed for pose in part_poses]
+        targets = [pose * self.held.grasp for pose in part_poses]
         return self._line(kind, "closed", targets, what, frozenset({mate}), with_held=False)
 
     def screw(self, part_poses: Sequence[Pose], what: str, mate: str) -> RobotFailure | None:
@@ -394,7 +380,7 @@ class Robot:
         index, regrasped = 0, False
         while index < len(part_poses):
             assert self.held is not None
-            targets = [pose * self.held.believed for pose in part_poses[index:]]
+            targets = [pose * self.held.grasp for pose in part_poses[index:]]
             failure, done = self._line_part("screw", "closed", targets, what, frozenset({mate}), with_held=False)
             index += done
             if failure is None:
@@ -431,7 +417,7 @@ class Robot:
         self.panda.set(turned)
         self._fingers("grasp", "closed", width)
         spin = Pose(orientation=about_axis((0.0, 0.0, 1.0), back))
-        self.held = Held(held.part, held.believed * spin)
+        self.held = Held(held.part, held.grasp * spin)
         return None
 
     def release(self, retreat: bool = True, mate: str | None = None) -> RobotFailure | None:
