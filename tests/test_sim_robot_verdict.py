@@ -46,6 +46,7 @@ def test_the_film_of_the_robot_is_an_mp4_or_a_gif_of_every_frame() -> None:
     assert frames.shape[1:] == (120, 160, 3) and len(frames) == len(report.video)
     gif, _ = robot_video(board, plan, ".gif", size=(160, 120))
     assert gif[:6] == b"GIF89a"
+    assert robot_video(board, plan, ".mp4", size=(160, 120))[0] is mp4  # one film per object and plan
 
 
 def test_the_last_frames_show_the_light_when_the_goal_is_produced() -> None:

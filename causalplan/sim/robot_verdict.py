@@ -10,15 +10,16 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import replace
+from functools import lru_cache
 from typing import TYPE_CHECKING
 
 from causalplan.causal.diagnostics import Severity
 from causalplan.objects.model import AssemblyObject
 from causalplan.planners.result import PlanStep
 from causalplan.sim.executor import simulate_plan
-from causalplan.sim.plan_steps import StepRequest
+from causalplan.sim.plan_steps import StepRequest, check_steps
 from causalplan.sim.report import RenderMode, SimulationReport
-from causalplan.sim.video import VIDEO_SIZE, encode
+from causalplan.sim.video import VIDEO_FORMATS, VIDEO_SIZE, VideoError, encode
 from causalplan.transfer.verdict import Reason, TransferVerdict, Verdict, transfer_verdict
 
 if TYPE_CHECKING:
@@ -28,13 +29,30 @@ if TYPE_CHECKING:
 ROBOT_CANNOT_EXECUTE = "robot_cannot_execute"
 
 
+VIDEO_CACHE_SIZE = 16
+"""Films kept per process: the robot and its plan are deterministic, so one film per object and plan."""
+
+
 def robot_video(
     obj: AssemblyObject,
     steps: Sequence[StepRequest | PlanStep],
     suffix: str = ".mp4",
     size: tuple[int, int] = VIDEO_SIZE,
 ) -> tuple[bytes, SimulationReport]:
-    """Return a film of the robot carrying out ``steps`` (".mp4" or ".gif" bytes) and the run's report."""
+    """Return a film of the robot carrying out ``steps`` (".mp4" or ".gif" bytes) and the run's report.
+
+    Films are cached per object, plan, format and size (the run is deterministic). Raises
+    PlanInputError for steps that do not belong to the object, VideoError for another format.
+    """
+    if suffix.lower() not in VIDEO_FORMATS:
+        raise VideoError(f"A video is written as {' or '.join(VIDEO_FORMATS)}, not '{suffix}'.")
+    return _filmed(obj, check_steps(steps, obj), suffix.lower(), size)
+
+
+@lru_cache(maxsize=VIDEO_CACHE_SIZE)
+def _filmed(
+    obj: AssemblyObject, steps: tuple[StepRequest, ...], suffix: str, size: tuple[int, int]
+) -> tuple[bytes, SimulationReport]:
     report = simulate_plan(obj, steps, render=RenderMode.NONE, robot=True, video=True, video_size=size)
     return encode(report.video, suffix), report
 
