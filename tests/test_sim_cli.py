@@ -170,6 +170,8 @@ def test_video_and_trajectory_need_the_robot_and_a_known_format(tmp_path: Path) 
     assert no_robot.exit_code == 2 and "need --robot" in no_robot.stderr
     avi = run("simulate", DESK_LAMP, "--robot", "--video", tmp_path / "lamp.avi")
     assert avi.exit_code == 2 and "writes .mp4 or .gif, not '.avi'" in avi.stderr
+    both = run("simulate", DESK_LAMP, "--robot", "--arm")
+    assert both.exit_code == 2 and "not both" in both.stderr
 
 
 def test_estimate_fits_reports_each_fit_with_its_interval_and_failures(tmp_path: Path) -> None:

@@ -116,6 +116,8 @@ def simulate(
     from causalplan.sim import RenderMode, read_plan_steps, simulate_plan
     from causalplan.sim.render import animation, strip
 
+    if arm and robot:
+        fail("invalid_option", "Use --robot (the Panda does the work) or --arm (it only checks its reach), not both.")
     if (trajectory or video) and not robot:
         fail("invalid_option", "--trajectory and --video need --robot (the robot's motions are what they record).")
     if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
