@@ -49,13 +49,14 @@ def estimate_fits_command(
 
     The Panda fetches the moving part, carries it and drives it home along the connector
     axis; in each trial the part sits in the gripper off by a random offset (--noise-mm per
-    axis) and turn (--noise-deg), and the trial succeeds when the connector still arrives
-    within the fit's own tolerance (a thread is stricter than a clip). Prints each fit's
-    success rate with its 95% Wilson interval and the commonest failure codes. For example:
+    axis) and turn (--noise-deg), follows the robot's commands, and succeeds when it does not
+    jam on the way and its connector still arrives within the fit's own tolerance (a thread
+    is stricter than a clip). Prints each fit's success rate with its 95% Wilson interval and
+    the commonest failure codes. For example:
 
+    \b
         causalplan estimate-fits desk_lamp --trials 500 --noise-mm 0.5 --out overlay.yaml
-
-    then `causalplan plan MODEL --planner mdp --catalog-overlay overlay.yaml` plans with them.
+        causalplan plan examples/paper/desk_lamp.yaml --planner mdp --catalog-overlay overlay.yaml
     """
     from causalplan.errors import CausalPlanError
     from causalplan.objects.overlay import overlay_data

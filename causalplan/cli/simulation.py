@@ -108,8 +108,11 @@ def simulate(
     its goal, 1 when not (or no plan is found), 2 for invalid input, 3 when the planner could
     not decide.
 
-    With --robot the Panda does the work and the report says, per step, what it did; for example
-    `causalplan simulate examples/paper/desk_lamp.yaml --robot --video lamp.mp4 --trajectory t.json`.
+    With --robot the Panda does the work and the report says, per step, what it did (and
+    which step it could not do: unreachable, no_collision_free_path, collision, grasp_lost):
+
+    \b
+        causalplan simulate examples/paper/desk_lamp.yaml --robot --video lamp.mp4 --trajectory t.json
     """
     from causalplan.errors import CausalPlanError
     from causalplan.planners.pipeline import plan_task
