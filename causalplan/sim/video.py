@@ -24,8 +24,8 @@ FRAME_EVERY = 5
 FRAMES_PER_SECOND = RATE_HZ // FRAME_EVERY
 HOLD_SECONDS = 2.0
 """How long the finished object stays on screen at the end."""
-ROBOT_BOX: Box = ((-0.65, -0.3, 0.0), (-0.2, 0.3, 0.8))
-"""Room the arm takes, which the camera shows too."""
+ROBOT_BOX: Box = ((-0.45, -0.1, 0.0), (-0.3, 0.1, 0.45))
+"""Part of the arm the camera shows too (its upper reaches may leave the picture)."""
 VIDEO_FORMATS = (".mp4", ".gif")
 
 
