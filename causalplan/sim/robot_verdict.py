@@ -57,6 +57,15 @@ def _filmed(
     return encode(report.video, suffix), report
 
 
+@lru_cache(maxsize=256)
+def robot_run(obj: AssemblyObject, steps: tuple[PlanStep | StepRequest, ...]) -> SimulationReport:
+    """Return the robot's run of ``steps`` on ``obj``, without pictures.
+
+    Deterministic, so cached: a batch judges the same plan on the same object many times.
+    """
+    return simulate_plan(obj, steps, render=RenderMode.NONE, robot=True)
+
+
 def robot_reason(report: SimulationReport) -> Reason | None:
     """Return why the robot could not carry out the plan of ``report`` (None when it could)."""
     failed = report.failed_step
@@ -87,7 +96,7 @@ def robot_transfer_verdict(
         verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit)
     if verdict.verdict is not Verdict.TRANSFERS or verdict.plan is None or verdict.test_object is None:
         return verdict
-    report = simulate_plan(catalog.get(verdict.test_object), verdict.plan.steps, render=RenderMode.NONE, robot=True)
+    report = robot_run(catalog.get(verdict.test_object), tuple(verdict.plan.steps))
     reason = robot_reason(report)
     if reason is None:
         return replace(verdict, simulation=report)
