@@ -158,3 +158,10 @@ CORRECT_PLANS: dict[str, tuple[StepRequest, ...]] = {
     ),
 }
 """The whole assembly of each of the paper's four objects, in an order that works."""
+
+TOY_CAR_PLAN = steps(
+    "insert wind_up_motor chassis motor_into_chassis",
+    "connect wheels wind_up_motor wheels_onto_axle",
+    "place sticker chassis sticker_onto_chassis",
+)
+"""The toy car (the tutorial object) built whole."""

@@ -129,3 +129,73 @@ def test_an_unwritable_picture_is_a_clear_error(tmp_path: Path) -> None:
     result = run("simulate", DESK_LAMP, "--png", tmp_path / "no_such_folder" / "lamp.png")
     assert result.exit_code == 2
     assert "output_not_writable" in result.stderr
+
+
+def test_the_robot_builds_the_lamp_and_writes_its_motor_commands(tmp_path: Path) -> None:
+    from causalplan.sim.trajectory import read_trajectory
+
+    commands = tmp_path / "trajectory.json"
+    code, data = run_json("simulate", DESK_LAMP, "--robot", "--trajectory", commands)
+    assert code == 0 and data["produces_goal"]
+    assert data["steps"][0]["robot"][:5] == ["transit", "grasp", "carry", "approach", "screw"]
+    assert data["robot"]["rate_hz"] == 50 and data["robot"]["seconds"] > 1
+    assert data["files"] == [str(commands)]
+    trajectory = read_trajectory(json.loads(commands.read_text()))
+    assert trajectory.seconds == data["robot"]["seconds"]
+
+
+def test_the_robot_report_says_what_the_robot_did_per_step() -> None:
+    result = run("simulate", DESK_LAMP, "--robot")
+    assert result.exit_code == 0
+    assert "robot: transit, grasp, carry, approach, screw, release" in result.stdout
+    assert "The robot moved for" in result.stdout
+
+
+def test_a_part_out_of_reach_fails_the_step_with_unreachable() -> None:
+    model = EXAMPLES / "robot" / "long_bench.yaml"
+    code, data = run_json("simulate", model, "--robot", "--catalog", EXAMPLES / "robot" / "catalog")
+    assert code == 1
+    assert data["steps"][0]["failure"] == "unreachable"
+
+
+def test_a_seat_walled_in_fails_the_step_with_no_collision_free_path() -> None:
+    model = EXAMPLES / "robot" / "walled_plate.yaml"
+    result = run("simulate", model, "--robot", "--catalog", EXAMPLES / "robot" / "catalog")
+    assert result.exit_code == 1
+    assert "FAILED[no_collision_free_path]" in result.stdout
+
+
+def test_video_and_trajectory_need_the_robot_and_a_known_format(tmp_path: Path) -> None:
+    no_robot = run("simulate", DESK_LAMP, "--video", tmp_path / "lamp.mp4")
+    assert no_robot.exit_code == 2 and "need --robot" in no_robot.stderr
+    avi = run("simulate", DESK_LAMP, "--robot", "--video", tmp_path / "lamp.avi")
+    assert avi.exit_code == 2 and "writes .mp4 or .gif, not '.avi'" in avi.stderr
+    both = run("simulate", DESK_LAMP, "--robot", "--arm")
+    assert both.exit_code == 2 and "not both" in both.stderr
+
+
+def test_estimate_fits_reports_each_fit_with_its_interval_and_failures(tmp_path: Path) -> None:
+    overlay = tmp_path / "overlay.yaml"
+    code, data = run_json("estimate-fits", "desk_lamp", "--trials", 50, "--seed", 3, "--out", overlay)
+    assert code == 0
+    assert [fit["id"] for fit in data["fits"]] == ["bulb_into_socket", "shade_onto_ring"]
+    for fit in data["fits"]:
+        assert set(fit) == {"id", "trials", "successes", "probability", "interval", "failures"}
+        assert fit["trials"] == 50 and fit["interval"][0] <= fit["probability"] <= fit["interval"][1]
+    planned = run("plan", DESK_LAMP, "--planner", "mdp", "--catalog-overlay", overlay)
+    thread = data["fits"][0]["probability"]
+    assert f"Success probability {thread:.4f}" in planned.stdout
+
+
+def test_estimate_fits_names_an_unknown_object_or_fit() -> None:
+    unknown = run("estimate-fits", "desk_lamb")
+    assert unknown.exit_code == 2 and "Did you mean 'desk_lamp'?" in unknown.stderr
+    no_fit = run("estimate-fits", "desk_lamp", "--fit", "glue")
+    assert no_fit.exit_code == 2 and "has no fit 'glue'" in no_fit.stderr
+
+
+def test_a_wrong_overlay_is_invalid_input(tmp_path: Path) -> None:
+    overlay = tmp_path / "overlay.yaml"
+    overlay.write_text("objects: {desk_lamp: {bulb_into_socket: {probability: 2}}}")
+    result = run("plan", DESK_LAMP, "--catalog-overlay", overlay)
+    assert result.exit_code == 2 and "probability 2 is not in (0, 1]" in result.stderr

@@ -11,7 +11,7 @@ One module per family of commands; `common` holds what they share. A new command
 
 import click
 
-from causalplan.cli import comparison, crowd, models, planning, serving, simulation, studies
+from causalplan.cli import comparison, crowd, fits, models, planning, serving, simulation, studies
 
 
 @click.group(
@@ -42,6 +42,7 @@ for command in (
     planning.planners,
     serving.serve,
     simulation.simulate,
+    fits.estimate_fits_command,
     models.objects,
     studies.analyze,
     crowd.consensus,

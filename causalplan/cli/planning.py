@@ -45,6 +45,11 @@ if TYPE_CHECKING:
 @click.option("--pddl-out", type=FILE, help="Also write domain.pddl and problem.pddl to this folder.")
 @click.option("--up-validate", is_flag=True, help="Also check the plan with unified-planning's plan validator.")
 @val_option
+@click.option(
+    "--catalog-overlay",
+    type=FILE,
+    help="Fit probabilities to use instead of the catalog's (the --out file of `causalplan estimate-fits`).",
+)
 @json_option
 @catalog_option
 def plan(
@@ -55,6 +60,7 @@ def plan(
     pddl_out: Path | None,
     up_validate: bool,
     val: bool,
+    catalog_overlay: Path | None,
     as_json: bool,
     catalog: tuple[Path, ...],
 ) -> None:
@@ -72,6 +78,13 @@ def plan(
 
     check_planner(planner)
     objects = catalog_from(catalog)
+    if catalog_overlay is not None:
+        from causalplan.objects.overlay import apply_overlay
+
+        try:
+            objects = apply_overlay(objects, catalog_overlay)
+        except CausalPlanError as exc:
+            fail(exc.code, exc.message)
     task = load_task(model, mapping, objects, as_json)
     try:
         result = plan_task(

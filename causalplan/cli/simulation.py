@@ -23,6 +23,7 @@ from causalplan.cli.common import (
     mark,
     print_json,
     print_plan,
+    progress_bar,
     say,
 )
 
@@ -45,12 +46,16 @@ def _print_simulation(report: SimulationReport) -> None:
             say(f"  {step.number}. {step.text} {failed}[{failure}]: {step.message}{reach}")
         else:
             say(f"  {step.number}. {step.text} {dim('not run')}")
+        if step.motions:
+            say("     " + dim("robot: " + ", ".join(step.motions)))
     drift = report.stability[0]
     say(f"Holds still while it settles: {mark(report.is_stable)} ({drift.detail}; tolerance {drift.tolerance:g} mm)")
     say("True mechanism on the simulated assembly:")
     for requirement in report.requirements:
         say(f"  {mark(requirement.met)} {requirement.says}: {requirement.detail}")
     say(f"Produces {report.goal}: {mark(report.produces_goal)}")
+    if report.trajectory is not None:
+        say(f"The robot moved for {report.trajectory.seconds:.1f} s ({len(report.trajectory.segments)} motions).")
 
 
 @click.command(short_help="Check a plan in a headless physics simulation, and draw it.")
@@ -66,6 +71,19 @@ def _print_simulation(report: SimulationReport) -> None:
 @click.option("--frames", type=FILE, help="Write a picture per step to this folder, and strip.png.")
 @click.option("--gif", type=FILE, help="Write the steps as an animated GIF.")
 @click.option("--arm", is_flag=True, help="Add a Panda arm and report whether it reaches each step's grasp poses.")
+@click.option(
+    "--robot",
+    is_flag=True,
+    help="Have the Franka Panda build the object: grasp each part, carry it along a collision-free path "
+    "(OMPL), drive it home along the connector axis, let go. A step it cannot do fails with "
+    "unreachable, no_collision_free_path, collision or grasp_lost.",
+)
+@click.option(
+    "--trajectory",
+    type=FILE,
+    help="With --robot: write the motor commands (time-stamped joint positions and gripper commands) as JSON.",
+)
+@click.option("--video", type=FILE, help="With --robot: film the robot at work, as V.mp4 or V.gif.")
 @json_option
 @catalog_option
 def simulate(
@@ -76,6 +94,9 @@ def simulate(
     frames: Path | None,
     gif: Path | None,
     arm: bool,
+    robot: bool,
+    trajectory: Path | None,
+    video: Path | None,
     as_json: bool,
     catalog: tuple[Path, ...],
 ) -> None:
@@ -86,12 +107,24 @@ def simulate(
     judged on the simulated assembly. Exit 0 when everything passes and the object produces
     its goal, 1 when not (or no plan is found), 2 for invalid input, 3 when the planner could
     not decide.
+
+    With --robot the Panda does the work and the report says, per step, what it did (and
+    which step it could not do: unreachable, no_collision_free_path, collision, grasp_lost):
+
+    \b
+        causalplan simulate examples/paper/desk_lamp.yaml --robot --video lamp.mp4 --trajectory t.json
     """
     from causalplan.errors import CausalPlanError
     from causalplan.planners.pipeline import plan_task
     from causalplan.sim import RenderMode, read_plan_steps, simulate_plan
     from causalplan.sim.render import animation, strip
 
+    if arm and robot:
+        fail("invalid_option", "Use --robot (the Panda does the work) or --arm (it only checks its reach), not both.")
+    if (trajectory or video) and not robot:
+        fail("invalid_option", "--trajectory and --video need --robot (the robot's motions are what they record).")
+    if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
+        fail("invalid_option", f"--video writes .mp4 or .gif, not '{video.suffix or video.name}'.")
     objects = catalog_from(catalog)
     task = load_task(model, mapping, objects, as_json)
     target = task.obj
@@ -114,7 +147,16 @@ def simulate(
                     print_plan(result)
                 exit_with(EXIT_NO_PLAN if result.status.is_final() else EXIT_UNDECIDED)
             steps = read_plan_steps([step.as_dict() for step in result.steps], target)
-        report = simulate_plan(target, steps, render=render, arm=arm)
+        if video is None:
+            report = simulate_plan(target, steps, render=render, arm=arm, robot=robot)
+        else:
+            with progress_bar() as progress:
+                filming = progress.add_task("filming the robot", total=None)
+
+                def drawn(frames: int) -> None:
+                    progress.update(filming, description=f"filming the robot: {frames} frames")
+
+                report = simulate_plan(target, steps, render=render, arm=arm, robot=True, video=True, on_frame=drawn)
     except CausalPlanError as exc:
         fail(exc.code, exc.message)
     written: list[str] = []
@@ -131,6 +173,14 @@ def simulate(
         if gif is not None:
             gif.write_bytes(animation(report.frames))
             written.append(str(gif))
+        if trajectory is not None and report.trajectory is not None:
+            trajectory.write_text(json.dumps(report.trajectory.as_dict()), encoding="utf-8")
+            written.append(str(trajectory))
+        if video is not None:
+            from causalplan.sim.video import encode
+
+            video.write_bytes(encode(report.video, video.suffix))
+            written.append(str(video))
     except OSError as exc:
         fail("output_not_writable", f"Cannot write {exc.filename}: {exc.strerror}.")
     if as_json:

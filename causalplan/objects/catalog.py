@@ -19,13 +19,13 @@ from causalplan.causal.labels import closest
 from causalplan.causal.validation import ObjectSummary
 from causalplan.errors import CatalogError, UnknownObjectError
 from causalplan.objects.cache import cached_object
-from causalplan.objects.model import AssemblyObject, Connector, Fit, Part, Requirement
+from causalplan.objects.model import AssemblyObject, Connector, Fit, Grasp, Part, Requirement
 from causalplan.objects.shapes import build_geometry, unit
 
 if TYPE_CHECKING:
     from pydantic import ValidationError
 
-    from causalplan.objects.schema import FitSchema, ObjectSchema
+    from causalplan.objects.schema import FitSchema, GraspSchema, ObjectSchema
 
 OBJECT_FILE_SUFFIXES = (".yaml", ".yml", ".json")
 
@@ -54,7 +54,21 @@ def _build_fit(schema: FitSchema, specs: dict[tuple[str, str], str]) -> Fit:
             schema.text.format(moving="", fixed="")
         except (KeyError, IndexError, ValueError) as exc:
             raise ValueError(f"fit '{schema.id}': text may only use {{moving}} and {{fixed}} ({exc})") from exc
-    return Fit(schema.id, schema.primitive, *moving, *fixed, schema.probability, blocks, schema.text)
+    return Fit(
+        schema.id,
+        schema.primitive,
+        *moving,
+        *fixed,
+        schema.probability,
+        blocks,
+        schema.text,
+        schema.tolerance_mm,
+        schema.tolerance_deg,
+    )
+
+
+def _grasp(schema: GraspSchema) -> Grasp:
+    return Grasp(schema.at, unit(schema.approach), unit(schema.fingers), schema.width)
 
 
 def build_object(schema: ObjectSchema) -> AssemblyObject:
@@ -96,6 +110,7 @@ def build_object(schema: ObjectSchema) -> AssemblyObject:
                 p.name,
                 tuple(Connector(c.id, c.kind, c.spec, c.at, unit(c.axis) if c.axis else None) for c in p.connectors),
                 build_geometry(p.geometry) if p.geometry else None,
+                _grasp(p.grasp) if p.grasp else None,
             )
             for p in schema.parts
         ),

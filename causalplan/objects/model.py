@@ -66,13 +66,32 @@ class Connector:
 
 
 @dataclass(frozen=True)
+class Grasp:
+    """Where the robot's gripper holds a part, in the part's frame.
+
+    ``position`` is the point between the fingertips, ``approach`` the direction the gripper
+    points (towards the part), ``fingers`` the direction the fingers close along, and
+    ``width`` how far apart the fingers are when closed on the part (metres).
+    """
+
+    position: Vector
+    approach: Vector = (0.0, 0.0, -1.0)
+    fingers: Vector = (0.0, 1.0, 0.0)
+    width: float | None = None
+
+
+@dataclass(frozen=True)
 class Part:
-    """One part of an object; ``geometry`` is optional (the simulator then uses a plain cylinder)."""
+    """One part of an object; ``geometry`` is optional (the simulator then uses a plain cylinder).
+
+    ``grasp`` is optional too: without it the robot holds the part from above, at its top.
+    """
 
     id: str
     name: str
     connectors: tuple[Connector, ...]
     geometry: Geometry | None = None
+    grasp: Grasp | None = None
 
 
 @dataclass(frozen=True)
@@ -92,6 +111,11 @@ class Fit:
     probability: float
     blocks: tuple[tuple[str, str], ...] = ()
     text: str | None = None
+    tolerance_mm: float | None = None
+    """How far off its seat the moving connector may arrive and still engage (a thread's lead-in, a
+    clip's chamfer); None: the simulator's alignment tolerance."""
+    tolerance_deg: float | None = None
+    """The same, as the angle between the connector axes."""
 
     def connectors(self) -> tuple[tuple[str, str], tuple[str, str]]:
         """Return the two (part, connector) pairs this fit joins."""

@@ -114,11 +114,34 @@ class ConnectorSchema(_Strict):
         return value
 
 
+class GraspSchema(_Strict):
+    """Where the robot's gripper holds the part, in the part's frame (metres)."""
+
+    at: Point = Field(description="The point between the fingertips.")
+    approach: Direction = Field(default=(0.0, 0.0, -1.0), description="The direction the gripper points.")
+    fingers: Direction = Field(default=(0.0, 1.0, 0.0), description="The direction the fingers close along.")
+    width: float | None = Field(default=None, ge=0.0, le=0.08, description="Finger gap when closed (metres).")
+
+    @model_validator(mode="after")
+    def _directions(self) -> Self:
+        for name in ("approach", "fingers"):
+            if sum(component * component for component in getattr(self, name)) < 1e-12:
+                raise ValueError(f"the grasp's {name} must not be [0, 0, 0]")
+        a, f = self.approach, self.fingers
+        cosine = (
+            abs(sum(x * y for x, y in zip(a, f, strict=True))) / (sum(x * x for x in a) * sum(y * y for y in f)) ** 0.5
+        )
+        if cosine > 0.01:
+            raise ValueError("the grasp's fingers must close at right angles to its approach")
+        return self
+
+
 class PartSchema(_Strict):
     id: str = Field(pattern=IDENTIFIER_PATTERN)
     name: str = Field(min_length=1, max_length=80, description="Display name, e.g. 'light bulb'.")
     connectors: list[ConnectorSchema] = Field(default_factory=list)
     geometry: GeometrySchema | None = Field(default=None, description="Optional; without it, a 5 cm cylinder.")
+    grasp: GraspSchema | None = Field(default=None, description="Optional; without it, held from above at the top.")
 
 
 class FitSchema(_Strict):
@@ -129,6 +152,12 @@ class FitSchema(_Strict):
     probability: float = Field(default=1.0, gt=0.0, le=1.0)
     blocks: list[str] = Field(default_factory=list, description="'part.connector's this fit covers.")
     text: str | None = Field(default=None, max_length=200, description="Sentence with {moving} and {fixed}.")
+    tolerance_mm: float | None = Field(
+        default=None, gt=0.0, le=50.0, description="How far off the seat the part may arrive and still engage (mm)."
+    )
+    tolerance_deg: float | None = Field(
+        default=None, gt=0.0, le=45.0, description="How tilted it may arrive and still engage (degrees)."
+    )
 
     @field_validator("primitive")
     @classmethod

@@ -4,8 +4,10 @@
 geometry, moves each part along its connector's axis into place (screwing, inserting,
 placing, igniting), checks every step (connectors fit, the path is clear, the weld is
 aligned, nothing falls), lets the assembly settle, evaluates the object's true mechanism on
-what was built, and can render a PNG, one frame per step, or a GIF. pybullet and numpy are
-imported only when a simulation runs.
+what was built, and can render a PNG, one frame per step, or a GIF. With ``robot=True``
+the Franka Panda does the work (``sim.robot``: OMPL paths, IK lines, regrasps), its motor
+commands come back as a trajectory, and it can be filmed (``sim.video``). pybullet and numpy
+are imported only when a simulation runs.
 """
 
 from causalplan.sim.executor import simulate_plan

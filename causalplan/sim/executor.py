@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 from causalplan.objects.model import AssemblyObject, Connector
@@ -37,10 +37,15 @@ from causalplan.sim.report import (
     StepReport,
     StepStatus,
 )
+from causalplan.sim.robot import Robot
+from causalplan.sim.robot_steps import bring, drive, let_go, step_motions
 from causalplan.sim.scene import GROUND, Scene
+from causalplan.sim.video import VIDEO_SIZE, VideoRecorder
 
 ROW_GAP = 0.04
 """Metres between parts waiting on the table, and between them and the assembly."""
+ROBOT_ROW_GAP = 0.12
+"""The same when the robot fetches them: room for its hand (21 cm across) between the parts."""
 
 
 @dataclass
@@ -54,6 +59,7 @@ class _Run:
     joints: list[Joint] = field(default_factory=list)
     attached_at: dict[str, int] = field(default_factory=dict)
     arm: Arm | None = None
+    robot: Robot | None = None
 
     def name(self, part_or_ground: str) -> str:
         return "table" if part_or_ground == GROUND else self.obj.part(part_or_ground).name
@@ -167,7 +173,18 @@ def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
     start = approach_start(scene.bounds([request.moving]), scene.bounds(run.assembled), direction)
     if run.arm is not None:
         step.reach = reach_step(run.arm, scene, request.moving, (path(start), path(0.0)))
+    robot = run.robot
+    if robot is not None:
+        robot.step = number
+        scene.place(request.moving, run.homes[request.moving])
+        failed = bring(robot, request.moving, obj.part(request.moving), motion, path, start, request.fixed)
+        if failed is not None:
+            return step.fail(failed.failure, failed.check)
     went = approach(scene, request.moving, path, start)
+    if robot is not None:
+        failed = drive(robot, motion, path, start, went.stopped, moving_name, request.fixed)
+        if failed is not None:
+            return step.fail(failed.failure, failed.check)
     if went.hit is not None and went.hit != request.fixed:
         blocked = checks.path_check(went.hit_depth * 1000, moving_name, run.name(went.hit), went.stopped * 1000)
         return step.fail(Failure.BLOCKED_PATH, blocked)
@@ -193,6 +210,10 @@ def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
             short = f"stopped against the {fixed_name} {went.stopped * 1000:.1f} mm before the seat"
             return step.fail(Failure.MISALIGNED, alignment, short if went.hit else "")
         step.passed(alignment)
+    if robot is not None:
+        failed = let_go(robot, motion, path, start, run.homes[request.moving], moving_name, request.fixed)
+        if failed is not None:
+            return step.fail(failed.failure, failed.check)
     if motion.touches_only:
         run.joints.append(joint)  # the flame touched the tip: lit
         scene.place(request.moving, run.homes[request.moving])  # and goes back to the table
@@ -212,19 +233,12 @@ def _specs(obj: AssemblyObject, part_id: str) -> str:
     return ", ".join(f"{c.kind} {c.spec}" for c in obj.part(part_id).connectors) or "no connectors"
 
 
-def _layout(
-    obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...]
-) -> tuple[dict[str, Pose], Box]:
-    """Return where each part starts, and the bounds of the assembly the plan means to build.
-
-    The base stands at the origin; the other parts wait in a row behind where the assembly
-    will be. The designed bounds (every part at its seat, lights included) frame the camera.
-    """
+def designed_poses(obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...]) -> dict[str, Pose]:
+    """Return where the plan means each part it joins to end up: the base at the origin, the rest at their seats."""
     base = parts[obj.base]
-    homes = {
+    design = {
         obj.base: Pose((-(base.lower[0] + base.upper[0]) / 2, -(base.lower[1] + base.upper[1]) / 2, -base.lower[2]))
     }
-    design = {obj.base: homes[obj.base]}
     joints: list[Joint] = []
     for request in requests:
         pair = _connectors(obj, request, joints)
@@ -235,17 +249,33 @@ def _layout(
         relative = mating_pose(parts[request.moving].frames[pair[0].id], parts[request.fixed].frames[pair[1].id])
         design[request.moving] = design[request.fixed] * relative
         joints.append(Joint(0, None, request.moving, pair[0].id, request.fixed, pair[1].id))
+    return design
+
+
+def layout(
+    obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...], gap: float = ROW_GAP
+) -> tuple[dict[str, Pose], Box]:
+    """Return where each part starts, and the bounds of the assembly the plan means to build.
+
+    The base stands at the origin; the other parts wait in a row behind where the assembly
+    will be (for the robot, in two rows, behind and in front, so that all are in its reach).
+    The designed bounds (every part at its seat, lights included) frame the camera.
+    """
+    design = designed_poses(obj, parts, requests)
+    homes = {obj.base: design[obj.base]}
     lower, upper = bounding_box(
         pose.apply(corner) for part, pose in design.items() for corner in corners(parts[part].drawn_bounds)
     )
     waiting = [part for part in parts if part != obj.base]
-    widths = [parts[part].upper[0] - parts[part].lower[0] for part in waiting]
-    left = -(sum(widths) + ROW_GAP * (len(waiting) - 1)) / 2
-    for part, width in zip(waiting, widths, strict=True):
-        solid = parts[part]
-        row = upper[1] + ROW_GAP - solid.lower[1]
-        homes[part] = Pose((left - solid.lower[0], row, -solid.lower[2]))
-        left += width + ROW_GAP
+    rows = [waiting[0::2], waiting[1::2]] if gap == ROBOT_ROW_GAP else [waiting]
+    for side, row_parts in zip((1.0, -1.0), rows, strict=False):
+        widths = [parts[part].upper[0] - parts[part].lower[0] for part in row_parts]
+        left = -(sum(widths) + gap * (len(row_parts) - 1)) / 2
+        for part, width in zip(row_parts, widths, strict=True):
+            solid = parts[part]
+            row = upper[1] + gap - solid.lower[1] if side > 0 else lower[1] - gap - solid.upper[1]
+            homes[part] = Pose((left - solid.lower[0], row, -solid.lower[2]))
+            left += width + gap
     return homes, (lower, upper)
 
 
@@ -256,25 +286,36 @@ def simulate_plan(
     render: RenderMode = RenderMode.FINAL,
     arm: bool = False,
     size: tuple[int, int] = DEFAULT_SIZE,
+    robot: bool = False,
+    video: bool = False,
+    video_size: tuple[int, int] = VIDEO_SIZE,
+    on_frame: Callable[[int], None] | None = None,
 ) -> SimulationReport:
     """Return the report of running ``steps`` on the target's object in a fresh headless PyBullet world.
 
     Raises PlanInputError when a step does not belong to the object, SimulatorUnavailableError
     when PyBullet cannot start. ``render`` picks the pictures (none, the final assembly, or a
-    frame per step too); ``arm`` adds the Panda's reachability per step.
+    frame per step too); ``arm`` adds the Panda's reachability per step; ``robot`` has the
+    Panda carry out every step (its motor commands are in the report's ``trajectory``), and
+    ``video`` films it doing so (the report's ``video`` frames, ``video_size`` pixels;
+    ``on_frame`` hears of every frame drawn).
     """
     obj = target.obj if isinstance(target, PlanningTask) else target
     requests = check_steps(steps, obj)
     timing: dict[str, float] = {}
     clock = time.perf_counter()
     parts = solids(obj)
-    homes, design = _layout(obj, parts, requests)
+    homes, design = layout(obj, parts, requests, ROBOT_ROW_GAP if robot else ROW_GAP)
     frames: list[Picture] = []
-    with Scene(parts, drawn=render is not RenderMode.NONE) as scene:
+    video = video and robot
+    with Scene(parts, drawn=render is not RenderMode.NONE or video) as scene:
         for part, pose in homes.items():
             scene.add_part(part, pose, dynamic=part == obj.base)
         run = _Run(obj, scene, homes, {obj.base}, arm=Arm(scene) if arm else None)
         camera = Camera.around(scene, *design, size=size) if render is not RenderMode.NONE else None
+        recorder = VideoRecorder(scene, design, obj.name, video_size, on_frame) if video else None
+        if robot:
+            run.robot = Robot(scene, observe=recorder.observe if recorder else None)
         timing["scene"], clock = time.perf_counter() - clock, time.perf_counter()
         if camera is not None and render is RenderMode.FRAMES:
             frames.append(draw(scene, camera, (), f"{obj.name}: the parts"))
@@ -283,11 +324,21 @@ def simulate_plan(
             if reports and reports[-1].status is not StepStatus.PASSED:
                 reports.append(_StepChecks(run, number, request).report(not_run=True))
                 continue
+            if recorder is not None:
+                recorder.caption = f"{number}/{len(requests)} {request.text(obj)}"
             reports.append(_step(run, number, request))
+            if run.robot is not None:
+                reports[-1] = replace(reports[-1], motions=step_motions(run.robot.trajectory, number))
             if camera is not None and render is RenderMode.FRAMES:
                 lit = _lit_parts(run, evaluate(obj, scene, run.joints))
                 caption = f"{number}/{len(requests)} {reports[-1].text} {reports[-1].status.value}"
                 frames.append(draw(scene, camera, lit, caption))
+        if run.robot is not None:
+            run.robot.step = len(requests)
+            if not reports or reports[-1].status is StepStatus.PASSED:
+                run.robot.go_home()
+            timing["robot_ik"] = run.robot.panda.ik_seconds
+            timing["robot_planning"] = run.robot.planning_seconds
         timing["steps"], clock = time.perf_counter() - clock, time.perf_counter()
         if run.arm is not None:
             run.arm.go_home()
@@ -303,6 +354,8 @@ def simulate_plan(
             if render is RenderMode.FRAMES:
                 frames.append(picture)
             timing["render"] = time.perf_counter() - clock
+        if recorder is not None:
+            recorder.finish(_lit_parts(run, requirements), f"{obj.name}: " + ("light" if produces_goal else "no goal"))
     return SimulationReport(
         object_id=obj.id,
         object_name=obj.name,
@@ -317,6 +370,10 @@ def simulate_plan(
         timing=timing,
         picture=picture,
         frames=tuple(frames),
+        robot=robot,
+        trajectory=run.robot.trajectory if run.robot else None,
+        placed=dict(run.robot.released) if run.robot else {},
+        video=tuple(recorder.frames) if recorder else (),
     )
 
 

@@ -10,6 +10,9 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from PIL import Image
 
+    from causalplan.sim.poses import Pose
+    from causalplan.sim.trajectory import Trajectory
+
 
 class RenderMode(StrEnum):
     """Which pictures a simulation draws."""
@@ -35,6 +38,10 @@ class Failure(StrEnum):
     NO_CONTACT = "no_contact"  # at its seat the part does not touch the part it joins
     MISALIGNED = "misaligned"  # the joined connectors are further apart (or more tilted) than allowed
     FALLS = "falls"  # a part moved or tilted while the assembly settled
+    UNREACHABLE = "unreachable"  # the robot: no IK solution for a grasp, approach or seat pose
+    NO_COLLISION_FREE_PATH = "no_collision_free_path"  # the robot: the motion planner found no path
+    COLLISION = "collision"  # the robot: an executed motion touched what it must not
+    GRASP_LOST = "grasp_lost"  # the robot: the part moved in the gripper beyond tolerance
 
 
 @dataclass(frozen=True)
@@ -86,6 +93,8 @@ class StepReport:
     failure: Failure | None = None
     message: str = ""
     reach: Reach | None = None
+    motions: tuple[str, ...] = ()
+    """What the robot did in this step (``robot`` runs only): transit, grasp, carry, ..."""
 
     def as_dict(self) -> dict[str, object]:
         """Return the step as a JSON-ready dict."""
@@ -102,6 +111,8 @@ class StepReport:
         }
         if self.reach is not None:
             result["reach"] = self.reach.as_dict()
+        if self.motions:
+            result["robot"] = list(self.motions)
         return result
 
 
@@ -156,9 +167,16 @@ class SimulationReport:
     produces_goal: bool
     tolerances: dict[str, float]
     arm: bool = False
+    robot: bool = False
     timing: dict[str, float] = field(default_factory=dict, compare=False)
     picture: Picture | None = field(default=None, compare=False)
     frames: tuple[Picture, ...] = field(default=(), compare=False)
+    trajectory: Trajectory | None = field(default=None, compare=False)
+    """The robot's motor commands (``robot`` runs only)."""
+    placed: dict[str, Pose] = field(default_factory=dict, compare=False)
+    """Where the robot let go of each part it joined (``robot`` runs only), before the assembly settled."""
+    video: tuple[Picture, ...] = field(default=(), compare=False)
+    """Frames of the robot at work (``robot`` runs with a video only)."""
 
     @property
     def failed_step(self) -> StepReport | None:
@@ -221,4 +239,15 @@ class SimulationReport:
             "tolerances": dict(self.tolerances),
             "arm": self.arm,
             "timing_ms": {stage: round(seconds * 1000, 2) for stage, seconds in self.timing.items()},
+            **({"robot": self._robot_summary()} if self.robot else {}),
+        }
+
+    def _robot_summary(self) -> dict[str, object]:
+        """Return what the robot did overall: how long it moved, at what control rate, in how many motions."""
+        if self.trajectory is None:
+            return {"seconds": 0.0, "rate_hz": None, "motions": 0}
+        return {
+            "seconds": round(self.trajectory.seconds, 2),
+            "rate_hz": self.trajectory.rate_hz,
+            "motions": len(self.trajectory.segments),
         }

@@ -1,0 +1,162 @@
+"""The Franka Panda from ``pybullet_data`` as the robot that builds the object: joints, IK, collisions.
+
+The arm is kinematic: its joints are set, not driven by motors, so the physics of the
+assembly (welds, settling) runs exactly as without it, and every motion repeats exactly.
+It never pushes anything in PyBullet's physics (its collision filter is off); whether it
+touches what it must not is measured with ``getClosestPoints``, which ignores that filter.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import time
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from causalplan.objects.model import Vector
+from causalplan.sim.poses import Pose, difference
+from causalplan.sim.scene import Scene, SimulatorUnavailableError
+
+PANDA_FILE = "franka_panda/panda.urdf"
+ROBOT_NAME = "franka_panda"
+JOINT_NAMES = tuple(f"panda_joint{number}" for number in range(1, 8))
+ARM_JOINTS = tuple(range(7))
+FINGER_JOINTS = (9, 10)
+HAND_LINKS = frozenset({7, 8, 9, 10, 11})
+"""Flange, hand, fingers and grasp target: the links that touch a held part."""
+BASE_LINKS = frozenset({-1, 0})
+"""The links that stand on the table."""
+GRASP_LINK = 11
+"""``panda_grasptarget``, between the fingertips."""
+FINGER_OPEN = 0.04
+"""Metres each finger opens: the fingers then leave a gap of about 72 mm."""
+FINGER_GAP_OPEN = 0.072
+FINGER_BELOW_TARGET = 0.0115
+"""How far the fingertips reach below the grasp target (metres)."""
+HOME = (0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785)
+BASE_POSITION: Vector = (-0.55, 0.0, 0.0)
+"""Where the arm stands, beside the object (which stands at the origin)."""
+IK_POSITION_TOLERANCE = 0.0005
+IK_ANGLE_TOLERANCE = math.radians(0.5)
+IK_ROUNDS = 40
+LIMIT_MARGIN = 0.02
+"""Radians kept clear of every joint limit (OMPL's bounds and the IK's)."""
+
+Configuration = tuple[float, ...]
+"""The seven arm joint angles, in radians."""
+
+
+@dataclass(frozen=True)
+class Contact:
+    """The deepest touch between the robot (or what it holds) and another body."""
+
+    robot_part: str
+    other: str
+    depth: float  # metres
+
+
+class Panda:
+    """A kinematic Franka Panda standing beside the table of a scene."""
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+        pb, client = scene.pb, scene.client
+        try:
+            data = importlib.import_module("pybullet_data")
+        except ImportError as exc:
+            raise SimulatorUnavailableError(f"The robot needs pybullet_data ({exc}).") from None
+        pb.setAdditionalSearchPath(data.getDataPath(), physicsClientId=client)
+        self.body: int = pb.loadURDF(PANDA_FILE, BASE_POSITION, useFixedBase=True, physicsClientId=client)
+        self.links = tuple(range(-1, pb.getNumJoints(self.body, physicsClientId=client)))
+        for link in self.links:
+            pb.setCollisionFilterGroupMask(self.body, link, 0, 0, physicsClientId=client)
+        limits = [pb.getJointInfo(self.body, joint, physicsClientId=client)[8:10] for joint in ARM_JOINTS]
+        self.lower = tuple(low + LIMIT_MARGIN for low, _ in limits)
+        self.upper = tuple(high - LIMIT_MARGIN for _, high in limits)
+        self.fingers = FINGER_OPEN
+        self.ik_seconds = 0.0
+        """Time spent in inverse kinematics so far (the benchmark's breakdown)."""
+        self.configuration: Configuration = HOME
+        self.set(HOME)
+
+    def set(self, configuration: Sequence[float], fingers: float | None = None) -> None:
+        """Put the arm at ``configuration`` (and the fingers at ``fingers`` metres each, if given)."""
+        pb, client = self.scene.pb, self.scene.client
+        for joint, angle in zip(ARM_JOINTS, configuration, strict=True):
+            pb.resetJointState(self.body, joint, angle, physicsClientId=client)
+        if fingers is not None:
+            self.fingers = fingers
+        for joint in FINGER_JOINTS:
+            pb.resetJointState(self.body, joint, self.fingers, physicsClientId=client)
+        self.configuration = tuple(float(angle) for angle in configuration)
+
+    def within_limits(self, configuration: Sequence[float]) -> bool:
+        return all(low <= angle <= high for angle, low, high in zip(configuration, self.lower, self.upper, strict=True))
+
+    def limit_margin(self, configuration: Sequence[float]) -> float:
+        """Return how close ``configuration`` comes to a joint limit, as a fraction of that joint's range."""
+        return min(
+            float(min(angle - low, high - angle) / (high - low))
+            for angle, low, high in zip(configuration, self.lower, self.upper, strict=True)
+        )
+
+    def gripper_pose(self) -> Pose:
+        """Return the grasp target's pose in the world, at the current configuration."""
+        state = self.scene.pb.getLinkState(
+            self.body, GRASP_LINK, computeForwardKinematics=True, physicsClientId=self.scene.client
+        )
+        return Pose(tuple(state[4]), tuple(state[5]))
+
+    def solve(self, target: Pose, seed: Sequence[float]) -> Configuration | None:
+        """Return joint angles that put the grasp target at ``target``, starting from ``seed``; None when none.
+
+        PyBullet's damped least squares runs from the current joints, so it is run in rounds
+        from its own last answer until the pose is met within a fraction of a millimetre. The
+        arm is left at ``seed`` either way.
+        """
+        pb, client = self.scene.pb, self.scene.client
+        started = time.perf_counter()
+        ranges = [high - low for low, high in zip(self.lower, self.upper, strict=True)]
+        self.set(seed)
+        answer: Configuration | None = None
+        for _ in range(IK_ROUNDS):
+            angles = pb.calculateInverseKinematics(
+                self.body,
+                GRASP_LINK,
+                target.position,
+                target.orientation,
+                lowerLimits=list(self.lower),
+                upperLimits=list(self.upper),
+                jointRanges=ranges,
+                restPoses=list(self.configuration),
+                maxNumIterations=100,
+                residualThreshold=1e-6,
+                physicsClientId=client,
+            )
+            self.set(tuple(angles[: len(ARM_JOINTS)]))
+            moved, turned = difference(self.gripper_pose(), target)
+            if moved <= IK_POSITION_TOLERANCE and turned <= IK_ANGLE_TOLERANCE:
+                answer = self.configuration
+                break
+        self.set(seed)
+        self.ik_seconds += time.perf_counter() - started
+        if answer is None or not self.within_limits(answer):
+            return None
+        return answer
+
+    def deepest_contact(
+        self, others: Iterable[int], ignore: frozenset[tuple[int, int]] = frozenset()
+    ) -> Contact | None:
+        """Return the deepest overlap between the arm's links and ``others`` (``ignore``: (link, body) pairs)."""
+        pb, client = self.scene.pb, self.scene.client
+        deepest: Contact | None = None
+        for other in others:
+            for point in pb.getClosestPoints(self.body, other, 0.0, physicsClientId=client):
+                link, depth = point[3], -point[8]
+                if (link, other) in ignore or (link in BASE_LINKS and other == self.scene.ground):
+                    continue
+                if deepest is None or depth > deepest.depth:
+                    name = pb.getJointInfo(self.body, max(link, 0), physicsClientId=client)[12].decode()
+                    deepest = Contact(name if link >= 0 else "panda_link0", self.scene.names.get(other, "?"), depth)
+        return deepest

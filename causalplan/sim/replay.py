@@ -1,0 +1,68 @@
+"""Replay a robot trajectory file in a fresh scene: the joint positions alone rebuild the assembly.
+
+Nothing of the original run is used but the object, the plan (which lays the parts out on
+the table) and the motor commands: when the gripper closes, the part between its fingers
+rides along; when it opens, the part stays where it is. The poses where parts were let go
+are what the replay returns, to compare with the run's ``SimulationReport.placed``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from causalplan.objects.model import AssemblyObject
+from causalplan.planners.result import PlanStep
+from causalplan.sim.executor import ROBOT_ROW_GAP, layout
+from causalplan.sim.geometry import solids
+from causalplan.sim.panda import FINGER_JOINTS, FINGER_OPEN, Panda
+from causalplan.sim.plan_steps import StepRequest, check_steps
+from causalplan.sim.poses import Pose
+from causalplan.sim.scene import Scene
+from causalplan.sim.trajectory import Trajectory
+
+GRASP_REACH = 0.02
+"""Metres from each finger within which a part counts as between the fingers."""
+
+
+def _part_between_fingers(scene: Scene, panda: Panda) -> str | None:
+    """Return the part both fingers are nearest to (each within ``GRASP_REACH``), if any."""
+    pb, client = scene.pb, scene.client
+    nearest: tuple[float, str] | None = None
+    for part, body in scene.bodies.items():
+        gaps = []
+        for finger in FINGER_JOINTS:
+            points = pb.getClosestPoints(panda.body, body, GRASP_REACH, linkIndexA=finger, physicsClientId=client)
+            gaps.append(min((point[8] for point in points), default=None))
+        if None in gaps:
+            continue
+        total = sum(gap for gap in gaps if gap is not None)
+        if nearest is None or total < nearest[0]:
+            nearest = (total, part)
+    return nearest[1] if nearest else None
+
+
+def replay(obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], trajectory: Trajectory) -> dict[str, Pose]:
+    """Return where each part was last let go when ``trajectory`` is played in a fresh scene."""
+    requests = check_steps(steps, obj)
+    parts = solids(obj)
+    homes, _ = layout(obj, parts, requests, ROBOT_ROW_GAP)
+    released: dict[str, Pose] = {}
+    with Scene(parts, drawn=False) as scene:
+        for part, pose in homes.items():
+            scene.add_part(part, pose, dynamic=False)
+        panda = Panda(scene)
+        held: tuple[str, Pose] | None = None
+        for segment in trajectory.segments:
+            panda.set(segment.positions[0], FINGER_OPEN if segment.gripper == "open" else 0.0)
+            if segment.gripper == "closed" and held is None:
+                between = _part_between_fingers(scene, panda)
+                if between is not None:
+                    held = (between, panda.gripper_pose().inverse() * scene.pose(between))
+            elif segment.gripper == "open" and held is not None:
+                released[held[0]] = scene.pose(held[0])
+                held = None
+            for position in segment.positions:
+                panda.set(position)
+                if held is not None:
+                    scene.place(held[0], panda.gripper_pose() * held[1])
+    return released

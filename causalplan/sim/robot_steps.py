@@ -1,0 +1,92 @@
+"""The robot's share of one plan step: bring the part to its approach, drive it home, let go.
+
+The executor (``sim.executor``) keeps its physics checks; around them these functions make
+the robot do the motions: before the approach, ``bring`` (transit, grasp, carry); after the
+simulator's approach found how far the part gets, ``drive`` (the straight line along the
+connector axis, split into approach and the primitive: screw, push or ignite); once the
+joint is made, ``let_go`` (release and retreat, or for a flame, carry it back to the table).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+from causalplan.objects.model import Part
+from causalplan.sim.motions import ENGAGEMENT, Motion
+from causalplan.sim.poses import Pose
+from causalplan.sim.robot import LIFT, LINE_STEP, SCREW_STEP, Robot, RobotFailure, line_poses
+from causalplan.sim.trajectory import Trajectory
+
+PUSH_DEPTH = 0.005
+"""Metres of the approach, at its end, that are the push home (insert, clip, place) or the touch (ignite)."""
+
+
+def bring(
+    robot: Robot, part_id: str, part: Part, motion: Motion, path: Callable[[float], Pose], start: float, mate: str
+) -> RobotFailure | None:
+    """Fetch the part from the table and carry it to the start of its approach."""
+    failure = robot.fetch(part_id, part)
+    if failure is None:
+        end = min(start, ENGAGEMENT) if motion.turns > 0 else 0.0
+        line = [path(d) for d in _distances(start, end, LINE_STEP)]
+        failure = robot.carry(path(start), f"at the approach of the {part.name}", line, mate)
+    return failure
+
+
+def _distances(start: float, end: float, step: float) -> list[float]:
+    count = max(1, math.ceil(abs(start - end) / step))
+    return [start + (end - start) * k / count for k in range(1, count + 1)]
+
+
+def drive(
+    robot: Robot, motion: Motion, path: Callable[[float], Pose], start: float, stopped: float, name: str, mate: str
+) -> RobotFailure | None:
+    """Move the held part from ``start`` to ``stopped`` (metres from the seat) along its path, by the primitive."""
+    what = f"driving the {name} home"
+    if motion.turns > 0:
+        thread = max(stopped, min(start, ENGAGEMENT))
+        failure = robot.follow("approach", [path(d) for d in _distances(start, thread, LINE_STEP)], what, mate)
+        if failure is not None or thread <= stopped:
+            return failure
+        spin_per_metre = 2 * math.pi * motion.turns / ENGAGEMENT
+        step = min(LINE_STEP, SCREW_STEP / spin_per_metre)
+        return robot.screw([path(d) for d in _distances(thread, stopped, step)], what, mate)
+    push = max(stopped, min(start, PUSH_DEPTH))
+    failure = robot.follow("approach", [path(d) for d in _distances(start, push, LINE_STEP)], what, mate)
+    if failure is not None or push <= stopped:
+        return failure
+    kind = "ignite" if motion.touches_only else "push"
+    return robot.follow(kind, [path(d) for d in _distances(push, stopped, LINE_STEP)], what, mate)
+
+
+def let_go(
+    robot: Robot, motion: Motion, path: Callable[[float], Pose], start: float, home: Pose, name: str, mate: str
+) -> RobotFailure | None:
+    """Release the joined part and retreat; a flame first goes back along its line and to its place on the table."""
+    if motion.touches_only:
+        back = robot.follow(
+            "ignite", [path(d) for d in _distances(0.0, start, LINE_STEP)], f"taking the {name} back", mate
+        )
+        if back is not None:
+            return back
+        above = home.translated((0.0, 0.0, LIFT))
+        failure = robot.carry(above, f"taking the {name} back to the table")
+        if failure is not None:
+            return failure
+        assert robot.held is not None
+        failure = robot.follow(
+            "carry", [pose for pose in line_poses(above, home)], f"putting the {name} down", "ground"
+        )
+        if failure is not None:
+            return failure
+    return robot.release(mate=None if motion.touches_only else mate)
+
+
+def step_motions(trajectory: Trajectory, step: int) -> tuple[str, ...]:
+    """Return the kinds of motion the robot made in ``step``, in order, repeats merged."""
+    kinds: list[str] = []
+    for segment in trajectory.segments:
+        if segment.step == step and segment.positions and (not kinds or kinds[-1] != segment.kind):
+            kinds.append(segment.kind)
+    return tuple(kinds)

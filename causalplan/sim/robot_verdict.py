@@ -1,0 +1,105 @@
+"""The robot's word on a plan, for callers above the simulator: transfer verdicts and the web service.
+
+``robot_video(obj, steps)`` films the Panda carrying out a plan (MP4 or GIF bytes) for the
+service's "Watch the robot"; ``robot_transfer_verdict(...)`` is ``transfer_verdict`` with the
+robot as the last judge: a plan that transfers on paper and in physics but that the robot
+cannot carry out fails with the reason ``robot_cannot_execute``, naming the step and the code.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+from functools import lru_cache
+from typing import TYPE_CHECKING
+
+from causalplan.causal.diagnostics import Severity
+from causalplan.objects.model import AssemblyObject
+from causalplan.planners.result import PlanStep
+from causalplan.sim.executor import simulate_plan
+from causalplan.sim.plan_steps import StepRequest, check_steps
+from causalplan.sim.report import RenderMode, SimulationReport
+from causalplan.sim.video import VIDEO_FORMATS, VIDEO_SIZE, VideoError, encode
+from causalplan.transfer.verdict import Reason, TransferVerdict, Verdict, transfer_verdict
+
+if TYPE_CHECKING:
+    from causalplan.inputs import LoadedMapping, LoadedModel
+    from causalplan.objects.catalog import Catalog
+
+ROBOT_CANNOT_EXECUTE = "robot_cannot_execute"
+
+
+VIDEO_CACHE_SIZE = 16
+"""Films kept per process: the robot and its plan are deterministic, so one film per object and plan."""
+
+
+def robot_video(
+    obj: AssemblyObject,
+    steps: Sequence[StepRequest | PlanStep],
+    suffix: str = ".mp4",
+    size: tuple[int, int] = VIDEO_SIZE,
+) -> tuple[bytes, SimulationReport]:
+    """Return a film of the robot carrying out ``steps`` (".mp4" or ".gif" bytes) and the run's report.
+
+    Films are cached per object, plan, format and size (the run is deterministic). Raises
+    PlanInputError for steps that do not belong to the object, VideoError for another format.
+    """
+    if suffix.lower() not in VIDEO_FORMATS:
+        raise VideoError(f"A video is written as {' or '.join(VIDEO_FORMATS)}, not '{suffix}'.")
+    return _filmed(obj, check_steps(steps, obj), suffix.lower(), size)
+
+
+@lru_cache(maxsize=VIDEO_CACHE_SIZE)
+def _filmed(
+    obj: AssemblyObject, steps: tuple[StepRequest, ...], suffix: str, size: tuple[int, int]
+) -> tuple[bytes, SimulationReport]:
+    report = simulate_plan(obj, steps, render=RenderMode.NONE, robot=True, video=True, video_size=size)
+    return encode(report.video, suffix), report
+
+
+@lru_cache(maxsize=256)
+def robot_run(obj: AssemblyObject, steps: tuple[PlanStep | StepRequest, ...]) -> SimulationReport:
+    """Return the robot's run of ``steps`` on ``obj``, without pictures.
+
+    Deterministic, so cached: a batch judges the same plan on the same object many times.
+    """
+    return simulate_plan(obj, steps, render=RenderMode.NONE, robot=True)
+
+
+def robot_reason(report: SimulationReport) -> Reason | None:
+    """Return why the robot could not carry out the plan of ``report`` (None when it could)."""
+    failed = report.failed_step
+    if failed is None and report.produces_goal:
+        return None
+    if failed is None:
+        message = f"The robot carried out every step, but {report.explanation()}."
+        return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, report.unmet_requirements)
+    code = failed.failure.value if failed.failure else "failed"
+    message = f"The robot cannot carry out step {failed.number} ({failed.text}): {code}: {failed.message}."
+    return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, (f"step {failed.number}", code))
+
+
+def robot_transfer_verdict(
+    loaded_model: LoadedModel,
+    loaded_mapping: LoadedMapping,
+    catalog: Catalog,
+    planner: str = "auto",
+    time_limit: float | None = None,
+) -> TransferVerdict:
+    """Return ``transfer_verdict`` with the robot as the last judge (``decided_by`` "robot" when it fails).
+
+    ``time_limit`` None is the planner's own default.
+    """
+    if time_limit is None:
+        verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner)
+    else:
+        verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit)
+    if verdict.verdict is not Verdict.TRANSFERS or verdict.plan is None or verdict.test_object is None:
+        return verdict
+    report = robot_run(catalog.get(verdict.test_object), tuple(verdict.plan.steps))
+    reason = robot_reason(report)
+    if reason is None:
+        return replace(verdict, simulation=report)
+    return replace(
+        verdict, verdict=Verdict.FAILS, decided_by="robot", reasons=(*verdict.reasons, reason), simulation=report
+    )

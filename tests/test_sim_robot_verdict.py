@@ -1,0 +1,63 @@
+"""The robot as the last judge of a transfer, and the film the service shows."""
+
+from __future__ import annotations
+
+import imageio.v3 as iio
+import numpy as np
+
+from causalplan.inputs import load_mapping, load_model
+from causalplan.objects.catalog import load_catalog
+from causalplan.sim.robot_verdict import ROBOT_CANNOT_EXECUTE, robot_transfer_verdict, robot_video
+from causalplan.transfer.verdict import Verdict, transfer_verdict
+from tests.conftest import EXAMPLES, builtin_catalog
+from tests.sim_fixtures import PEG_BOARD, parsed_object, steps
+
+ROBOT = EXAMPLES / "robot"
+
+
+def test_a_plan_the_robot_cannot_carry_out_fails_the_transfer_naming_the_step_and_code() -> None:
+    catalog = load_catalog([ROBOT / "catalog"])
+    model = load_model(ROBOT / "walled_plate.yaml", catalog)
+    mapping = load_mapping(ROBOT / "long_bench_mapping.yaml", catalog)
+    assert transfer_verdict(model, mapping, catalog).verdict is Verdict.TRANSFERS  # on paper and in physics
+    verdict = robot_transfer_verdict(model, mapping, catalog)
+    assert verdict.verdict is Verdict.FAILS and verdict.decided_by == "robot"
+    reason = verdict.reasons[-1]
+    assert reason.code == ROBOT_CANNOT_EXECUTE
+    assert reason.labels == ("step 1", "unreachable")
+    assert "cannot carry out step 1" in reason.message
+
+
+def test_a_plan_the_robot_carries_out_still_transfers() -> None:
+    catalog = builtin_catalog()
+    model = load_model(EXAMPLES / "paper" / "desk_lamp.yaml", catalog)
+    mapping = load_mapping(EXAMPLES / "paper" / "flashlight_mapping.yaml", catalog)
+    verdict = robot_transfer_verdict(model, mapping, catalog)
+    assert verdict.verdict is Verdict.TRANSFERS
+    assert verdict.simulation is not None and verdict.simulation.robot and verdict.simulation.produces_goal
+
+
+def test_the_film_of_the_robot_is_an_mp4_or_a_gif_of_every_frame() -> None:
+    board = parsed_object(PEG_BOARD)
+    plan = steps("insert thin_peg board thin_peg_into_hole")
+    mp4, report = robot_video(board, plan, ".mp4", size=(160, 120))
+    assert mp4[4:8] == b"ftyp" and report.produces_goal
+    frames = iio.imread(mp4, index=None, extension=".mp4")
+    assert frames.shape[1:] == (120, 160, 3) and len(frames) == len(report.video)
+    gif, _ = robot_video(board, plan, ".gif", size=(160, 120))
+    assert gif[:6] == b"GIF89a"
+    assert robot_video(board, plan, ".mp4", size=(160, 120))[0] is mp4  # one film per object and plan
+
+
+def test_the_last_frames_show_the_light_when_the_goal_is_produced() -> None:
+    lamp = builtin_catalog().get("desk_lamp")
+    _, report = robot_video(lamp, steps("screw light_bulb base_with_cables bulb_into_socket"), ".gif", size=(240, 180))
+
+    def glowing(index: int) -> int:
+        frame = report.video[index]
+        pixels = np.frombuffer(frame.rgb, dtype=np.uint8).reshape(frame.height, frame.width, 3).astype(int)
+        red, green, blue = pixels[..., 0], pixels[..., 1], pixels[..., 2]
+        return int(((red > 240) & (green > 215) & (blue < 200) & (red - blue > 60)).sum())
+
+    assert glowing(0) == 0
+    assert glowing(-1) > 20
