@@ -1,6 +1,6 @@
 """The object catalog: the built-in objects shipped as data files, plus a user's own folder.
 
-Checking an object file needs pydantic (~0.15 s to import with the schema); a file that was
+Checking an object file needs pydantic and its schema, which are slow to import; a file that was
 checked before is read back from ``objects.cache`` instead, keyed by its exact text.
 """
 

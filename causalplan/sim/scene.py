@@ -75,7 +75,7 @@ _servers = threading.local()
 def _fresh_client(pb: ModuleType) -> int:
     """Return this thread's headless physics server, with an empty world.
 
-    Starting a server costs about 20 ms, emptying one a few, so each thread (of each process:
+    Starting a server costs far more than emptying one, so each thread (of each process:
     a forked child starts its own) keeps one; a scene empties it when it closes.
     """
     client: int | None = getattr(_servers, "client", None)
