@@ -15,12 +15,13 @@ from causalplan.causal.diagnostics import Report
 from causalplan.inputs import LoadedModel
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep
-from causalplan.service.web import store
+from causalplan.service.web import arrivals, recruitment, store
 from causalplan.service.web.drawings import document_key
 from causalplan.service.web.errors import InvalidFormError
 from causalplan.service.web.forms import Form, read_form
 from causalplan.service.web.journey import Journey
 from causalplan.service.web.participation import picture_url, run_trial, submit_model
+from causalplan.service.web.recruitment import MTURK_FRAME_ORIGINS
 from causalplan.service.web.schemas import MAX_PART_TEXT, MAX_RULES_TEXT
 from causalplan.service.web.study import (
     Stage,
@@ -37,6 +38,7 @@ from causalplan.service.web.tutorial import (
     EXAMPLE_RULES,
     QUESTIONS,
     TUTORIAL_FUNCTIONS,
+    Question,
     TUTORIAL_OBJECT,
     practice_model,
     wrong_answers,
@@ -75,6 +77,25 @@ def _common(journey: Journey) -> dict[str, Any]:
         "training": journey.training,
         "tests": journey.tests,
     }
+
+
+def framing(journey: Journey) -> tuple[str, ...]:
+    """Return the origins that may frame the participant's pages (MTurk's, for MTurk workers)."""
+    arrival = journey.participant.arrival
+    return MTURK_FRAME_ORIGINS if arrival is not None and arrival.platform == "mturk" else ()
+
+
+def _page(request: Request, journey: Journey, template: str, status_code: int = 200, **context: Any) -> Response:
+    """Return one of the participant's pages (secret address; framed by their platform when it must be)."""
+    return render(
+        request,
+        template,
+        secret_url=True,
+        status_code=status_code,
+        framed_by=framing(journey),
+        **_common(journey),
+        **context,
+    )
 
 
 def check_view(check: LoadedModel, rules_text: str) -> dict[str, Any]:
@@ -118,12 +139,11 @@ def _tutorial_page(
     model = practice_model(tuple(rules), catalog)
     check = check_model(model, catalog, settings)
     car = catalog.get(TUTORIAL_OBJECT)
-    return render(
+    return _page(
         request,
+        journey,
         "tutorial.html",
-        secret_url=True,
         status_code=status_code,
-        **_common(journey),
         car=car,
         parts=_parts(car),
         functions=TUTORIAL_FUNCTIONS,
@@ -135,7 +155,16 @@ def _tutorial_page(
         check=check_view(check, rules_text) if rules_text.strip() else None,
         graph_url=graph_url(journey.participant.code, check, model.merged_document(), practice=True) if rules else None,
         feedback=feedback,
+        tries_left=_tries_left(journey),
     )
+
+
+def _tries_left(journey: Journey) -> int | None:
+    """Return how many tries of the comprehension check are left (None: no limit, or passed)."""
+    limit = journey.recruitment.comprehension_tries
+    if limit is None or journey.has_passed_comprehension():
+        return None
+    return max(0, limit - len(journey.tutorial_work().get("tries", [])))
 
 
 @router.get("/tutorial")
@@ -154,14 +183,32 @@ async def finish_tutorial(
     answers = {question.id: form.text(f"answer:{question.id}", "", max_length=40) for question in QUESTIONS}
     rules_text = form.text("rules", "", max_length=MAX_RULES_TEXT)
     journey.save_tutorial(rules_text, answers)
+    wrong = wrong_answers(answers)
+    if screened_out_by_comprehension(journey, answers, wrong):
+        tries = len(journey.tutorial_work().get("tries", []))
+        detail = f"not every comprehension question right within {tries} tries"
+        store.save(session, journey.participant, arrivals.exclusion(journey.participant, "comprehension", detail))
+        return _here(journey)
     rules, _ = rules_from_text(rules_text)
     practice_ok = bool(rules) and check_model(practice_model(tuple(rules), catalog), catalog, settings).is_valid
-    if wrong_answers(answers) or not practice_ok:
+    if wrong or not practice_ok:
         store.save(session, journey.participant)
         return _tutorial_page(request, journey, catalog, settings, feedback=True, status_code=422)
     journey.finish_tutorial()
     store.save(session, journey.participant)
     return _here(journey)
+
+
+def screened_out_by_comprehension(journey: Journey, answers: dict[str, str], wrong: list[Question]) -> bool:
+    """Count one try of the comprehension check; screen the participant out when the rule says so."""
+    if journey.has_passed_comprehension():
+        return False  # later tries (to fix the practice rules) no longer count
+    tries = journey.record_tutorial_try(answers, not wrong)
+    limit = journey.recruitment.comprehension_tries
+    if wrong and limit is not None and tries >= limit:
+        journey.screen_out()
+        return True
+    return False
 
 
 # -- step 1 ---------------------------------------------------------------------------------------------
@@ -180,12 +227,11 @@ def _step1_page(
     noted: str = "",
 ) -> Response:
     obj = journey.training[index]
-    return render(
+    return _page(
         request,
+        journey,
         "step1.html",
-        secret_url=True,
         status_code=status_code,
-        **_common(journey),
         index=index,
         obj=obj,
         parts=_parts(obj),
@@ -242,12 +288,11 @@ def _step2_page(
     model = journey.draft_model()
     rules_text = journey.rules_text()
     check = check_model(model, catalog, settings)
-    return render(
+    return _page(
         request,
+        journey,
         "step2.html",
-        secret_url=True,
         status_code=status_code,
-        **_common(journey),
         functions=[
             (obj, [(part, model.functions[obj.id].get(part.id, [])) for part in obj.parts]) for obj in journey.training
         ],
@@ -300,12 +345,11 @@ def _step3_page(
     stored = store.trial_of(session, journey.participant, obj.id)
     code = journey.participant.code
     result = stored.trial.result if stored is not None else None
-    return render(
+    return _page(
         request,
+        journey,
         "step3.html",
-        secret_url=True,
         status_code=status_code,
-        **_common(journey),
         index=index,
         obj=obj,
         parts=_parts(obj),
@@ -377,8 +421,68 @@ def next_test(journey: JourneyDep, number: Number, session: SessionDep) -> Respo
     if store.trial_of(session, journey.participant, journey.tests[index].id) is None:
         return _here(journey)  # nothing submitted yet for this object
     journey.finish_test(index)
-    store.save(session, journey.participant)
+    _save_progress(session, journey)
     return _here(journey)
+
+
+def _save_progress(session: SessionDep, journey: Journey) -> None:
+    """Store the participant's move; one who has just finished too fast is flagged, with the reason."""
+    seconds = journey.seconds_taken()
+    threshold = journey.recruitment.too_fast_seconds
+    flagged = journey.stage is Stage.DONE and seconds is not None and threshold is not None and seconds < threshold
+    if flagged:
+        detail = f"finished in {seconds:.0f} s; the experiment's threshold is {threshold} s"
+        store.save(session, journey.participant, arrivals.exclusion(journey.participant, "too_fast", detail))
+    else:
+        store.save(session, journey.participant)
+
+
+@router.get("/about")
+def about(request: Request, journey: JourneyDep) -> Response:
+    if not journey.may_open(Stage.ABOUT):
+        return _here(journey)
+    return _page(request, journey, "about.html", questions=journey.recruitment.questions())
+
+
+@router.post("/about")
+async def finish_about(request: Request, journey: JourneyDep, session: SessionDep) -> Response:
+    journey.require_open(Stage.ABOUT)
+    form = await read_form(request)
+    answers = {}
+    for question in journey.recruitment.questions():
+        answer = form.text(question.id, "", max_length=40).strip()
+        if question.choices and answer and answer not in question.choices:
+            raise InvalidFormError(f"'{question.text}' has no such answer.", details={"field": question.id})
+        if not question.choices and answer and not (answer.isdigit() and question.low <= int(answer) <= question.high):
+            raise InvalidFormError(
+                f"'{question.text}': write a whole number from {question.low} to {question.high}, or leave it empty.",
+                details={"field": question.id},
+            )
+        answers[question.id] = answer
+    journey.finish_demographics(answers)
+    _save_progress(session, journey)
+    return _here(journey)
+
+
+def _finish_page(request: Request, journey: Journey, template: str, outcome: str, **context: Any) -> Response:
+    """Return a page that ends the study, with the way back to the participant's platform."""
+    arrival = journey.participant.arrival
+    codes = {"completed": journey.recruitment.completion_code, "screened_out": journey.recruitment.screened_out_code}
+    back = (
+        recruitment.finish(arrival.platform, arrival.platform_session, arrival.submit_to, codes[outcome], outcome)
+        if arrival is not None
+        else None
+    )
+    return render(
+        request,
+        template,
+        secret_url=True,
+        framed_by=framing(journey),
+        posts_to=(back.origin,) if back is not None and back.fields else (),
+        **_common(journey),
+        back=back,
+        **context,
+    )
 
 
 @router.get("/done")
@@ -386,11 +490,18 @@ def done(request: Request, journey: JourneyDep, session: SessionDep) -> Response
     if not journey.may_open(Stage.DONE):
         return _here(journey)
     stored = store.trials_by_test(session, journey.participant)
-    return render(
+    return _finish_page(
         request,
+        journey,
         "done.html",
-        secret_url=True,
-        **_common(journey),
+        "completed",
         results=[(obj, stored[obj.id].trial.verdict if obj.id in stored else None) for obj in journey.tests],
         show_verdict=journey.design.show_verdict,
     )
+
+
+@router.get("/screened")
+def screened(request: Request, journey: JourneyDep) -> Response:
+    if not journey.may_open(Stage.SCREENED):
+        return _here(journey)
+    return _finish_page(request, journey, "screened.html", "screened_out")

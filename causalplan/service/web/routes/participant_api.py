@@ -150,7 +150,7 @@ def graph(
     if practice:
         rules, _ = rules_from_text(str(journey.tutorial_work().get("rules", "")))
         model = practice_model(tuple(rules), catalog)
-    elif journey.stage in (Stage.STEP3, Stage.DONE):
+    elif journey.participant.model_id is not None:  # step 2 is submitted: the model is fixed
         model = journey.submitted_model()
     else:
         model = journey.draft_model()
