@@ -141,7 +141,7 @@ def find_arrival(session: Session, experiment_id: uuid.UUID, visit: PlatformVisi
 
 
 def arrive(session: Session, experiment: ExperimentRecord, visit: PlatformVisit) -> ArrivalRecord:
-    """Return this visit's arrival: the one stored for its platform id, or a new one (the only record before consent)."""
+    """Return this visit's arrival: the one stored for its platform id, or a new one (all that precedes consent)."""
     found = find_arrival(session, experiment.id, visit)
     if found is not None:
         return found

@@ -18,6 +18,7 @@ from causalplan.service.responses import SafeJSONResponse, csv_bytes
 from causalplan.service.web import arrivals, store
 from causalplan.service.web.design import Design, read_design
 from causalplan.service.web.journey import Journey
+from causalplan.service.web.recruitment import Recruitment, read_quotas, read_recruitment
 from causalplan.service.web.results import (
     PARTICIPANT_COLUMNS,
     TRIAL_COLUMNS,
@@ -27,7 +28,6 @@ from causalplan.service.web.results import (
     transfer_rates,
     trial_dict,
 )
-from causalplan.service.web.recruitment import Recruitment, read_quotas, read_recruitment
 from causalplan.service.web.schemas import ExperimentIn, ExperimentOut, ParticipantOut, RecruitmentIn, RecruitmentOut
 from causalplan.studies.analysis import Analysis, analyse
 from causalplan.studies.trials import ExportError, trial_rows
@@ -93,6 +93,8 @@ def participant_out(participant: ParticipantRecord, catalog: Catalog, request: R
             "started_at": participant.started_at,
             "updated_at": participant.updated_at,
             "finished_at": participant.finished_at,
+            "platform": participant.arrival.platform if participant.arrival is not None else None,
+            "exclusion_reason": "; ".join(item.reason for item in participant.exclusions) or None,
         }
     )
 

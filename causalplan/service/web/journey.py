@@ -142,7 +142,7 @@ class Journey:
         self._save(work)
 
     def record_tutorial_try(self, answers: dict[str, str], all_correct: bool) -> int:
-        """Store one try of the comprehension check (its answers, whether all were right); return the number of tries."""
+        """Store one try of the comprehension check (answers, all right or not); return the number of tries."""
         work = self._work()
         tutorial = work.setdefault("tutorial", {})
         tries = tutorial.setdefault("tries", [])

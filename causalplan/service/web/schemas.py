@@ -143,6 +143,12 @@ class ParticipantOut(OutputModel):
     started_at: UtcDatetime | None
     updated_at: UtcDatetime | None
     finished_at: UtcDatetime | None
+    platform: str | None = Field(
+        description="prolific, mturk or direct for arrivals on the public link; null for made links."
+    )
+    exclusion_reason: str | None = Field(
+        description="Why the participant is excluded (comprehension, too_fast); null: included."
+    )
 
 
 class ParticipantsOut(OutputModel):

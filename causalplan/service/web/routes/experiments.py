@@ -122,7 +122,7 @@ def export(
     platform_ids: Annotated[
         Literal["plain", "hashed", "omit"],
         Query(
-            description="Crowd-platform ids (Prolific PID, MTurk workerId, ...): as stored, SHA-256 hashed, or left out."
+            description="Crowd-platform ids (Prolific PID, MTurk workerId, ...): as stored, SHA-256 hashed, or omitted."
         ),
     ] = "plain",
 ) -> Response:

@@ -38,8 +38,8 @@ from causalplan.service.web.tutorial import (
     EXAMPLE_RULES,
     QUESTIONS,
     TUTORIAL_FUNCTIONS,
-    Question,
     TUTORIAL_OBJECT,
+    Question,
     practice_model,
     wrong_answers,
 )
