@@ -14,8 +14,8 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Query, Request, Response
 from pydantic import ValidationError
 
-from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep, check_research_token
 from causalplan.service.db.models import ExperimentRecord
+from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep, check_research_token
 from causalplan.service.errors import InvalidRequestError, TooManyAttemptsError
 from causalplan.service.web import experiments, store
 from causalplan.service.web.auth import ResearchPageDep, sign_in, sign_out
