@@ -1,4 +1,4 @@
-"""Arrivals on the public link, on SQLite and on a real PostgreSQL: balanced assignment and quotas that hold in a race."""
+"""Arrivals on the public link (SQLite and PostgreSQL): balanced assignment, quotas that hold in a race."""
 
 from __future__ import annotations
 
