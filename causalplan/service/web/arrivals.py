@@ -214,3 +214,20 @@ def exclusion(participant: ParticipantRecord, reason: str, detail: str) -> Exclu
     return ExclusionRecord(
         id=uuid.uuid4(), participant_id=participant.id, reason=reason, detail=detail[:500], created_at=utc_now()
     )
+
+
+def arrival_counts(session: Session, experiment_id: uuid.UUID) -> dict[str, int]:
+    """Return how many arrived on the public link, and how many of them consented, declined or have not decided."""
+    with storage_errors(session):
+        rows = session.execute(
+            select(ArrivalRecord.consented, func.count())
+            .where(ArrivalRecord.experiment_id == experiment_id)
+            .group_by(ArrivalRecord.consented)
+        ).all()
+    found = {consented: int(number) for consented, number in rows}
+    return {
+        "arrived": sum(found.values()),
+        "consented": found.get(True, 0),
+        "declined": found.get(False, 0),
+        "undecided": found.get(None, 0),
+    }

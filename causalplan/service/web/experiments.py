@@ -190,6 +190,7 @@ def recruitment_out(session: Session, experiment: ExperimentRecord, request: Req
             **Recruitment.from_dict(experiment.recruitment).as_dict(),
             "public_link": public_link(request, experiment),
             "places": [vars(place) for place in arrivals.places(session, experiment)],
+            "arrivals": arrivals.arrival_counts(session, experiment.id),
         }
     )
 

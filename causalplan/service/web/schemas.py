@@ -85,6 +85,7 @@ class RecruitmentOut(OutputModel):
     demographics: list[str]
     public_link: str
     places: list[dict[str, Any]]
+    arrivals: dict[str, int] = Field(description="Arrived on the public link: in all, consented, declined, undecided.")
 
 
 class ConditionOut(OutputModel):
