@@ -147,6 +147,10 @@ def test_a_too_fast_finish_is_flagged_and_the_export_hides_or_hashes_platform_id
     post(client, f"/p/{code}/about", {"age": "29"})
     done = client.get(f"/p/{code}/done")
     assert 'href="https://app.prolific.com/submissions/complete?cc=DONE1"' in done.text
+    assert (
+        '<meta http-equiv="refresh" content="5;url=https://app.prolific.com/submissions/complete?cc=DONE1">'
+        in done.text
+    )
     (participant,) = exported(client, created["id"])["participants"]
     assert participant["excluded"] and participant["exclusion_reason"] == "too_fast"
     assert participant["platform"] == "prolific" and participant["platform_participant_id"] == "pid-fast"

@@ -34,6 +34,8 @@ MTURK_HOSTS = ("www.mturk.com", "workersandbox.mturk.com")
 MTURK_PREVIEW = "ASSIGNMENT_ID_NOT_AVAILABLE"
 """MTurk's ``assignmentId`` while a worker only previews the HIT."""
 PROLIFIC_COMPLETE = "https://app.prolific.com/submissions/complete"
+REDIRECT_SECONDS = 5
+"""A finished page sends the participant on to Prolific by itself after this long (or at the click)."""
 MAX_QUOTA = 100_000
 MAX_TOO_FAST_SECONDS = 24 * 3600
 MAX_TRIES = 10

@@ -481,6 +481,7 @@ def _finish_page(request: Request, journey: Journey, template: str, outcome: str
         posts_to=(back.origin,) if back is not None and back.fields else (),
         **_common(journey),
         back=back,
+        redirect_seconds=recruitment.REDIRECT_SECONDS,
         **context,
     )
 

@@ -15,7 +15,7 @@ from typing import Any
 from fastapi import APIRouter, Request, Response
 
 from causalplan.service.deps import SessionDep
-from causalplan.service.web import arrivals, store
+from causalplan.service.web import arrivals, recruitment, store
 from causalplan.service.web.errors import InvalidFormError
 from causalplan.service.web.forms import read_form
 from causalplan.service.web.recruitment import MTURK_FRAME_ORIGINS, Recruitment, finish, read_visit
@@ -30,7 +30,9 @@ def _page(request: Request, template: str, platform: str, status_code: int = 200
 
 
 def _full(request: Request, platform: str) -> Response:
-    return _page(request, "study_message.html", platform, kind="full", back=None)
+    return _page(
+        request, "study_message.html", platform, kind="full", back=None, redirect_seconds=recruitment.REDIRECT_SECONDS
+    )
 
 
 @router.get("")
@@ -79,6 +81,7 @@ def _declined(request: Request, arrival: Any, recruiting: Recruitment) -> Respon
         posts_to=(back.origin,) if back is not None and back.fields else (),
         kind="declined",
         back=back,
+        redirect_seconds=recruitment.REDIRECT_SECONDS,
     )
 
 
