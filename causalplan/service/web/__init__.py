@@ -28,6 +28,7 @@ def routers() -> list[APIRouter]:
     from causalplan.service.web import upkeep
     from causalplan.service.web.routes import (
         assets,
+        ending,
         experiments,
         participant,
         participant_api,
@@ -41,6 +42,7 @@ def routers() -> list[APIRouter]:
         assets.router,
         study_link.router,
         participant.router,
+        ending.router,
         participant_api.router,
         research.router,
         experiments.router,

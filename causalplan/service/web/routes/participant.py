@@ -7,22 +7,24 @@ A page that is closed (finished, or not reached yet) sends the participant to wh
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Any
 
-from fastapi import APIRouter, Depends, Path, Request, Response
+from fastapi import APIRouter, Request, Response
 
 from causalplan.causal.diagnostics import Report
 from causalplan.inputs import LoadedModel
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep
-from causalplan.service.web import arrivals, recruitment, store
+from causalplan.service.web import store
 from causalplan.service.web.drawings import document_key
 from causalplan.service.web.errors import InvalidFormError
 from causalplan.service.web.forms import Form, read_form
 from causalplan.service.web.journey import Journey
 from causalplan.service.web.participation import picture_url, run_trial, submit_model
-from causalplan.service.web.recruitment import MTURK_FRAME_ORIGINS
+from causalplan.service.web.routes.ending import save_progress
+from causalplan.service.web.routes.journeys import JourneyDep, Number, here, page
 from causalplan.service.web.schemas import MAX_PART_TEXT, MAX_RULES_TEXT
+from causalplan.service.web.screening import comprehension_try
 from causalplan.service.web.study import (
     Stage,
     check_functions,
@@ -33,69 +35,23 @@ from causalplan.service.web.study import (
     rules_from_text,
     unusable_label_notes,
 )
-from causalplan.service.web.templating import PageRoute, redirect, render
+from causalplan.service.web.templating import PageRoute, redirect
 from causalplan.service.web.tutorial import (
     EXAMPLE_RULES,
     QUESTIONS,
     TUTORIAL_FUNCTIONS,
     TUTORIAL_OBJECT,
-    Question,
     practice_model,
     wrong_answers,
 )
 
 router = APIRouter(prefix="/p/{code}", route_class=PageRoute, include_in_schema=False)
 
-Code = Annotated[str, Path(max_length=64)]
-Number = Annotated[int, Path(ge=1, le=100)]
-
-
-def get_journey(code: Code, session: SessionDep, catalog: CatalogDep) -> Journey:
-    return Journey.of(store.participant_by_code(session, code), catalog)
-
-
-JourneyDep = Annotated[Journey, Depends(get_journey)]
-
-
-def _here(journey: Journey) -> Response:
-    return redirect(f"/p/{journey.participant.code}/{journey.current_page()}")
-
 
 def _parts(obj: AssemblyObject) -> list[dict[str, str]]:
     return [
         {"id": part.id, "name": part.name, "picture": f"/web/pictures/{obj.id}/{part.id}.png"} for part in obj.parts
     ]
-
-
-def _common(journey: Journey) -> dict[str, Any]:
-    """Return what every participant page shows: the code, where they are, the steps and objects."""
-    return {
-        "code": journey.participant.code,
-        "journey": journey,
-        "stage": journey.stage.value,
-        "goal": journey.goal,
-        "training": journey.training,
-        "tests": journey.tests,
-    }
-
-
-def framing(journey: Journey) -> tuple[str, ...]:
-    """Return the origins that may frame the participant's pages (MTurk's, for MTurk workers)."""
-    arrival = journey.participant.arrival
-    return MTURK_FRAME_ORIGINS if arrival is not None and arrival.platform == "mturk" else ()
-
-
-def _page(request: Request, journey: Journey, template: str, status_code: int = 200, **context: Any) -> Response:
-    """Return one of the participant's pages (secret address; framed by their platform when it must be)."""
-    return render(
-        request,
-        template,
-        secret_url=True,
-        status_code=status_code,
-        framed_by=framing(journey),
-        **_common(journey),
-        **context,
-    )
 
 
 def check_view(check: LoadedModel, rules_text: str) -> dict[str, Any]:
@@ -118,7 +74,7 @@ def graph_url(code: str, check: LoadedModel, document: dict[str, Any], practice:
 
 @router.get("", summary="Where the participant is")
 def current(journey: JourneyDep) -> Response:
-    return _here(journey)
+    return here(journey)
 
 
 # -- tutorial ---------------------------------------------------------------------------------------------
@@ -139,7 +95,7 @@ def _tutorial_page(
     model = practice_model(tuple(rules), catalog)
     check = check_model(model, catalog, settings)
     car = catalog.get(TUTORIAL_OBJECT)
-    return _page(
+    return page(
         request,
         journey,
         "tutorial.html",
@@ -170,7 +126,7 @@ def _tries_left(journey: Journey) -> int | None:
 @router.get("/tutorial")
 def tutorial(request: Request, journey: JourneyDep, catalog: CatalogDep, settings: SettingsDep) -> Response:
     if not journey.may_open(Stage.TUTORIAL):
-        return _here(journey)
+        return here(journey)
     return _tutorial_page(request, journey, catalog, settings)
 
 
@@ -184,11 +140,10 @@ async def finish_tutorial(
     rules_text = form.text("rules", "", max_length=MAX_RULES_TEXT)
     journey.save_tutorial(rules_text, answers)
     wrong = wrong_answers(answers)
-    if screened_out_by_comprehension(journey, answers, wrong):
-        tries = len(journey.tutorial_work().get("tries", []))
-        detail = f"not every comprehension question right within {tries} tries"
-        store.save(session, journey.participant, arrivals.exclusion(journey.participant, "comprehension", detail))
-        return _here(journey)
+    excluded = comprehension_try(journey, answers, not wrong)
+    if excluded is not None:
+        store.save(session, journey.participant, excluded)
+        return here(journey)
     rules, _ = rules_from_text(rules_text)
     practice_ok = bool(rules) and check_model(practice_model(tuple(rules), catalog), catalog, settings).is_valid
     if wrong or not practice_ok:
@@ -196,19 +151,7 @@ async def finish_tutorial(
         return _tutorial_page(request, journey, catalog, settings, feedback=True, status_code=422)
     journey.finish_tutorial()
     store.save(session, journey.participant)
-    return _here(journey)
-
-
-def screened_out_by_comprehension(journey: Journey, answers: dict[str, str], wrong: list[Question]) -> bool:
-    """Count one try of the comprehension check; screen the participant out when the rule says so."""
-    if journey.has_passed_comprehension():
-        return False  # later tries (to fix the practice rules) no longer count
-    tries = journey.record_tutorial_try(answers, not wrong)
-    limit = journey.recruitment.comprehension_tries
-    if wrong and limit is not None and tries >= limit:
-        journey.screen_out()
-        return True
-    return False
+    return here(journey)
 
 
 # -- step 1 ---------------------------------------------------------------------------------------------
@@ -227,7 +170,7 @@ def _step1_page(
     noted: str = "",
 ) -> Response:
     obj = journey.training[index]
-    return _page(
+    return page(
         request,
         journey,
         "step1.html",
@@ -246,7 +189,7 @@ def _step1_page(
 @router.get("/step1/{number}")
 def step1(request: Request, journey: JourneyDep, number: Number) -> Response:
     if not journey.may_open(Stage.STEP1, number - 1):
-        return _here(journey)
+        return here(journey)
     return _step1_page(request, journey, number - 1)
 
 
@@ -288,7 +231,7 @@ def _step2_page(
     model = journey.draft_model()
     rules_text = journey.rules_text()
     check = check_model(model, catalog, settings)
-    return _page(
+    return page(
         request,
         journey,
         "step2.html",
@@ -306,7 +249,7 @@ def _step2_page(
 @router.get("/step2")
 def step2(request: Request, journey: JourneyDep, catalog: CatalogDep, settings: SettingsDep) -> Response:
     if not journey.may_open(Stage.STEP2):
-        return _here(journey)
+        return here(journey)
     return _step2_page(request, journey, catalog, settings)
 
 
@@ -324,7 +267,7 @@ async def finish_step2(
         store.save(session, journey.participant)
         return _step2_page(request, journey, catalog, settings, status_code=422)
     submit_model(session, journey, model, check)
-    return _here(journey)
+    return here(journey)
 
 
 # -- step 3 ---------------------------------------------------------------------------------------------
@@ -345,7 +288,7 @@ def _step3_page(
     stored = store.trial_of(session, journey.participant, obj.id)
     code = journey.participant.code
     result = stored.trial.result if stored is not None else None
-    return _page(
+    return page(
         request,
         journey,
         "step3.html",
@@ -368,7 +311,7 @@ def _step3_page(
 @router.get("/step3/{number}")
 def step3(request: Request, journey: JourneyDep, number: Number, session: SessionDep, catalog: CatalogDep) -> Response:
     if not journey.may_open(Stage.STEP3, number - 1):
-        return _here(journey)
+        return here(journey)
     return _step3_page(request, journey, number - 1, session, catalog)
 
 
@@ -403,7 +346,7 @@ async def submit_step3(
     model = journey.submitted_model()
     assert model is not None, "step 3 begins when the model is submitted"
     if store.trial_of(session, journey.participant, obj.id) is not None:
-        return _here(journey)  # a second click of Submit: the answer is in
+        return here(journey)  # a second click of Submit: the answer is in
     entries = mapping_entries_from_form(await read_form(request), obj, model.function_labels())
     journey.save_mapping(obj.id, entries)
     store.save(session, journey.participant)
@@ -419,90 +362,7 @@ def next_test(journey: JourneyDep, number: Number, session: SessionDep) -> Respo
     index = number - 1
     journey.require_open(Stage.STEP3, index)
     if store.trial_of(session, journey.participant, journey.tests[index].id) is None:
-        return _here(journey)  # nothing submitted yet for this object
+        return here(journey)  # nothing submitted yet for this object
     journey.finish_test(index)
-    _save_progress(session, journey)
-    return _here(journey)
-
-
-def _save_progress(session: SessionDep, journey: Journey) -> None:
-    """Store the participant's move; one who has just finished too fast is flagged, with the reason."""
-    seconds = journey.seconds_taken()
-    threshold = journey.recruitment.too_fast_seconds
-    flagged = journey.stage is Stage.DONE and seconds is not None and threshold is not None and seconds < threshold
-    if flagged:
-        detail = f"finished in {seconds:.0f} s; the experiment's threshold is {threshold} s"
-        store.save(session, journey.participant, arrivals.exclusion(journey.participant, "too_fast", detail))
-    else:
-        store.save(session, journey.participant)
-
-
-@router.get("/about")
-def about(request: Request, journey: JourneyDep) -> Response:
-    if not journey.may_open(Stage.ABOUT):
-        return _here(journey)
-    return _page(request, journey, "about.html", questions=journey.recruitment.questions())
-
-
-@router.post("/about")
-async def finish_about(request: Request, journey: JourneyDep, session: SessionDep) -> Response:
-    journey.require_open(Stage.ABOUT)
-    form = await read_form(request)
-    answers = {}
-    for question in journey.recruitment.questions():
-        answer = form.text(question.id, "", max_length=40).strip()
-        if question.choices and answer and answer not in question.choices:
-            raise InvalidFormError(f"'{question.text}' has no such answer.", details={"field": question.id})
-        if not question.choices and answer and not (answer.isdigit() and question.low <= int(answer) <= question.high):
-            raise InvalidFormError(
-                f"'{question.text}': write a whole number from {question.low} to {question.high}, or leave it empty.",
-                details={"field": question.id},
-            )
-        answers[question.id] = answer
-    journey.finish_demographics(answers)
-    _save_progress(session, journey)
-    return _here(journey)
-
-
-def _finish_page(request: Request, journey: Journey, template: str, outcome: str, **context: Any) -> Response:
-    """Return a page that ends the study, with the way back to the participant's platform."""
-    arrival = journey.participant.arrival
-    codes = {"completed": journey.recruitment.completion_code, "screened_out": journey.recruitment.screened_out_code}
-    back = (
-        recruitment.finish(arrival.platform, arrival.platform_session, arrival.submit_to, codes[outcome], outcome)
-        if arrival is not None
-        else None
-    )
-    return render(
-        request,
-        template,
-        secret_url=True,
-        framed_by=framing(journey),
-        posts_to=(back.origin,) if back is not None and back.fields else (),
-        **_common(journey),
-        back=back,
-        redirect_seconds=recruitment.REDIRECT_SECONDS,
-        **context,
-    )
-
-
-@router.get("/done")
-def done(request: Request, journey: JourneyDep, session: SessionDep) -> Response:
-    if not journey.may_open(Stage.DONE):
-        return _here(journey)
-    stored = store.trials_by_test(session, journey.participant)
-    return _finish_page(
-        request,
-        journey,
-        "done.html",
-        "completed",
-        results=[(obj, stored[obj.id].trial.verdict if obj.id in stored else None) for obj in journey.tests],
-        show_verdict=journey.design.show_verdict,
-    )
-
-
-@router.get("/screened")
-def screened(request: Request, journey: JourneyDep) -> Response:
-    if not journey.may_open(Stage.SCREENED):
-        return _here(journey)
-    return _finish_page(request, journey, "screened.html", "screened_out")
+    save_progress(session, journey)
+    return here(journey)

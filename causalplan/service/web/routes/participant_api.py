@@ -17,7 +17,8 @@ from causalplan.service.web.drawings import SVG_HEADERS, document_key, graph_svg
 from causalplan.service.web.errors import StepLockedError
 from causalplan.service.web.journey import Journey
 from causalplan.service.web.participation import invalid_model_error, plans
-from causalplan.service.web.routes.participant import JourneyDep, check_view, graph_url
+from causalplan.service.web.routes.journeys import JourneyDep
+from causalplan.service.web.routes.participant import check_view, graph_url
 from causalplan.service.web.schemas import (
     CheckIn,
     CheckOut,
