@@ -92,6 +92,8 @@ async def consent(request: Request, experiment_id: uuid.UUID, session: SessionDe
     arrival = arrivals.arrival_by_code(session, experiment.id, form.text("arrival", "", max_length=64))
     if arrival is None:
         raise InvalidFormError("This consent form is out of date: please open the study link again.")
+    if arrival.participant is not None:  # a second click, or an old tab: they are in already
+        return redirect(f"/p/{arrival.participant.code}")
     decision = form.text("decision", "", max_length=16)
     if decision not in ("agree", "decline"):
         raise InvalidFormError("Choose whether you agree to take part.", details={"field": "decision"})
