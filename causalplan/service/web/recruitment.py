@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any
 from urllib.parse import urlencode, urlsplit
 
+from causalplan.service.db.crud import clean_text
 from causalplan.service.db.models import MAX_PLATFORM_ID_LENGTH
 from causalplan.service.errors import InvalidRequestError
 
@@ -121,7 +122,7 @@ def _bounded(value: int | None, low: int, high: int, what: str, problems: list[s
 def read_recruitment(values: Mapping[str, Any]) -> Recruitment:
     """Return checked recruiting settings; InvalidRequestError lists every problem (``details['errors']``)."""
     problems: list[str] = []
-    consent = str(values.get("consent_text") or "").strip() or DEFAULT_CONSENT
+    consent = clean_text(str(values.get("consent_text") or "")).strip() or DEFAULT_CONSENT
     if len(consent) > MAX_CONSENT_TEXT:
         problems.append(f"The consent text is {len(consent)} characters long; the limit is {MAX_CONSENT_TEXT}.")
     codes = {}
