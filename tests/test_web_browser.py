@@ -16,7 +16,7 @@ import httpx
 import pytest
 from playwright.sync_api import Browser, Page, Playwright, ViewportSize, expect, sync_playwright
 
-from tests.service_fixtures import RESEARCH_TOKEN
+from tests.service_fixtures import AUTH, RESEARCH_TOKEN
 from tests.web_flows import LAMP_RULES, TUTORIAL_ANSWERS, TUTORIAL_RULES, experiment, links
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -263,6 +263,15 @@ def test_the_researcher_defines_an_experiment_and_the_export_contains_the_trial(
     expect(page.locator("#trials summary")).to_contain_text("fails")
     expect(page.locator("img.chart")).to_have_js_property("complete", True)
     assert page.locator("img.chart").evaluate("image => image.naturalWidth") > 0
+    expect(page.locator("#analysis-cells")).to_contain_text("0/1")  # the analysis, beside the table
+    expect(page.locator("#analysis")).to_contain_text("unmodelled_function")
+    expect(page.locator("#analysis-plot")).to_have_js_property("complete", True)
+    assert page.locator("#analysis-plot").evaluate("image => image.naturalWidth") > 0
+    page.get_by_label("near").fill("30")  # the quota of the only condition
+    page.get_by_label("Finished").fill("DONE42")
+    page.get_by_role("button", name="Save the recruiting settings").click()
+    expect(page.locator("#places")).to_contain_text("30")
+    expect(page.get_by_label("Finished")).to_have_value("DONE42")
     shoot(page, "research-1-results")
 
     with page.expect_download() as download:
@@ -278,3 +287,132 @@ def test_the_researcher_defines_an_experiment_and_the_export_contains_the_trial(
         page.locator("#export-csv").click()
     csv_text = Path(download.value.path()).read_text()
     assert trial["trial_id"] in csv_text and "unmodelled_function" in csv_text
+
+
+# -- the public study link, as a Prolific participant meets it ---------------------------------------
+
+
+def public_study(base: str, **recruiting: Any) -> str:
+    """Define a desk-lamp-to-flashlight experiment with a tutorial and recruiting settings; return its id."""
+    with httpx.Client(base_url=base, timeout=30) as client:
+        experiment_id: str = experiment(client, tutorial=True)["id"]
+        response = client.put(f"/v1/experiments/{experiment_id}/recruitment", json=recruiting, headers=AUTH)
+        assert response.status_code == 200, response.text
+        return experiment_id
+
+
+def recruitment_of(base: str, experiment_id: str) -> dict[str, Any]:
+    with httpx.Client(base_url=base, timeout=30) as client:
+        found: dict[str, Any] = client.get(f"/v1/experiments/{experiment_id}/recruitment", headers=AUTH).json()
+        return found
+
+
+def prolific_link(base: str, experiment_id: str, pid: str) -> str:
+    return f"{base}/s/{experiment_id}?PROLIFIC_PID={pid}&STUDY_ID=study1&SESSION_ID=session-{pid}"
+
+
+def test_a_prolific_participant_consents_passes_the_check_and_lands_on_the_completion_url(
+    live_server: str, page: Page
+) -> None:
+    experiment_id = public_study(
+        live_server, completion_code="CPLT42", comprehension_tries=2, consent_text="Consent text of this study."
+    )
+    # Prolific's site is not reachable from the tests: its completion page is answered here, as it would be.
+    page.route(
+        "https://app.prolific.com/**", lambda route: route.fulfill(body="<h1>Prolific</h1>", content_type="text/html")
+    )
+    page.goto(prolific_link(live_server, experiment_id, "5f1e2d3c4b5a697887766554"))
+    expect(page.locator("#consent-text")).to_have_text("Consent text of this study.")
+    shoot(page, "public-0-consent")
+    page.get_by_role("button", name="I agree to take part").click()
+
+    expect(page).to_have_url(re.compile(r"/tutorial$"))
+    expect(page.locator("#tries-left")).to_have_text("You have 2 tries left to answer all three questions correctly.")
+    page.get_by_label("Yes: every part's function belongs in a rule.").check()  # wrong, once
+    page.get_by_label("No: light must already exist before it can be diffused.").check()
+    page.get_by_label("One rule: FIRST AND SECOND CAUSES EFFECT").check()
+    page.get_by_label("Rules for the wind-up toy car, one per line").fill(TUTORIAL_RULES)
+    saved(page)
+    page.get_by_role("button", name="Continue to the study").click()
+    expect(page.locator(".question.wrong .feedback")).to_contain_text("Not quite.")
+    expect(page.locator("#tries-left")).to_have_text("You have 1 try left to answer all three questions correctly.")
+    page.get_by_label("No: decorating does not make the car move.").check()
+    page.get_by_role("button", name="Continue to the study").click()
+
+    expect(page).to_have_url(re.compile(r"/step1/1$"))
+    page.get_by_label("Functions of the base with cables (one per line)").fill("provide electricity")
+    page.get_by_label("Functions of the light bulb (one per line)").fill(
+        "turn electricity into light\nclose the circuit"
+    )
+    page.get_by_role("button", name="Save and continue").click()
+    page.get_by_label("Your rules, one per line").fill(LAMP_RULES)
+    submit = page.get_by_role("button", name="Submit my model")
+    expect(submit).to_be_enabled()
+    submit.click()
+    expect(page).to_have_url(re.compile(r"/step3/1$"))
+    page.get_by_role("group", name="batteries").get_by_label("provide electricity").check()
+    head = page.get_by_role("group", name="head")
+    head.get_by_label("turn electricity into light").check()
+    head.get_by_label("close the circuit").check()
+    page.get_by_role("button", name="Submit: can the robot build the flashlight?").click()
+    expect(page.locator("#verdict")).to_have_text("Your model works for the flashlight.")
+    page.get_by_role("button", name="Finish").click()
+    expect(page.locator("h1")).to_have_text("Thank you: you have finished")
+    shoot(page, "public-1-finished")
+    page.get_by_role("link", name="Return to Prolific to record your submission").click()
+    expect(page).to_have_url("https://app.prolific.com/submissions/complete?cc=CPLT42")
+
+
+def test_the_same_prolific_id_coming_back_returns_to_its_own_progress(live_server: str, browser: Browser) -> None:
+    experiment_id = public_study(live_server)
+    link = prolific_link(live_server, experiment_id, "pid-comes-back")
+    first = browser.new_context(viewport=LAPTOP)
+    page = first.new_page()
+    page.goto(link)
+    page.get_by_role("button", name="I agree to take part").click()
+    page.get_by_label("No: decorating does not make the car move.").check()
+    saved(page)
+    own_page = page.url
+    first.close()
+
+    second = browser.new_context(viewport=LAPTOP)  # another browser: no cookie, only the platform id
+    again = second.new_page()
+    again.goto(link)
+    expect(again).to_have_url(own_page)
+    expect(again.get_by_label("No: decorating does not make the car move.")).to_be_checked()
+    second.close()
+    assert recruitment_of(live_server, experiment_id)["arrivals"] == {
+        "arrived": 1,
+        "consented": 1,
+        "declined": 0,
+        "undecided": 0,
+    }
+
+
+def test_declining_consent_stores_nothing_but_the_arrival(live_server: str, page: Page) -> None:
+    experiment_id = public_study(live_server, no_consent_code="NOCONS1")
+    page.goto(prolific_link(live_server, experiment_id, "pid-declines"))
+    page.get_by_role("button", name="I do not agree").click()
+    expect(page.locator("h1")).to_have_text("Thank you")
+    expect(page.locator("#study-message")).to_contain_text("You chose not to take part.")
+    expect(page.get_by_role("link", name="Return to Prolific to record your submission")).to_have_attribute(
+        "href", "https://app.prolific.com/submissions/complete?cc=NOCONS1"
+    )
+    shoot(page, "public-2-declined")
+    found = recruitment_of(live_server, experiment_id)
+    assert found["arrivals"] == {"arrived": 1, "consented": 0, "declined": 1, "undecided": 0}
+    assert [place["taken"] for place in found["places"]] == [0]
+    with httpx.Client(base_url=live_server, timeout=30) as client:
+        assert client.get(f"/v1/experiments/{experiment_id}/participants", headers=AUTH).json()["data"] == []
+
+
+def test_a_full_quota_is_refused_politely(live_server: str, page: Page) -> None:
+    experiment_id = public_study(live_server, quotas={"near": 1})
+    page.goto(prolific_link(live_server, experiment_id, "pid-takes-the-place"))
+    page.get_by_role("button", name="I agree to take part").click()
+    expect(page).to_have_url(re.compile(r"/tutorial$"))
+    page.goto(prolific_link(live_server, experiment_id, "pid-too-late"))
+    expect(page.locator("h1")).to_have_text("This study is full")
+    expect(page.locator("#study-message")).to_contain_text("Every place in this study has been taken")
+    shoot(page, "public-3-full")
+    assert recruitment_of(live_server, experiment_id)["arrivals"]["arrived"] == 1

@@ -106,6 +106,8 @@ class ExperimentRecord(Base):
     description: Mapped[str] = mapped_column(String(2000), default="")
     design: Mapped[dict[str, Any]] = mapped_column(JSON)
     is_demo: Mapped[bool] = mapped_column(Boolean, default=False)
+    recruitment: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    """Consent text, completion codes, the comprehension rule, ... (``web.recruitment``); None: the defaults."""
 
     participants: Mapped[list[ParticipantRecord]] = relationship(back_populates="experiment")
 
@@ -139,6 +141,8 @@ class ParticipantRecord(Base):
     trials: Mapped[list[ParticipantTrialRecord]] = relationship(
         back_populates="participant", order_by="ParticipantTrialRecord.position"
     )
+    arrival: Mapped[ArrivalRecord | None] = relationship(back_populates="participant", uselist=False)
+    exclusions: Mapped[list[ExclusionRecord]] = relationship(order_by="ExclusionRecord.created_at")
 
 
 class ParticipantTrialRecord(Base):
@@ -156,6 +160,69 @@ class ParticipantTrialRecord(Base):
 
     participant: Mapped[ParticipantRecord] = relationship(back_populates="trials")
     trial: Mapped[TrialRecord] = relationship()
+
+
+MAX_PLATFORM_ID_LENGTH = 64
+"""Longest platform id (Prolific's are 24 hex digits, MTurk's about 14 to 30 letters and digits)."""
+
+
+class StudyPlaceRecord(Base):
+    """The places of one condition on an experiment's public link: how many are taken, and the quota.
+
+    Arrivals take a place with a compare-and-set update of ``taken``, so two arrivals on two
+    service replicas cannot both take the last place (see ``web.arrivals.claim_place``).
+    """
+
+    __tablename__ = "study_places"
+
+    experiment_id: Mapped[uuid.UUID] = mapped_column(
+        ForeignKey("experiments.id", ondelete="RESTRICT"), primary_key=True
+    )
+    condition: Mapped[str] = mapped_column(String(200), primary_key=True)
+    taken: Mapped[int] = mapped_column(Integer, default=0)
+    quota: Mapped[int | None] = mapped_column(Integer)
+
+
+class ArrivalRecord(Base):
+    """One arrival on an experiment's public link, with the platform's ids and the consent decision.
+
+    Before consent, this row is all that is stored about a person. ``code`` is the opaque secret
+    the consent form sends back; one platform id arrives once per experiment (coming back finds it).
+    """
+
+    __tablename__ = "study_arrivals"
+    __table_args__ = (
+        UniqueConstraint("experiment_id", "platform", "platform_id", name="uq_study_arrivals_platform_id"),
+    )
+
+    id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
+    code: Mapped[str] = mapped_column(String(MAX_CODE_LENGTH), unique=True)
+    experiment_id: Mapped[uuid.UUID] = mapped_column(ForeignKey("experiments.id", ondelete="RESTRICT"), index=True)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+    platform: Mapped[str] = mapped_column(String(16))
+    platform_id: Mapped[str | None] = mapped_column(String(MAX_PLATFORM_ID_LENGTH))
+    platform_study: Mapped[str | None] = mapped_column(String(MAX_PLATFORM_ID_LENGTH))
+    platform_session: Mapped[str | None] = mapped_column(String(MAX_PLATFORM_ID_LENGTH))
+    submit_to: Mapped[str | None] = mapped_column(String(64))
+    consented: Mapped[bool | None] = mapped_column(Boolean)
+    decided_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    participant_id: Mapped[uuid.UUID | None] = mapped_column(
+        ForeignKey("participants.id", ondelete="RESTRICT"), unique=True
+    )
+
+    participant: Mapped[ParticipantRecord | None] = relationship(back_populates="arrival")
+
+
+class ExclusionRecord(Base):
+    """A participant screened out or flagged, with the reason: recorded once, never deleted."""
+
+    __tablename__ = "participant_exclusions"
+
+    id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
+    participant_id: Mapped[uuid.UUID] = mapped_column(ForeignKey("participants.id", ondelete="RESTRICT"), index=True)
+    reason: Mapped[str] = mapped_column(String(32))
+    detail: Mapped[str] = mapped_column(String(500))
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
 
 
 class RevokedResearchSessionRecord(Base):

@@ -3,6 +3,8 @@
 Served by the service's app (``main.create_app`` includes ``routers()``):
 
 * ``/`` the start page and ``/try`` (a participant of the built-in demo: desk lamp, then flashlight);
+* ``/s/<experiment>`` the public study link (Prolific, MTurk or none): consent, then admission
+  to the emptiest open condition;
 * ``/p/<code>/...`` a participant's pages: the toy-car tutorial, step 1 (functions of each
   training object's parts), step 2 (rules, checked as one types, with the graph and the robot's
   plan), step 3 (each test object's parts mapped to the model's functions, and the verdict),
@@ -24,13 +26,23 @@ from fastapi import APIRouter
 def routers() -> list[APIRouter]:
     """Return the web routers, in the order the app includes them."""
     from causalplan.service.web import upkeep
-    from causalplan.service.web.routes import assets, experiments, participant, participant_api, research
+    from causalplan.service.web.routes import (
+        assets,
+        ending,
+        experiments,
+        participant,
+        participant_api,
+        research,
+        study_link,
+    )
 
     return [
         APIRouter(lifespan=upkeep.lifespan),  # no routes: the demo's limit and the background upkeep
         assets.pages,
         assets.router,
+        study_link.router,
         participant.router,
+        ending.router,
         participant_api.router,
         research.router,
         experiments.router,

@@ -15,9 +15,10 @@ from causalplan.errors import UnknownObjectError
 from causalplan.objects.catalog import Catalog
 from causalplan.service.db.models import ExperimentRecord, ParticipantRecord
 from causalplan.service.responses import SafeJSONResponse, csv_bytes
-from causalplan.service.web import store
+from causalplan.service.web import arrivals, store
 from causalplan.service.web.design import Design, read_design
 from causalplan.service.web.journey import Journey
+from causalplan.service.web.recruitment import Recruitment, read_quotas, read_recruitment
 from causalplan.service.web.results import (
     PARTICIPANT_COLUMNS,
     TRIAL_COLUMNS,
@@ -27,7 +28,9 @@ from causalplan.service.web.results import (
     transfer_rates,
     trial_dict,
 )
-from causalplan.service.web.schemas import ExperimentIn, ExperimentOut, ParticipantOut
+from causalplan.service.web.schemas import ExperimentIn, ExperimentOut, ParticipantOut, RecruitmentIn, RecruitmentOut
+from causalplan.studies.analysis import Analysis, analyse
+from causalplan.studies.trials import ExportError, trial_rows
 
 
 def create(session: Session, catalog: Catalog, body: ExperimentIn) -> ExperimentRecord:
@@ -90,6 +93,8 @@ def participant_out(participant: ParticipantRecord, catalog: Catalog, request: R
             "started_at": participant.started_at,
             "updated_at": participant.updated_at,
             "finished_at": participant.finished_at,
+            "platform": participant.arrival.platform if participant.arrival is not None else None,
+            "exclusion_reason": "; ".join(item.reason for item in participant.exclusions) or None,
         }
     )
 
@@ -107,29 +112,51 @@ def results(session: Session, catalog: Catalog, experiment: ExperimentRecord, re
     }
 
 
-def export(
-    session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request, format: str, table: str
-) -> Response:
-    """Return every raw record of an experiment as a JSON file, or one table as a CSV file."""
-    stamp = datetime.now(UTC)
-    name = f"causalplan-experiment-{str(experiment.id)[:8]}-{stamp:%Y%m%dT%H%M%SZ}"
+def export_data(
+    session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request, platform_ids: str = "plain"
+) -> dict[str, Any]:
+    """Return every raw record of an experiment as the JSON export holds them (``causalplan analyze`` reads it)."""
     participants = [
-        participant_dict(participant, progress(participant, catalog), participant_link(request, participant))
+        participant_dict(
+            participant, progress(participant, catalog), participant_link(request, participant), platform_ids
+        )
         for participant in store.participants_of(session, experiment.id)
     ]
     stored = store.trials_of(session, experiment.id)
-    trials = [trial_dict(trial, catalog) for trial in stored]
+    rates = transfer_rates(Design.from_dict(experiment.design), stored, catalog)
+    return {
+        "exported_at": datetime.now(UTC).isoformat(),
+        "experiment": experiment_dict(experiment),
+        "rates": [rate.as_dict() for rate in rates],
+        "participants": participants,
+        "trials": [trial_dict(trial, catalog) for trial in stored],
+    }
+
+
+def export(
+    session: Session,
+    catalog: Catalog,
+    experiment: ExperimentRecord,
+    request: Request,
+    format: str,
+    table: str,
+    platform_ids: str = "plain",
+) -> Response:
+    """Return every raw record of an experiment as a JSON file, or one table as a CSV file.
+
+    ``platform_ids``: the crowd platforms' ids as stored (``plain``), ``hashed`` or ``omit``-ted.
+    """
+    data = export_data(session, catalog, experiment, request, platform_ids)
+    name = (
+        f"causalplan-experiment-{str(experiment.id)[:8]}-{datetime.fromisoformat(data['exported_at']):%Y%m%dT%H%M%SZ}"
+    )
     if format == "json":
-        rates = transfer_rates(Design.from_dict(experiment.design), stored, catalog)
-        data = {
-            "exported_at": stamp.isoformat(),
-            "experiment": experiment_dict(experiment),
-            "rates": [rate.as_dict() for rate in rates],
-            "participants": participants,
-            "trials": trials,
-        }
         return SafeJSONResponse(data, headers={"Content-Disposition": f'attachment; filename="{name}.json"'})
-    body = csv_bytes(TRIAL_COLUMNS, trials) if table == "trials" else csv_bytes(PARTICIPANT_COLUMNS, participants)
+    body = (
+        csv_bytes(TRIAL_COLUMNS, data["trials"])
+        if table == "trials"
+        else csv_bytes(PARTICIPANT_COLUMNS, data["participants"])
+    )
     return Response(
         body,
         media_type="text/csv; charset=utf-8",
@@ -137,6 +164,42 @@ def export(
     )
 
 
+def analysis_of(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> Analysis | str:
+    """Return the study's analysis (``causalplan analyze`` on its export), or why it cannot be made."""
+    data = export_data(session, catalog, experiment, request, platform_ids="omit")
+    try:
+        return analyse(trial_rows(data, catalog), catalog)
+    except (ExportError, UnknownObjectError) as exc:
+        return exc.message
+
+
 def rates_of(session: Session, catalog: Catalog, experiment: ExperimentRecord) -> list[Rate]:
     """Return an experiment's transfer rates per condition and test object."""
     return transfer_rates(Design.from_dict(experiment.design), store.trials_of(session, experiment.id), catalog)
+
+
+def public_link(request: Request, experiment: ExperimentRecord) -> str:
+    """Return the experiment's public study link (Prolific or MTurk add their ids to it)."""
+    return f"{request.base_url}s/{experiment.id}"
+
+
+def recruitment_out(session: Session, experiment: ExperimentRecord, request: Request) -> RecruitmentOut:
+    """Return the recruiting settings with the public link and each condition's places."""
+    return RecruitmentOut.model_validate(
+        {
+            **Recruitment.from_dict(experiment.recruitment).as_dict(),
+            "public_link": public_link(request, experiment),
+            "places": [vars(place) for place in arrivals.places(session, experiment)],
+            "arrivals": arrivals.arrival_counts(session, experiment.id),
+        }
+    )
+
+
+def set_recruitment(session: Session, experiment: ExperimentRecord, body: RecruitmentIn) -> None:
+    """Check and store the recruiting settings and quotas (InvalidRequestError lists every problem)."""
+    settings = read_recruitment(body.model_dump(exclude={"quotas"}))
+    conditions = [condition.name for condition in Design.from_dict(experiment.design).conditions]
+    quotas = read_quotas(body.quotas, conditions)
+    experiment.recruitment = settings.as_dict()
+    store.save(session, experiment)
+    arrivals.set_quotas(session, experiment, quotas)

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import copy
 import uuid
-from dataclasses import dataclass
-from datetime import datetime
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
 from typing import Any
 
 from causalplan.objects.catalog import Catalog
@@ -19,7 +19,14 @@ from causalplan.objects.model import AssemblyObject
 from causalplan.service.db.models import ParticipantRecord, utc_now
 from causalplan.service.web.design import Design
 from causalplan.service.web.errors import StepLockedError
+from causalplan.service.web.recruitment import Recruitment
 from causalplan.service.web.study import ParticipantModel, Stage, labels_from_text, rules_from_text
+
+
+def as_utc(moment: datetime) -> datetime:
+    """Return ``moment`` timezone-aware (SQLite gives back stored UTC times without their zone)."""
+    return moment if moment.tzinfo is not None else moment.replace(tzinfo=UTC)
+
 
 MAX_PLAN_REQUESTS_KEPT = 50
 """Each 'Show the robot's plan' is logged with the rules of that moment (for research), up to this many."""
@@ -33,6 +40,7 @@ class Journey:
     design: Design
     training: tuple[AssemblyObject, ...]
     tests: tuple[AssemblyObject, ...]
+    recruitment: Recruitment = field(default_factory=Recruitment)
 
     @classmethod
     def of(cls, participant: ParticipantRecord, catalog: Catalog) -> Journey:
@@ -43,6 +51,7 @@ class Journey:
             design,
             tuple(catalog.get(object_id) for object_id in participant.training_order),
             tuple(catalog.get(object_id) for object_id in participant.test_order),
+            Recruitment.from_dict(participant.experiment.recruitment),
         )
 
     # -- where they are ---------------------------------------------------------------------------
@@ -90,7 +99,13 @@ class Journey:
             return f"step 1, object {self.position + 1} of {len(self.training)}"
         if self.stage is Stage.STEP3:
             return f"step 3, object {self.position + 1} of {len(self.tests)}"
-        return {Stage.TUTORIAL: "tutorial", Stage.STEP2: "step 2", Stage.DONE: "finished"}[self.stage]
+        return {
+            Stage.TUTORIAL: "tutorial",
+            Stage.STEP2: "step 2",
+            Stage.ABOUT: "demographic questions",
+            Stage.DONE: "finished",
+            Stage.SCREENED: "screened out",
+        }[self.stage]
 
     # -- their work ---------------------------------------------------------------------------------
 
@@ -125,6 +140,30 @@ class Journey:
         if answers is not None:
             tutorial["answers"] = answers
         self._save(work)
+
+    def record_tutorial_try(self, answers: dict[str, str], all_correct: bool) -> int:
+        """Store one try of the comprehension check (answers, all right or not); return the number of tries."""
+        work = self._work()
+        tutorial = work.setdefault("tutorial", {})
+        tries = tutorial.setdefault("tries", [])
+        tries.append({"at": utc_now().isoformat(), "answers": answers, "all_correct": all_correct})
+        if all_correct:
+            tutorial.setdefault("passed_on_try", len(tries))
+        self._save(work)
+        return len(tries)
+
+    def has_passed_comprehension(self) -> bool:
+        return "passed_on_try" in self.tutorial_work()
+
+    def step_seconds(self) -> list[dict[str, Any]]:
+        """Return the time spent on each page left so far: ``[{"step": "step1/1", "seconds": 41.2}, ...]``."""
+        times: list[dict[str, Any]] = self._saved().get("step_seconds", [])
+        return times
+
+    def seconds_taken(self) -> float | None:
+        """Return the seconds from the start to the end of the study (None before both)."""
+        start, end = self.participant.started_at, self.participant.finished_at
+        return (as_utc(end) - as_utc(start)).total_seconds() if start is not None and end is not None else None
 
     def function_texts(self, object_id: str) -> dict[str, str]:
         """Return the step-1 boxes of a training object as typed (part id -> text)."""
@@ -210,11 +249,38 @@ class Journey:
         self.require_open(Stage.STEP3, index)
         if index + 1 < len(self.tests):
             self._move(Stage.STEP3, index + 1)
+        elif self.recruitment.questions():
+            self._move(Stage.ABOUT, 0)
         else:
-            self._move(Stage.DONE, 0)
-            self.participant.finished_at = utc_now()
+            self._finish(Stage.DONE)
+
+    def finish_demographics(self, answers: dict[str, str]) -> None:
+        """Store the answers to the demographic questions (empty ones left out) and end the study."""
+        self.require_open(Stage.ABOUT)
+        work = self._work()
+        work["demographics"] = {name: answer for name, answer in answers.items() if answer}
+        self._save(work)
+        self._finish(Stage.DONE)
+
+    def screen_out(self) -> None:
+        """End the study here: the participant failed the comprehension check."""
+        self._finish(Stage.SCREENED)
+
+    def _finish(self, stage: Stage) -> None:
+        self._move(stage, 0)
+        self.participant.finished_at = self.participant.updated_at
 
     def _move(self, stage: Stage, position: int) -> None:
+        # The time on the page being left is kept with the work (the export's step_seconds).
+        now = utc_now()
+        work = self._work()
+        entered = work.get("entered_at")
+        since = as_utc(datetime.fromisoformat(entered) if entered else self.participant.started_at or now)
+        work.setdefault("step_seconds", []).append(
+            {"step": self.current_page(), "seconds": round(max(0.0, (now - since).total_seconds()), 1)}
+        )
+        work["entered_at"] = now.isoformat()
+        self.participant.work = work
         self.participant.stage = stage.value
         self.participant.position = position
         self._touch()

@@ -12,6 +12,8 @@ from causalplan.errors import UnknownObjectError
 from causalplan.objects.catalog import Catalog
 from causalplan.service.db.models import ExperimentRecord, ParticipantRecord
 from causalplan.service.web.design import Design, generalization
+from causalplan.service.web.journey import as_utc
+from causalplan.service.web.recruitment import platform_id_view
 from causalplan.service.web.store import StoredTrial
 
 
@@ -124,9 +126,18 @@ def experiment_dict(experiment: ExperimentRecord) -> dict[str, Any]:
     }
 
 
-def participant_dict(participant: ParticipantRecord, progress: str, link: str) -> dict[str, Any]:
-    """Return one participant as exported: condition, orders, progress, times, model and all saved work."""
+def participant_dict(
+    participant: ParticipantRecord, progress: str, link: str, platform_ids: str = "plain"
+) -> dict[str, Any]:
+    """Return one participant as exported: condition, orders, progress, times, exclusions, model and all saved work.
+
+    ``platform_ids``: the crowd platform's ids as stored (``plain``), ``hashed``, or ``omit``-ted.
+    """
     work = participant.work or {}
+    arrival = participant.arrival
+    experiment_id = str(participant.experiment_id)
+    tutorial = work.get("tutorial", {})
+    started, finished = participant.started_at, participant.finished_at
     return {
         "participant_id": str(participant.id),
         "code": participant.code,
@@ -143,9 +154,36 @@ def participant_dict(participant: ParticipantRecord, progress: str, link: str) -
         "updated_at": _iso(participant.updated_at),
         "finished_at": _iso(participant.finished_at),
         "model_id": str(participant.model_id) if participant.model_id else None,
+        "excluded": bool(participant.exclusions),
+        "exclusion_reason": "; ".join(item.reason for item in participant.exclusions) or None,
+        "exclusions": [
+            {"reason": item.reason, "detail": item.detail, "created_at": _iso(item.created_at)}
+            for item in participant.exclusions
+        ],
+        "platform": arrival.platform if arrival is not None else None,
+        **{
+            name: platform_id_view(getattr(arrival, field) if arrival else None, experiment_id, platform_ids)
+            for name, field in PLATFORM_FIELDS
+        },
+        "consented_at": _iso(arrival.decided_at) if arrival is not None else None,
+        "seconds_taken": round((as_utc(finished) - as_utc(started)).total_seconds(), 1)
+        if started and finished
+        else None,
+        "step_seconds": work.get("step_seconds", []),
+        "comprehension_tries": len(tutorial.get("tries", [])),
+        "comprehension_passed_on_try": tutorial.get("passed_on_try"),
+        "demographics": work.get("demographics", {}),
         "model": work.get("model"),
         "work": work,
     }
+
+
+PLATFORM_FIELDS = (
+    ("platform_participant_id", "platform_id"),
+    ("platform_study_id", "platform_study"),
+    ("platform_session_id", "platform_session"),
+)
+"""Export column -> arrival field: Prolific's PID, STUDY_ID, SESSION_ID or MTurk's workerId, hitId, assignmentId."""
 
 
 def trial_dict(stored: StoredTrial, catalog: Catalog) -> dict[str, Any]:
@@ -213,6 +251,18 @@ PARTICIPANT_COLUMNS = [
     "updated_at",
     "finished_at",
     "model_id",
+    "excluded",
+    "exclusion_reason",
+    "platform",
+    "platform_participant_id",
+    "platform_study_id",
+    "platform_session_id",
+    "consented_at",
+    "seconds_taken",
+    "step_seconds",
+    "comprehension_tries",
+    "comprehension_passed_on_try",
+    "demographics",
     "model",
     "work",
 ]

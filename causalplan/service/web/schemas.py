@@ -52,6 +52,42 @@ class ExperimentIn(InputModel):
     )
 
 
+class RecruitmentIn(InputModel):
+    """PUT /v1/experiments/{id}/recruitment: how the public link recruits (every field optional)."""
+
+    consent_text: str = Field(
+        default="", max_length=10_000, description="Shown before anything is stored; '' : the default text."
+    )
+    completion_code: str = Field(default="", max_length=32, description="Prolific completion code of those who finish.")
+    screened_out_code: str = Field(default="", max_length=32, description="Code of those screened out (or '').")
+    no_consent_code: str = Field(default="", max_length=32, description="Code of those who decline consent (or '').")
+    comprehension_tries: int | None = Field(
+        default=None, description="Screen out who has not answered all tutorial questions right within this many tries."
+    )
+    too_fast_seconds: int | None = Field(default=None, description="Flag as excluded who finishes faster than this.")
+    demographics: list[str] = Field(default=[], max_length=10, description="Ids of the demographic questions to ask.")
+    quotas: dict[str, int | None] = Field(
+        default={}, description="Condition name -> most participants on the public link (null: no limit)."
+    )
+
+    model_config = ConfigDict(extra="forbid")
+
+
+class RecruitmentOut(OutputModel):
+    """An experiment's recruiting settings, its public link, and the places per condition."""
+
+    consent_text: str
+    completion_code: str
+    screened_out_code: str
+    no_consent_code: str
+    comprehension_tries: int | None
+    too_fast_seconds: int | None
+    demographics: list[str]
+    public_link: str
+    places: list[dict[str, Any]]
+    arrivals: dict[str, int] = Field(description="Arrived on the public link: in all, consented, declined, undecided.")
+
+
 class ConditionOut(OutputModel):
     name: str
     training: list[str]
@@ -102,12 +138,18 @@ class ParticipantOut(OutputModel):
     ordinal: int = Field(description="Number within the condition; picks the Latin-square rows.")
     training_order: list[str]
     test_order: list[str]
-    stage: Literal["tutorial", "step1", "step2", "step3", "done"]
+    stage: Literal["tutorial", "step1", "step2", "step3", "about", "done", "screened"]
     progress: str
     created_at: UtcDatetime
     started_at: UtcDatetime | None
     updated_at: UtcDatetime | None
     finished_at: UtcDatetime | None
+    platform: str | None = Field(
+        description="prolific, mturk or direct for arrivals on the public link; null for made links."
+    )
+    exclusion_reason: str | None = Field(
+        description="Why the participant is excluded (comprehension, too_fast); null: included."
+    )
 
 
 class ParticipantsOut(OutputModel):

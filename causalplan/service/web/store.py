@@ -10,7 +10,7 @@ from collections import Counter
 from dataclasses import dataclass
 
 from sqlalchemy import Select, func, select
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session, selectinload
 
 from causalplan.service.db.crud import storage_errors
 from causalplan.service.db.models import (
@@ -136,13 +136,16 @@ def add_participants(
             if condition_name is not None
             else min(design.conditions, key=lambda c: taken[c.name])  # ties: the first defined
         )
-        made.append(_participant(experiment, design, condition, taken[condition.name]))
+        made.append(participant_record(experiment, design, condition, taken[condition.name]))
         taken[condition.name] += 1
     save(session, *made)
     return made
 
 
-def _participant(experiment: ExperimentRecord, design: Design, condition: Condition, ordinal: int) -> ParticipantRecord:
+def participant_record(
+    experiment: ExperimentRecord, design: Design, condition: Condition, ordinal: int
+) -> ParticipantRecord:
+    """Return a new participant (not stored) of ``condition``, number ``ordinal`` in it, with its object orders."""
     training, tests = object_orders(
         ordinal, condition.training, condition.tests, design.counterbalance_training, design.counterbalance_tests
     )
@@ -180,6 +183,7 @@ def participants_of(session: Session, experiment_id: uuid.UUID) -> list[Particip
         return list(
             session.scalars(
                 select(ParticipantRecord)
+                .options(selectinload(ParticipantRecord.arrival), selectinload(ParticipantRecord.exclusions))
                 .where(ParticipantRecord.experiment_id == experiment_id)
                 .order_by(ParticipantRecord.created_at, ParticipantRecord.condition, ParticipantRecord.ordinal)
             ).all()

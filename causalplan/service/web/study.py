@@ -38,7 +38,9 @@ class Stage(StrEnum):
     STEP1 = "step1"  # label the parts of each training object with functions
     STEP2 = "step2"  # one set of rules for the training objects
     STEP3 = "step3"  # map each test object's parts to the model's functions
+    ABOUT = "about"  # the experiment's optional demographic questions
     DONE = "done"
+    SCREENED = "screened"  # screened out by the comprehension check: the study ends here
 
 
 def labels_from_text(text: str) -> list[str]:

@@ -8,7 +8,7 @@ this server only, nothing inline) and send no Referer, because participant links
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Coroutine
+from collections.abc import Callable, Coroutine, Sequence
 from functools import cache
 from typing import Any
 from urllib.parse import quote
@@ -26,11 +26,12 @@ from causalplan.service.web.errors import LoginRequiredError
 
 logger = logging.getLogger(__name__)
 
+CONTENT_SECURITY_POLICY = (
+    "default-src 'self'; img-src 'self' data:; script-src 'self'; style-src 'self'; "
+    "object-src 'none'; base-uri 'none'; form-action 'self'{posts_to}; frame-ancestors {framed_by}"
+)
 PAGE_HEADERS = {
-    "Content-Security-Policy": (
-        "default-src 'self'; img-src 'self' data:; script-src 'self'; style-src 'self'; "
-        "object-src 'none'; base-uri 'none'; form-action 'self'; frame-ancestors 'none'"
-    ),
+    "Content-Security-Policy": CONTENT_SECURITY_POLICY.format(posts_to="", framed_by="'none'"),
     "X-Content-Type-Options": "nosniff",
     "Cache-Control": "no-store",
 }
@@ -57,12 +58,28 @@ def environment() -> jinja2.Environment:
 
 
 def render(
-    request: Request, template: str, status_code: int = 200, secret_url: bool = False, **context: Any
+    request: Request,
+    template: str,
+    status_code: int = 200,
+    secret_url: bool = False,
+    framed_by: Sequence[str] = (),
+    posts_to: Sequence[str] = (),
+    **context: Any,
 ) -> HTMLResponse:
-    """Return the page ``template`` filled with ``context`` (``secret_url``: its address holds a participant code)."""
+    """Return the page ``template`` filled with ``context`` (``secret_url``: its address holds a participant code).
+
+    ``framed_by``: the only origins that may show the page in a frame (MTurk shows a study in
+    one); ``posts_to``: origins besides this server its forms may post to (MTurk's submit host).
+    Both are fixed origins chosen by the code, never taken from a request.
+    """
     html = environment().get_template(template).render(request=request, **context)
     referrer = SECRET_URL_REFERRER if secret_url else REFERRER
-    return HTMLResponse(html, status_code=status_code, headers={**PAGE_HEADERS, "Referrer-Policy": referrer})
+    headers = {**PAGE_HEADERS, "Referrer-Policy": referrer}
+    if framed_by or posts_to:
+        headers["Content-Security-Policy"] = CONTENT_SECURITY_POLICY.format(
+            posts_to="".join(f" {origin}" for origin in posts_to), framed_by=" ".join(framed_by) or "'none'"
+        )
+    return HTMLResponse(html, status_code=status_code, headers=headers)
 
 
 def redirect(path: str) -> RedirectResponse:

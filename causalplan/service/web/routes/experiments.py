@@ -13,7 +13,15 @@ from fastapi import APIRouter, Query, Request, Response
 from causalplan.service.deps import CatalogDep, ResearchAccessDep, SessionDep
 from causalplan.service.schemas.common import RESEARCH_ERROR_RESPONSES, error_responses
 from causalplan.service.web import experiments, store
-from causalplan.service.web.schemas import ExperimentIn, ExperimentOut, LinksIn, ParticipantsOut, ResultsOut
+from causalplan.service.web.schemas import (
+    ExperimentIn,
+    ExperimentOut,
+    LinksIn,
+    ParticipantsOut,
+    RecruitmentIn,
+    RecruitmentOut,
+    ResultsOut,
+)
 
 router = APIRouter(prefix="/v1/experiments", tags=["experiments"], responses=RESEARCH_ERROR_RESPONSES)
 
@@ -111,7 +119,42 @@ def export(
     request: Request,
     format: Annotated[Literal["json", "csv"], Query(description="json (everything) or csv (one table).")] = "json",
     table: Annotated[Literal["trials", "participants"], Query(description="For csv: which table.")] = "trials",
+    platform_ids: Annotated[
+        Literal["plain", "hashed", "omit"],
+        Query(
+            description="Crowd-platform ids (Prolific PID, MTurk workerId, ...): as stored, SHA-256 hashed, or omitted."
+        ),
+    ] = "plain",
 ) -> Response:
-    """Export the experiment, every participant (with all saved work) and every trial, as JSON or CSV."""
+    """Export the experiment, every participant (with all saved work and exclusions) and every trial, as JSON or CSV."""
     experiment = store.get_experiment(session, experiment_id)
-    return experiments.export(session, catalog, experiment, request, format, table)
+    return experiments.export(session, catalog, experiment, request, format, table, platform_ids)
+
+
+@router.get(
+    "/{experiment_id}/recruitment",
+    response_model=RecruitmentOut,
+    summary="Recruiting settings and places",
+    responses=error_responses(404),
+)
+def read_recruitment(
+    experiment_id: uuid.UUID, _: ResearchAccessDep, session: SessionDep, request: Request
+) -> RecruitmentOut:
+    """Return the consent text, completion codes, screening rules, demographics, the public link and its places."""
+    experiment = store.get_experiment(session, experiment_id)
+    return experiments.recruitment_out(session, experiment, request)
+
+
+@router.put(
+    "/{experiment_id}/recruitment",
+    response_model=RecruitmentOut,
+    summary="Set how the public link recruits",
+    responses=error_responses(404, 422),
+)
+def set_recruitment(
+    experiment_id: uuid.UUID, body: RecruitmentIn, _: ResearchAccessDep, session: SessionDep, request: Request
+) -> RecruitmentOut:
+    """Store the consent text, completion codes, comprehension rule, too-fast threshold, demographics and quotas."""
+    experiment = store.get_experiment(session, experiment_id)
+    experiments.set_recruitment(session, experiment, body)
+    return experiments.recruitment_out(session, experiment, request)

@@ -7,9 +7,9 @@ A page that is closed (finished, or not reached yet) sends the participant to wh
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Any
 
-from fastapi import APIRouter, Depends, Path, Request, Response
+from fastapi import APIRouter, Request, Response
 
 from causalplan.causal.diagnostics import Report
 from causalplan.inputs import LoadedModel
@@ -21,7 +21,10 @@ from causalplan.service.web.errors import InvalidFormError
 from causalplan.service.web.forms import Form, read_form
 from causalplan.service.web.journey import Journey
 from causalplan.service.web.participation import picture_url, run_trial, submit_model
+from causalplan.service.web.routes.ending import save_progress
+from causalplan.service.web.routes.journeys import JourneyDep, Number, here, page
 from causalplan.service.web.schemas import MAX_PART_TEXT, MAX_RULES_TEXT
+from causalplan.service.web.screening import comprehension_try
 from causalplan.service.web.study import (
     Stage,
     check_functions,
@@ -32,7 +35,7 @@ from causalplan.service.web.study import (
     rules_from_text,
     unusable_label_notes,
 )
-from causalplan.service.web.templating import PageRoute, redirect, render
+from causalplan.service.web.templating import PageRoute, redirect
 from causalplan.service.web.tutorial import (
     EXAMPLE_RULES,
     QUESTIONS,
@@ -44,37 +47,11 @@ from causalplan.service.web.tutorial import (
 
 router = APIRouter(prefix="/p/{code}", route_class=PageRoute, include_in_schema=False)
 
-Code = Annotated[str, Path(max_length=64)]
-Number = Annotated[int, Path(ge=1, le=100)]
-
-
-def get_journey(code: Code, session: SessionDep, catalog: CatalogDep) -> Journey:
-    return Journey.of(store.participant_by_code(session, code), catalog)
-
-
-JourneyDep = Annotated[Journey, Depends(get_journey)]
-
-
-def _here(journey: Journey) -> Response:
-    return redirect(f"/p/{journey.participant.code}/{journey.current_page()}")
-
 
 def _parts(obj: AssemblyObject) -> list[dict[str, str]]:
     return [
         {"id": part.id, "name": part.name, "picture": f"/web/pictures/{obj.id}/{part.id}.png"} for part in obj.parts
     ]
-
-
-def _common(journey: Journey) -> dict[str, Any]:
-    """Return what every participant page shows: the code, where they are, the steps and objects."""
-    return {
-        "code": journey.participant.code,
-        "journey": journey,
-        "stage": journey.stage.value,
-        "goal": journey.goal,
-        "training": journey.training,
-        "tests": journey.tests,
-    }
 
 
 def check_view(check: LoadedModel, rules_text: str) -> dict[str, Any]:
@@ -97,7 +74,7 @@ def graph_url(code: str, check: LoadedModel, document: dict[str, Any], practice:
 
 @router.get("", summary="Where the participant is")
 def current(journey: JourneyDep) -> Response:
-    return _here(journey)
+    return here(journey)
 
 
 # -- tutorial ---------------------------------------------------------------------------------------------
@@ -118,12 +95,11 @@ def _tutorial_page(
     model = practice_model(tuple(rules), catalog)
     check = check_model(model, catalog, settings)
     car = catalog.get(TUTORIAL_OBJECT)
-    return render(
+    return page(
         request,
+        journey,
         "tutorial.html",
-        secret_url=True,
         status_code=status_code,
-        **_common(journey),
         car=car,
         parts=_parts(car),
         functions=TUTORIAL_FUNCTIONS,
@@ -135,13 +111,22 @@ def _tutorial_page(
         check=check_view(check, rules_text) if rules_text.strip() else None,
         graph_url=graph_url(journey.participant.code, check, model.merged_document(), practice=True) if rules else None,
         feedback=feedback,
+        tries_left=_tries_left(journey),
     )
+
+
+def _tries_left(journey: Journey) -> int | None:
+    """Return how many tries of the comprehension check are left (None: no limit, or passed)."""
+    limit = journey.recruitment.comprehension_tries
+    if limit is None or journey.has_passed_comprehension():
+        return None
+    return max(0, limit - len(journey.tutorial_work().get("tries", [])))
 
 
 @router.get("/tutorial")
 def tutorial(request: Request, journey: JourneyDep, catalog: CatalogDep, settings: SettingsDep) -> Response:
     if not journey.may_open(Stage.TUTORIAL):
-        return _here(journey)
+        return here(journey)
     return _tutorial_page(request, journey, catalog, settings)
 
 
@@ -154,14 +139,19 @@ async def finish_tutorial(
     answers = {question.id: form.text(f"answer:{question.id}", "", max_length=40) for question in QUESTIONS}
     rules_text = form.text("rules", "", max_length=MAX_RULES_TEXT)
     journey.save_tutorial(rules_text, answers)
+    wrong = wrong_answers(answers)
+    excluded = comprehension_try(journey, answers, not wrong)
+    if excluded is not None:
+        store.save(session, journey.participant, excluded)
+        return here(journey)
     rules, _ = rules_from_text(rules_text)
     practice_ok = bool(rules) and check_model(practice_model(tuple(rules), catalog), catalog, settings).is_valid
-    if wrong_answers(answers) or not practice_ok:
+    if wrong or not practice_ok:
         store.save(session, journey.participant)
         return _tutorial_page(request, journey, catalog, settings, feedback=True, status_code=422)
     journey.finish_tutorial()
     store.save(session, journey.participant)
-    return _here(journey)
+    return here(journey)
 
 
 # -- step 1 ---------------------------------------------------------------------------------------------
@@ -180,12 +170,11 @@ def _step1_page(
     noted: str = "",
 ) -> Response:
     obj = journey.training[index]
-    return render(
+    return page(
         request,
+        journey,
         "step1.html",
-        secret_url=True,
         status_code=status_code,
-        **_common(journey),
         index=index,
         obj=obj,
         parts=_parts(obj),
@@ -200,7 +189,7 @@ def _step1_page(
 @router.get("/step1/{number}")
 def step1(request: Request, journey: JourneyDep, number: Number) -> Response:
     if not journey.may_open(Stage.STEP1, number - 1):
-        return _here(journey)
+        return here(journey)
     return _step1_page(request, journey, number - 1)
 
 
@@ -242,12 +231,11 @@ def _step2_page(
     model = journey.draft_model()
     rules_text = journey.rules_text()
     check = check_model(model, catalog, settings)
-    return render(
+    return page(
         request,
+        journey,
         "step2.html",
-        secret_url=True,
         status_code=status_code,
-        **_common(journey),
         functions=[
             (obj, [(part, model.functions[obj.id].get(part.id, [])) for part in obj.parts]) for obj in journey.training
         ],
@@ -261,7 +249,7 @@ def _step2_page(
 @router.get("/step2")
 def step2(request: Request, journey: JourneyDep, catalog: CatalogDep, settings: SettingsDep) -> Response:
     if not journey.may_open(Stage.STEP2):
-        return _here(journey)
+        return here(journey)
     return _step2_page(request, journey, catalog, settings)
 
 
@@ -279,7 +267,7 @@ async def finish_step2(
         store.save(session, journey.participant)
         return _step2_page(request, journey, catalog, settings, status_code=422)
     submit_model(session, journey, model, check)
-    return _here(journey)
+    return here(journey)
 
 
 # -- step 3 ---------------------------------------------------------------------------------------------
@@ -300,12 +288,11 @@ def _step3_page(
     stored = store.trial_of(session, journey.participant, obj.id)
     code = journey.participant.code
     result = stored.trial.result if stored is not None else None
-    return render(
+    return page(
         request,
+        journey,
         "step3.html",
-        secret_url=True,
         status_code=status_code,
-        **_common(journey),
         index=index,
         obj=obj,
         parts=_parts(obj),
@@ -324,7 +311,7 @@ def _step3_page(
 @router.get("/step3/{number}")
 def step3(request: Request, journey: JourneyDep, number: Number, session: SessionDep, catalog: CatalogDep) -> Response:
     if not journey.may_open(Stage.STEP3, number - 1):
-        return _here(journey)
+        return here(journey)
     return _step3_page(request, journey, number - 1, session, catalog)
 
 
@@ -359,7 +346,7 @@ async def submit_step3(
     model = journey.submitted_model()
     assert model is not None, "step 3 begins when the model is submitted"
     if store.trial_of(session, journey.participant, obj.id) is not None:
-        return _here(journey)  # a second click of Submit: the answer is in
+        return here(journey)  # a second click of Submit: the answer is in
     entries = mapping_entries_from_form(await read_form(request), obj, model.function_labels())
     journey.save_mapping(obj.id, entries)
     store.save(session, journey.participant)
@@ -375,22 +362,7 @@ def next_test(journey: JourneyDep, number: Number, session: SessionDep) -> Respo
     index = number - 1
     journey.require_open(Stage.STEP3, index)
     if store.trial_of(session, journey.participant, journey.tests[index].id) is None:
-        return _here(journey)  # nothing submitted yet for this object
+        return here(journey)  # nothing submitted yet for this object
     journey.finish_test(index)
-    store.save(session, journey.participant)
-    return _here(journey)
-
-
-@router.get("/done")
-def done(request: Request, journey: JourneyDep, session: SessionDep) -> Response:
-    if not journey.may_open(Stage.DONE):
-        return _here(journey)
-    stored = store.trials_by_test(session, journey.participant)
-    return render(
-        request,
-        "done.html",
-        secret_url=True,
-        **_common(journey),
-        results=[(obj, stored[obj.id].trial.verdict if obj.id in stored else None) for obj in journey.tests],
-        show_verdict=journey.design.show_verdict,
-    )
+    save_progress(session, journey)
+    return here(journey)

@@ -17,7 +17,8 @@ from causalplan.service.web.drawings import SVG_HEADERS, document_key, graph_svg
 from causalplan.service.web.errors import StepLockedError
 from causalplan.service.web.journey import Journey
 from causalplan.service.web.participation import invalid_model_error, plans
-from causalplan.service.web.routes.participant import JourneyDep, check_view, graph_url
+from causalplan.service.web.routes.journeys import JourneyDep
+from causalplan.service.web.routes.participant import check_view, graph_url
 from causalplan.service.web.schemas import (
     CheckIn,
     CheckOut,
@@ -150,7 +151,7 @@ def graph(
     if practice:
         rules, _ = rules_from_text(str(journey.tutorial_work().get("rules", "")))
         model = practice_model(tuple(rules), catalog)
-    elif journey.stage in (Stage.STEP3, Stage.DONE):
+    elif journey.participant.model_id is not None:  # step 2 is submitted: the model is fixed
         model = journey.submitted_model()
     else:
         model = journey.draft_model()

@@ -6,25 +6,31 @@ sets an HttpOnly cookie (see ``auth``).
 
 from __future__ import annotations
 
+import tempfile
 import uuid
+from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request, Response
 from pydantic import ValidationError
 
+from causalplan.service.db.models import ExperimentRecord
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep, check_research_token
-from causalplan.service.errors import TooManyAttemptsError
+from causalplan.service.errors import InvalidRequestError, TooManyAttemptsError
 from causalplan.service.web import experiments, store
 from causalplan.service.web.auth import ResearchPageDep, sign_in, sign_out
 from causalplan.service.web.drawings import SVG_HEADERS, rates_chart
 from causalplan.service.web.errors import InvalidExperimentError
 from causalplan.service.web.forms import Form, read_form
-from causalplan.service.web.schemas import ExperimentIn
+from causalplan.service.web.recruitment import DEMOGRAPHICS
+from causalplan.service.web.schemas import ExperimentIn, RecruitmentIn
 from causalplan.service.web.templating import PageRoute, redirect, render
 from causalplan.settings import Settings
+from causalplan.studies.outputs import plot
 
 router = APIRouter(prefix="/research", route_class=PageRoute, include_in_schema=False)
 
+CODE_FIELDS = ("completion_code", "screened_out_code", "no_consent_code")
 FORM_CONDITIONS = 4
 """Condition rows on the new-experiment form (empty rows are ignored)."""
 
@@ -166,13 +172,96 @@ async def create_experiment(request: Request, _: ResearchPageDep, session: Sessi
     return redirect(f"/research/experiments/{record.id}")
 
 
+def _experiment_page(
+    request: Request,
+    session: SessionDep,
+    catalog: CatalogDep,
+    experiment: ExperimentRecord,
+    recruitment_errors: list[str] | None = None,
+) -> Response:
+    data = experiments.results(session, catalog, experiment, request)
+    analysis = experiments.analysis_of(session, catalog, experiment, request)
+    return render(
+        request,
+        "research_experiment.html",
+        status_code=422 if recruitment_errors else 200,
+        record=experiment,
+        recruitment=experiments.recruitment_out(session, experiment, request),
+        recruitment_errors=recruitment_errors or [],
+        demographics=DEMOGRAPHICS,
+        analysis=None if isinstance(analysis, str) else analysis.as_dict(),
+        analysis_problem=analysis if isinstance(analysis, str) else None,
+        misconception_words={
+            participant: [found.says() for found in items]
+            for participant, items in ({} if isinstance(analysis, str) else analysis.misconceptions).items()
+        },
+        **data,
+    )
+
+
 @router.get("/experiments/{experiment_id}")
 def experiment_page(
     request: Request, experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep
 ) -> Response:
+    return _experiment_page(request, session, catalog, store.get_experiment(session, experiment_id))
+
+
+def _whole_number(form: Form, name: str, label: str) -> int | None:
+    """Return a number field ('' : None); InvalidRequestError names the field when it is not a whole number."""
+    text = form.text(name, "", max_length=12).strip()
+    if not text:
+        return None
+    if not text.isdigit():
+        raise InvalidRequestError(f"{label} must be a whole number or empty.", details={"field": name})
+    return int(text)
+
+
+@router.post("/experiments/{experiment_id}/recruitment")
+async def set_recruitment(
+    request: Request, experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep
+) -> Response:
     experiment = store.get_experiment(session, experiment_id)
-    data = experiments.results(session, catalog, experiment, request)
-    return render(request, "research_experiment.html", record=experiment, **data)
+    form = await read_form(request)
+    conditions = [condition["name"] for condition in experiment.design["conditions"]]
+    try:
+        body = RecruitmentIn.model_validate(
+            {
+                "consent_text": form.text("consent_text", "", max_length=10_000),
+                **{name: form.text(name, "", max_length=32).strip() for name in CODE_FIELDS},
+                "comprehension_tries": _whole_number(form, "comprehension_tries", "The number of tries"),
+                "too_fast_seconds": _whole_number(form, "too_fast_seconds", "The too-fast threshold"),
+                "demographics": form.texts("demographics", max_count=len(DEMOGRAPHICS), max_length=40),
+                "quotas": {
+                    name: _whole_number(form, f"quota:{index}", f"The quota of condition '{name}'")
+                    for index, name in enumerate(conditions)
+                },
+            }
+        )
+        experiments.set_recruitment(session, experiment, body)
+    except ValidationError as exc:
+        problems = [" > ".join(str(piece) for piece in e["loc"]) + f": {e['msg']}" for e in exc.errors()]
+        return _experiment_page(request, session, catalog, experiment, problems)
+    except InvalidRequestError as exc:
+        errors = exc.details.get("errors")
+        problems = [str(e) for e in errors] if isinstance(errors, list) else [exc.message]
+        return _experiment_page(request, session, catalog, experiment, problems)
+    return redirect(f"/research/experiments/{experiment_id}#recruiting")
+
+
+@router.get("/experiments/{experiment_id}/analysis.svg")
+def analysis_plot(
+    request: Request, experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep
+) -> Response:
+    """The transfer rates with their 95% Wilson intervals, drawn by ``causalplan analyze``'s own plot."""
+    experiment = store.get_experiment(session, experiment_id)
+    analysis = experiments.analysis_of(session, catalog, experiment, request)
+    if isinstance(analysis, str):
+        raise InvalidRequestError(f"The analysis cannot be drawn: {analysis}")
+    with tempfile.TemporaryDirectory() as folder:  # matplotlib writes the file; it is only read back
+        path = Path(folder) / "rates.svg"
+        plot(analysis, path)
+        svg = path.read_bytes()
+    return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
 
 
 @router.post("/experiments/{experiment_id}/participants")
@@ -202,6 +291,7 @@ def export(
     catalog: CatalogDep,
     format: Annotated[Literal["json", "csv"], Query()] = "json",
     table: Annotated[Literal["trials", "participants"], Query()] = "trials",
+    platform_ids: Annotated[Literal["plain", "hashed", "omit"], Query()] = "plain",
 ) -> Response:
     experiment = store.get_experiment(session, experiment_id)
-    return experiments.export(session, catalog, experiment, request, format, table)
+    return experiments.export(session, catalog, experiment, request, format, table, platform_ids)

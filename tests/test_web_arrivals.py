@@ -1,0 +1,143 @@
+"""Arrivals on the public link (SQLite and PostgreSQL): balanced assignment, quotas that hold in a race."""
+
+from __future__ import annotations
+
+import threading
+import uuid
+from collections import Counter
+from collections.abc import Iterator
+
+import pytest
+from sqlalchemy import Engine, func, select
+from sqlalchemy.orm import Session
+
+from causalplan.service.db.migrate import upgrade
+from causalplan.service.db.models import ExperimentRecord, ParticipantRecord
+from causalplan.service.db.session import create_database_engine
+from causalplan.service.web import arrivals, store
+from causalplan.service.web.arrivals import Place, choose
+from causalplan.service.web.design import Condition, Design
+from causalplan.service.web.recruitment import PlatformVisit
+
+TWO_CONDITIONS = Design(
+    (
+        Condition("near", ("desk_lamp", "flashlight"), ("candle",)),
+        Condition("far", ("desk_lamp", "candle"), ("flashlight",)),
+    )
+)
+ONE_CONDITION = Design((Condition("near", ("desk_lamp",), ("flashlight",)),))
+
+
+@pytest.fixture
+def engine(database_url: str) -> Iterator[Engine]:
+    made = create_database_engine(database_url)
+    upgrade(made)
+    yield made
+    made.dispose()
+
+
+def new_experiment(engine: Engine, design: Design) -> uuid.UUID:
+    with Session(engine, expire_on_commit=False) as session:
+        return store.create_experiment(session, "public link", "", design).id
+
+
+def direct_visit() -> PlatformVisit:
+    return PlatformVisit("direct")
+
+
+def admit_one(engine: Engine, experiment_id: uuid.UUID, visit: PlatformVisit) -> ParticipantRecord | None:
+    with Session(engine, expire_on_commit=False) as session:
+        experiment = store.get_experiment(session, experiment_id)
+        return arrivals.admit(session, experiment, arrivals.arrive(session, experiment, visit))
+
+
+def test_the_open_place_with_fewest_taken_is_chosen_ties_to_the_first_condition() -> None:
+    assert choose([Place("near", 2, None), Place("far", 1, None)]) == Place("far", 1, None)
+    assert choose([Place("near", 1, None), Place("far", 1, None)]) == Place("near", 1, None)
+    assert choose([Place("near", 0, 0), Place("far", 5, None)]) == Place("far", 5, None)  # near is full
+    assert choose([Place("near", 3, 3)]) is None
+
+
+def test_arrivals_are_balanced_over_conditions_and_object_orders_as_they_come(engine: Engine) -> None:
+    experiment_id = new_experiment(engine, TWO_CONDITIONS)
+    admitted = [admit_one(engine, experiment_id, direct_visit()) for _ in range(8)]
+    assert all(participant is not None for participant in admitted)
+    placed = [(p.condition, p.ordinal) for p in admitted if p is not None]
+    assert placed == [
+        ("near", 0),
+        ("far", 0),
+        ("near", 1),
+        ("far", 1),
+        ("near", 2),
+        ("far", 2),
+        ("near", 3),
+        ("far", 3),
+    ]
+    near_orders = Counter(tuple(p.training_order) for p in admitted if p is not None and p.condition == "near")
+    assert near_orders == {("desk_lamp", "flashlight"): 2, ("flashlight", "desk_lamp"): 2}
+
+
+def test_links_made_before_the_public_link_count_as_taken_places(engine: Engine) -> None:
+    experiment_id = new_experiment(engine, TWO_CONDITIONS)
+    with Session(engine, expire_on_commit=False) as session:
+        store.add_participants(session, store.get_experiment(session, experiment_id), 2, "near")
+    participant = admit_one(engine, experiment_id, direct_visit())
+    assert participant is not None and (participant.condition, participant.ordinal) == ("far", 0)
+
+
+def test_of_two_arrivals_that_saw_the_last_place_only_one_takes_it(engine: Engine) -> None:
+    experiment_id = new_experiment(engine, ONE_CONDITION)
+    with Session(engine) as first, Session(engine) as second:
+        experiment = store.get_experiment(first, experiment_id)
+        arrivals.set_quotas(first, experiment, {"near": 1})
+        seen_by_first = choose(arrivals.places(first, experiment))
+        seen_by_second = choose(arrivals.places(second, store.get_experiment(second, experiment_id)))
+        assert seen_by_first == seen_by_second == Place("near", 0, 1)
+        assert seen_by_first is not None and seen_by_second is not None
+        assert arrivals.take_place(first, experiment_id, seen_by_first)
+        first.commit()
+        assert not arrivals.take_place(second, experiment_id, seen_by_second)
+        second.rollback()
+        assert arrivals.is_full(second, store.get_experiment(second, experiment_id))
+
+
+def test_simultaneous_arrivals_never_exceed_the_quota(engine: Engine) -> None:
+    experiment_id = new_experiment(engine, TWO_CONDITIONS)
+    with Session(engine) as session:
+        arrivals.set_quotas(session, store.get_experiment(session, experiment_id), {"near": 2, "far": 1})
+    start = threading.Barrier(8)
+    admitted: list[ParticipantRecord | None] = []
+
+    def arrive() -> None:
+        start.wait()
+        admitted.append(admit_one(engine, experiment_id, direct_visit()))
+
+    threads = [threading.Thread(target=arrive) for _ in range(8)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(60)
+    assert len(admitted) == 8
+    placed = sorted((p.condition, p.ordinal) for p in admitted if p is not None)
+    assert placed == [("far", 0), ("near", 0), ("near", 1)]  # each place once, none over the quota
+    with Session(engine) as session:
+        stored = session.scalar(
+            select(func.count()).select_from(ParticipantRecord).where(ParticipantRecord.experiment_id == experiment_id)
+        )
+        assert stored == 3
+        assert [(p.taken, p.quota) for p in arrivals.places(session, store.get_experiment(session, experiment_id))] == [
+            (2, 2),
+            (1, 1),
+        ]
+
+
+def test_the_same_platform_id_arrives_once_and_is_admitted_once(engine: Engine) -> None:
+    experiment_id = new_experiment(engine, ONE_CONDITION)
+    visit = PlatformVisit("prolific", "5f1e2d3c4b5a697887766554", "study-1", "sess_9")
+    first = admit_one(engine, experiment_id, visit)
+    again = admit_one(engine, experiment_id, PlatformVisit("prolific", "5f1e2d3c4b5a697887766554", "study-1", "s2"))
+    assert first is not None and again is not None and first.id == again.id
+    with Session(engine) as session:
+        experiment = session.get(ExperimentRecord, experiment_id)
+        assert experiment is not None
+        assert [place.taken for place in arrivals.places(session, experiment)] == [1]

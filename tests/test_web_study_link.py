@@ -1,0 +1,188 @@
+"""The public study link through the app: platforms, consent, screening, the way back, the export and its analysis."""
+
+from __future__ import annotations
+
+import json
+import re
+import uuid
+from pathlib import Path
+from typing import Any
+
+from click.testing import CliRunner
+from fastapi.testclient import TestClient
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+from causalplan.cli import app
+from causalplan.service.db.models import ArrivalRecord, ParticipantRecord
+from tests.service_fixtures import AUTH, services_of
+from tests.web_flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, post
+
+WRONG_ANSWERS = {**TUTORIAL_ANSWERS, "answer:diffuse": "yes"}
+
+
+def recruiting(client: TestClient, experiment_id: str, **settings: Any) -> dict[str, Any]:
+    response = client.put(f"/v1/experiments/{experiment_id}/recruitment", json=settings, headers=AUTH)
+    assert response.status_code == 200, response.text
+    body: dict[str, Any] = response.json()
+    return body
+
+
+def prolific(pid: str) -> dict[str, str]:
+    return {"PROLIFIC_PID": pid, "STUDY_ID": "study1", "SESSION_ID": f"session-{pid}"}
+
+
+def consent_code(page: str) -> str:
+    found = re.search(r'name="arrival" value="([A-Za-z0-9]+)"', page)
+    assert found, page
+    return found.group(1)
+
+
+def join(client: TestClient, experiment_id: str, params: dict[str, str]) -> str:
+    """Arrive with ``params``, agree to take part; return the participant's code."""
+    arrival = client.get(f"/s/{experiment_id}", params=params)
+    assert arrival.status_code == 200, arrival.text
+    agreed = post(client, f"/s/{experiment_id}/consent", {"arrival": consent_code(arrival.text), "decision": "agree"})
+    location: str = agreed.headers["location"]
+    assert location.startswith("/p/")
+    return location.removeprefix("/p/")
+
+
+def counts(client: TestClient, experiment_id: str) -> tuple[int, int]:
+    """Return the experiment's stored arrivals and participants."""
+    experiment = uuid.UUID(experiment_id)
+    with Session(services_of(client).engine) as session:
+        arrivals = session.scalar(
+            select(func.count()).select_from(ArrivalRecord).where(ArrivalRecord.experiment_id == experiment)
+        )
+        participants = session.scalar(
+            select(func.count()).select_from(ParticipantRecord).where(ParticipantRecord.experiment_id == experiment)
+        )
+    return int(arrivals or 0), int(participants or 0)
+
+
+def exported(client: TestClient, experiment_id: str, platform_ids: str = "plain") -> dict[str, Any]:
+    response = client.get(
+        f"/v1/experiments/{experiment_id}/export", params={"platform_ids": platform_ids}, headers=AUTH
+    )
+    assert response.status_code == 200
+    data: dict[str, Any] = response.json()
+    return data
+
+
+def test_failing_the_comprehension_check_twice_screens_out_with_the_other_code(client: TestClient) -> None:
+    created = experiment(client, tutorial=True)
+    recruiting(client, created["id"], completion_code="DONE1", screened_out_code="OUT1", comprehension_tries=2)
+    code = join(client, created["id"], prolific("pid-screened"))
+    first = post(client, f"/p/{code}/tutorial", {**WRONG_ANSWERS, "rules": TUTORIAL_RULES}, status=422)
+    assert "You have 1 try left" in first.text
+    post(client, f"/p/{code}/tutorial", {**WRONG_ANSWERS, "rules": TUTORIAL_RULES})
+    screened = client.get(f"/p/{code}")
+    assert screened.url.path == f"/p/{code}/screened"
+    assert 'href="https://app.prolific.com/submissions/complete?cc=OUT1"' in screened.text
+    again = client.get(f"/s/{created['id']}", params=prolific("pid-screened"))  # no second chance
+    assert again.url.path == f"/p/{code}/screened"
+    (participant,) = exported(client, created["id"])["participants"]
+    assert participant["excluded"] and participant["exclusion_reason"] == "comprehension"
+    assert participant["comprehension_tries"] == 2 and participant["comprehension_passed_on_try"] is None
+    assert participant["exclusions"][0]["detail"] == "not every comprehension question right within 2 tries"
+
+
+def test_declining_stores_only_the_arrival_and_gives_the_no_consent_code(client: TestClient) -> None:
+    created = experiment(client)
+    recruiting(client, created["id"], no_consent_code="NOPE1", consent_text="Our own consent text.")
+    arrival = client.get(f"/s/{created['id']}", params=prolific("pid-declines"))
+    assert "Our own consent text." in arrival.text
+    assert counts(client, created["id"]) == (1, 0)
+    declined = client.post(
+        f"/s/{created['id']}/consent", data={"arrival": consent_code(arrival.text), "decision": "decline"}
+    )
+    assert declined.status_code == 200 and "You chose not to take part" in declined.text
+    assert 'href="https://app.prolific.com/submissions/complete?cc=NOPE1"' in declined.text
+    assert counts(client, created["id"]) == (1, 0)
+    back = client.get(f"/s/{created['id']}", params=prolific("pid-declines"))
+    assert "You chose not to take part" in back.text and counts(client, created["id"]) == (1, 0)
+
+
+def test_a_full_study_says_so_and_stores_nothing(client: TestClient) -> None:
+    created = experiment(client)
+    recruiting(client, created["id"], quotas={"near": 1})
+    join(client, created["id"], prolific("pid-first"))
+    full = client.get(f"/s/{created['id']}", params=prolific("pid-second"))
+    assert full.status_code == 200 and "This study is full" in full.text
+    assert counts(client, created["id"]) == (1, 1)
+
+
+def test_an_mturk_preview_stores_nothing_and_a_worker_submits_to_mturk(client: TestClient) -> None:
+    created = experiment(client)
+    preview = client.get(f"/s/{created['id']}", params={"assignmentId": "ASSIGNMENT_ID_NOT_AVAILABLE", "hitId": "H1"})
+    assert "This is a preview" in preview.text and 'name="arrival"' not in preview.text
+    assert counts(client, created["id"]) == (0, 0)
+    worker = {"workerId": "W1", "hitId": "H1", "assignmentId": "A1", "turkSubmitTo": "https://workersandbox.mturk.com"}
+    code = join(client, created["id"], worker)
+    step1 = client.get(f"/p/{code}/step1/1")
+    assert "frame-ancestors https://worker.mturk.com" in step1.headers["content-security-policy"]
+    complete(client, code)
+    done = client.get(f"/p/{code}/done")
+    assert 'action="https://workersandbox.mturk.com/mturk/externalSubmit"' in done.text
+    assert 'name="assignmentId" value="A1"' in done.text
+    assert "form-action 'self' https://workersandbox.mturk.com;" in done.headers["content-security-policy"]
+
+
+def test_a_hostile_parameter_is_refused_and_never_shown(client: TestClient) -> None:
+    created = experiment(client)
+    refused = client.get(f"/s/{created['id']}", params={**prolific("x"), "PROLIFIC_PID": '"><script>alert(1)</script>'})
+    assert refused.status_code == 422 and "PROLIFIC_PID" in refused.text
+    assert "<script>alert" not in refused.text and "alert(1)" not in refused.text
+    elsewhere = {"workerId": "W1", "hitId": "H1", "assignmentId": "A1", "turkSubmitTo": "https://evil.example"}
+    assert client.get(f"/s/{created['id']}", params=elsewhere).status_code == 422
+    assert counts(client, created["id"]) == (0, 0)
+
+
+def test_a_too_fast_finish_is_flagged_and_the_export_hides_or_hashes_platform_ids(client: TestClient) -> None:
+    created = experiment(client)
+    recruiting(client, created["id"], completion_code="DONE1", too_fast_seconds=3600, demographics=["age"])
+    code = join(client, created["id"], prolific("pid-fast"))
+    complete(client, code)
+    post(client, f"/p/{code}/about", {"age": "29"})
+    done = client.get(f"/p/{code}/done")
+    assert 'href="https://app.prolific.com/submissions/complete?cc=DONE1"' in done.text
+    assert (
+        '<meta http-equiv="refresh" content="5;url=https://app.prolific.com/submissions/complete?cc=DONE1">'
+        in done.text
+    )
+    (participant,) = exported(client, created["id"])["participants"]
+    assert participant["excluded"] and participant["exclusion_reason"] == "too_fast"
+    assert participant["platform"] == "prolific" and participant["platform_participant_id"] == "pid-fast"
+    assert participant["demographics"] == {"age": "29"}
+    assert [step["step"] for step in participant["step_seconds"]] == ["step1/1", "step2", "step3/1", "about"]
+    assert participant["seconds_taken"] is not None and participant["seconds_taken"] < 3600
+    (hashed,) = exported(client, created["id"], "hashed")["participants"]
+    assert len(hashed["platform_participant_id"]) == 64 and "pid-fast" not in json.dumps(hashed)
+    (omitted,) = exported(client, created["id"], "omit")["participants"]
+    assert omitted["platform_participant_id"] is None and omitted["platform_session_id"] is None
+
+
+def test_the_analyze_command_reads_the_export_of_a_real_run_and_skips_the_excluded(
+    client: TestClient, tmp_path: Path
+) -> None:
+    created = experiment(client, tutorial=True)
+    recruiting(client, created["id"], comprehension_tries=1)
+    for pid in ("pid-a", "pid-b"):
+        code = join(client, created["id"], prolific(pid))
+        post(client, f"/p/{code}/tutorial", {**TUTORIAL_ANSWERS, "rules": TUTORIAL_RULES})
+        complete(client, code)
+    screened = join(client, created["id"], prolific("pid-c"))
+    post(client, f"/p/{screened}/tutorial", {**WRONG_ANSWERS, "rules": TUTORIAL_RULES})
+    path = tmp_path / "export.json"
+    path.write_text(json.dumps(exported(client, created["id"])), encoding="utf-8")
+    result = CliRunner().invoke(app, ["analyze", str(path), "--out", str(tmp_path / "out"), "--json"])
+    assert result.exit_code == 0, result.output
+    analysis = json.loads(result.output)
+    assert analysis["trials"] == analysis["analysed_trials"] == 2  # the screened-out one never reached step 3
+    assert analysis["cells"][0]["successes"] == 2 and analysis["cells"][0]["test_object"] == "flashlight"
+    written = sorted(item.name for item in (tmp_path / "out").iterdir())
+    assert written == ["analysis.json", "codebook.csv", "rates.png", "rates.svg", "trials.csv"]
+    page = client.get(f"/research/experiments/{created['id']}", headers=AUTH)
+    assert "2 of 2 trials analysed" in page.text and "1 participant(s) excluded" not in page.text
+    assert client.get(f"/research/experiments/{created['id']}/analysis.svg", headers=AUTH).text.count("<svg") == 1
