@@ -86,3 +86,21 @@ def test_a_file_that_is_no_crowd_says_what_it_should_be(tmp_path: Path) -> None:
     path.write_text('{"hello": 1}')
     with pytest.raises(InputFileError, match="neither a list of trials"):
         read_participants(path)
+
+
+def test_a_research_page_model_is_read_as_the_model_file_of_its_first_training_object() -> None:
+    from causalplan.consensus.participants import participants_of_export
+
+    web_model = {
+        "goal": "light",
+        "functions": {"candle": {"wick": ["burn"]}, "desk_lamp": {"light_bulb": ["glow"], "shade": []}},
+        "rules": ["glow CAUSES light"],
+    }
+    export = {"participants": [{"participant_id": "p1", "training_order": ["desk_lamp", "candle"], "model": web_model}]}
+    (person,) = participants_of_export(export, "an export")
+    assert person.model == {
+        "object": "desk_lamp",
+        "goal": "light",
+        "functions": {"light_bulb": ["glow"]},
+        "rules": ["glow CAUSES light"],
+    }

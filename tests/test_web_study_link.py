@@ -186,3 +186,16 @@ def test_the_analyze_command_reads_the_export_of_a_real_run_and_skips_the_exclud
     page = client.get(f"/research/experiments/{created['id']}", headers=AUTH)
     assert "2 of 2 trials analysed" in page.text and "1 participant(s) excluded" not in page.text
     assert client.get(f"/research/experiments/{created['id']}/analysis.svg", headers=AUTH).text.count("<svg") == 1
+    assert 'id="consensus-graph"' in page.text and "from the 2 participants' models" in page.text
+    graph = client.get(f"/research/experiments/{created['id']}/consensus.svg", headers=AUTH)
+    assert graph.status_code == 200, graph.text
+    assert graph.headers["content-type"].startswith("image/svg+xml")
+    assert graph.text.count("<svg") == 1
+
+
+def test_the_crowds_model_waits_for_two_models(client: TestClient) -> None:
+    created = experiment(client)
+    page = client.get(f"/research/experiments/{created['id']}", headers=AUTH)
+    assert "appears once two participants have written a model" in page.text
+    refused = client.get(f"/research/experiments/{created['id']}/consensus.svg", headers=AUTH)
+    assert refused.status_code == 422 and "There is no consensus to draw" in refused.text

@@ -99,6 +99,37 @@ def _add_mapping(person: Participant, mapping: object, where: str) -> None:
         person.mappings[test] = mapping
 
 
+def _first(training_order: object) -> str | None:
+    return str(training_order[0]) if isinstance(training_order, list) and training_order else None
+
+
+def _file_schema(model: object, training: str | None) -> object:
+    """Return a participant's model as a model file: the research pages keep labels per training object.
+
+    Their form is ``{"goal", "functions": {object: {part: labels}}, "rules"}``; a model of two
+    training objects gives the one of the first it was shown (a consensus is of one training
+    object). A model already in the file schema, or one that is not a dict, is returned as it is.
+    """
+    if not isinstance(model, dict) or "object" in model or not isinstance(model.get("functions"), dict):
+        return model
+    per_object = model["functions"]
+    if not per_object or not all(isinstance(parts, dict) for parts in per_object.values()):
+        return model
+    object_id = training if training in per_object else next(iter(per_object))
+    parts = per_object[object_id]
+    return {
+        "object": object_id,
+        "goal": model.get("goal", "light"),
+        "functions": {part: labels for part, labels in parts.items() if labels},
+        "rules": model.get("rules", []),
+    }
+
+
+def participants_of_export(data: dict[str, object], where: str) -> list[Participant]:
+    """Return the participants of an experiment export already parsed (``where`` names it in errors)."""
+    return _from_export(data, Path(where))
+
+
 def _from_export(data: dict[str, object], path: Path) -> list[Participant]:
     """Return the participants of an experiment export: each model, and every trial's mapping."""
     people: dict[str, Participant] = {}
@@ -110,7 +141,7 @@ def _from_export(data: dict[str, object], path: Path) -> list[Participant]:
             continue
         person_id = str(entry.get("code") or entry.get("participant_id") or f"participant {index}")
         key = str(entry.get("participant_id", person_id))
-        model = entry.get("model")
+        model = _file_schema(entry.get("model"), _first(entry.get("training_order")))
         person = Participant(person_id, model, where=f"participant {index}")
         if model is None:
             person.problems.append(f"{person_id} has no model yet")

@@ -5,13 +5,15 @@ The pages and ``/v1/experiments`` call the same functions, so both show the same
 
 from __future__ import annotations
 
+import tempfile
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any
 
 from fastapi import Request, Response
 from sqlalchemy.orm import Session
 
-from causalplan.errors import UnknownObjectError
+from causalplan.errors import InputFileError, UnknownObjectError
 from causalplan.objects.catalog import Catalog
 from causalplan.service.db.models import ExperimentRecord, ParticipantRecord
 from causalplan.service.responses import SafeJSONResponse, csv_bytes
@@ -171,6 +173,32 @@ def analysis_of(session: Session, catalog: Catalog, experiment: ExperimentRecord
         return analyse(trial_rows(data, catalog), catalog)
     except (ExportError, UnknownObjectError) as exc:
         return exc.message
+
+
+def crowd_size(session: Session, experiment: ExperimentRecord) -> int:
+    """Return how many of the experiment's participants have written a model (the crowd of its consensus)."""
+    return sum(
+        1 for participant in store.participants_of(session, experiment.id) if (participant.work or {}).get("model")
+    )
+
+
+def consensus_svg(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> bytes | str:
+    """Return the crowd's consensus graph as SVG (``causalplan consensus`` on the export), or why there is none.
+
+    The graph beside the first members' own models; an arrow's width is its rule's support.
+    """
+    from causalplan.consensus.build import NoCrowdError, build_consensus
+    from causalplan.consensus.drawing import draw_consensus
+    from causalplan.consensus.participants import participants_of_export
+
+    data = export_data(session, catalog, experiment, request, platform_ids="omit")
+    try:
+        consensus = build_consensus(participants_of_export(data, f"experiment {experiment.id}"), catalog)
+    except (NoCrowdError, InputFileError) as exc:
+        return exc.message
+    with tempfile.TemporaryDirectory() as folder:  # matplotlib writes the files; the SVG is read back
+        paths = draw_consensus(consensus, dict(consensus.models), Path(folder))
+        return next(path for path in paths if path.suffix == ".svg").read_bytes()
 
 
 def rates_of(session: Session, catalog: Catalog, experiment: ExperimentRecord) -> list[Rate]:

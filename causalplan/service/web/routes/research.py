@@ -190,6 +190,7 @@ def _experiment_page(
         recruitment_errors=recruitment_errors or [],
         demographics=DEMOGRAPHICS,
         analysis=None if isinstance(analysis, str) else analysis.as_dict(),
+        crowd_size=experiments.crowd_size(session, experiment),
         analysis_problem=analysis if isinstance(analysis, str) else None,
         misconception_words={
             participant: [found.says() for found in items]
@@ -261,6 +262,18 @@ def analysis_plot(
         path = Path(folder) / "rates.svg"
         plot(analysis, path)
         svg = path.read_bytes()
+    return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
+
+
+@router.get("/experiments/{experiment_id}/consensus.svg")
+def consensus_graph(
+    request: Request, experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep
+) -> Response:
+    """The crowd's consensus model (arrow width: how many participants hold the rule) beside their own models."""
+    experiment = store.get_experiment(session, experiment_id)
+    svg = experiments.consensus_svg(session, catalog, experiment, request)
+    if isinstance(svg, str):
+        raise InvalidRequestError(f"There is no consensus to draw: {svg}")
     return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
 
 
