@@ -24,7 +24,7 @@ from fastapi import APIRouter
 def routers() -> list[APIRouter]:
     """Return the web routers, in the order the app includes them."""
     from causalplan.service.web import upkeep
-    from causalplan.service.web.routes import assets, experiments, participant, participant_api, research
+    from causalplan.service.web.routes import assets, experiments, participant, participant_api, research, robot_films
 
     return [
         APIRouter(lifespan=upkeep.lifespan),  # no routes: the demo's limit and the background upkeep
@@ -32,6 +32,7 @@ def routers() -> list[APIRouter]:
         assets.router,
         participant.router,
         participant_api.router,
+        robot_films.router,
         research.router,
         experiments.router,
     ]

@@ -62,6 +62,7 @@ def plans(services: Services, journey: Journey, participant_model: ParticipantMo
                 "message": str(answer.data.get("message", "")),
                 "works": bool(answer.data.get("valid_under_true_mechanism")),
                 "picture_url": picture_url(journey.participant.code, obj.id, steps),
+                "fits": [str(step.get("fit") or "") for step in steps],
             }
         )
     return found

@@ -221,7 +221,30 @@ class PlanForObjectOut(OutputModel):
     message: str
     works: bool = Field(description="Whether the plan makes the real object produce its goal (replayed).")
     picture_url: str | None
+    fits: list[str] = Field(description="The fits the plan makes, in order (what 'Watch the robot' films).")
 
 
 class PlansOut(OutputModel):
     plans: list[PlanForObjectOut]
+
+
+class FilmIn(InputModel):
+    """'Watch the robot': film the robot making these fits of one of the participant's training objects."""
+
+    object: str = Field(max_length=200)
+    fits: list[str] = Field(min_length=1, max_length=64)
+
+
+class FilmOut(OutputModel):
+    """A film of the robot being made, or made: what the page shows while it waits, then plays."""
+
+    key: str
+    state: Literal["filming", "ready", "failed"]
+    frames: int = Field(description="Frames drawn so far.")
+    expected_frames: int | None = Field(description="Frames the film has while the robot moves (null: not known yet).")
+    seconds: float = Field(description="Seconds since filming began (or that it took).")
+    status_url: str
+    video_url: str | None = Field(description="Where the film is, once ready.")
+    content_type: str
+    robot: dict[str, Any] | None = Field(description="Whether the robot carried out the plan, and why not.")
+    error: dict[str, str] | None
