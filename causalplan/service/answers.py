@@ -244,12 +244,22 @@ class Answerer:
         return self._answer(key, jobs.plan_job, args, seconds, _is_final_plan, meanwhile)
 
     def transfer(
-        self, model: CausalModel, mapping: Labelling, planner: str, time_limit: float, val: bool = False
+        self,
+        model: CausalModel,
+        mapping: Labelling,
+        planner: str,
+        time_limit: float,
+        val: bool = False,
+        robot: bool = False,
     ) -> Answer:
-        """Return the transfer verdict of ``model`` through ``mapping``, as ``causalplan transfer --json``."""
-        key = self.key("transfer:val" if val else "transfer", model, mapping, planner, time_limit)
-        seconds = time_limit + self.settings.solve_grace_seconds
-        args = (*self._args(model, mapping, planner, time_limit), val)
+        """Return the transfer verdict of ``model`` through ``mapping``, as ``causalplan transfer --json``.
+
+        ``robot``: the robot has the last word (a plan it cannot carry out fails, ``robot_cannot_execute``).
+        """
+        kind = "transfer" + (":val" if val else "") + (":robot" if robot else "")
+        key = self.key(kind, model, mapping, planner, time_limit)
+        seconds = time_limit + self.settings.solve_grace_seconds + (self.settings.robot_seconds if robot else 0.0)
+        args = (*self._args(model, mapping, planner, time_limit), val, robot)
         return self._answer(key, jobs.transfer_job, args, seconds, _is_final_verdict, None)
 
     def simulate(

@@ -75,10 +75,19 @@ def transfer_job(
     time_limit: float,
     catalog_folders: tuple[Path, ...],
     val: bool = False,
+    robot: bool = False,
 ) -> dict[str, object]:
-    """Return the transfer verdict of ``model`` through ``mapping``, as ``causalplan transfer --json``."""
+    """Return the transfer verdict of ``model`` through ``mapping``, as ``causalplan transfer --json``.
+
+    ``robot``: the robot has the last word (``sim.robot_verdict.robot_judged``).
+    """
     catalog = worker_catalog(catalog_folders)
-    return evaluate_transfer(model, mapping, catalog, planner, time_limit, val=val).as_dict()
+    verdict = evaluate_transfer(model, mapping, catalog, planner, time_limit, val=val)
+    if robot:
+        from causalplan.sim.robot_verdict import robot_judged
+
+        verdict = robot_judged(verdict, catalog)
+    return verdict.as_dict()
 
 
 def _version(distribution: str) -> str | None:

@@ -104,7 +104,8 @@ def run_trial(services: Services, session: Session, journey: Journey, index: int
     test = journey.tests[index]
     planner = default_planner()
     model = model_on(participant_model, journey.training[0].id)
-    answer = services.answers.transfer(model, mapping.mapping, planner, services.settings.default_time_limit)
+    limit = services.settings.default_time_limit
+    answer = services.answers.transfer(model, mapping.mapping, planner, limit, robot=journey.design.robot_verdict)
     trial = crud.new_trial_record(
         model_id, mapping.document, planner, answer.data, answer.cached, answer.seconds, client_ids(journey)
     )

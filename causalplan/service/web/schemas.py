@@ -35,6 +35,11 @@ class ExperimentIn(InputModel):
     counterbalance_tests: bool = Field(default=True, description="Order the test objects by a Latin square.")
     show_verdict: bool = Field(default=True, description="Show participants whether their model transferred.")
     tutorial: bool = Field(default=True, description="Begin with the toy-car tutorial.")
+    robot_verdict: bool = Field(
+        default=False,
+        description="A transfer also needs the robot (Franka Panda) to carry out the plan; a plan it cannot "
+        "carry out fails with robot_cannot_execute.",
+    )
 
     model_config = ConfigDict(
         extra="forbid",
@@ -78,6 +83,7 @@ class ExperimentOut(OutputModel):
     counterbalance_tests: bool
     show_verdict: bool
     tutorial: bool
+    robot_verdict: bool
     is_demo: bool
     participants: int
     links: ExperimentLinks
