@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import tempfile
 import threading
 import time
@@ -25,6 +26,8 @@ from cachetools import LRUCache
 from causalplan.errors import CausalPlanError
 from causalplan.service.errors import NotFoundError
 from causalplan.service.pool.robot_jobs import CONTENT_TYPES, read_progress
+
+logger = logging.getLogger(__name__)
 
 FilmState = Literal["filming", "ready", "failed"]
 FILM_OVERHEAD_BYTES = 1024
@@ -150,6 +153,10 @@ class FilmStore:
             made = make(film.progress_file)
         except CausalPlanError as exc:
             film.error = {"code": exc.code, "message": exc.message}
+            film.state = "failed"
+        except Exception:  # a bug must not leave the film "filming" for ever
+            logger.exception("filming %s failed", film.key)
+            film.error = {"code": "internal_error", "message": "The film could not be made; the server log says why."}
             film.state = "failed"
         else:
             film.robot = made.get("robot")
