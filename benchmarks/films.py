@@ -45,7 +45,7 @@ def main() -> int:
     args = parser.parse_args()
     sizes = [_size(item) for item in args.sizes.split(",") if item]
     catalog = load_catalog(())
-    console = Console()
+    console = Console(width=160)  # the table stays whole when written to a file
     console.print(
         f"python {platform.python_version()}, pybullet {metadata.version('pybullet')}, "
         f"imageio-ffmpeg {metadata.version('imageio-ffmpeg')}, {platform.machine()}, repeat {args.repeat}"

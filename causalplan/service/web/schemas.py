@@ -252,5 +252,6 @@ class FilmOut(OutputModel):
     status_url: str
     video_url: str | None = Field(description="Where the film is, once ready.")
     content_type: str
+    bytes: int = Field(description="The film's size, once ready (0 before).")
     robot: dict[str, Any] | None = Field(description="Whether the robot carried out the plan, and why not.")
     error: dict[str, str] | None
