@@ -48,7 +48,7 @@ def frames_expected(report: SimulationReport) -> int:
     """Return how many frames filming the run of ``report`` draws while the robot moves.
 
     The recorder draws one frame every ``FRAME_EVERY`` commanded positions, and the run is
-    deterministic, so the run without a film (about a tenth of the filming's cost) says it.
+    deterministic, so the run without a film (a few percent of the filming's cost) says it.
     """
     from causalplan.sim.video import FRAME_EVERY
 
