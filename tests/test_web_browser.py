@@ -16,7 +16,7 @@ import httpx
 import pytest
 from playwright.sync_api import Browser, Page, Playwright, ViewportSize, expect, sync_playwright
 
-from tests.service_fixtures import AUTH, RESEARCH_TOKEN
+from tests.service_fixtures import AUTH, RESEARCH_TOKEN, serving, settings_for, sqlite_url
 from tests.web_flows import LAMP_RULES, TUTORIAL_ANSWERS, TUTORIAL_RULES, experiment, links
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -416,3 +416,40 @@ def test_a_full_quota_is_refused_politely(live_server: str, page: Page) -> None:
     expect(page.locator("#study-message")).to_contain_text("Every place in this study has been taken")
     shoot(page, "public-3-full")
     assert recruitment_of(live_server, experiment_id)["arrivals"]["arrived"] == 1
+
+
+@pytest.fixture(scope="module")
+def filming_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """A real server that films the robot small (the robot's run is the same at any size; filming is quicker)."""
+    url = sqlite_url(tmp_path_factory.mktemp("db"))
+    with serving(settings_for(url, robot_video_width=160, robot_video_height=120)) as base:
+        yield base
+
+
+def test_watch_the_robot_plays_the_film_of_the_desk_lamp_while_the_page_stays_usable(
+    filming_server: str, page: Page
+) -> None:
+    page.goto(new_link(filming_server, tutorial=False))
+    page.get_by_label("Functions of the base with cables (one per line)").fill("provide electricity")
+    bulb = page.get_by_label("Functions of the light bulb (one per line)")
+    bulb.fill("turn electricity into light\nclose the circuit")
+    saved(page)
+    page.get_by_role("button", name="Save and continue").click()
+    expect(page).to_have_url(re.compile(r"/step2$"))
+    page.get_by_label("Your rules, one per line").fill(LAMP_RULES)
+    expect(page.locator("#problems")).to_have_class(re.compile(r"\bok\b"))
+    page.get_by_role("button", name="Show the robot's plan").click()
+    page.get_by_role("button", name="Watch the robot").click()
+    progress = page.locator(".film-progress")
+    expect(progress).to_contain_text("frames", timeout=30_000)  # frames filmed of those expected
+    expect(page.get_by_role("button", name="Submit my model")).to_be_enabled()  # the page stays usable
+    video = page.locator("video.robot-video")
+    expect(video).to_have_count(1, timeout=120_000)
+    expect(video).to_have_attribute("controls", "")
+    page.wait_for_function("() => document.querySelector('video.robot-video').readyState >= 2", timeout=30_000)
+    started = float(video.evaluate("v => v.currentTime"))
+    page.wait_for_function(
+        f"() => document.querySelector('video.robot-video').currentTime > {started} + 0.5", timeout=30_000
+    )
+    assert not progress.is_visible()
+    shoot(page, "participant-2-watch-the-robot")

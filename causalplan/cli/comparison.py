@@ -174,6 +174,12 @@ def _on_cluster(
 @time_limit_option
 @click.option("--simulate/--no-simulate", default=True, help="Check plans in the physics simulator (as transfer does).")
 @val_option
+@click.option(
+    "--robot",
+    is_flag=True,
+    help="Also have the Franka Panda carry out each plan that transfers: one it cannot carry out fails "
+    "with robot_cannot_execute (not with --cluster or --workers).",
+)
 @click.option("--out", type=FILE, default=Path("out/batch"), help="Folder for verdicts.csv and verdicts.json.")
 @click.option(
     "--cluster",
@@ -199,6 +205,7 @@ def batch(
     time_limit: float,
     simulate: bool,
     val: bool,
+    robot: bool,
     out: Path,
     cluster: str | None,
     workers: int | None,
@@ -236,11 +243,20 @@ def batch(
         fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
     if cluster is not None and workers is not None:
         fail("invalid_option", "Give --cluster (an existing cluster) or --workers (a local one), not both.")
+    if robot and (cluster is not None or workers is not None):
+        fail("invalid_option", "--robot judges on this machine only; leave out --cluster and --workers.")
+    judge = None
+    if robot:
+        from causalplan.sim.robot_verdict import robot_judged
+
+        judge = robot_judged
     started = time.perf_counter()
     with progress_bar() as progress:
         bar = progress.add_task("judging trials", total=len(trials))
         if cluster is None and workers is None:
-            results = run_batch(trials, objects, planner, time_limit, simulate, lambda: progress.advance(bar), val=val)
+            results = run_batch(
+                trials, objects, planner, time_limit, simulate, lambda: progress.advance(bar), val=val, judge=judge
+            )
         else:
             results = _on_cluster(
                 trials,

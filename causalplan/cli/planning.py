@@ -128,6 +128,12 @@ def _print_verdict(verdict: TransferVerdict) -> None:
 @planner_option
 @time_limit_option
 @val_option
+@click.option(
+    "--robot",
+    is_flag=True,
+    help="Also have the Franka Panda carry out the plan: a transfer it cannot carry out fails with "
+    "robot_cannot_execute (its step and code, e.g. unreachable, no_collision_free_path).",
+)
 @json_option
 @catalog_option
 def transfer(
@@ -136,6 +142,7 @@ def transfer(
     planner: str,
     time_limit: float,
     val: bool,
+    robot: bool,
     as_json: bool,
     catalog: tuple[Path, ...],
 ) -> None:
@@ -144,7 +151,12 @@ def transfer(
     MODEL is the causal model of the training object (steps 1-2); MAPPING maps a new object's
     parts to the model's functions (step 3). Exit 0 when it transfers, 1 when it fails, 2 when
     the model or mapping is invalid or VAL rejects the plan, 3 when the planner could not
-    decide (e.g. it timed out).
+    decide (e.g. it timed out). With --robot the robot has the last word: a plan it cannot
+    carry out fails with robot_cannot_execute (the step, and unreachable, collision, ...):
+
+    \b
+        causalplan transfer examples/robot/walled_plate.yaml examples/robot/long_bench_mapping.yaml \\
+            --robot --catalog examples/robot/catalog
     """
     from causalplan.errors import CausalPlanError
     from causalplan.inputs import load_mapping, load_model
@@ -155,6 +167,10 @@ def transfer(
     loaded_model, loaded_mapping = load_model(model, objects), load_mapping(mapping, objects)
     try:
         verdict = transfer_verdict(loaded_model, loaded_mapping, objects, planner, time_limit, val=val)
+        if robot:
+            from causalplan.sim.robot_verdict import robot_judged
+
+            verdict = robot_judged(verdict, objects)
     except CausalPlanError as exc:
         fail(exc.code, exc.message)
     if as_json:

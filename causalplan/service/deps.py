@@ -18,6 +18,7 @@ from causalplan.service.answers import Answerer, ResultCache
 from causalplan.service.db.crud import ClientIds
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH
 from causalplan.service.errors import NotAuthenticatedError, ResearchDisabledError
+from causalplan.service.films import FilmStore
 from causalplan.service.pool.pool import PlannerPool
 from causalplan.service.throttle import FailedAttempts
 from causalplan.settings import Settings
@@ -39,6 +40,11 @@ class Services:
     """Wrong research tokens by client and in total, to refuse guessing at full speed."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
+    films: FilmStore = field(init=False)
+    """The robot's films, by key (``video_cache_mb`` of them)."""
+
+    def __post_init__(self) -> None:
+        self.films = FilmStore(self.settings.video_cache_mb * 1024 * 1024)
 
     @property
     def answers(self) -> Answerer:

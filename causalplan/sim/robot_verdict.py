@@ -94,6 +94,14 @@ def robot_transfer_verdict(
         verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner)
     else:
         verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit)
+    return robot_judged(verdict, catalog)
+
+
+def robot_judged(verdict: TransferVerdict, catalog: Catalog) -> TransferVerdict:
+    """Return ``verdict`` with the robot as the last judge: a transfer it cannot carry out fails (by "robot").
+
+    Other verdicts are returned as they are: the robot only judges plans that transfer.
+    """
     if verdict.verdict is not Verdict.TRANSFERS or verdict.plan is None or verdict.test_object is None:
         return verdict
     report = robot_run(catalog.get(verdict.test_object), tuple(verdict.plan.steps))

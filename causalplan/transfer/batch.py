@@ -182,10 +182,24 @@ def _unchecked_verdict(exc: PlanRejectedError | ValidatorError, training: str, t
     )
 
 
+Judge = Callable[[TransferVerdict, Catalog], TransferVerdict]
+"""A last judge of a verdict, e.g. the robot (``sim.robot_verdict.robot_judged``; passed in, since
+``transfer`` never imports the simulator above it)."""
+
+
 def evaluate_trial(
-    trial: Trial, catalog: Catalog, planner: str, time_limit: float, simulate: bool, val: bool = False
+    trial: Trial,
+    catalog: Catalog,
+    planner: str,
+    time_limit: float,
+    simulate: bool,
+    val: bool = False,
+    judge: Judge | None = None,
 ) -> TrialResult:
-    """Return the verdict of one trial (never raises for bad input; a plan VAL rejects is ``undecided``)."""
+    """Return the verdict of one trial (never raises for bad input; a plan VAL rejects is ``undecided``).
+
+    ``judge`` has the last word on the verdict (e.g. the robot's).
+    """
     started = time.perf_counter()
     if trial.problem is not None:
         verdict = _unreadable_verdict(trial.problem, trial.line)
@@ -195,6 +209,8 @@ def evaluate_trial(
         loaded_mapping = mapping_from_data(trial.mapping, source, catalog)
         try:
             verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit, simulate, val=val)
+            if judge is not None:
+                verdict = judge(verdict, catalog)
         except (PlanRejectedError, ValidatorError) as exc:
             assert loaded_model.model is not None and loaded_mapping.mapping is not None  # only valid ones plan
             verdict = _unchecked_verdict(exc, loaded_model.model.object_id, loaded_mapping.mapping.object_id)
@@ -209,11 +225,12 @@ def run_batch(
     simulate: bool = True,
     progress: Callable[[], None] | None = None,
     val: bool = False,
+    judge: Judge | None = None,
 ) -> list[TrialResult]:
-    """Return the results of every trial, in order; ``val`` checks every plan with VAL too."""
+    """Return the results of every trial, in order; ``val``: VAL checks each plan, ``judge`` has the last word."""
     results = []
     for trial in trials:
-        results.append(evaluate_trial(trial, catalog, planner, time_limit, simulate, val))
+        results.append(evaluate_trial(trial, catalog, planner, time_limit, simulate, val, judge))
         if progress is not None:
             progress()
     return results

@@ -75,10 +75,19 @@ def transfer_job(
     time_limit: float,
     catalog_folders: tuple[Path, ...],
     val: bool = False,
+    robot: bool = False,
 ) -> dict[str, object]:
-    """Return the transfer verdict of ``model`` through ``mapping``, as ``causalplan transfer --json``."""
+    """Return the transfer verdict of ``model`` through ``mapping``, as ``causalplan transfer --json``.
+
+    ``robot``: the robot has the last word (``sim.robot_verdict.robot_judged``).
+    """
     catalog = worker_catalog(catalog_folders)
-    return evaluate_transfer(model, mapping, catalog, planner, time_limit, val=val).as_dict()
+    verdict = evaluate_transfer(model, mapping, catalog, planner, time_limit, val=val)
+    if robot:
+        from causalplan.sim.robot_verdict import robot_judged
+
+        verdict = robot_judged(verdict, catalog)
+    return verdict.as_dict()
 
 
 def _version(distribution: str) -> str | None:
@@ -138,14 +147,20 @@ def simulate_job(
     time_limit: float,
     catalog_folders: tuple[Path, ...],
     picture: bool,
+    robot: bool = False,
+    video: str | None = None,
+    video_size: tuple[int, int] = (480, 360),
 ) -> dict[str, object]:
     """Plan ``model`` (on the mapping's object), run the plan in the physics simulator.
 
     Returns the plan (as ``causalplan plan --json``), the simulator's report and, when asked,
-    the picture of the final assembly as a PNG data URL.
+    the picture of the final assembly as a PNG data URL. With ``robot`` the Panda carries out
+    the plan (``robot``: whether it could, and why not), and ``video`` ("mp4" or "gif") films
+    it: the film's bytes are in ``video`` (the app keeps them and answers with their URL).
     """
     import base64
 
+    from causalplan.service.pool.robot_jobs import robot_outcome, robot_simulation
     from causalplan.sim import RenderMode, simulate_plan
 
     catalog = worker_catalog(catalog_folders)
@@ -154,6 +169,10 @@ def simulate_job(
     data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "image": None}
     if not result.has_plan:
         return data
+    if robot:
+        report, film = robot_simulation(target, result.steps, video, video_size)
+        data.update(simulation=report.as_dict(), robot=robot_outcome(report), video=film)
+        return data  # no still picture: the film shows the assembly
     report = simulate_plan(target, result.steps, render=RenderMode.FINAL if picture else RenderMode.NONE)
     data["simulation"] = report.as_dict()
     if picture and report.picture is not None:

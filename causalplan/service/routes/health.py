@@ -119,5 +119,6 @@ def health(services: ServicesDep) -> HealthOut:
             "max_rules": settings.max_rules,
             "default_time_limit": settings.default_time_limit,
             "max_time_limit": settings.max_time_limit,
+            "robot_seconds": settings.robot_seconds,
         },
     )

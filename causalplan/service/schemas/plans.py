@@ -63,7 +63,25 @@ class TransferIn(_Solve):
 class SimulationIn(PlanIn):
     """POST /v1/simulations: what POST /v1/plans takes, and whether to draw the final assembly."""
 
-    picture: bool = Field(default=True, description="Also return a PNG of the final assembly as a data URL.")
+    picture: bool = Field(
+        default=True, description="Also return a PNG of the final assembly as a data URL (not with 'robot')."
+    )
+    robot: bool = Field(
+        default=False,
+        description="Have the Franka Panda carry out the plan: per step what it did ('robot' in each step), "
+        "and in the answer's 'robot' whether it could (else the reason robot_cannot_execute, its step and code).",
+    )
+    video: Literal["mp4", "gif"] | None = Field(
+        default=None,
+        description="With 'robot': also film it, as MP4 (H.264) or GIF; the answer's 'video' says where to "
+        "fetch the film (GET /v1/simulations/videos/{key}). Filming takes tens of seconds.",
+    )
+
+    @model_validator(mode="after")
+    def _video_needs_robot(self) -> SimulationIn:
+        if self.video is not None and not self.robot:
+            raise ValueError("'video' needs 'robot': true (the film is of the robot at work)")
+        return self
 
 
 class PddlOut(OutputModel):

@@ -33,6 +33,7 @@ def routers() -> list[APIRouter]:
         participant,
         participant_api,
         research,
+        robot_films,
         study_link,
     )
 
@@ -44,6 +45,7 @@ def routers() -> list[APIRouter]:
         participant.router,
         ending.router,
         participant_api.router,
+        robot_films.router,
         research.router,
         experiments.router,
     ]

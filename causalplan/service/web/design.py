@@ -39,6 +39,8 @@ class Design:
     counterbalance_tests: bool = True
     show_verdict: bool = True
     tutorial: bool = True
+    robot_verdict: bool = False
+    """Whether a transfer also needs the robot to carry out the plan (``robot_cannot_execute`` when not)."""
 
     def condition(self, name: str) -> Condition:
         """Return the condition called ``name`` (KeyError when there is none)."""
@@ -54,6 +56,7 @@ class Design:
             "counterbalance_tests": self.counterbalance_tests,
             "show_verdict": self.show_verdict,
             "tutorial": self.tutorial,
+            "robot_verdict": self.robot_verdict,
         }
 
     @classmethod
@@ -68,6 +71,7 @@ class Design:
             bool(data.get("counterbalance_tests", True)),
             bool(data.get("show_verdict", True)),
             bool(data.get("tutorial", True)),
+            bool(data.get("robot_verdict", False)),  # designs stored before the option was added: off
         )
 
 
@@ -160,6 +164,7 @@ def read_design(
         counterbalance_tests=options.get("counterbalance_tests", True),
         show_verdict=options.get("show_verdict", True),
         tutorial=options.get("tutorial", True),
+        robot_verdict=options.get("robot_verdict", False),
     )
     return display_label(name), design
 

@@ -37,7 +37,9 @@ from causalplan.studies.trials import ExportError, trial_rows
 
 def create(session: Session, catalog: Catalog, body: ExperimentIn) -> ExperimentRecord:
     """Check a definition against the catalog and store the experiment (InvalidExperimentError lists problems)."""
-    options = body.model_dump(include={"counterbalance_training", "counterbalance_tests", "show_verdict", "tutorial"})
+    options = body.model_dump(
+        include={"counterbalance_training", "counterbalance_tests", "show_verdict", "tutorial", "robot_verdict"}
+    )
     name, design = read_design(body.name, [condition.model_dump() for condition in body.conditions], options, catalog)
     return store.create_experiment(session, name, body.description.strip(), design)
 

@@ -62,6 +62,7 @@ def plans(services: Services, journey: Journey, participant_model: ParticipantMo
                 "message": str(answer.data.get("message", "")),
                 "works": bool(answer.data.get("valid_under_true_mechanism")),
                 "picture_url": picture_url(journey.participant.code, obj.id, steps),
+                "fits": [str(step.get("fit") or "") for step in steps],
             }
         )
     return found
@@ -103,7 +104,8 @@ def run_trial(services: Services, session: Session, journey: Journey, index: int
     test = journey.tests[index]
     planner = default_planner()
     model = model_on(participant_model, journey.training[0].id)
-    answer = services.answers.transfer(model, mapping.mapping, planner, services.settings.default_time_limit)
+    limit = services.settings.default_time_limit
+    answer = services.answers.transfer(model, mapping.mapping, planner, limit, robot=journey.design.robot_verdict)
     trial = crud.new_trial_record(
         model_id, mapping.document, planner, answer.data, answer.cached, answer.seconds, client_ids(journey)
     )

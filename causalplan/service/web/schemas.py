@@ -35,6 +35,11 @@ class ExperimentIn(InputModel):
     counterbalance_tests: bool = Field(default=True, description="Order the test objects by a Latin square.")
     show_verdict: bool = Field(default=True, description="Show participants whether their model transferred.")
     tutorial: bool = Field(default=True, description="Begin with the toy-car tutorial.")
+    robot_verdict: bool = Field(
+        default=False,
+        description="A transfer also needs the robot (Franka Panda) to carry out the plan; a plan it cannot "
+        "carry out fails with robot_cannot_execute.",
+    )
 
     model_config = ConfigDict(
         extra="forbid",
@@ -114,6 +119,7 @@ class ExperimentOut(OutputModel):
     counterbalance_tests: bool
     show_verdict: bool
     tutorial: bool
+    robot_verdict: bool
     is_demo: bool
     participants: int
     links: ExperimentLinks
@@ -263,7 +269,31 @@ class PlanForObjectOut(OutputModel):
     message: str
     works: bool = Field(description="Whether the plan makes the real object produce its goal (replayed).")
     picture_url: str | None
+    fits: list[str] = Field(description="The fits the plan makes, in order (what 'Watch the robot' films).")
 
 
 class PlansOut(OutputModel):
     plans: list[PlanForObjectOut]
+
+
+class FilmIn(InputModel):
+    """'Watch the robot': film the robot making these fits of one of the participant's training objects."""
+
+    object: str = Field(max_length=200)
+    fits: list[str] = Field(min_length=1, max_length=64)
+
+
+class FilmOut(OutputModel):
+    """A film of the robot being made, or made: what the page shows while it waits, then plays."""
+
+    key: str
+    state: Literal["filming", "ready", "failed"]
+    frames: int = Field(description="Frames drawn so far.")
+    expected_frames: int | None = Field(description="Frames the film has while the robot moves (null: not known yet).")
+    seconds: float = Field(description="Seconds since filming began (or that it took).")
+    status_url: str
+    video_url: str | None = Field(description="Where the film is, once ready.")
+    content_type: str
+    bytes: int = Field(description="The film's size, once ready (0 before).")
+    robot: dict[str, Any] | None = Field(description="Whether the robot carried out the plan, and why not.")
+    error: dict[str, str] | None

@@ -118,6 +118,7 @@ def new_experiment(request: Request, _: ResearchPageDep, catalog: CatalogDep) ->
         "counterbalance_tests": True,
         "show_verdict": True,
         "tutorial": True,
+        "robot_verdict": False,
         "conditions": [],
     }
     return _new_form(request, catalog, defaults)
@@ -141,6 +142,7 @@ def _experiment_values(form: Form) -> dict[str, Any]:
         "counterbalance_tests": form.flag("counterbalance_tests"),
         "show_verdict": form.flag("show_verdict"),
         "tutorial": form.flag("tutorial"),
+        "robot_verdict": form.flag("robot_verdict"),
     }
 
 

@@ -254,6 +254,97 @@
     return frame;
   }
 
+  // "Watch the robot": the film is made in a worker (tens of seconds); the page asks how far it
+  // is every second, shows the frames filmed so far, and plays the MP4 once it is ready.
+  const FILM_POLL_MS = 1000;
+
+  function filmProgressText(status) {
+    const seconds = Math.round(status.seconds) + " s";
+    if (!status.expected_frames) return "The robot is getting ready… (" + seconds + ")";
+    return "Filming the robot: " + status.frames + " of " + status.expected_frames + " frames (" + seconds + ")";
+  }
+
+  function watchRobot(plan, filmUrl) {
+    const frame = document.createElement("div");
+    frame.className = "robot-film";
+    const button = document.createElement("button");
+    button.type = "button";
+    button.className = "watch-robot";
+    button.textContent = "Watch the robot";
+    frame.appendChild(button);
+    const progress = document.createElement("p");
+    progress.className = "small film-progress";
+    progress.setAttribute("role", "status");
+    progress.hidden = true;
+    const bar = document.createElement("progress");
+    bar.setAttribute("aria-label", "Filming the robot");
+    const words = document.createElement("span");
+    progress.appendChild(bar);
+    progress.appendChild(document.createTextNode(" "));
+    progress.appendChild(words);
+    frame.appendChild(progress);
+
+    function show(status) {
+      if (status.expected_frames) {
+        bar.max = status.expected_frames;
+        bar.value = status.frames;
+      } else {
+        bar.removeAttribute("value");
+      }
+      words.textContent = filmProgressText(status);
+    }
+
+    function play(status) {
+      progress.hidden = true;
+      const video = document.createElement("video");
+      video.className = "robot-video";
+      video.controls = true;
+      video.muted = true;
+      video.autoplay = true;
+      video.playsInline = true;
+      video.preload = "auto";
+      video.setAttribute("aria-label", "The robot assembling the " + plan.name);
+      video.src = status.video_url;
+      frame.appendChild(video);
+      if (status.robot && !status.robot.carried_out && status.robot.reason) {
+        const note = document.createElement("p");
+        note.className = "feedback";
+        note.textContent = status.robot.reason.message;
+        frame.appendChild(note);
+      }
+      button.remove();
+    }
+
+    async function follow(status) {
+      while (status.state === "filming") {
+        show(status);
+        await new Promise(function (resolve) { setTimeout(resolve, FILM_POLL_MS); });
+        const response = await fetch(status.status_url, { headers: { Accept: "application/json" }, credentials: "same-origin" });
+        if (!response.ok) throw new Error("The server answered " + response.status + ".");
+        status = await response.json();
+      }
+      if (status.state === "ready") {
+        play(status);
+      } else {
+        throw new Error(status.error ? status.error.message : "The film could not be made.");
+      }
+    }
+
+    button.addEventListener("click", async function () {
+      button.disabled = true;
+      progress.hidden = false;
+      words.textContent = "Asking for the film…";
+      try {
+        await follow(await postJson(filmUrl, { object: plan.object, fits: plan.fits }));
+      } catch (error) {
+        words.textContent = "No film now: " + error.message;
+        bar.remove();
+        button.disabled = false;
+      }
+    });
+    return frame;
+  }
+
   const planButton = document.getElementById("show-plan");
   if (planButton && rules) {
     const section = document.getElementById("plan");
@@ -293,6 +384,9 @@
             block.appendChild(warning);
           }
           if (plan.picture_url) block.appendChild(planPicture(plan));
+          if (planButton.dataset.filmUrl && plan.fits.length && plan.fits.every(Boolean)) {
+            block.appendChild(watchRobot(plan, planButton.dataset.filmUrl));
+          }
           body.appendChild(block);
         });
         const advice = document.createElement("p");

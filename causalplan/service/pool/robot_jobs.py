@@ -1,0 +1,128 @@
+"""The robot's jobs for the planner workers: carry out a plan, and film it with progress.
+
+Filming takes tens of seconds, so a film job writes its progress (frames drawn, frames
+expected) to a small JSON file that the app reads while the worker works: the worker's
+socket carries only the job and its answer.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from causalplan.objects.model import AssemblyObject
+
+if TYPE_CHECKING:
+    from causalplan.planners.result import PlanStep
+    from causalplan.sim import SimulationReport, StepRequest
+
+FORMATS = {"mp4": ".mp4", "gif": ".gif"}
+"""Video formats a request may ask for, by name, and the file suffix each is written with."""
+CONTENT_TYPES = {"mp4": "video/mp4", "gif": "image/gif"}
+
+
+def write_progress(path: Path | None, frames: int, expected: int | None) -> None:
+    """Write the film's progress to ``path`` whole (a reader never sees half a file)."""
+    if path is None:
+        return
+    draft = path.with_suffix(".part")
+    draft.write_text(json.dumps({"frames": frames, "expected": expected}), encoding="utf-8")
+    os.replace(draft, path)
+
+
+def read_progress(path: Path) -> tuple[int, int | None]:
+    """Return (frames drawn, frames expected) from a progress file; (0, None) before the first write."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return 0, None
+    expected = data.get("expected")
+    return int(data.get("frames", 0)), int(expected) if isinstance(expected, int) else None
+
+
+def frames_expected(report: SimulationReport) -> int:
+    """Return how many frames filming the run of ``report`` draws while the robot moves.
+
+    The recorder draws one frame every ``FRAME_EVERY`` commanded positions, and the run is
+    deterministic, so the run without a film (a few percent of the filming's cost) says it.
+    """
+    from causalplan.sim.video import FRAME_EVERY
+
+    positions = sum(len(segment.positions) for segment in report.trajectory.segments) if report.trajectory else 0
+    return max(1, math.ceil(positions / FRAME_EVERY))
+
+
+def steps_of(obj: AssemblyObject, fit_ids: Sequence[str]) -> list[StepRequest]:
+    """Return the plan steps that make the fits ``fit_ids`` of ``obj``, in order."""
+    from causalplan.sim import StepRequest
+
+    return [StepRequest(fit.primitive, fit.moving_part, fit.fixed_part, fit.id) for fit in map(obj.fit, fit_ids)]
+
+
+def robot_simulation(
+    obj: AssemblyObject,
+    steps: Sequence[StepRequest | PlanStep],
+    video: str | None,
+    size: tuple[int, int],
+    progress: Path | None = None,
+) -> tuple[SimulationReport, bytes | None]:
+    """Return the robot's run of ``steps`` on ``obj`` and, when ``video`` names a format, its film.
+
+    Without a film the run comes from the robot's cache (``robot_verdict.robot_run``).
+    """
+    from causalplan.sim import RenderMode, simulate_plan
+    from causalplan.sim.robot_verdict import robot_run
+    from causalplan.sim.video import encode
+
+    report = robot_run(obj, tuple(steps))
+    if video is None:
+        return report, None
+    expected = frames_expected(report)
+    write_progress(progress, 0, expected)
+    on_frame: Callable[[int], None] = lambda frames: write_progress(progress, min(frames, expected), expected)  # noqa: E731
+    filmed = simulate_plan(
+        obj, steps, render=RenderMode.NONE, robot=True, video=True, video_size=size, on_frame=on_frame
+    )
+    return filmed, encode(filmed.video, FORMATS[video])
+
+
+def robot_film_job(
+    object_id: str,
+    fit_ids: tuple[str, ...],
+    catalog_folders: tuple[Path, ...],
+    video: str,
+    size: tuple[int, int],
+    progress: Path | None,
+) -> dict[str, object]:
+    """Film the robot making ``fit_ids`` of the object (runs in a worker); return the film and the report.
+
+    ``{"video": bytes, "simulation": report.as_dict(), "robot": robot_outcome(report)}``.
+    """
+    from causalplan.service.pool.jobs import worker_catalog
+
+    obj = worker_catalog(catalog_folders).get(object_id)
+    report, film = robot_simulation(obj, steps_of(obj, fit_ids), video, size, progress)
+    return {"video": film, "simulation": report.as_dict(), "robot": robot_outcome(report)}
+
+
+def robot_outcome(report: SimulationReport) -> dict[str, object]:
+    """Return whether the robot carried out the plan and, when not, why: the ``robot_cannot_execute`` reason."""
+    from causalplan.sim.robot_verdict import robot_reason
+
+    reason = robot_reason(report)
+    if reason is None:
+        return {"carried_out": True, "reason": None}
+    failed = report.failed_step
+    return {
+        "carried_out": False,
+        "reason": {
+            "code": reason.code,
+            "message": reason.message,
+            "step": failed.number if failed is not None else None,
+            "failure": failed.failure.value if failed is not None and failed.failure else None,
+        },
+    }
