@@ -49,8 +49,13 @@ def test_batch_robot_judges_each_trial_by_the_robot(tmp_path: Path) -> None:
     assert "robot_cannot_execute" in {reason["code"] for reason in verdict["reasons"]}
 
 
-def test_batch_robot_refuses_a_cluster(tmp_path: Path) -> None:
+def test_batch_robot_on_a_local_cluster_gives_the_robots_verdict(tmp_path: Path) -> None:
+    model = yaml.safe_load(WALLED_PLATE.read_text())
+    mapping = yaml.safe_load(LONG_BENCH_MAPPING.read_text())
     trials = tmp_path / "trials.jsonl"
-    trials.write_text("")
-    result = runner.invoke(app, ["batch", str(trials), "--robot", "--workers", "2", "--out", str(tmp_path), *CATALOG])
-    assert result.exit_code == 2 and "--robot judges on this machine only" in result.output
+    trials.write_text(json.dumps({"id": "bench", "model": model, "mapping": mapping}) + "\n")
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["batch", str(trials), "--robot", "--workers", "1", "--out", str(out), *CATALOG])
+    assert result.exit_code == 0, result.output
+    (verdict,) = json.loads((out / "verdicts.json").read_text())
+    assert verdict["verdict"] == "fails" and verdict["decided_by"] == "robot"

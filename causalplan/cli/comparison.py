@@ -178,7 +178,7 @@ def _on_cluster(
     "--robot",
     is_flag=True,
     help="Also have the Franka Panda carry out each plan that transfers: one it cannot carry out fails "
-    "with robot_cannot_execute (not with --cluster or --workers).",
+    "with robot_cannot_execute.",
 )
 @click.option("--out", type=FILE, default=Path("out/batch"), help="Folder for verdicts.csv and verdicts.json.")
 @click.option(
@@ -243,8 +243,6 @@ def batch(
         fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
     if cluster is not None and workers is not None:
         fail("invalid_option", "Give --cluster (an existing cluster) or --workers (a local one), not both.")
-    if robot and (cluster is not None or workers is not None):
-        fail("invalid_option", "--robot judges on this machine only; leave out --cluster and --workers.")
     judge = None
     if robot:
         from causalplan.sim.robot_verdict import robot_judged
@@ -261,7 +259,7 @@ def batch(
             results = _on_cluster(
                 trials,
                 objects,
-                JudgeOptions(planner, time_limit, simulate, val),
+                JudgeOptions(planner, time_limit, simulate, val, judge),
                 cluster,
                 workers,
                 chunk_size,

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import Catalog
-from causalplan.transfer.batch import Trial, TrialResult, run_batch
+from causalplan.transfer.batch import Judge, Trial, TrialResult, run_batch
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -42,11 +42,16 @@ class JudgeOptions:
     time_limit: float = 30.0
     simulate: bool = True
     val: bool = False
+    judge: Judge | None = None
+    """The last judge of each verdict (e.g. ``sim.robot_verdict.robot_judged``): a top-level function,
+    so it travels to the workers by name."""
 
 
 def judge_chunk(trials: list[Trial], catalog: Catalog, options: JudgeOptions) -> list[TrialResult]:
     """Return the results of one chunk of trials (the task a worker runs)."""
-    return run_batch(trials, catalog, options.planner, options.time_limit, options.simulate, val=options.val)
+    return run_batch(
+        trials, catalog, options.planner, options.time_limit, options.simulate, val=options.val, judge=options.judge
+    )
 
 
 def chunks(trials: Sequence[Trial], size: int) -> list[list[Trial]]:
