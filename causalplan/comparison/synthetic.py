@@ -77,11 +77,6 @@ _EFFECTS = (
 # fmt: on
 
 
-def _check_size(n_parts: int) -> None:
-    if not MIN_PARTS <= n_parts <= MAX_PARTS:
-        raise ValueError(f"a synthetic object has {MIN_PARTS} to {MAX_PARTS} parts, not {n_parts}")
-
-
 def _part_id(index: int) -> str:
     return f"p{index:03d}"
 
@@ -103,7 +98,8 @@ def object_id(n_parts: int, seed: int) -> str:
 @lru_cache(maxsize=64)
 def synthetic_object(n_parts: int, seed: int = 0) -> AssemblyObject:
     """Return the seeded synthetic object with ``n_parts`` parts (same arguments, same object)."""
-    _check_size(n_parts)
+    if not MIN_PARTS <= n_parts <= MAX_PARTS:
+        raise ValueError(f"a synthetic object has {MIN_PARTS} to {MAX_PARTS} parts, not {n_parts}")
     rng = random.Random(f"object/{n_parts}/{seed}")
     growing = [_Growing(rng.choice(_INTERFACES), {}, [])]
     parents = [-1]
