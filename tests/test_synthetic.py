@@ -8,7 +8,6 @@ from causalplan.causal.graph import goal_holds
 from causalplan.causal.validation import ObjectSummary, validate_model
 from causalplan.comparison.synthetic import (
     GOAL,
-    object_as_dict,
     synthetic_model,
     synthetic_object,
     synthetic_task,
@@ -20,6 +19,42 @@ from causalplan.pddl.task import PlanningTask
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanStatus
+
+
+def object_as_dict(obj: AssemblyObject) -> dict[str, object]:
+    """Return ``obj`` in the catalog's file schema, to check it as the catalog checks object files."""
+    return {
+        "id": obj.id,
+        "name": obj.name,
+        "category": obj.category,
+        "goal": obj.goal,
+        "description": obj.description,
+        "base": obj.base,
+        "parts": [
+            {
+                "id": part.id,
+                "name": part.name,
+                "connectors": [{"id": c.id, "kind": c.kind, "spec": c.spec} for c in part.connectors],
+            }
+            for part in obj.parts
+        ],
+        "fits": [
+            {
+                "id": fit.id,
+                "primitive": fit.primitive,
+                "moving": f"{fit.moving_part}.{fit.moving_connector}",
+                "fixed": f"{fit.fixed_part}.{fit.fixed_connector}",
+                "probability": fit.probability,
+                "blocks": [f"{part}.{connector}" for part, connector in fit.blocks],
+                **({"text": fit.text} if fit.text is not None else {}),
+            }
+            for fit in obj.fits
+        ],
+        "mechanism": {
+            "explanation": obj.mechanism_explanation,
+            "requires": [{"any": list(req.any_of), "says": req.says} for req in obj.mechanism],
+        },
+    }
 
 
 def _primary_parents(obj: AssemblyObject) -> dict[str, str]:

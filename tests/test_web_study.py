@@ -8,7 +8,7 @@ from causalplan.causal.documents import SourceMap
 from causalplan.inputs import model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.service.responses import csv_bytes
-from causalplan.service.web.auth import is_valid_cookie, session_cookie
+from causalplan.service.web.auth import cookie_session, session_cookie
 from causalplan.service.web.design import read_design
 from causalplan.service.web.diagram import diagram_svg
 from causalplan.service.web.errors import InvalidExperimentError
@@ -157,6 +157,10 @@ def test_the_graph_is_drawn_with_every_label_escaped(catalog: Catalog) -> None:
     svg = diagram_svg(checked.model).decode()
     assert "<script" not in svg and "&lt;script&gt;alert(1)&lt;/scr" in svg  # wrapped over two lines
     assert svg.count(">AND<") == 1 and ">light</text>" in svg and "(base with cables)" in svg
+
+
+def is_valid_cookie(value: str, token: str, now: float | None = None) -> bool:
+    return cookie_session(value, token, now) is not None
 
 
 def test_the_sign_in_cookie_is_signed_by_the_token_and_expires() -> None:

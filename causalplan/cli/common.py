@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
@@ -99,14 +100,37 @@ def fail(code: str, message: str) -> NoReturn:
     exit_with(EXIT_INVALID)
 
 
-def catalog_from(folders: Sequence[Path]) -> Catalog:
+@contextmanager
+def exit_on_error() -> Iterator[None]:
+    """Print a ``CausalPlanError`` raised inside as its code and message, and exit with 2."""
     from causalplan.errors import CausalPlanError
-    from causalplan.objects.catalog import load_catalog
 
     try:
-        return load_catalog(folders)
+        yield
     except CausalPlanError as exc:
         fail(exc.code, exc.message)
+
+
+@contextmanager
+def writing(path: Path, verb: str = "write") -> Iterator[None]:
+    """Exit with 2, naming ``path``, when writing inside fails (no such folder, no permission, disk full)."""
+    try:
+        yield
+    except OSError as exc:
+        fail("output_not_writable", f"Cannot {verb} {path}: {exc.strerror}.")
+
+
+def make_folder(folder: Path) -> None:
+    """Create ``folder`` (and its parents) or exit with 2 saying why not."""
+    with writing(folder, "create"):
+        folder.mkdir(parents=True, exist_ok=True)
+
+
+def catalog_from(folders: Sequence[Path]) -> Catalog:
+    from causalplan.objects.catalog import load_catalog
+
+    with exit_on_error():
+        return load_catalog(folders)
 
 
 def print_json(data: object) -> None:
@@ -182,12 +206,10 @@ def load_task(model: Path, mapping: Path | None, objects: Catalog, as_json: bool
 
 
 def write_pddl(folder: Path, domain: str, problem: str) -> None:
-    try:
+    with writing(folder, "write the PDDL to"):
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "domain.pddl").write_text(domain, encoding="utf-8")
         (folder / "problem.pddl").write_text(problem, encoding="utf-8")
-    except OSError as exc:
-        fail("output_not_writable", f"Cannot write the PDDL to {folder}: {exc.strerror}.")
 
 
 def print_plan(result: PlanResult) -> None:

@@ -14,8 +14,10 @@ from causalplan.cli.common import (
     catalog_from,
     catalog_option,
     check_planner,
+    exit_on_error,
     fail,
     make_console,
+    make_folder,
     planner_option,
     progress_bar,
     time_limit_option,
@@ -79,24 +81,18 @@ def compare(
     from causalplan.comparison import tasks as comparison_tasks
     from causalplan.comparison.runner import compare as run_comparison
     from causalplan.comparison.runner import total_runs
-    from causalplan.errors import CausalPlanError
 
     chosen = [name.strip() for name in planners_option.split(",") if name.strip()]
     for name in chosen:
         check_planner(name)
-    try:
+    with exit_on_error():
         sizes = _int_list(synthetic, "--synthetic") if synthetic else []
         if tasks:
             selected = [comparison_tasks.from_argument(path, list(catalog)) for path in tasks]
         else:
             selected = comparison_tasks.default_tasks(Path.cwd())
         selected += [comparison_tasks.synthetic(size) for size in sizes]
-    except CausalPlanError as exc:
-        fail(exc.code, exc.message)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
+    make_folder(out)
     console = make_console()
     with progress_bar() as progress:
         bar = progress.add_task("comparing", total=total_runs(selected, chosen, repeat))
@@ -149,7 +145,6 @@ def _on_cluster(
     advance: Callable[[int], None],
 ) -> list[TrialResult]:
     """Return the trials' results judged on a Dask cluster, appending each chunk's to verdicts.jsonl as it comes."""
-    from causalplan.errors import CausalPlanError
     from causalplan.transfer.cluster import run_batch_on_cluster
 
     with (out / "verdicts.jsonl").open("w", encoding="utf-8") as stream:
@@ -160,12 +155,10 @@ def _on_cluster(
             stream.flush()
             advance(len(results))
 
-        try:
+        with exit_on_error():
             return run_batch_on_cluster(
                 trials, objects, options, address=address, workers=workers, chunk_size=chunk_size, on_chunk=write
             )
-        except CausalPlanError as exc:
-            fail(exc.code, exc.message)
 
 
 @click.command(short_help="Judge many transfer trials; write their verdicts and reasons.")
@@ -237,10 +230,7 @@ def batch(
     if not trials_file.is_file():
         fail("file_not_found", f"There is no file {trials_file}.")
     trials = list(read_trials(trials_file))
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
+    make_folder(out)
     if cluster is not None and workers is not None:
         fail("invalid_option", "Give --cluster (an existing cluster) or --workers (a local one), not both.")
     judge = None

@@ -17,13 +17,16 @@ from causalplan.cli.common import (
     catalog_from,
     catalog_option,
     check_planner,
+    exit_on_error,
     exit_with,
     fail,
     make_console,
+    make_folder,
     planner_option,
     progress_bar,
     say,
     time_limit_option,
+    writing,
 )
 
 if TYPE_CHECKING:
@@ -81,21 +84,15 @@ def consensus(
     from causalplan.consensus.drawing import draw_consensus
     from causalplan.consensus.judging import judge, report
     from causalplan.consensus.participants import read_participants
-    from causalplan.errors import CausalPlanError
 
     check_planner(planner)
     objects = catalog_from(catalog)
     if not trials_file.is_file():
         fail("file_not_found", f"There is no file {trials_file}.")
-    try:
+    with exit_on_error():
         participants = read_participants(trials_file)
         crowd = build_consensus(participants, objects, min_support)
-    except CausalPlanError as exc:
-        fail(exc.code, exc.message)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
+    make_folder(out)
     with progress_bar() as progress:
         total = sum(len(p.mappings) for p in participants if p.id in crowd.members) + len(crowd.mappings)
         bar = progress.add_task("judging the crowd and its consensus", total=total)
@@ -211,18 +208,13 @@ def population(training_object: str, count: int, seed: int, tests: tuple[str, ..
     Example: causalplan population desk_lamp --n 30 --seed 1 --rate-effect-as-cause 0.6 --out crowd.jsonl
     """
     from causalplan.consensus.population import population as make_population
-    from causalplan.errors import CausalPlanError
 
-    try:
+    with exit_on_error():
         lines = make_population(training_object, count, seed, _rates(rates), tests)
-    except CausalPlanError as exc:
-        fail(exc.code, exc.message)
-    try:
+    with writing(out):
         out.parent.mkdir(parents=True, exist_ok=True)
         with out.open("w", encoding="utf-8") as handle:
             handle.writelines(json.dumps(line, ensure_ascii=False) + "\n" for line in lines)
-    except OSError as exc:
-        fail("output_not_writable", f"Cannot write {out}: {exc.strerror}.")
     made: dict[str, int] = {}
     people = {str(line["id"]): line["errors"] for line in lines}
     for errors in people.values():
@@ -273,7 +265,6 @@ def crowd_curve(
 
     from causalplan.consensus.curve import crowd_curve as measure
     from causalplan.consensus.curve import plot_curve
-    from causalplan.errors import CausalPlanError
 
     check_planner(planner)
     objects = catalog_from(catalog)
@@ -283,14 +274,11 @@ def crowd_curve(
         fail("invalid_sizes", f"--sizes must be whole numbers separated by commas, not '{sizes}'.")
     if not crowd_sizes or crowd_sizes[0] < 1:
         fail("invalid_sizes", "--sizes needs at least one crowd size of 1 or more.")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        fail("output_not_writable", f"Cannot create {out}: {exc.strerror}.")
+    make_folder(out)
     chosen = _rates(rates)
     with progress_bar() as progress:
         bar = progress.add_task("building and judging crowds", total=draws * len(crowd_sizes))
-        try:
+        with exit_on_error():
             points = measure(
                 training_object,
                 objects,
@@ -305,8 +293,6 @@ def crowd_curve(
                 simulate,
                 lambda: progress.advance(bar),
             )
-        except CausalPlanError as exc:
-            fail(exc.code, exc.message)
     rows = [point.as_dict() for point in points]
     with (out / "curve.csv").open("w", newline="", encoding="utf-8") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))

@@ -7,7 +7,17 @@ from pathlib import Path
 import click
 
 from causalplan.cli import common
-from causalplan.cli.common import FILE, catalog_from, catalog_option, fail, json_option, print_json, say
+from causalplan.cli.common import (
+    FILE,
+    catalog_from,
+    catalog_option,
+    exit_on_error,
+    fail,
+    json_option,
+    print_json,
+    say,
+    writing,
+)
 
 
 @click.command("estimate-fits", short_help="Measure each fit's success probability by noisy robot insertions.")
@@ -58,15 +68,12 @@ def estimate_fits_command(
         causalplan estimate-fits desk_lamp --trials 500 --noise-mm 0.5 --out overlay.yaml
         causalplan plan examples/paper/desk_lamp.yaml --planner mdp --catalog-overlay overlay.yaml
     """
-    from causalplan.errors import CausalPlanError
     from causalplan.objects.overlay import overlay_data
     from causalplan.sim.fit_estimates import estimate_fit
 
     objects = catalog_from(catalog)
-    try:
+    with exit_on_error():
         obj = objects.get(object_id)
-    except CausalPlanError as exc:
-        fail(exc.code, exc.message)
     known = {fit.id for fit in obj.fits}
     unknown = sorted(set(fit_ids) - known)
     if unknown:
@@ -75,15 +82,12 @@ def estimate_fits_command(
     if not chosen:
         fail("unknown_fit", f"The {obj.name} has no fits to estimate.")
     estimates = []
-    try:
-        with common.progress_bar() as progress:
-            bar = progress.add_task("estimating", total=len(chosen))
-            for fit in chosen:
-                progress.update(bar, description=f"{fit.id}: {trials} trials")
-                estimates.append(estimate_fit(obj, fit, trials, seed, noise_mm, noise_deg))
-                progress.update(bar, advance=1)
-    except CausalPlanError as exc:
-        fail(exc.code, exc.message)
+    with exit_on_error(), common.progress_bar() as progress:
+        bar = progress.add_task("estimating", total=len(chosen))
+        for fit in chosen:
+            progress.update(bar, description=f"{fit.id}: {trials} trials")
+            estimates.append(estimate_fit(obj, fit, trials, seed, noise_mm, noise_deg))
+            progress.update(bar, advance=1)
     rows = [estimate.as_dict() for estimate in estimates]
     data = {"object": obj.id, "noise": {"mm": noise_mm, "deg": noise_deg}, "seed": seed, "fits": rows}
     if out is not None:
@@ -93,10 +97,8 @@ def estimate_fits_command(
             f"causalplan estimate-fits {obj.id} --trials {trials} --seed {seed} "
             f"--noise-mm {noise_mm:g} --noise-deg {noise_deg:g}"
         )
-        try:
+        with writing(out):
             out.write_text(yaml.safe_dump(overlay_data({obj.id: rows}, command), sort_keys=False), encoding="utf-8")
-        except OSError as exc:
-            fail("output_not_writable", f"Cannot write {out}: {exc.strerror}.")
     if as_json:
         print_json({**data, "overlay": str(out) if out else None})
         return

@@ -14,6 +14,7 @@ from causalplan.cli.common import (
     FILE,
     catalog_from,
     catalog_option,
+    exit_on_error,
     exit_with,
     fail,
     is_mapping_file,
@@ -25,6 +26,7 @@ from causalplan.cli.common import (
     print_report,
     say,
     write_pddl,
+    writing,
 )
 
 if TYPE_CHECKING:
@@ -101,15 +103,11 @@ def graph(model: Path, out: Path | None, as_json: bool, catalog: tuple[Path, ...
     elif out is None:
         sys.stdout.write(to_dot(loaded.model))
     elif out.suffix.lower() == ".dot":
-        try:
+        with writing(out):
             out.write_text(to_dot(loaded.model), encoding="utf-8")
-        except OSError as exc:
-            fail("output_not_writable", f"Cannot write {out}: {exc.strerror}.")
     elif out.suffix.lower() in PICTURE_SUFFIXES:
-        try:
+        with writing(out):
             draw(loaded.model, out)
-        except OSError as exc:
-            fail("output_not_writable", f"Cannot write {out}: {exc.strerror}.")
     else:
         fail("unknown_format", f"Cannot tell the format of {out}: use .png, .svg, .pdf or .dot.")
     if out is not None:
@@ -128,15 +126,11 @@ def objects(object_id: str | None, as_json: bool, catalog: tuple[Path, ...]) -> 
     from rich.markup import escape
     from rich.table import Table
 
-    from causalplan.errors import CausalPlanError
-
     known = catalog_from(catalog)
     console = make_console()
     if object_id is not None:
-        try:
+        with exit_on_error():
             obj = known.get(object_id)
-        except CausalPlanError as exc:
-            fail(exc.code, exc.message)
         if as_json:
             print_json(asdict(obj))
             return

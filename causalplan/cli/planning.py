@@ -14,8 +14,8 @@ from causalplan.cli.common import (
     catalog_from,
     catalog_option,
     check_planner,
+    exit_on_error,
     exit_with,
-    fail,
     json_option,
     load_task,
     make_console,
@@ -73,7 +73,6 @@ def plan(
 
     Example: causalplan plan examples/paper/desk_lamp.yaml --pddl-out out/desk_lamp
     """
-    from causalplan.errors import CausalPlanError
     from causalplan.planners.pipeline import plan_task
 
     check_planner(planner)
@@ -81,12 +80,10 @@ def plan(
     if catalog_overlay is not None:
         from causalplan.objects.overlay import apply_overlay
 
-        try:
+        with exit_on_error():
             objects = apply_overlay(objects, catalog_overlay)
-        except CausalPlanError as exc:
-            fail(exc.code, exc.message)
     task = load_task(model, mapping, objects, as_json)
-    try:
+    with exit_on_error():
         result = plan_task(
             task,
             planner,
@@ -95,8 +92,6 @@ def plan(
             validate_up=up_validate,
             val=val,
         )
-    except CausalPlanError as exc:
-        fail(exc.code, exc.message)
     if pddl_out is not None and result.pddl is not None:
         write_pddl(pddl_out, result.pddl["domain"], result.pddl["problem"])
     if as_json:
@@ -158,21 +153,18 @@ def transfer(
         causalplan transfer examples/robot/walled_plate.yaml examples/robot/long_bench_mapping.yaml \\
             --robot --catalog examples/robot/catalog
     """
-    from causalplan.errors import CausalPlanError
     from causalplan.inputs import load_mapping, load_model
     from causalplan.transfer.verdict import transfer_verdict
 
     check_planner(planner)
     objects = catalog_from(catalog)
     loaded_model, loaded_mapping = load_model(model, objects), load_mapping(mapping, objects)
-    try:
+    with exit_on_error():
         verdict = transfer_verdict(loaded_model, loaded_mapping, objects, planner, time_limit, val=val)
         if robot:
             from causalplan.sim.robot_verdict import robot_judged
 
             verdict = robot_judged(verdict, objects)
-    except CausalPlanError as exc:
-        fail(exc.code, exc.message)
     if as_json:
         print_json(verdict.as_dict())
     else:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from causalplan.cli.common import fail, say
+from causalplan.cli.common import exit_on_error, fail, say
 
 
 @click.command(short_help="Run the HTTP planning service (JSON API and participant pages).")
@@ -37,7 +37,6 @@ def serve(host: str, port: int, workers: int | None, database_url: str | None, a
     """
     from pydantic import ValidationError
 
-    from causalplan.errors import CausalPlanError
     from causalplan.settings import Settings
 
     overrides: dict[str, object] = {}
@@ -55,10 +54,8 @@ def serve(host: str, port: int, workers: int | None, database_url: str | None, a
     from causalplan.service.main import check_startup
     from causalplan.service.main import serve as run_service
 
-    try:
+    with exit_on_error():
         database = check_startup(settings)
-    except CausalPlanError as exc:
-        fail(exc.code, exc.message)
     say(
         f"causalplan service on http://{host}:{port} (API docs: /docs), database {database}, "
         f"{settings.planning_workers} planner worker(s)",

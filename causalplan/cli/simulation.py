@@ -16,6 +16,7 @@ from causalplan.cli.common import (
     catalog_from,
     catalog_option,
     dim,
+    exit_on_error,
     exit_with,
     fail,
     json_option,
@@ -114,7 +115,6 @@ def simulate(
     \b
         causalplan simulate examples/paper/desk_lamp.yaml --robot --video lamp.mp4 --trajectory t.json
     """
-    from causalplan.errors import CausalPlanError
     from causalplan.planners.pipeline import plan_task
     from causalplan.sim import RenderMode, read_plan_steps, simulate_plan
     from causalplan.sim.render import animation, strip
@@ -129,7 +129,7 @@ def simulate(
     task = load_task(model, mapping, objects, as_json)
     target = task.obj
     render = RenderMode.FRAMES if frames or gif else RenderMode.FINAL if png else RenderMode.NONE
-    try:
+    with exit_on_error():
         if plan_file is not None:
             try:
                 data = json.loads(plan_file.read_text(encoding="utf-8"))
@@ -157,8 +157,6 @@ def simulate(
                     progress.update(filming, description=f"filming the robot: {frames} frames")
 
                 report = simulate_plan(target, steps, render=render, arm=arm, robot=True, video=True, on_frame=drawn)
-    except CausalPlanError as exc:
-        fail(exc.code, exc.message)
     written: list[str] = []
     try:
         if png is not None and report.picture is not None:

@@ -11,11 +11,12 @@ from causalplan.cli.common import (
     FILE,
     catalog_from,
     catalog_option,
+    exit_on_error,
     exit_with,
-    fail,
     json_option,
     make_console,
     print_json,
+    writing,
 )
 
 
@@ -42,20 +43,15 @@ def analyze(export: Path, out: Path, as_json: bool, catalog: tuple[Path, ...]) -
     from rich.markup import escape
     from rich.table import Table
 
-    from causalplan.errors import CausalPlanError
     from causalplan.studies.analysis import analyse
     from causalplan.studies.outputs import write_outputs
     from causalplan.studies.trials import read_export, trial_rows
 
     objects = catalog_from(catalog)
-    try:
+    with exit_on_error():
         analysis = analyse(trial_rows(read_export(export), objects), objects)
-    except CausalPlanError as exc:
-        fail(exc.code, exc.message)
-    try:
+    with writing(out, "write to"):
         written = write_outputs(analysis, out)
-    except OSError as exc:
-        fail("output_not_writable", f"Cannot write to {out}: {exc.strerror}.")
     if as_json:
         print_json({**analysis.as_dict(), "files": [str(path) for path in written]})
         exit_with(EXIT_OK)

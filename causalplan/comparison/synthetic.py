@@ -56,79 +56,25 @@ _INTERFACES: tuple[tuple[str, str, str], ...] = (
     ("spade terminal", "spade terminal 4.8 mm", "connect"),
     ("seat", "flat seat 30 mm", "place"),
 )
+# fmt: off
 _PART_NOUNS = (
-    "housing",
-    "bracket",
-    "cable",
-    "lens",
-    "switch",
-    "circuit board",
-    "battery",
-    "reflector",
-    "spring",
-    "cap",
-    "holder",
-    "frame",
-    "fan",
-    "capacitor",
-    "resistor",
-    "coil",
-    "gear",
-    "lever",
-    "diffuser",
-    "heat sink",
+    "housing", "bracket", "cable", "lens", "switch", "circuit board", "battery", "reflector", "spring", "cap",
+    "holder", "frame", "fan", "capacitor", "resistor", "coil", "gear", "lever", "diffuser", "heat sink",
 )
 _FUNCTION_VERBS = (
-    "conduct",
-    "store",
-    "switch",
-    "guide",
-    "focus",
-    "regulate",
-    "insulate",
-    "cool",
-    "amplify",
-    "filter",
-    "hold",
-    "reflect",
-    "spread",
-    "limit",
-    "sense",
-    "route",
+    "conduct", "store", "switch", "guide", "focus", "regulate", "insulate", "cool", "amplify", "filter", "hold",
+    "reflect", "spread", "limit", "sense", "route",
 )
 _FUNCTION_OBJECTS = (
-    "current",
-    "charge",
-    "heat",
-    "light",
-    "voltage",
-    "the beam",
-    "the signal",
-    "the cable",
-    "the glass",
-    "the air",
+    "current", "charge", "heat", "light", "voltage", "the beam", "the signal", "the cable", "the glass", "the air",
 )
 _EFFECTS = (
-    "current flows",
-    "the coil is energized",
-    "the voltage is stepped down",
-    "the circuit is closed",
-    "the driver is powered",
-    "the filament heats up",
-    "the signal is amplified",
-    "the beam is shaped",
-    "the reflector is aligned",
-    "the filament glows",
-    "the lens is focused",
-    "heat is carried away",
-    "the housing is sealed",
-    "the light is steady",
+    "current flows", "the coil is energized", "the voltage is stepped down", "the circuit is closed",
+    "the driver is powered", "the filament heats up", "the signal is amplified", "the beam is shaped",
+    "the reflector is aligned", "the filament glows", "the lens is focused", "heat is carried away",
+    "the housing is sealed", "the light is steady",
 )
-
-
-def _check_size(n_parts: int) -> None:
-    if not MIN_PARTS <= n_parts <= MAX_PARTS:
-        raise ValueError(f"a synthetic object has {MIN_PARTS} to {MAX_PARTS} parts, not {n_parts}")
+# fmt: on
 
 
 def _part_id(index: int) -> str:
@@ -152,7 +98,8 @@ def object_id(n_parts: int, seed: int) -> str:
 @lru_cache(maxsize=64)
 def synthetic_object(n_parts: int, seed: int = 0) -> AssemblyObject:
     """Return the seeded synthetic object with ``n_parts`` parts (same arguments, same object)."""
-    _check_size(n_parts)
+    if not MIN_PARTS <= n_parts <= MAX_PARTS:
+        raise ValueError(f"a synthetic object has {MIN_PARTS} to {MAX_PARTS} parts, not {n_parts}")
     rng = random.Random(f"object/{n_parts}/{seed}")
     growing = [_Growing(rng.choice(_INTERFACES), {}, [])]
     parents = [-1]
@@ -327,39 +274,3 @@ def synthetic_task(n_parts: int, seed: int = 0) -> PlanningTask:
     """Return the planning task of the synthetic object and model of this size and seed."""
     obj = synthetic_object(n_parts, seed)
     return build_task(synthetic_model(obj, seed), obj)
-
-
-def object_as_dict(obj: AssemblyObject) -> dict[str, object]:
-    """Return ``obj`` in the catalog's file schema (e.g. to save a synthetic object as YAML)."""
-    return {
-        "id": obj.id,
-        "name": obj.name,
-        "category": obj.category,
-        "goal": obj.goal,
-        "description": obj.description,
-        "base": obj.base,
-        "parts": [
-            {
-                "id": part.id,
-                "name": part.name,
-                "connectors": [{"id": c.id, "kind": c.kind, "spec": c.spec} for c in part.connectors],
-            }
-            for part in obj.parts
-        ],
-        "fits": [
-            {
-                "id": fit.id,
-                "primitive": fit.primitive,
-                "moving": f"{fit.moving_part}.{fit.moving_connector}",
-                "fixed": f"{fit.fixed_part}.{fit.fixed_connector}",
-                "probability": fit.probability,
-                "blocks": [f"{part}.{connector}" for part, connector in fit.blocks],
-                **({"text": fit.text} if fit.text is not None else {}),
-            }
-            for fit in obj.fits
-        ],
-        "mechanism": {
-            "explanation": obj.mechanism_explanation,
-            "requires": [{"any": list(req.any_of), "says": req.says} for req in obj.mechanism],
-        },
-    }

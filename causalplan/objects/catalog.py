@@ -25,7 +25,7 @@ from causalplan.objects.shapes import build_geometry, unit
 if TYPE_CHECKING:
     from pydantic import ValidationError
 
-    from causalplan.objects.schema import FitSchema, GraspSchema, ObjectSchema
+    from causalplan.objects.schema import FitSchema, ObjectSchema
 
 OBJECT_FILE_SUFFIXES = (".yaml", ".yml", ".json")
 
@@ -67,10 +67,6 @@ def _build_fit(schema: FitSchema, specs: dict[tuple[str, str], str]) -> Fit:
     )
 
 
-def _grasp(schema: GraspSchema) -> Grasp:
-    return Grasp(schema.at, unit(schema.approach), unit(schema.fingers), schema.width)
-
-
 def build_object(schema: ObjectSchema) -> AssemblyObject:
     """Cross-check a schema-valid object file and return the object; ValueError says what is wrong."""
     from causalplan.objects.schema import RESERVED_WORDS
@@ -110,7 +106,7 @@ def build_object(schema: ObjectSchema) -> AssemblyObject:
                 p.name,
                 tuple(Connector(c.id, c.kind, c.spec, c.at, unit(c.axis) if c.axis else None) for c in p.connectors),
                 build_geometry(p.geometry) if p.geometry else None,
-                _grasp(p.grasp) if p.grasp else None,
+                Grasp(p.grasp.at, unit(p.grasp.approach), unit(p.grasp.fingers), p.grasp.width) if p.grasp else None,
             )
             for p in schema.parts
         ),

@@ -85,8 +85,8 @@ def goal_structure(task: PlanningTask) -> Formula:
                 formula, cause_cut = expand(cause, inner)
                 cut = cut or cause_cut
                 parts.append(formula)
-            alternatives.append(_conjunction(parts))
-        result = _disjunction(alternatives)
+            alternatives.append(_combine("and", parts))
+        result = _combine("or", alternatives)
         if not cut:
             memo[key] = result
         return result, cut
@@ -94,22 +94,15 @@ def goal_structure(task: PlanningTask) -> Formula:
     return expand(task.goal_key, frozenset())[0]
 
 
-def _conjunction(parts: list[Formula]) -> Formula:
-    if any(part == FALSE_FORMULA for part in parts):
-        return FALSE_FORMULA
-    parts = [part for part in parts if part != TRUE_FORMULA]
+def _combine(kind: str, parts: list[Formula]) -> Formula:
+    """Return ``(kind, parts)`` simplified: one false part decides an "and", one true part an "or"."""
+    decides, neutral = (FALSE_FORMULA, TRUE_FORMULA) if kind == "and" else (TRUE_FORMULA, FALSE_FORMULA)
+    if decides in parts:
+        return decides
+    parts = [part for part in parts if part != neutral]
     if not parts:
-        return TRUE_FORMULA
-    return parts[0] if len(parts) == 1 else ("and", parts)
-
-
-def _disjunction(parts: list[Formula]) -> Formula:
-    if any(part == TRUE_FORMULA for part in parts):
-        return TRUE_FORMULA
-    parts = [part for part in parts if part != FALSE_FORMULA]
-    if not parts:
-        return FALSE_FORMULA
-    return parts[0] if len(parts) == 1 else ("or", parts)
+        return neutral
+    return parts[0] if len(parts) == 1 else (kind, parts)
 
 
 def build_up_problem(task: PlanningTask) -> tuple[Problem, ActionMap]:

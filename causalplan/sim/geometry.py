@@ -114,10 +114,6 @@ def centroid(shapes: tuple[Shape, ...]) -> Vector:
     return (x, y, z)
 
 
-def _moving_connectors(obj: AssemblyObject) -> set[tuple[str, str]]:
-    return {(fit.moving_part, fit.moving_connector) for fit in obj.fits}
-
-
 def _default_frames(part: Part, lower: Vector, upper: Vector, moving: set[tuple[str, str]]) -> dict[str, Frame]:
     """Return a frame for every connector of ``part``: its own, or one on a face of the bounds."""
     middle = scale(add(lower, upper), 0.5)
@@ -173,7 +169,7 @@ def solids(obj: AssemblyObject) -> dict[str, Solid]:
 
     Cached, since objects are immutable: callers share the dict and must not change it.
     """
-    moving = _moving_connectors(obj)
+    moving = {(fit.moving_part, fit.moving_connector) for fit in obj.fits}
     return {part.id: solid_of(part, index, moving) for index, part in enumerate(obj.parts)}
 
 

@@ -23,8 +23,6 @@ ROBOT_NAME = "franka_panda"
 JOINT_NAMES = tuple(f"panda_joint{number}" for number in range(1, 8))
 ARM_JOINTS = tuple(range(7))
 FINGER_JOINTS = (9, 10)
-HAND_LINKS = frozenset({7, 8, 9, 10, 11})
-"""Flange, hand, fingers and grasp target: the links that touch a held part."""
 BASE_LINKS = frozenset({-1, 0})
 """The links that stand on the table."""
 GRASP_LINK = 11

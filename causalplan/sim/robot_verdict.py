@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 from causalplan.causal.diagnostics import Severity
 from causalplan.objects.model import AssemblyObject
+from causalplan.planners.fd import DEFAULT_TIME_LIMIT
 from causalplan.planners.result import PlanStep
 from causalplan.sim.executor import simulate_plan
 from causalplan.sim.plan_steps import StepRequest, check_steps
@@ -90,10 +91,9 @@ def robot_transfer_verdict(
 
     ``time_limit`` None is the planner's own default.
     """
-    if time_limit is None:
-        verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner)
-    else:
-        verdict = transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit)
+    verdict = transfer_verdict(
+        loaded_model, loaded_mapping, catalog, planner, DEFAULT_TIME_LIMIT if time_limit is None else time_limit
+    )
     return robot_judged(verdict, catalog)
 
 

@@ -9,7 +9,7 @@ carries) is decided without it, and the verdict says so in ``decided_by``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from enum import StrEnum
 from functools import lru_cache
 from typing import TYPE_CHECKING
@@ -54,12 +54,7 @@ class Reason:
 
     def as_dict(self) -> dict[str, object]:
         """Return the reason as a JSON-ready dict."""
-        return {
-            "code": self.code,
-            "severity": self.severity.value,
-            "message": self.message,
-            "labels": list(self.labels),
-        }
+        return {**asdict(self), "severity": self.severity.value, "labels": list(self.labels)}
 
 
 @dataclass(frozen=True)

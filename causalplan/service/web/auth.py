@@ -63,11 +63,6 @@ def cookie_session(value: str, token: str, now: float | None = None) -> tuple[st
     return session_id, expires
 
 
-def is_valid_cookie(value: str, token: str, now: float | None = None) -> bool:
-    """Return whether ``value`` is a research session cookie of ``token`` that has not lapsed (revocation aside)."""
-    return cookie_session(value, token, now) is not None
-
-
 def is_revoked(session: Session, session_id: str) -> bool:
     """Return whether the research session ``session_id`` was signed out."""
     with storage_errors(session):

@@ -81,26 +81,15 @@ def progress(participant: ParticipantRecord, catalog: Catalog) -> str:
 
 
 def participant_out(participant: ParticipantRecord, catalog: Catalog, request: Request) -> ParticipantOut:
-    """Return the API view of a participant link."""
-    return ParticipantOut.model_validate(
-        {
-            "id": participant.id,
-            "code": participant.code,
-            "url": participant_link(request, participant),
-            "condition": participant.condition,
-            "ordinal": participant.ordinal,
-            "training_order": participant.training_order,
-            "test_order": participant.test_order,
-            "stage": participant.stage,
-            "progress": progress(participant, catalog),
-            "created_at": participant.created_at,
-            "started_at": participant.started_at,
-            "updated_at": participant.updated_at,
-            "finished_at": participant.finished_at,
-            "platform": participant.arrival.platform if participant.arrival is not None else None,
-            "exclusion_reason": "; ".join(item.reason for item in participant.exclusions) or None,
-        }
-    )
+    """Return the API view of a participant link: the record's own fields, and four worked out from it."""
+    worked_out = {
+        "url": participant_link(request, participant),
+        "progress": progress(participant, catalog),
+        "platform": participant.arrival.platform if participant.arrival is not None else None,
+        "exclusion_reason": "; ".join(item.reason for item in participant.exclusions) or None,
+    }
+    stored = {name: getattr(participant, name) for name in ParticipantOut.model_fields if name not in worked_out}
+    return ParticipantOut.model_validate({**stored, **worked_out})
 
 
 def results(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> dict[str, Any]:

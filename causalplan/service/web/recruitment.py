@@ -270,9 +270,6 @@ def finish(platform: str, assignment: str | None, submit_to: str | None, code: s
     return None
 
 
-PLATFORM_ID_VIEWS = ("plain", "hashed", "omit")
-
-
 def platform_id_view(value: str | None, experiment_id: str, view: str) -> str | None:
     """Return a platform id as an export shows it: as stored, hashed, or left out.
 

@@ -157,10 +157,6 @@ async def finish_tutorial(
 # -- step 1 ---------------------------------------------------------------------------------------------
 
 
-def _used_labels(journey: Journey) -> list[str]:
-    return journey.draft_model().function_labels()
-
-
 def _step1_page(
     request: Request,
     journey: Journey,
@@ -179,7 +175,7 @@ def _step1_page(
         obj=obj,
         parts=_parts(obj),
         texts=journey.function_texts(obj.id),
-        used_labels=_used_labels(journey),
+        used_labels=journey.draft_model().function_labels(),
         problems=[d.as_dict() for d in report.diagnostics] if report is not None else [],
         may_go_back=index > 0,
         noted=noted,

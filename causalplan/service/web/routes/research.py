@@ -146,6 +146,14 @@ def _experiment_values(form: Form) -> dict[str, Any]:
     }
 
 
+def _problems(exc: ValidationError | InvalidRequestError) -> list[str]:
+    """Return what is wrong with a submitted research form, one sentence a problem, as the page lists them."""
+    if isinstance(exc, ValidationError):
+        return [" > ".join(str(piece) for piece in e["loc"]) + f": {e['msg']}" for e in exc.errors()]
+    errors = exc.details.get("errors")
+    return [str(e) for e in errors] if isinstance(errors, list) else [exc.message]
+
+
 @router.post("/experiments")
 async def create_experiment(request: Request, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep) -> Response:
     values = _experiment_values(await read_form(request))
@@ -163,14 +171,8 @@ async def create_experiment(request: Request, _: ResearchPageDep, session: Sessi
         return _new_form(request, catalog, values, problems)
     try:
         record = experiments.create(session, catalog, ExperimentIn.model_validate(values))
-    except ValidationError as exc:
-        problems = [" > ".join(str(piece) for piece in e["loc"]) + f": {e['msg']}" for e in exc.errors()]
-        return _new_form(request, catalog, values, problems)
-    except InvalidExperimentError as exc:
-        errors = exc.details.get("errors")
-        return _new_form(
-            request, catalog, values, [str(e) for e in errors] if isinstance(errors, list) else [exc.message]
-        )
+    except (ValidationError, InvalidExperimentError) as exc:
+        return _new_form(request, catalog, values, _problems(exc))
     return redirect(f"/research/experiments/{record.id}")
 
 
@@ -241,13 +243,8 @@ async def set_recruitment(
             }
         )
         experiments.set_recruitment(session, experiment, body)
-    except ValidationError as exc:
-        problems = [" > ".join(str(piece) for piece in e["loc"]) + f": {e['msg']}" for e in exc.errors()]
-        return _experiment_page(request, session, catalog, experiment, problems)
-    except InvalidRequestError as exc:
-        errors = exc.details.get("errors")
-        problems = [str(e) for e in errors] if isinstance(errors, list) else [exc.message]
-        return _experiment_page(request, session, catalog, experiment, problems)
+    except (ValidationError, InvalidRequestError) as exc:
+        return _experiment_page(request, session, catalog, experiment, _problems(exc))
     return redirect(f"/research/experiments/{experiment_id}#recruiting")
 
 
