@@ -9,10 +9,18 @@ from typing import Any
 SLOW_JOB_SECONDS = 2.0
 
 
+STARTED_MARK = "slow-job-started"
+"""The file a slow job leaves in its worker's temp folder when it begins (tests wait for it)."""
+
+
 def sleep_then_plan(*args: Any) -> dict[str, object]:
-    """Sleep for ``SLOW_JOB_SECONDS``, then plan as usual (a slow solve)."""
+    """Leave STARTED_MARK in the worker's temp folder, sleep ``SLOW_JOB_SECONDS``, then plan (a slow solve)."""
+    import tempfile
+    from pathlib import Path
+
     from causalplan.service.pool.jobs import plan_job
 
+    (Path(tempfile.gettempdir()) / STARTED_MARK).touch()
     time.sleep(SLOW_JOB_SECONDS)
     return plan_job(*args)
 

@@ -39,6 +39,7 @@ from tests.service_fixtures import (
     with_unique_effect,
 )
 from tests.service_jobs import (
+    STARTED_MARK,
     allocate_too_much,
     crash_with_exception,
     sleep_forever,
@@ -90,9 +91,11 @@ def test_a_full_queue_is_429_with_retry_after(one_worker: TestClient, monkeypatc
 def test_a_killed_worker_fails_only_its_request(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
     pool = services_of(one_worker).pool
     monkeypatch.setattr(jobs, "plan_job", sleep_then_plan)
-    thread, responses = post_in_background(one_worker, {"model": with_unique_effect(DESK_LAMP)})
-    wait_until(lambda: pool.stats().busy == 1)
     [pid] = pool.worker_pids()
+    (_temp_folder_of(pid) / STARTED_MARK).unlink(missing_ok=True)  # left by an earlier slow job of this worker
+    thread, responses = post_in_background(one_worker, {"model": with_unique_effect(DESK_LAMP)})
+    # Killed once the job has begun: a worker killed before it takes its job hands the job on (200).
+    wait_until(lambda: (_temp_folder_of(pid) / STARTED_MARK).exists())
     os.kill(pid, signal.SIGKILL)
     thread.join()
     error = error_of(responses[0], 503)
