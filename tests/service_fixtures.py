@@ -25,8 +25,11 @@ from typing import Any
 import pytest
 import yaml
 from fastapi.testclient import TestClient
+from sqlalchemy import Engine
 from sqlalchemy.engine import make_url
 
+from causalplan.service.db.migrate import upgrade
+from causalplan.service.db.session import create_database_engine
 from causalplan.service.deps import Services
 from causalplan.service.main import create_app, uvicorn_config
 from causalplan.settings import Settings
@@ -92,6 +95,13 @@ def free_port() -> int:
 def sqlite_url(folder: Path) -> str:
     """Return the URL of a SQLite database file in ``folder``."""
     return f"sqlite:///{folder / 'causalplan.sqlite3'}"
+
+
+def migrated_engine(folder: Path) -> Engine:
+    """Return an engine on a new SQLite database in ``folder``, migrated to the newest schema."""
+    engine = create_database_engine(sqlite_url(folder))
+    upgrade(engine)
+    return engine
 
 
 def is_running(pid: int) -> bool:

@@ -72,6 +72,7 @@ def start_services(settings: Settings) -> Services:
         revision,
         catalog_key=catalog_key(catalog),
         failed_attempts=FailedAttempts(
+            engine,
             settings.research_max_failures,
             settings.research_failure_window_seconds,
             settings.research_max_failures_total,
