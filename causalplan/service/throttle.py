@@ -22,8 +22,9 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any, cast
 
-from sqlalchemy import Engine, and_, delete, func, insert, select, text, update
+from sqlalchemy import CursorResult, Engine, and_, delete, func, insert, select, text, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -149,11 +150,12 @@ class WindowCounter:
             WindowCountRecord.window == window,
         )
         with Session(self.engine) as session, storage_errors(session):
-            counted = session.execute(
+            increment = session.execute(
                 update(WindowCountRecord)
                 .where(key, WindowCountRecord.count < self.per_window)
                 .values(count=WindowCountRecord.count + 1)
-            ).rowcount
+            )
+            counted = cast(CursorResult[Any], increment).rowcount
             if not counted:
                 existing = session.scalar(select(WindowCountRecord.count).where(key))
                 if existing is None:
