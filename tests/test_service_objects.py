@@ -73,6 +73,8 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/plans",
         "/v1/simulations",
         "/v1/transfers",
+        "/v1/jobs",
+        "/v1/jobs/{job_id}",
         "/v1/objects",
         "/v1/objects/{object_id}",
         "/v1/trials",
@@ -88,4 +90,7 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
     assert {"200", "404", "413", "422", "429", "503", "504"} <= set(plans)
     assert plans["422"]["content"]["application/json"]["schema"] == {"$ref": "#/components/schemas/ErrorOut"}
     assert "HTTPValidationError" not in spec["components"]["schemas"]
+    jobs = spec["paths"]["/v1/jobs"]["post"]["responses"]
+    assert {"202", "413", "422", "429"} <= set(jobs) and "200" not in jobs
+    assert {"200", "404", "409"} <= set(spec["paths"]["/v1/jobs/{job_id}"]["delete"]["responses"])
     assert client.get("/docs").status_code == 200
