@@ -65,6 +65,16 @@ FAILED_FLASHLIGHT_MAPPING: dict[str, Any] = {
 }
 
 
+FIRST_LINES = 4
+"""The first lines of examples/batch/trials.jsonl are readable trials."""
+
+
+def first_trials(count: int = FIRST_LINES) -> str:
+    """Return the first ``count`` lines of the example batch file (JSON Lines), as an upload."""
+    lines = (EXAMPLES / "batch" / "trials.jsonl").read_text(encoding="utf-8").splitlines()
+    return "\n".join(lines[:count]) + "\n"
+
+
 def error_of(response: Any, status: int) -> dict[str, Any]:
     """Assert the one error shape and ``status``; return the error."""
     assert response.status_code == status, response.text

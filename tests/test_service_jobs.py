@@ -28,11 +28,12 @@ from causalplan.service.jobs import store
 from causalplan.service.jobs.kinds import KINDS, csv_to_json_lines
 from causalplan.service.jobs.store import MAX_ATTEMPTS
 from causalplan.transfer.batch import read_trials, run_batch
-from tests.conftest import EXAMPLES
 from tests.service_fixtures import (
     DESK_LAMP,
+    FIRST_LINES,
     FLASHLIGHT_MAPPING,
     error_of,
+    first_trials,
     migrated_engine,
     running_client,
     services_of,
@@ -40,13 +41,7 @@ from tests.service_fixtures import (
     sqlite_url,
 )
 
-TRIALS_FILE = EXAMPLES / "batch" / "trials.jsonl"
-FIRST_LINES = 4
 KIND_NAMES = list(KINDS)
-
-
-def first_trials(count: int = FIRST_LINES) -> str:
-    return "\n".join(TRIALS_FILE.read_text(encoding="utf-8").splitlines()[:count]) + "\n"
 
 
 def as_csv(json_lines: str) -> str:
@@ -187,8 +182,9 @@ def test_a_cancelled_job_stops_and_cannot_be_cancelled_twice(tmp_path: Path) -> 
 
 
 def test_a_running_job_cancelled_stops_at_its_next_step(jobs_client: TestClient) -> None:
-    lines = first_trials(40)  # two chunks at least
-    url = start(jobs_client, {"kind": "batch", "trials": lines, "simulate": False})
+    one = first_trials(1).strip()
+    lines = "\n".join([one] * 400)  # twenty chunks, each simulated: the cancel comes long before the end
+    url = start(jobs_client, {"kind": "batch", "trials": lines, "simulate": True})
     deadline = time.monotonic() + 60
     while jobs_client.get(url).json()["status"] == "queued":
         assert time.monotonic() < deadline
@@ -196,7 +192,7 @@ def test_a_running_job_cancelled_stops_at_its_next_step(jobs_client: TestClient)
     assert jobs_client.delete(url).json()["status"] == "cancelled"
     time.sleep(1.0)
     job = jobs_client.get(url).json()
-    assert job["status"] == "cancelled" and job["result"] is None and job["progress"]["done"] < 40
+    assert job["status"] == "cancelled" and job["result"] is None and job["progress"]["done"] < 400
 
 
 def test_an_unknown_job_is_404(jobs_client: TestClient) -> None:
