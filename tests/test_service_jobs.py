@@ -284,6 +284,7 @@ def test_a_job_whose_server_keeps_stopping_is_given_up(engine: Engine) -> None:
     assert store.claim_job(engine, "last", 30, KIND_NAMES) is None
     job = store.get_job(engine, job_id)
     assert job.status == "failed" and job.error is not None and job.error["code"] == "job_abandoned"
+    assert job.expires_at is not None  # kept as long as any finished job, then deleted
 
 
 def test_a_replica_takes_up_the_job_of_one_that_died(tmp_path: Path) -> None:

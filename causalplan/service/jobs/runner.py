@@ -76,7 +76,13 @@ class JobRunner:
         while not self._stop.is_set():
             try:
                 self._sweep()
-                job = store.claim_job(self.services.engine, self.owner, settings.job_lease_seconds, list(KINDS))
+                job = store.claim_job(
+                    self.services.engine,
+                    self.owner,
+                    settings.job_lease_seconds,
+                    list(KINDS),
+                    settings.job_result_seconds,
+                )
             except CausalPlanError as exc:  # the database is down: say so, try again later
                 logger.warning("the job runner cannot use the database: %s", exc.message)
                 job = None

@@ -110,12 +110,14 @@ def _aware(value: datetime) -> datetime:
     return value.replace(tzinfo=UTC) if value.tzinfo is None else value
 
 
-def claim_job(engine: Engine, owner: str, lease_seconds: float, kinds: Sequence[str]) -> JobRecord | None:
+def claim_job(
+    engine: Engine, owner: str, lease_seconds: float, kinds: Sequence[str], keep_seconds: float = 86_400.0
+) -> JobRecord | None:
     """Take the oldest queued job of ``kinds``, or a running one whose lease has lapsed; None when there is none.
 
     Only ``kinds`` (what this replica can do): during an upgrade, an older replica leaves a new
     kind to the newer ones. A job taken over for the ``MAX_ATTEMPTS``-th time is marked failed
-    instead of run again.
+    instead of run again (and kept ``keep_seconds``, as a finished job).
     """
     now = utc_now()
     claimable = and_(
@@ -137,6 +139,7 @@ def claim_job(engine: Engine, owner: str, lease_seconds: float, kinds: Sequence[
                         status=JobStatus.FAILED,
                         lease_owner=None,
                         finished_at=now,
+                        expires_at=now + timedelta(seconds=keep_seconds),
                         error={
                             "code": "job_abandoned",
                             "message": f"The job was started {attempts} times and its server stopped each time.",
