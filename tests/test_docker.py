@@ -63,3 +63,6 @@ def test_the_tests_image_installs_what_the_tests_need_from_debian() -> None:
     text = (DOCKER / "Dockerfile").read_text(encoding="utf-8")
     tests_stage = text.split("AS tests", 1)[1].split("FROM ", 1)[0]
     assert "postgresql" in tests_stage and "chromium" in tests_stage
+    assert "libatomic1" in tests_stage  # Playwright's Node driver does not start without it
+    tests_service = compose()["services"]["tests"]
+    assert tests_service["init"] is True  # orphans must not become the test process's children
