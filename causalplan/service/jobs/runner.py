@@ -51,7 +51,6 @@ class JobRunner:
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
         self._last_sweep = 0.0
-        self.completed = 0
 
     def start(self) -> None:
         """Start the runner threads (none when ``job_runners`` is 0)."""
@@ -89,7 +88,10 @@ class JobRunner:
             if job is None:
                 self._stop.wait(settings.job_poll_seconds)
                 continue
-            self._run(job)
+            try:
+                self._run(job)
+            except CausalPlanError as exc:  # the result could not be stored: the lease lapses, the job is redone
+                logger.warning("job %s could not be stored: %s", job.id, exc.message)
 
     def _sweep(self) -> None:
         if time.monotonic() - self._last_sweep >= SWEEP_SECONDS:
@@ -125,7 +127,6 @@ class JobRunner:
         try:
             result = self._work(job, progress)
             store.finish_job(engine, job.id, self.owner, keep, result=result)
-            self.completed += 1
         except JobCancelledError:
             if self._stop.is_set() and not lost.is_set():
                 store.release_job(engine, job.id, self.owner)
