@@ -40,7 +40,8 @@ fi
 
 for target in service tests; do
     stage "build localhost/causalplan-$target"
-    "${podman[@]}" build --quiet --network=host "${volumes[@]}" \
+    # --format docker keeps the HEALTHCHECK (the OCI format has none), which compose waits on.
+    "${podman[@]}" build --quiet --format docker --network=host "${volumes[@]}" \
         -f docker/Dockerfile --ignorefile docker/Dockerfile.dockerignore \
         --build-arg BASE=localhost/bookworm-py --target "$target" -t "localhost/causalplan-$target" . >/dev/null
 done
