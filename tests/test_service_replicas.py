@@ -33,10 +33,8 @@ from tests.conftest import EXAMPLES
 from tests.service_fixtures import (
     AUTH,
     DESK_LAMP,
-    FIRST_LINES,
     FLASHLIGHT_MAPPING,
     RESEARCH_TOKEN,
-    first_trials,
     free_port,
     postgres_database,
 )
@@ -245,9 +243,13 @@ def test_a_load_run_over_two_replicas_loses_no_trial(pair: list[Replica], databa
 
 
 def test_a_job_whose_replica_is_killed_is_finished_by_another(postgres_admin_url: str, tmp_path: Path) -> None:
-    # Long enough (ten chunks) that the kill lands mid-way; each trial with its own id.
-    examples = [json.loads(line) for line in first_trials(FIRST_LINES).splitlines()]
-    trials = [json.dumps({**examples[number % len(examples)], "id": f"t{number}"}) for number in range(200)]
+    # Long enough that the kill lands mid-way: 200 trials that differ (one label numbered in
+    # each), so no answer is reused and each is planned and simulated.
+    trial = json.dumps({"model": DESK_LAMP, "mapping": FLASHLIGHT_MAPPING})
+    trials = [
+        json.dumps({**json.loads(trial.replace("provide electricity", f"provide electricity {n}")), "id": f"t{n}"})
+        for n in range(200)
+    ]
     with postgres_database(postgres_admin_url) as url:
         doomed = launch(url, tmp_path, "doomed", job_lease_seconds="2")
         try:
@@ -255,9 +257,10 @@ def test_a_job_whose_replica_is_killed_is_finished_by_another(postgres_admin_url
             body = {"kind": "batch", "trials": "\n".join(trials), "simulate": True}
             job_url = f"{doomed.url}{httpx.post(f'{doomed.url}/v1/jobs', json=body).json()['url']}"
             deadline = time.monotonic() + 120
-            while httpx.get(job_url).json()["progress"]["done"] == 0:  # mid-job: a chunk is done, more to do
-                assert time.monotonic() < deadline
+            while (job := httpx.get(job_url).json())["progress"]["done"] == 0:  # mid-job: a chunk done, more to do
+                assert time.monotonic() < deadline and job["status"] in ("queued", "running"), job
                 time.sleep(0.05)
+            assert job["status"] == "running", job
         finally:
             stop(doomed, kill=True)
         path = job_url.removeprefix(doomed.url)
