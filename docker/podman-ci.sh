@@ -5,7 +5,8 @@
 #
 # 1. a base image from Debian's packages (mmdebstrap bookworm, python3 and venv), imported as
 #    localhost/bookworm-py (kept between runs; CAUSALPLAN_REBUILD_BASE=1 makes it again);
-# 2. the service and tests images of docker/Dockerfile on that base (BASE build argument);
+# 2. the service and tests images of docker/Dockerfile on that base (BASE build argument), and
+#    the load balancer's (docker/nginx), whose configuration nginx checks;
 # 3. the tests container: the README's test command inside it (PostgreSQL and Chromium are
 #    Debian's, installed in the image);
 # 4. the service container's smoke test (docker/smoke.py: health, one plan, one transfer).
@@ -45,6 +46,12 @@ for target in service tests; do
         -f docker/Dockerfile --ignorefile docker/Dockerfile.dockerignore \
         --build-arg BASE=localhost/bookworm-py --target "$target" -t "localhost/causalplan-$target" . >/dev/null
 done
+
+stage "build localhost/causalplan-nginx (the load balancer) and check its configuration"
+"${podman[@]}" build --quiet --format docker --network=host "${volumes[@]}" \
+    --build-arg BASE=localhost/bookworm-py -t localhost/causalplan-nginx docker/nginx >/dev/null
+# nginx resolves its upstream when it reads the file: name compose's `service` for the check.
+"${podman[@]}" run --rm "${limits[@]}" --add-host service:127.0.0.1 localhost/causalplan-nginx nginx -t -q
 
 stage "tests container: the README's test command"
 # --init: an init process as PID 1 adopts and reaps orphans (PostgreSQL's server, killed
