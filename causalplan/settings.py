@@ -124,6 +124,37 @@ class Settings(BaseSettings):
         default=True, description="Draw the pictures of the catalog objects' likely plans in the background at start."
     )
 
+    # Long work as jobs (causalplan.service.jobs), and where it runs.
+    dask_scheduler: str | None = Field(
+        default=None,
+        description="A Dask scheduler's address (tcp://HOST:8786): batch jobs run their trials there; "
+        "unset, they run in this replica's planner workers.",
+    )
+    job_runners: int = Field(
+        default=1, ge=0, le=16, description="Jobs this replica runs at once (0: it only answers for jobs)."
+    )
+    job_lease_seconds: float = Field(
+        default=30.0,
+        ge=1,
+        le=3600,
+        description="A running job's lease, renewed every third of it; a job whose replica stopped renewing "
+        "is taken up by another replica once its lease has lapsed.",
+    )
+    job_poll_seconds: float = Field(default=1.0, gt=0, le=60, description="How often an idle runner looks for jobs.")
+    job_result_seconds: float = Field(
+        default=86_400.0, gt=0, description="Seconds a finished job's result is kept; then the job is deleted."
+    )
+    max_queued_jobs: int = Field(default=100, ge=1, description="Unfinished jobs at once; more get 429.")
+    max_job_trials: int = Field(default=10_000, ge=1, description="Most trials one batch or consensus job may have.")
+    max_upload_bytes: int = Field(
+        default=16 * 1024 * 1024, ge=1024, description="Largest request body of POST /v1/jobs (it carries uploads)."
+    )
+
+    @field_validator("dask_scheduler")
+    @classmethod
+    def _empty_scheduler_is_none(cls, value: str | None) -> str | None:
+        return value.strip() or None if value is not None else None
+
     @field_validator("trusted_proxies", mode="before")
     @classmethod
     def _networks(cls, value: object) -> object:

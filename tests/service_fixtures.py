@@ -25,8 +25,11 @@ from typing import Any
 import pytest
 import yaml
 from fastapi.testclient import TestClient
+from sqlalchemy import Engine
 from sqlalchemy.engine import make_url
 
+from causalplan.service.db.migrate import upgrade
+from causalplan.service.db.session import create_database_engine
 from causalplan.service.deps import Services
 from causalplan.service.main import create_app, uvicorn_config
 from causalplan.settings import Settings
@@ -62,6 +65,16 @@ FAILED_FLASHLIGHT_MAPPING: dict[str, Any] = {
 }
 
 
+FIRST_LINES = 4
+"""The first lines of examples/batch/trials.jsonl are readable trials."""
+
+
+def first_trials(count: int = FIRST_LINES) -> str:
+    """Return the first ``count`` lines of the example batch file (JSON Lines), as an upload."""
+    lines = (EXAMPLES / "batch" / "trials.jsonl").read_text(encoding="utf-8").splitlines()
+    return "\n".join(lines[:count]) + "\n"
+
+
 def error_of(response: Any, status: int) -> dict[str, Any]:
     """Assert the one error shape and ``status``; return the error."""
     assert response.status_code == status, response.text
@@ -92,6 +105,13 @@ def free_port() -> int:
 def sqlite_url(folder: Path) -> str:
     """Return the URL of a SQLite database file in ``folder``."""
     return f"sqlite:///{folder / 'causalplan.sqlite3'}"
+
+
+def migrated_engine(folder: Path) -> Engine:
+    """Return an engine on a new SQLite database in ``folder``, migrated to the newest schema."""
+    engine = create_database_engine(sqlite_url(folder))
+    upgrade(engine)
+    return engine
 
 
 def is_running(pid: int) -> bool:

@@ -47,8 +47,8 @@ def test_health_reports_planners_database_pool_and_limits(client: TestClient) ->
     assert health["database"] == {
         "reachable": True,
         "backend": "sqlite",
-        "revision": "0004",
-        "expected_revision": "0004",
+        "revision": "0005",
+        "expected_revision": "0005",
         "problem": None,
     }
     assert health["pool"]["workers"] == 2 and health["pool"]["max_in_flight"] == 18
@@ -74,6 +74,8 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/simulations",
         "/v1/simulations/videos/{key}",
         "/v1/transfers",
+        "/v1/jobs",
+        "/v1/jobs/{job_id}",
         "/v1/objects",
         "/v1/objects/{object_id}",
         "/v1/trials",
@@ -90,4 +92,7 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
     assert {"200", "404", "413", "422", "429", "503", "504"} <= set(plans)
     assert plans["422"]["content"]["application/json"]["schema"] == {"$ref": "#/components/schemas/ErrorOut"}
     assert "HTTPValidationError" not in spec["components"]["schemas"]
+    jobs = spec["paths"]["/v1/jobs"]["post"]["responses"]
+    assert {"202", "413", "422", "429"} <= set(jobs) and "200" not in jobs
+    assert {"200", "404", "409"} <= set(spec["paths"]["/v1/jobs/{job_id}"]["delete"]["responses"])
     assert client.get("/docs").status_code == 200

@@ -11,7 +11,10 @@ import httpx
 import pytest
 from fastapi.testclient import TestClient
 from pydantic import ValidationError
+from sqlalchemy import Engine, delete, func, select
+from sqlalchemy.orm import Session
 
+from causalplan.service.db.models import FailedAttemptRecord
 from causalplan.service.errors import TooManyAttemptsError
 from causalplan.service.throttle import FailedAttempts
 from causalplan.settings import Settings
@@ -19,6 +22,7 @@ from tests.service_fixtures import (
     AUTH,
     RESEARCH_TOKEN,
     error_of,
+    migrated_engine,
     running_client,
     services_of,
     serving,
@@ -30,6 +34,12 @@ MAX_FAILURES = 3
 WINDOW = 60.0
 TOTAL = 1000
 WRONG = {"Authorization": "Bearer wrong"}
+
+
+@pytest.fixture
+def engine(tmp_path: Path) -> Engine:
+    """A migrated SQLite database for one throttle."""
+    return migrated_engine(tmp_path)
 
 
 class FakeClock:
@@ -74,9 +84,9 @@ def retry_after(attempts: FailedAttempts, address: str) -> int:
 # -- the throttle -------------------------------------------------------------------------------
 
 
-def test_after_max_failures_an_address_is_refused_until_its_oldest_failure_leaves_the_window() -> None:
+def test_after_max_failures_an_address_is_refused_until_its_oldest_failure_leaves_the_window(engine: Engine) -> None:
     clock = FakeClock()
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, clock=clock)
+    attempts = FailedAttempts(engine, MAX_FAILURES, WINDOW, TOTAL, clock=clock)
     fail(attempts, "a", 1)
     clock.now += 10
     fail(attempts, "a", MAX_FAILURES - 1)
@@ -89,8 +99,8 @@ def test_after_max_failures_an_address_is_refused_until_its_oldest_failure_leave
     assert retry_after(attempts, "a") == 10  # now the failures made 10 s after the first one are the oldest
 
 
-def test_successes_do_not_count_and_do_not_reset() -> None:
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, clock=FakeClock())
+def test_successes_do_not_count_and_do_not_reset(engine: Engine) -> None:
+    attempts = FailedAttempts(engine, MAX_FAILURES, WINDOW, TOTAL, clock=FakeClock())
     fail(attempts, "a", MAX_FAILURES - 1)
     for _ in range(20):
         assert attempts.check("a", right) is True
@@ -98,8 +108,8 @@ def test_successes_do_not_count_and_do_not_reset() -> None:
     assert retry_after(attempts, "a") == 60
 
 
-def test_addresses_are_counted_apart() -> None:
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, clock=FakeClock())
+def test_addresses_are_counted_apart(engine: Engine) -> None:
+    attempts = FailedAttempts(engine, MAX_FAILURES, WINDOW, TOTAL, clock=FakeClock())
     fail(attempts, "a", MAX_FAILURES)
     retry_after(attempts, "a")
     assert attempts.check("b", right) is True
@@ -107,27 +117,31 @@ def test_addresses_are_counted_apart() -> None:
     assert attempts.check("b", right) is True
 
 
-def test_memory_is_bounded_by_the_window_and_the_number_of_clients() -> None:
+def test_failures_that_left_the_window_are_deleted(engine: Engine) -> None:
     clock = FakeClock()
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, max_clients=3, clock=clock)
+    attempts = FailedAttempts(engine, MAX_FAILURES, WINDOW, TOTAL, clock=clock)
     for address in ("a", "b", "c"):
         fail(attempts, address, MAX_FAILURES)
-    clock.now += 1
-    retry_after(attempts, "a")  # looked at: now the most recently used
-    fail(attempts, "d", 1)  # a fourth client drops the least recently used, "b"
     assert len(attempts) == 3
-    fail(attempts, "b", MAX_FAILURES)  # forgotten, so checked again (and now "c" is dropped)
-    assert len(attempts) == 3
-    assert attempts.check("c", right) is True
-    assert retry_after(attempts, "a") == 59
-    clock.now += WINDOW  # every failure has left the window: all are forgotten
+    clock.now += WINDOW  # every failure has left the window: the next one clears them out
     fail(attempts, "e", 1)
     assert len(attempts) == 1
+    with Session(engine) as session:
+        assert session.scalar(select(func.count()).select_from(FailedAttemptRecord)) == 1
 
 
-def test_failures_from_many_clients_together_are_limited_too() -> None:
+def test_two_throttles_on_one_database_hold_one_count(engine: Engine) -> None:
     clock = FakeClock()
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, 5, clock=clock)
+    first = FailedAttempts(engine, MAX_FAILURES, WINDOW, TOTAL, clock=clock)
+    second = FailedAttempts(engine, MAX_FAILURES, WINDOW, TOTAL, clock=clock)  # as another replica's
+    fail(first, "a", MAX_FAILURES - 1)
+    fail(second, "a", 1)
+    assert retry_after(first, "a") == retry_after(second, "a") == 60
+
+
+def test_failures_from_many_clients_together_are_limited_too(engine: Engine) -> None:
+    clock = FakeClock()
+    attempts = FailedAttempts(engine, MAX_FAILURES, WINDOW, 5, clock=clock)
     for client in range(5):
         fail(attempts, f"client-{client}", 1)
     assert retry_after(attempts, "a new client") == 60  # even the right token, from anyone
@@ -135,8 +149,8 @@ def test_failures_from_many_clients_together_are_limited_too() -> None:
     assert attempts.check("a new client", right) is True
 
 
-def test_concurrent_wrong_guesses_cannot_overshoot_the_limit() -> None:
-    attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, clock=FakeClock())
+def test_concurrent_wrong_guesses_cannot_overshoot_the_limit(engine: Engine) -> None:
+    attempts = FailedAttempts(engine, MAX_FAILURES, WINDOW, TOTAL, clock=FakeClock())
     start = threading.Barrier(16)
     compared: list[int] = []
     refused: list[int] = []
@@ -161,15 +175,13 @@ def test_concurrent_wrong_guesses_cannot_overshoot_the_limit() -> None:
     assert len(compared) == MAX_FAILURES and len(refused) == 16 - MAX_FAILURES
 
 
-def test_limits_must_be_positive() -> None:
+def test_limits_must_be_positive(engine: Engine) -> None:
     with pytest.raises(ValueError, match="must be positive"):
-        FailedAttempts(0, WINDOW, TOTAL)
+        FailedAttempts(engine, 0, WINDOW, TOTAL)
     with pytest.raises(ValueError, match="must be positive"):
-        FailedAttempts(MAX_FAILURES, 0.0, TOTAL)
+        FailedAttempts(engine, MAX_FAILURES, 0.0, TOTAL)
     with pytest.raises(ValueError, match="must be positive"):
-        FailedAttempts(MAX_FAILURES, WINDOW, 0)
-    with pytest.raises(ValueError, match="must be positive"):
-        FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, max_clients=0)
+        FailedAttempts(engine, MAX_FAILURES, WINDOW, 0)
     for setting in (
         {"research_max_failures": 0},
         {"research_max_failures": -1},
@@ -211,8 +223,11 @@ def clock(app_client: TestClient) -> Iterator[FakeClock]:
     """Give the app a fresh record of failures on a fake clock for one test; put its own back afterwards."""
     services = services_of(app_client)
     own = services.failed_attempts
+    with Session(services.engine) as session:  # the failures of earlier tests are on another clock
+        session.execute(delete(FailedAttemptRecord))
+        session.commit()
     clock = FakeClock()
-    services.failed_attempts = FailedAttempts(MAX_FAILURES, WINDOW, TOTAL, clock=clock)
+    services.failed_attempts = FailedAttempts(services.engine, MAX_FAILURES, WINDOW, TOTAL, clock=clock)
     yield clock
     services.failed_attempts = own
 

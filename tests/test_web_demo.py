@@ -14,7 +14,7 @@ from causalplan.service.db.models import ModelRecord, ParticipantRecord, TrialRe
 from causalplan.service.web.demo import WINDOW_SECONDS, DemoStarts, purge_demo_participants
 from causalplan.service.web.errors import TooManyDemoStartsError
 from causalplan.service.web.upkeep import purge_interval
-from tests.service_fixtures import running_client, services_of, settings_for, wait_until
+from tests.service_fixtures import migrated_engine, running_client, services_of, settings_for, wait_until
 from tests.web_flows import FLASHLIGHT_CHOICES, complete, experiment, links
 
 
@@ -26,9 +26,9 @@ class Clock:
         return self.now
 
 
-def test_each_client_has_its_own_starts_per_window() -> None:
+def test_each_client_has_its_own_starts_per_window(tmp_path: Path) -> None:
     clock = Clock(10 * WINDOW_SECONDS + 15)
-    starts = DemoStarts(2, clock)
+    starts = DemoStarts(migrated_engine(tmp_path), 2, clock)
     starts.admit("a")
     starts.admit("a")
     starts.admit("b")
@@ -39,8 +39,8 @@ def test_each_client_has_its_own_starts_per_window() -> None:
     starts.admit("a")  # a new window
 
 
-def test_no_limit_when_the_setting_is_zero() -> None:
-    starts = DemoStarts(0)
+def test_no_limit_when_the_setting_is_zero(tmp_path: Path) -> None:
+    starts = DemoStarts(migrated_engine(tmp_path), 0)
     for _ in range(100):
         starts.admit("a")
 

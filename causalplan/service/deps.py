@@ -6,7 +6,7 @@ import secrets
 import threading
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 from fastapi import Depends, Header, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
@@ -23,6 +23,9 @@ from causalplan.service.pool.pool import PlannerPool
 from causalplan.service.throttle import FailedAttempts
 from causalplan.settings import Settings
 
+if TYPE_CHECKING:
+    from causalplan.service.jobs.runner import JobRunner
+
 
 @dataclass
 class Services:
@@ -38,6 +41,8 @@ class Services:
     """The catalog's fingerprint, part of every answer's cache key."""
     failed_attempts: FailedAttempts
     """Wrong research tokens by client and in total, to refuse guessing at full speed."""
+    runner: JobRunner | None = None
+    """This replica's job runner (started after the pool)."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
     films: FilmStore = field(init=False)

@@ -112,6 +112,29 @@ class TooManyAttemptsError(ServiceError):
         self.retry_after = retry_after
 
 
+class JobNotFoundError(NotFoundError):
+    """No job has this id (or its result has expired)."""
+
+    code = "job_not_found"
+
+
+class JobFinishedError(ServiceError):
+    """The job has finished already, so it cannot be cancelled."""
+
+    code = "job_finished"
+    status_code = 409
+
+
+class TooManyJobsError(ServiceError):
+    """The service holds as many unfinished jobs as it takes; ``Retry-After`` says when to try again."""
+
+    code = "too_many_jobs"
+    status_code = 429
+
+    def __init__(self, message: str, retry_after: int) -> None:
+        super().__init__(message, details={"retry_after": retry_after}, headers={"Retry-After": str(retry_after)})
+
+
 class PlanningTimeoutError(ServiceError):
     """A worker was still busy well after the solve's time limit, so it was killed."""
 

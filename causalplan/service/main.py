@@ -32,10 +32,11 @@ from causalplan.service.db.migrate import upgrade
 from causalplan.service.db.session import create_database_engine
 from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
+from causalplan.service.jobs.runner import JobRunner
 from causalplan.service.pool.jobs import probe_job
 from causalplan.service.pool.pool import PlannerPool
 from causalplan.service.responses import SafeJSONResponse
-from causalplan.service.routes import health, models, objects, plans, research, simulations, transfers
+from causalplan.service.routes import health, jobs, models, objects, plans, research, simulations, transfers
 from causalplan.service.schemas.common import error_responses
 from causalplan.service.throttle import FailedAttempts
 from causalplan.service.web import routers as web_routers
@@ -72,12 +73,15 @@ def start_services(settings: Settings) -> Services:
         revision,
         catalog_key=catalog_key(catalog),
         failed_attempts=FailedAttempts(
+            engine,
             settings.research_max_failures,
             settings.research_failure_window_seconds,
             settings.research_max_failures_total,
         ),
     )
     threading.Thread(target=_probe, args=(services,), name="causalplan-probe", daemon=True).start()
+    services.runner = JobRunner(services)
+    services.runner.start()
     return services
 
 
@@ -115,25 +119,42 @@ def _probe(services: Services) -> None:
 
 
 def stop_services(services: Services) -> None:
-    """Stop the workers and close the database connections."""
+    """Stop the job runner and the workers, and close the database connections.
+
+    The runner puts its running jobs back in the queue; a job busy in a worker ends when the
+    pool closes, and is put back then.
+    """
+    if services.runner is not None:
+        services.runner.stop()
     services.pool.close()
+    if services.runner is not None:
+        services.runner.join(10.0)
     services.engine.dispose()
 
 
-class BodyLimitMiddleware:
-    """Refuse request bodies over ``max_bytes`` with 413, before any route reads them."""
+UPLOAD_PATH = "/v1/jobs"
+"""Where request bodies carry uploads (a batch of trials), so ``max_upload_bytes`` applies instead."""
 
-    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
+
+class BodyLimitMiddleware:
+    """Refuse request bodies over ``max_bytes`` with 413, before any route reads them.
+
+    At ``UPLOAD_PATH`` the limit is ``upload_bytes`` instead.
+    """
+
+    def __init__(self, app: ASGIApp, max_bytes: int, upload_bytes: int | None = None) -> None:
         self.app = app
         self.max_bytes = max_bytes
+        self.upload_bytes = upload_bytes if upload_bytes is not None else max_bytes
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
+        limit = self.upload_bytes if scope["path"] == UPLOAD_PATH else self.max_bytes
         declared = dict(scope["headers"]).get(b"content-length")
-        if declared is not None and declared.isdigit() and int(declared) > self.max_bytes:
-            await self._refuse(scope, receive, send)
+        if declared is not None and declared.isdigit() and int(declared) > limit:
+            await self._refuse(scope, receive, send, limit)
             return
         chunks: list[bytes] = []
         size = 0
@@ -144,8 +165,8 @@ class BodyLimitMiddleware:
                 return
             chunk = message.get("body", b"")
             size += len(chunk)
-            if size > self.max_bytes:
-                await self._refuse(scope, receive, send)
+            if size > limit:
+                await self._refuse(scope, receive, send, limit)
                 return
             chunks.append(chunk)
             more = message.get("more_body", False)
@@ -160,10 +181,8 @@ class BodyLimitMiddleware:
 
         await self.app(scope, receive_body, send)
 
-    async def _refuse(self, scope: Scope, receive: Receive, send: Send) -> None:
-        error = BodyTooLargeError(
-            f"The request body is over the limit of {self.max_bytes} bytes.", details={"limit": self.max_bytes}
-        )
+    async def _refuse(self, scope: Scope, receive: Receive, send: Send, limit: int) -> None:
+        error = BodyTooLargeError(f"The request body is over the limit of {limit} bytes.", details={"limit": limit})
         await _error_response(error.code, error.message, error.status_code, error.details)(scope, receive, send)
 
 
@@ -323,8 +342,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_exception_handler(RequestValidationError, handle_validation_error)
     app.add_exception_handler(StarletteHTTPException, handle_http_error)
     app.add_middleware(UnexpectedErrorMiddleware)
-    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
-    for module in (models, plans, simulations, transfers, objects, research, health):
+    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes, upload_bytes=settings.max_upload_bytes)
+    for module in (models, plans, simulations, transfers, jobs, objects, research, health):
         app.include_router(module.router)
     for router in web_routers():  # the participant and research pages, and /v1/experiments
         app.include_router(router)

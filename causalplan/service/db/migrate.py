@@ -8,8 +8,11 @@ To add a revision after changing ``models.py`` (from a checkout)::
 
 from __future__ import annotations
 
+import fcntl
 import sys
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from alembic import command
@@ -19,6 +22,7 @@ from alembic.script import ScriptDirectory
 from sqlalchemy import Connection, Engine, text
 from sqlalchemy.exc import SQLAlchemyError
 
+from causalplan.service.db.session import sqlite_path
 from causalplan.service.errors import StorageError
 
 SCRIPT_LOCATION = "causalplan.service.db:migrations"
@@ -49,10 +53,33 @@ def current_revision(engine: Engine) -> str | None:
         return MigrationContext.configure(connection).get_current_revision()
 
 
+@contextmanager
+def _sqlite_file_lock(engine: Engine) -> Iterator[None]:
+    """Hold an exclusive lock on a file beside a SQLite database while it migrates (no-op for others).
+
+    Two servers started at once on one SQLite file then migrate one after the other: SQLite's
+    own busy wait would let both read the old revision before either wrote the new one.
+    """
+    path = sqlite_path(engine.url.render_as_string(hide_password=False))
+    if path is None:
+        yield
+        return
+    with open(path.with_name(path.name + ".migrate-lock"), "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
 def upgrade(engine: Engine) -> str:
-    """Migrate the database to the newest schema; return its revision. StorageError says why not."""
+    """Migrate the database to the newest schema; return its revision. StorageError says why not.
+
+    Servers started together migrate once: a PostgreSQL advisory lock, or a file lock beside a
+    SQLite database, makes the others wait and then find the schema up to date.
+    """
     try:
-        with engine.begin() as connection:
+        with _sqlite_file_lock(engine), engine.begin() as connection:
             if connection.dialect.name == "postgresql":
                 # Two servers starting at once on one database must not both create the tables.
                 connection.execute(text("SELECT pg_advisory_xact_lock(:id)"), {"id": _MIGRATION_LOCK_ID})

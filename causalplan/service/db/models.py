@@ -232,3 +232,54 @@ class RevokedResearchSessionRecord(Base):
 
     id: Mapped[str] = mapped_column(String(64), primary_key=True)
     expires_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), index=True)
+
+
+class FailedAttemptRecord(Base):
+    """One wrong research token: who sent it and when (the throttle every replica shares)."""
+
+    __tablename__ = "failed_attempts"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    client: Mapped[str] = mapped_column(String(MAX_CLIENT_ID_LENGTH), index=True)
+    at: Mapped[float] = mapped_column(Float, index=True)
+    """Seconds since the epoch: every replica's clock reads the same time."""
+
+
+class WindowCountRecord(Base):
+    """How often a client did something (``scope``) in one fixed window: the demo's start limit."""
+
+    __tablename__ = "window_counts"
+
+    scope: Mapped[str] = mapped_column(String(32), primary_key=True)
+    client: Mapped[str] = mapped_column(String(MAX_CLIENT_ID_LENGTH), primary_key=True)
+    window: Mapped[int] = mapped_column(Integer, primary_key=True)
+    count: Mapped[int] = mapped_column(Integer)
+    ends_at: Mapped[float] = mapped_column(Float, index=True)
+
+
+class JobRecord(Base):
+    """A long piece of work asked over HTTP: its request, progress, lease, and result.
+
+    Any replica answers for any job; the replica running it holds a lease (``lease_owner``
+    until ``lease_expires_at``) and renews it while it works, so a job whose replica died is
+    taken up again by another once the lease has lapsed.
+    """
+
+    __tablename__ = "jobs"
+    __table_args__ = (Index("ix_jobs_status_created", "status", "created_at"),)
+
+    id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
+    kind: Mapped[str] = mapped_column(String(32))
+    status: Mapped[str] = mapped_column(String(16))
+    request: Mapped[dict[str, Any]] = mapped_column(JSON)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
+    started_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    expires_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), index=True)
+    lease_owner: Mapped[str | None] = mapped_column(String(128))
+    lease_expires_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    attempts: Mapped[int] = mapped_column(Integer, default=0)
+    done: Mapped[int] = mapped_column(Integer, default=0)
+    total: Mapped[int] = mapped_column(Integer, default=0)
+    result: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    error: Mapped[dict[str, Any] | None] = mapped_column(JSON)

@@ -299,7 +299,8 @@ def _unwrap(reply: tuple[Any, ...]) -> Any:
             error = error_class(code)(message, details=details)
         except TypeError:  # a class with another constructor: keep the code, lose the class
             error = CausalPlanError(message, details=details)
-            error.code = code
+        # A class this process has not imported (e.g. the consensus's) is found as the root: keep the code.
+        error.code = code
         raise error
     logger.error("planner worker job failed:\n%s", reply[1])
     raise InternalError("The planner failed unexpectedly; the server log has the details.")

@@ -6,15 +6,12 @@ it is purged once it has been left alone for ``demo_retention_hours``.
 
 from __future__ import annotations
 
-import math
-import threading
 import time
 import uuid
 from collections.abc import Callable, Iterable, Iterator
 from datetime import datetime
 
-from cachetools import TTLCache
-from sqlalchemy import delete, func, select
+from sqlalchemy import Engine, delete, func, select
 from sqlalchemy.orm import Session
 
 from causalplan.service.db.crud import storage_errors
@@ -25,42 +22,34 @@ from causalplan.service.db.models import (
     ParticipantTrialRecord,
     TrialRecord,
 )
+from causalplan.service.throttle import WindowCounter
 from causalplan.service.web.errors import TooManyDemoStartsError
 
 WINDOW_SECONDS = 60.0
 """The demo's start limit counts the starts of each client in fixed windows this long."""
-MAX_CLIENTS_COUNTED = 10_000
-"""Clients whose starts are counted at once; beyond that the longest-idle one is forgotten."""
 PURGE_BATCH = 500
 """Participants deleted per statement (keeps each IN list short)."""
 
 
 class DemoStarts:
-    """Counts demo starts per client in fixed windows; a window's count lapses with it (``cachetools.TTLCache``)."""
+    """Counts demo starts per client in fixed windows, in the database (one count for every replica)."""
 
-    def __init__(self, per_window: int, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(self, engine: Engine, per_window: int, clock: Callable[[], float] = time.time) -> None:
         self.per_window = per_window
-        self._clock = clock
-        self._counts: TTLCache[tuple[str, int], int] = TTLCache(MAX_CLIENTS_COUNTED, WINDOW_SECONDS, timer=clock)
-        self._lock = threading.Lock()
+        self._counter = WindowCounter(engine, "demo_start", per_window, WINDOW_SECONDS, clock)
 
     def admit(self, client: str) -> None:
         """Count one start of ``client``; TooManyDemoStartsError when its window is full (0 per window: no limit)."""
         if self.per_window == 0:
             return
-        now = self._clock()
-        window = math.floor(now / WINDOW_SECONDS)
-        key = (client, window)
-        with self._lock:
-            count = self._counts.get(key, 0)
-            if count >= self.per_window:
-                retry_after = max(1, math.ceil((window + 1) * WINDOW_SECONDS - now))
-                raise TooManyDemoStartsError(
-                    f"This computer has started the demo {count} times in the last minute; "
-                    f"please wait {retry_after} s, or go on with the demo you already started.",
-                    retry_after,
-                )
-            self._counts[key] = count + 1
+        refused = self._counter.admit(client)
+        if refused is not None:
+            count, retry_after = refused
+            raise TooManyDemoStartsError(
+                f"This computer has started the demo {count} times in the last minute; "
+                f"please wait {retry_after} s, or go on with the demo you already started.",
+                retry_after,
+            )
 
 
 def _chunks(ids: list[uuid.UUID]) -> Iterator[list[uuid.UUID]]:

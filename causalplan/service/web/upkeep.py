@@ -88,7 +88,7 @@ class Upkeep:
 async def lifespan(app: FastAPI) -> AsyncIterator[None]:
     """Run inside the app's own lifespan (its services are up): the demo's start limit and the upkeep thread."""
     services: Services = app.state.services
-    app.state.demo_starts = DemoStarts(services.settings.demo_starts_per_minute)
+    app.state.demo_starts = DemoStarts(services.engine, services.settings.demo_starts_per_minute)
     upkeep = Upkeep(services)
     app.state.upkeep = upkeep
     upkeep.start()

@@ -1,0 +1,297 @@
+"""What each kind of job does: read its upload when it is posted, then do the work when a runner takes it.
+
+A kind is a ``JobKind`` with two functions: ``prepare`` (at POST time, on the request's
+thread: refuse what is wrong with a clear error before anything is queued, and return the
+request to store) and ``run`` (in a runner thread of whichever replica took the job). Adding a
+kind (the robot's video, say) is one enum member and one entry in ``KINDS``.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import StrEnum
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypeVar
+
+from causalplan.service.errors import InvalidRequestError, LimitExceededError, QueueFullError
+from causalplan.service.pool import jobs as worker_jobs
+from causalplan.transfer.batch import Trial, TrialResult, read_trials, run_batch
+
+if TYPE_CHECKING:
+    from causalplan.service.deps import Services
+
+T = TypeVar("T")
+
+CHUNK_SIZE = 20
+"""Trials a planner worker judges per call: small enough for steady progress and a prompt cancel."""
+CONSENSUS_GRACE_SECONDS = 60.0
+"""A consensus job's worker may take this long beyond its trials' time limits (building, aligning)."""
+CSV_FIELDS = ("id", "model", "mapping")
+
+
+class JobKind(StrEnum):
+    """The kinds of job ``POST /v1/jobs`` takes."""
+
+    BATCH = "batch"
+    """Transfer trials uploaded as JSON Lines or CSV, judged as ``causalplan batch`` does."""
+    SIMULATION = "simulation"
+    """A plan run in the physics simulator, with the picture of the final assembly."""
+    CONSENSUS = "consensus"
+    """The crowd's consensus model of participants uploaded as JSON Lines, judged."""
+
+
+class JobCancelledError(Exception):
+    """The job was cancelled (or its lease lost) while it ran: stop, store nothing."""
+
+
+Progress = Callable[[int, int], None]
+"""Called by a job's work with (done, total); raises JobCancelledError when the job is no longer ours."""
+
+
+@dataclass(frozen=True)
+class Kind:
+    prepare: Callable[[dict[str, Any], Services], dict[str, Any]]
+    run: Callable[[dict[str, Any], Services, Progress], dict[str, Any]]
+
+
+def in_pool(services: Services, function: Callable[..., T], args: tuple[Any, ...], timeout: float) -> T:
+    """Return ``function(*args)`` run in a planner worker, waiting while interactive requests fill the queue.
+
+    A job is not in a hurry: a full queue (QueueFullError) means wait and try again, not fail.
+    """
+    while True:
+        try:
+            return services.pool.run(function, args, timeout)
+        except QueueFullError as exc:
+            time.sleep(float(exc.details.get("retry_after", 1)))  # type: ignore[arg-type]
+
+
+# -- batch --------------------------------------------------------------------------------------
+
+
+def csv_to_json_lines(text: str) -> str:
+    """Return a CSV upload (columns id, model, mapping; model and mapping cells hold JSON) as JSON Lines.
+
+    A row whose cell is not JSON keeps the text, so the batch reader reports that line's problem.
+    """
+    reader = csv.DictReader(io.StringIO(text))
+    missing = [name for name in ("model", "mapping") if name not in (reader.fieldnames or [])]
+    if missing:
+        raise InvalidRequestError(
+            f"The CSV upload has no column {' and no column '.join(repr(name) for name in missing)}; "
+            f"its first line must name the columns {', '.join(CSV_FIELDS)}.",
+            details={"columns": list(reader.fieldnames or [])},
+        )
+    lines = []
+    for number, row in enumerate(reader, start=2):
+        entry: dict[str, object] = {"id": row.get("id") or f"row-{number}"}
+        for name in ("model", "mapping"):
+            cell = row.get(name) or ""
+            try:
+                entry[name] = json.loads(cell)
+            except json.JSONDecodeError as exc:
+                raise InvalidRequestError(
+                    f"Row {number} of the CSV upload: the {name} cell is not JSON ({exc.msg}, column {exc.colno}).",
+                    details={"row": number, "column": name},
+                ) from None
+        lines.append(json.dumps(entry))
+    return "\n".join(lines)
+
+
+def read_uploaded_trials(text: str, limit: int) -> list[Trial]:
+    """Return the trials of a JSON Lines upload, read as ``causalplan batch`` reads a file; at most ``limit``."""
+    with tempfile.TemporaryDirectory(prefix="causalplan-upload-") as folder:
+        path = Path(folder) / "trials.jsonl"
+        path.write_text(text, encoding="utf-8", errors="surrogatepass")
+        trials = list(read_trials(path))
+    if len(trials) > limit:
+        raise LimitExceededError(
+            "too_many_trials",
+            f"The upload has {len(trials)} trials; this server takes at most {limit} per job.",
+            details={"limit": limit, "actual": len(trials)},
+        )
+    if not trials:
+        raise InvalidRequestError("The upload has no trials: one JSON object a line, with 'model' and 'mapping'.")
+    return trials
+
+
+def _batch_lines(request: dict[str, Any]) -> str:
+    text: str = request["trials"]
+    return csv_to_json_lines(text) if request.get("format") == "csv" else text
+
+
+def prepare_batch(request: dict[str, Any], services: Services) -> dict[str, Any]:
+    from causalplan.service.answers import resolve_planner, resolve_time_limit
+
+    lines = _batch_lines(request)
+    trials = read_uploaded_trials(lines, services.settings.max_job_trials)
+    return {
+        "trials": lines,
+        "count": len(trials),
+        "planner": resolve_planner(request.get("planner", "auto")),
+        "time_limit": resolve_time_limit(request.get("time_limit"), services.settings),
+        "simulate": bool(request.get("simulate", True)),
+    }
+
+
+def judge_trials(
+    trials: list[Trial], planner: str, time_limit: float, simulate: bool, folders: tuple[Path, ...]
+) -> list[TrialResult]:
+    """Return the results of a chunk of trials (what a planner worker runs)."""
+    return run_batch(trials, worker_jobs.worker_catalog(folders), planner, time_limit, simulate)
+
+
+def _summary(results: list[TrialResult]) -> dict[str, Any]:
+    counts: dict[str, int] = {}
+    for result in results:
+        counts[result.verdict.verdict.value] = counts.get(result.verdict.verdict.value, 0) + 1
+    return {"trials": len(results), "verdicts": counts, "results": [result.row() for result in results]}
+
+
+def run_batch_job(request: dict[str, Any], services: Services, progress: Progress) -> dict[str, Any]:
+    settings = services.settings
+    trials = read_uploaded_trials(request["trials"], settings.max_job_trials)
+    planner, time_limit, simulate = request["planner"], float(request["time_limit"]), bool(request["simulate"])
+    total = len(trials)
+    progress(0, total)
+    if settings.dask_scheduler is not None:
+        from causalplan.transfer.cluster import JudgeOptions, run_batch_on_cluster
+
+        done = 0
+
+        def on_chunk(results: list[TrialResult]) -> None:
+            nonlocal done
+            done += len(results)
+            progress(done, total)  # raises JobCancelledError on a cancel: the cluster's client is closed
+
+        ordered = run_batch_on_cluster(
+            trials,
+            services.catalog,
+            JudgeOptions(planner, time_limit, simulate),
+            address=settings.dask_scheduler,
+            on_chunk=on_chunk,
+        )
+        return _summary(ordered)
+    results: list[TrialResult] = []
+    folders = tuple(settings.catalog_folders)
+    for start in range(0, total, CHUNK_SIZE):
+        chunk = trials[start : start + CHUNK_SIZE]
+        timeout = len(chunk) * (time_limit + settings.solve_grace_seconds)
+        results.extend(in_pool(services, judge_trials, (chunk, planner, time_limit, simulate, folders), timeout))
+        progress(len(results), total)
+    return _summary(results)
+
+
+# -- simulation ---------------------------------------------------------------------------------
+
+
+def prepare_simulation(request: dict[str, Any], services: Services) -> dict[str, Any]:
+    from causalplan.service.db.crud import ClientIds
+    from causalplan.service.documents import plan_inputs
+    from causalplan.service.schemas.plans import SimulationIn
+
+    body = SimulationIn.model_validate({key: value for key, value in request.items() if key != "kind"})
+    inputs = plan_inputs(body, services, ClientIds())
+    inputs.store(services)
+    return {
+        "model_id": str(inputs.submission.record.id),
+        "mapping": body.mapping,
+        "planner": inputs.planner,
+        "time_limit": inputs.time_limit,
+        "picture": body.picture,
+    }
+
+
+def run_simulation_job(request: dict[str, Any], services: Services, progress: Progress) -> dict[str, Any]:
+    from causalplan.service.db.crud import ClientIds
+    from causalplan.service.documents import plan_inputs
+    from causalplan.service.schemas.plans import SimulationIn
+
+    body = SimulationIn.model_validate(request)
+    inputs = plan_inputs(body, services, ClientIds())
+    progress(0, 1)
+    args = (
+        inputs.model,
+        inputs.mapping,
+        inputs.planner,
+        inputs.time_limit,
+        tuple(services.settings.catalog_folders),
+        body.picture,
+    )
+    data = in_pool(services, worker_jobs.simulate_job, args, inputs.time_limit + services.settings.solve_grace_seconds)
+    progress(1, 1)
+    return {**data, "model_id": request["model_id"]}
+
+
+# -- consensus ----------------------------------------------------------------------------------
+
+
+def prepare_consensus(request: dict[str, Any], services: Services) -> dict[str, Any]:
+    from causalplan.service.answers import resolve_planner, resolve_time_limit
+
+    text: str = request["trials"]
+    count = len([line for line in text.splitlines() if line.strip()])
+    if count == 0:
+        raise InvalidRequestError("The upload has no participants: one JSON object a line, with 'id' and 'model'.")
+    if count > services.settings.max_job_trials:
+        raise LimitExceededError(
+            "too_many_trials",
+            f"The upload has {count} lines; this server takes at most {services.settings.max_job_trials} per job.",
+            details={"limit": services.settings.max_job_trials, "actual": count},
+        )
+    return {
+        "trials": text,
+        "count": count,
+        "min_support": float(request.get("min_support", 0.5)),
+        "planner": resolve_planner(request.get("planner", "auto")),
+        "time_limit": resolve_time_limit(request.get("time_limit"), services.settings),
+        "simulate": bool(request.get("simulate", True)),
+    }
+
+
+def consensus_report(
+    text: str, min_support: float, planner: str, time_limit: float, simulate: bool, folders: tuple[Path, ...]
+) -> dict[str, Any]:
+    """Return ``causalplan consensus``'s report.json of the participants in ``text`` (what a worker runs)."""
+    from causalplan.consensus.build import build_consensus
+    from causalplan.consensus.judging import judge, report
+    from causalplan.consensus.participants import read_participants
+
+    catalog = worker_jobs.worker_catalog(folders)
+    with tempfile.TemporaryDirectory(prefix="causalplan-upload-") as folder:
+        path = Path(folder) / "crowd.jsonl"
+        path.write_text(text, encoding="utf-8", errors="surrogatepass")
+        participants = read_participants(path)
+    crowd = build_consensus(participants, catalog, min_support)
+    return report(judge(crowd, participants, catalog, planner, time_limit, simulate))
+
+
+def run_consensus_job(request: dict[str, Any], services: Services, progress: Progress) -> dict[str, Any]:
+    progress(0, 1)
+    time_limit = float(request["time_limit"])
+    args = (
+        request["trials"],
+        float(request["min_support"]),
+        request["planner"],
+        time_limit,
+        bool(request["simulate"]),
+        tuple(services.settings.catalog_folders),
+    )
+    # Every member's trial plus one per test object may each take the time limit.
+    timeout = (int(request["count"]) + 8) * (time_limit + services.settings.solve_grace_seconds)
+    data = in_pool(services, consensus_report, args, timeout + CONSENSUS_GRACE_SECONDS)
+    progress(1, 1)
+    return data
+
+
+KINDS: dict[JobKind, Kind] = {
+    JobKind.BATCH: Kind(prepare_batch, run_batch_job),
+    JobKind.SIMULATION: Kind(prepare_simulation, run_simulation_job),
+    JobKind.CONSENSUS: Kind(prepare_consensus, run_consensus_job),
+}

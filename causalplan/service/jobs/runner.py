@@ -1,0 +1,153 @@
+"""The job runner of one replica: threads that claim jobs from the database, do them, and store the results.
+
+Each thread takes one job at a time (``store.claim_job``), renews the job's lease every third
+of ``job_lease_seconds`` while the work goes on, and stores the result with a write that only
+the lease's owner can make. A replica that dies mid-job stops renewing; once the lease has
+lapsed, another replica's runner takes the job up again. A replica that stops cleanly puts its
+running jobs back in the queue at once.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import threading
+import time
+import uuid
+from typing import TYPE_CHECKING, Any
+
+from causalplan.errors import CausalPlanError
+from causalplan.service.db.models import JobRecord
+from causalplan.service.errors import InternalError
+from causalplan.service.jobs import store
+from causalplan.service.jobs.kinds import KINDS, JobCancelledError, JobKind, Progress
+
+if TYPE_CHECKING:
+    from causalplan.service.deps import Services
+
+logger = logging.getLogger(__name__)
+
+SWEEP_SECONDS = 60.0
+"""How often a runner deletes expired jobs."""
+
+
+def replica_name() -> str:
+    """Return a name for this server process, unique among replicas: host, process id, and a random part."""
+    return f"{socket.gethostname()[:64]}:{os.getpid()}:{uuid.uuid4().hex[:8]}"
+
+
+def error_of(exc: CausalPlanError) -> dict[str, Any]:
+    """Return an error in the one shape's inner part: code, message, details."""
+    return {"code": exc.code, "message": exc.message, "details": exc.details}
+
+
+class JobRunner:
+    """``settings.job_runners`` threads doing jobs for the replica that owns ``services``."""
+
+    def __init__(self, services: Services) -> None:
+        self.services = services
+        self.owner = replica_name()
+        self._stop = threading.Event()
+        self._threads: list[threading.Thread] = []
+        self._last_sweep = 0.0
+
+    def start(self) -> None:
+        """Start the runner threads (none when ``job_runners`` is 0)."""
+        for number in range(self.services.settings.job_runners):
+            thread = threading.Thread(target=self._loop, name=f"causalplan-jobs-{number}", daemon=True)
+            thread.start()
+            self._threads.append(thread)
+
+    def stop(self, seconds: float = 2.0) -> None:
+        """Ask the threads to stop; wait up to ``seconds`` for them (a job in a worker ends when the pool closes)."""
+        self._stop.set()
+        self.join(seconds)
+
+    def join(self, seconds: float) -> None:
+        """Wait up to ``seconds`` in all for the threads to end."""
+        deadline = time.monotonic() + seconds
+        for thread in self._threads:
+            thread.join(max(0.0, deadline - time.monotonic()))
+
+    def _loop(self) -> None:
+        settings = self.services.settings
+        while not self._stop.is_set():
+            try:
+                self._sweep()
+                job = store.claim_job(
+                    self.services.engine,
+                    self.owner,
+                    settings.job_lease_seconds,
+                    list(KINDS),
+                    settings.job_result_seconds,
+                )
+            except CausalPlanError as exc:  # the database is down: say so, try again later
+                logger.warning("the job runner cannot use the database: %s", exc.message)
+                job = None
+            if job is None:
+                self._stop.wait(settings.job_poll_seconds)
+                continue
+            try:
+                self._run(job)
+            except CausalPlanError as exc:  # the result could not be stored: the lease lapses, the job is redone
+                logger.warning("job %s could not be stored: %s", job.id, exc.message)
+
+    def _sweep(self) -> None:
+        if time.monotonic() - self._last_sweep >= SWEEP_SECONDS:
+            self._last_sweep = time.monotonic()
+            store.delete_expired(self.services.engine)
+
+    def _run(self, job: JobRecord) -> None:
+        engine, settings = self.services.engine, self.services.settings
+        lease, keep = settings.job_lease_seconds, settings.job_result_seconds
+        lost = threading.Event()
+        finished = threading.Event()
+        state = {"progress": (job.done, job.total)}
+
+        def heartbeat() -> None:
+            while not finished.wait(lease / 3):
+                try:
+                    if not store.renew_lease(engine, job.id, self.owner, lease, state["progress"]):
+                        lost.set()
+                        return
+                except CausalPlanError as exc:
+                    logger.warning("cannot renew the lease of job %s: %s", job.id, exc.message)
+
+        def progress(done: int, total: int) -> None:
+            state["progress"] = (done, total)
+            if lost.is_set() or self._stop.is_set():
+                raise JobCancelledError
+            if not store.renew_lease(engine, job.id, self.owner, lease, (done, total)):
+                lost.set()
+                raise JobCancelledError
+
+        beating = threading.Thread(target=heartbeat, name=f"causalplan-lease-{job.id}", daemon=True)
+        beating.start()
+        try:
+            result = self._work(job, progress)
+            store.finish_job(engine, job.id, self.owner, keep, result=result)
+        except JobCancelledError:
+            if self._stop.is_set() and not lost.is_set():
+                store.release_job(engine, job.id, self.owner)
+        except CausalPlanError as exc:
+            if self._stop.is_set():  # the pool closed under the job: another replica does it
+                store.release_job(engine, job.id, self.owner)
+            else:
+                store.finish_job(engine, job.id, self.owner, keep, error=error_of(exc))
+        finally:
+            finished.set()
+            beating.join()
+
+    def _work(self, job: JobRecord, progress: Progress) -> dict[str, Any]:
+        """Return the job's result; raise the CausalPlanError that failed it (a bug becomes internal_error)."""
+        kind = KINDS[JobKind(job.kind)]  # claim_job takes only the kinds of KINDS
+        try:
+            return kind.run(job.request, self.services, progress)
+        except (CausalPlanError, JobCancelledError):
+            raise
+        except Exception as exc:
+            logger.exception("job %s (%s) failed", job.id, job.kind)
+            raise InternalError(
+                f"The job failed on the server ({exc.__class__.__name__}); the log has the details."
+            ) from exc
