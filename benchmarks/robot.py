@@ -26,33 +26,11 @@ from importlib import metadata
 
 from rich.console import Console
 from rich.table import Table
+from sim import PLANS  # benchmarks/sim.py, beside this script: the same plans as the physics benchmark
 
 from causalplan.objects.catalog import load_catalog
 from causalplan.sim import RenderMode, simulate_plan
 from causalplan.sim.fit_estimates import estimate_fit
-from causalplan.sim.plan_steps import StepRequest
-
-PLANS: dict[str, tuple[StepRequest, ...]] = {
-    "desk_lamp": (
-        StepRequest("screw", "light_bulb", "base_with_cables", "bulb_into_socket"),
-        StepRequest("clip", "shade", "base_with_cables", "shade_onto_ring"),
-    ),
-    "flashlight": (
-        StepRequest("insert", "batteries", "case", "batteries_into_bay"),
-        StepRequest("screw", "head", "case", "head_onto_case"),
-    ),
-    "candle": (
-        StepRequest("insert", "wick", "wax", "wick_into_wax"),
-        StepRequest("ignite", "match", "wick", "match_lights_wick"),
-    ),
-    "kerosene_lamp": (
-        StepRequest("screw", "burner", "fuel_tank", "burner_onto_tank"),
-        StepRequest("insert", "wick", "burner", "wick_into_burner"),
-        StepRequest("ignite", "lighter", "wick", "lighter_lights_wick"),
-        StepRequest("place", "glass_chimney", "burner", "chimney_onto_burner"),
-    ),
-}
-"""The whole assembly of each paper object, in an order that works."""
 
 
 def main() -> int:

@@ -89,12 +89,10 @@ def plan(
 
     ``val`` also checks it with VAL on the readable PDDL, as the command line does by default.
     """
-    from causalplan.pddl.task import build_task
+    from causalplan.pddl.task import catalog_task
     from causalplan.planners.pipeline import plan_task
 
-    known = objects or catalog()
-    task = build_task(model, known.get((mapping or model.labelling).object_id), mapping)
-    return plan_task(task, planner, time_limit, val=val)
+    return plan_task(catalog_task(model, objects or catalog(), mapping), planner, time_limit, val=val)
 
 
 def transfer_verdict(
@@ -120,12 +118,13 @@ def simulate(
     objects: Catalog | None = None,
 ) -> SimulationReport:
     """Return the physics check of the model's plan: each step, stability, and whether the goal is produced."""
+    from causalplan.pddl.task import catalog_task
+    from causalplan.planners.pipeline import plan_task
     from causalplan.sim import RenderMode, simulate_plan
 
-    known = objects or catalog()
-    result = plan(model, mapping, objects=known)
+    task = catalog_task(model, objects or catalog(), mapping)
+    result = plan_task(task, val=True)  # as ``plan`` checks it by default
     if not result.has_plan:
         message = f"There is no plan to simulate: {result.message}"
         raise CausalPlanError(message, details={"status": result.status.value})
-    target = known.get((mapping or model.labelling).object_id)
-    return simulate_plan(target, result.steps, render=RenderMode.NONE)
+    return simulate_plan(task, result.steps, render=RenderMode.NONE)

@@ -198,11 +198,11 @@ def load_valid_mapping(path: Path, objects: Catalog, as_json: bool) -> Labelling
 
 def load_task(model: Path, mapping: Path | None, objects: Catalog, as_json: bool) -> PlanningTask:
     """Return the planning task of a valid model (on a valid mapping's object, if given); else exit with 2."""
-    from causalplan.pddl.task import build_task
+    from causalplan.pddl.task import catalog_task
 
     causal_model = load_valid_model(model, objects, as_json)
     labelling = load_valid_mapping(mapping, objects, as_json) if mapping else None
-    return build_task(causal_model, objects.get((labelling or causal_model.labelling).object_id), labelling)
+    return catalog_task(causal_model, objects, labelling)
 
 
 def write_pddl(folder: Path, domain: str, problem: str) -> None:

@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from causalplan.causal.labels import normalize_label
 from causalplan.causal.model import CausalModel, Labelling, node_labels
 from causalplan.causal.rules import Rule
 from causalplan.objects.model import AssemblyObject
+
+if TYPE_CHECKING:
+    from causalplan.objects.catalog import Catalog
 
 
 @dataclass(frozen=True)
@@ -44,3 +48,8 @@ def build_task(model: CausalModel, obj: AssemblyObject, mapping: Labelling | Non
     """Return the task of planning ``model`` on ``obj``, with ``mapping``'s functions if given."""
     labelling = mapping if mapping is not None else model.labelling
     return PlanningTask(obj=obj, labelling=labelling, rules=model.rules, goal=model.goal)
+
+
+def catalog_task(model: CausalModel, catalog: Catalog, mapping: Labelling | None = None) -> PlanningTask:
+    """Return the task of planning ``model`` on its own object, or on ``mapping``'s object, from ``catalog``."""
+    return build_task(model, catalog.get((mapping or model.labelling).object_id), mapping)

@@ -21,7 +21,7 @@ from cachetools import LRUCache
 from causalplan.causal.labels import display_label
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.objects.catalog import Catalog
-from causalplan.pddl.task import build_task
+from causalplan.pddl.task import catalog_task
 from causalplan.pddl.writer import compile_task
 from causalplan.planners import pipeline
 from causalplan.planners.result import PlanStatus
@@ -334,6 +334,5 @@ def _is_final_simulation(data: dict[str, Any]) -> bool:
 
 def compiled_pddl(catalog: Catalog, model: CausalModel, mapping: Labelling | None) -> dict[str, str]:
     """Return the readable PDDL domain and problem of a plan request (pure and quick: done here, not by a worker)."""
-    target = catalog.get((mapping or model.labelling).object_id)
-    compiled = compile_task(build_task(model, target, mapping))
+    compiled = compile_task(catalog_task(model, catalog, mapping))
     return {"domain": compiled.domain, "problem": compiled.problem}

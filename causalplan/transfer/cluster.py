@@ -108,8 +108,7 @@ def run_batch_on_cluster(
     try:
         shared = client.scatter(catalog, broadcast=True)
         futures = {
-            client.submit(judge_chunk, part, shared, options, key=f"causalplan-chunk-{index}-{id(parts)}"): index
-            for index, part in enumerate(parts)
+            client.submit(judge_chunk, part, shared, options, pure=False): index for index, part in enumerate(parts)
         }
         done: dict[int, list[TrialResult]] = {}
         for future in as_completed(futures):

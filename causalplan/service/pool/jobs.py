@@ -17,7 +17,7 @@ from pathlib import Path
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import Catalog, load_catalog
-from causalplan.pddl.task import build_task
+from causalplan.pddl.task import catalog_task
 from causalplan.planners import fd, pipeline
 from causalplan.settings import Settings
 from causalplan.transfer.verdict import evaluate_transfer
@@ -62,9 +62,8 @@ def plan_job(
 
     Without the PDDL: the service compiles that itself when a request asks for it.
     """
-    catalog = worker_catalog(catalog_folders)
-    target = catalog.get((mapping or model.labelling).object_id)
-    result = pipeline.plan_task(build_task(model, target, mapping), planner, time_limit, val=val)
+    task = catalog_task(model, worker_catalog(catalog_folders), mapping)
+    result = pipeline.plan_task(task, planner, time_limit, val=val)
     return result.as_dict()
 
 
@@ -163,9 +162,9 @@ def simulate_job(
     from causalplan.service.pool.robot_jobs import robot_outcome, robot_simulation
     from causalplan.sim import RenderMode, simulate_plan
 
-    catalog = worker_catalog(catalog_folders)
-    target = catalog.get((mapping or model.labelling).object_id)
-    result = pipeline.plan_task(build_task(model, target, mapping), planner, time_limit)
+    task = catalog_task(model, worker_catalog(catalog_folders), mapping)
+    target = task.obj
+    result = pipeline.plan_task(task, planner, time_limit)
     data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "image": None}
     if not result.has_plan:
         return data

@@ -8,6 +8,8 @@ import logging
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from fastapi import Response
+
 from causalplan.causal.model import CausalModel
 from causalplan.causal.render import DRAW_LOCK
 from causalplan.errors import CausalPlanError
@@ -24,6 +26,12 @@ logger = logging.getLogger(__name__)
 PICTURE_SECONDS = 20.0
 """Longest a worker may take to draw an object's parts or a plan's result."""
 SVG_HEADERS = {**SVG_SECURITY_HEADERS, "X-Content-Type-Options": "nosniff"}
+
+
+def fresh_svg(svg: bytes) -> Response:
+    """Return a drawing made for this request (of data that changes) as an SVG response nobody keeps."""
+    return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
+
 
 _graphs = PictureCache(256)
 _part_pictures = PictureCache(512)

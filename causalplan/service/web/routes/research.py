@@ -19,7 +19,7 @@ from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, Setting
 from causalplan.service.errors import InvalidRequestError, TooManyAttemptsError
 from causalplan.service.web import experiments, store
 from causalplan.service.web.auth import ResearchPageDep, sign_in, sign_out
-from causalplan.service.web.drawings import SVG_HEADERS, rates_chart
+from causalplan.service.web.drawings import fresh_svg, rates_chart
 from causalplan.service.web.errors import InvalidExperimentError
 from causalplan.service.web.forms import Form, read_form
 from causalplan.service.web.recruitment import DEMOGRAPHICS
@@ -261,7 +261,7 @@ def analysis_plot(
         path = Path(folder) / "rates.svg"
         plot(analysis, path)
         svg = path.read_bytes()
-    return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
+    return fresh_svg(svg)
 
 
 @router.get("/experiments/{experiment_id}/consensus.svg")
@@ -273,7 +273,7 @@ def consensus_graph(
     svg = experiments.consensus_svg(session, catalog, experiment, request)
     if isinstance(svg, str):
         raise InvalidRequestError(f"There is no consensus to draw: {svg}")
-    return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
+    return fresh_svg(svg)
 
 
 @router.post("/experiments/{experiment_id}/participants")
@@ -291,7 +291,7 @@ async def make_links(request: Request, experiment_id: uuid.UUID, _: ResearchPage
 def chart(experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep) -> Response:
     experiment = store.get_experiment(session, experiment_id)
     svg = rates_chart(experiments.rates_of(session, catalog, experiment))
-    return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
+    return fresh_svg(svg)
 
 
 @router.get("/experiments/{experiment_id}/export")

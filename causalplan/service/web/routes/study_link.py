@@ -14,11 +14,12 @@ from typing import Any
 
 from fastapi import APIRouter, Request, Response
 
+from causalplan.service.db.models import ExperimentRecord
 from causalplan.service.deps import SessionDep
 from causalplan.service.web import arrivals, recruitment, store
 from causalplan.service.web.errors import InvalidFormError
 from causalplan.service.web.forms import read_form
-from causalplan.service.web.recruitment import MTURK_FRAME_ORIGINS, Recruitment, finish, read_visit
+from causalplan.service.web.recruitment import MTURK_FRAME_ORIGINS, PlatformVisit, Recruitment, finish, read_visit
 from causalplan.service.web.templating import PageRoute, redirect, render
 
 router = APIRouter(prefix="/s/{experiment_id}", route_class=PageRoute, include_in_schema=False)
@@ -41,15 +42,7 @@ def arrive(request: Request, experiment_id: uuid.UUID, session: SessionDep) -> R
     visit = read_visit(dict(request.query_params))
     recruiting = Recruitment.from_dict(experiment.recruitment)
     if visit.is_preview:  # MTurk's preview: show what the study is, store nothing
-        return _page(
-            request,
-            "consent.html",
-            visit.platform,
-            experiment_id=experiment.id,
-            name=experiment.name,
-            consent=recruiting,
-            arrival=None,
-        )
+        return _consent_page(request, experiment, visit, recruiting, None)
     found = arrivals.find_arrival(session, experiment.id, visit)
     if found is not None and found.participant is not None:
         return redirect(f"/p/{found.participant.code}")  # they come back to their own progress
@@ -57,7 +50,13 @@ def arrive(request: Request, experiment_id: uuid.UUID, session: SessionDep) -> R
         return _declined(request, found, recruiting)
     if found is None and arrivals.is_full(session, experiment):
         return _full(request, visit.platform)
-    arrival = found or arrivals.arrive(session, experiment, visit)
+    return _consent_page(request, experiment, visit, recruiting, found or arrivals.arrive(session, experiment, visit))
+
+
+def _consent_page(
+    request: Request, experiment: ExperimentRecord, visit: PlatformVisit, recruiting: Recruitment, arrival: Any
+) -> Response:
+    """The consent page (``arrival`` None: MTurk's preview, which stores nothing and cannot be agreed to)."""
     return _page(
         request,
         "consent.html",
