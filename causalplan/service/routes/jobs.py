@@ -72,7 +72,7 @@ async def create_job(body: JobIn, services: ServicesDep, response: Response) -> 
     a batch's unreadable lines become `invalid` trials in the result, as in the CLI.
     """
     kind = JobKind(body.kind)
-    request: dict[str, Any] = body.model_dump(mode="json")
+    request: dict[str, Any] = body.model_dump(mode="json", by_alias=True)  # stored as the API reads it
 
     def prepare_and_store() -> JobRecord:
         prepared = KINDS[kind].prepare(request, services)

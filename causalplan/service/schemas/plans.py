@@ -19,9 +19,6 @@ from causalplan.service.schemas.common import (
 
 
 class _Solve(InputModel):
-    # 'validate' is the field's name on the wire; a request stored by name (a job's) reads back too.
-    model_config = ConfigDict(extra="forbid", populate_by_name=True)
-
     model: ModelDocument | None = Field(default=None, description="The model inline (or give model_id).")
     model_id: uuid.UUID | None = Field(default=None, description="A model stored by POST /v1/models.")
     planner: str = Field(
