@@ -10,7 +10,7 @@ from sqlalchemy.orm import Session
 
 from causalplan.service.db.models import RevokedResearchSessionRecord
 from causalplan.service.web.auth import COOKIE_NAME, cookie_session, forget_lapsed_revocations, session_cookie
-from tests.service_fixtures import RESEARCH_TOKEN, running_client, services_of, settings_for
+from tests.service_fixtures import RESEARCH_TOKEN, migrated_engine, running_client, settings_for
 
 
 def signed_in_cookie(client: TestClient) -> str:
@@ -56,9 +56,12 @@ def test_signing_out_revokes_the_old_cookie_in_every_server_process(tmp_path: Pa
 
 
 def test_lapsed_revocations_are_forgotten(tmp_path: Path) -> None:
-    with running_client(settings_for(f"sqlite:///{tmp_path}/lapsed.sqlite3", planning_workers=1)) as client:
+    # A database of its own, with no service running: the service's upkeep forgets lapsed
+    # revocations too, and would race this call for the same row.
+    engine = migrated_engine(tmp_path)
+    try:
         now = datetime.now(UTC)
-        with Session(services_of(client).engine) as session:
+        with Session(engine) as session:
             session.add_all(
                 [
                     RevokedResearchSessionRecord(id="a" * 32, expires_at=now - timedelta(minutes=1)),
@@ -68,3 +71,5 @@ def test_lapsed_revocations_are_forgotten(tmp_path: Path) -> None:
             session.commit()
             assert forget_lapsed_revocations(session, now) == 1
             assert [r.id for r in session.query(RevokedResearchSessionRecord)] == ["b" * 32]
+    finally:
+        engine.dispose()
