@@ -1,0 +1,95 @@
+#!/usr/bin/env bash
+# The compose stack (docker/compose.yaml) brought up for real, checked end to end through nginx,
+# and torn down (its database volume too):
+#
+#   docker/compose-smoke.sh                          podman and podman-compose (as on CI's machines)
+#   CAUSALPLAN_ENGINE=docker docker/compose-smoke.sh Docker and Docker Compose
+#
+# What it checks is docker/compose_smoke.py's: health through nginx and of every container that
+# has a check, the database migrated once, a participant's steps reaching both replicas,
+# X-Forwarded-For believed only from nginx, a batch job judged on the Dask workers, and the
+# service still answering through nginx with a replica killed. Each check prints what it saw;
+# on a failure the containers' last log lines follow.
+#
+# With podman it builds only the images that are missing (docker/podman-ci.sh builds the service
+# and nginx images; PostgreSQL comes from docker/postgres, Debian's package, since the official
+# image cannot be pulled here), and runs podman as docker/podman/containers.conf says (runc, the
+# rlimits it may set). podman before 4.6 cannot wait for a health check, so the database is
+# started, and found healthy, before the rest.
+#
+# Settings: CAUSALPLAN_ENGINE (podman), PODMAN_COMPOSE (.venv/bin/podman-compose),
+# SMOKE_PYTHON (.venv/bin/python), CAUSALPLAN_POSTGRES_IMAGE (podman: localhost/causalplan-postgres).
+# nginx is published on 127.0.0.1:8000, as compose.yaml says: that port must be free.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+engine=${CAUSALPLAN_ENGINE:-podman}
+python=${SMOKE_PYTHON:-.venv/bin/python}
+
+case "$engine" in
+    podman)
+        scratch=$(mktemp -d /tmp/causalplan-compose.XXXXXX)
+        # shellcheck source=docker/podman-common.sh
+        source docker/podman-common.sh
+        export CONTAINERS_CONF=${CONTAINERS_CONF:-$PWD/docker/podman/containers.conf}
+        export CAUSALPLAN_POSTGRES_IMAGE=${CAUSALPLAN_POSTGRES_IMAGE:-localhost/causalplan-postgres}
+        compose=("${PODMAN_COMPOSE:-.venv/bin/podman-compose}" -f docker/compose.yaml)
+        # The images' anonymous volumes (VOLUME) go with their containers.
+        down=("${PODMAN_COMPOSE:-.venv/bin/podman-compose}" --podman-rm-args=-v -f docker/compose.yaml down -v)
+        ensure_base_image "$scratch"
+        if ! podman image exists localhost/causalplan-service; then
+            build_image localhost/causalplan-service -f docker/Dockerfile \
+                --ignorefile docker/Dockerfile.dockerignore --target service .
+        fi
+        if ! podman image exists localhost/causalplan-nginx; then build_image localhost/causalplan-nginx docker/nginx; fi
+        if [ "$CAUSALPLAN_POSTGRES_IMAGE" = localhost/causalplan-postgres ]; then
+            build_image localhost/causalplan-postgres docker/postgres  # cached layers when nothing changed
+        fi
+        rmdir "$scratch"
+        ;;
+    docker)
+        stage() { echo "== $(date -u +%H:%M:%S) $*"; }
+        compose=(docker compose -f docker/compose.yaml)
+        down=("${compose[@]}" down -v)
+        ;;
+    *)
+        echo "compose-smoke: CAUSALPLAN_ENGINE must be podman or docker, not '$engine'" >&2
+        exit 2
+        ;;
+esac
+
+up_log=$(mktemp /tmp/causalplan-compose-up.XXXXXX)
+teardown() {
+    local status=$?
+    if [ "$status" -ne 0 ]; then
+        echo "--- what compose said while starting the stack (its last lines)"
+        tail -n 30 "$up_log"
+        for container in $("$engine" ps -a --filter label=com.docker.compose.project=causalplan --format '{{.Names}}'); do
+            echo "--- $container (last lines of its log)"
+            "$engine" logs --tail 30 "$container" 2>&1 || true
+        done
+    fi
+    stage "tear down (containers, network, database volume)"
+    "${down[@]}" >/dev/null 2>&1 || true
+    rm -f "$up_log"
+    exit "$status"
+}
+trap teardown EXIT
+
+if [ "$engine" = podman ]; then
+    stage "up: postgres, then the rest once it is healthy"
+    "${compose[@]}" up -d postgres >>"$up_log" 2>&1
+    healthy=false
+    for _ in $(seq 60); do
+        if podman healthcheck run causalplan_postgres_1 >/dev/null 2>&1; then healthy=true && break; fi
+        sleep 1
+    done
+    if [ "$healthy" != true ]; then echo "compose-smoke: postgres was not healthy within 60 s" >&2 && exit 1; fi
+    "${compose[@]}" up -d >>"$up_log" 2>&1
+else
+    stage "up (building the images)"
+    "${compose[@]}" up -d --build --wait
+fi
+
+stage "checks through nginx"
+"$python" docker/compose_smoke.py --engine "$engine"
+stage "compose smoke passed"
