@@ -11,9 +11,9 @@
 # service still answering through nginx with a replica killed. Each check prints what it saw;
 # on a failure the containers' last log lines follow.
 #
-# With podman it builds only the images that are missing (docker/podman-ci.sh builds the service
-# and nginx images; PostgreSQL comes from docker/postgres, Debian's package, since the official
-# image cannot be pulled here), and runs podman as docker/podman/containers.conf says (runc, the
+# With podman it builds the service and nginx images only when missing (docker/podman-ci.sh
+# builds them) and PostgreSQL's from docker/postgres, Debian's package (the official image cannot
+# be pulled here; an unchanged one comes from the build cache), and runs podman as docker/podman/containers.conf says (runc, the
 # rlimits it may set). podman before 4.6 cannot wait for a health check, so the database is
 # started, and found healthy, before the rest.
 #
@@ -21,9 +21,19 @@
 # SMOKE_PYTHON (.venv/bin/python), CAUSALPLAN_POSTGRES_IMAGE (podman: localhost/causalplan-postgres).
 # nginx is published on 127.0.0.1:8000, as compose.yaml says: that port must be free.
 set -euo pipefail
+if [ $# -gt 0 ]; then
+    case "$1" in
+        -h | --help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//' && exit 0 ;;
+        *) echo "compose-smoke: no arguments are taken (settings are variables; see --help), got '$1'" >&2 && exit 2 ;;
+    esac
+fi
 cd "$(dirname "$0")/.."
 engine=${CAUSALPLAN_ENGINE:-podman}
 python=${SMOKE_PYTHON:-.venv/bin/python}
+if [ ! -x "$python" ]; then
+    echo "compose-smoke: no Python at $python (SMOKE_PYTHON): make the venv as the README says" >&2
+    exit 2
+fi
 
 case "$engine" in
     podman)
@@ -33,6 +43,10 @@ case "$engine" in
         export CONTAINERS_CONF=${CONTAINERS_CONF:-$PWD/docker/podman/containers.conf}
         export CAUSALPLAN_POSTGRES_IMAGE=${CAUSALPLAN_POSTGRES_IMAGE:-localhost/causalplan-postgres}
         compose=("${PODMAN_COMPOSE:-.venv/bin/podman-compose}" -f docker/compose.yaml)
+        if ! command -v "${compose[0]}" >/dev/null; then
+            echo "compose-smoke: no podman-compose at ${compose[0]} (PODMAN_COMPOSE): .venv/bin/pip install podman-compose" >&2
+            exit 2
+        fi
         # The images' anonymous volumes (VOLUME) go with their containers.
         down=("${PODMAN_COMPOSE:-.venv/bin/podman-compose}" --podman-rm-args=-v -f docker/compose.yaml down -v)
         ensure_base_image "$scratch"

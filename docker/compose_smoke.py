@@ -5,7 +5,8 @@
 docker/compose-smoke.sh brings the stack up, runs this, and tears it down. What it checks, in
 order, each printed as it passes:
 
-1. /health through nginx says ok; every replica passes its image's health check;
+1. /health through nginx says ok; every replica passes its image's health check, and nginx
+   reaches each of them;
 2. the replicas migrated the database once: one schema revision, neither replica restarted;
 3. a participant's steps (the demo: tutorial, steps 1-3) reach both replicas, and the study
    goes on whichever replica answers;
@@ -172,6 +173,11 @@ def wait_healthy(client: httpx.Client) -> dict[str, Any]:
     raise SmokeError(f"/health through nginx did not say ok within {WAIT_SECONDS:g} s; last: {last}")
 
 
+def forwarded_health(log: str, nginx: str) -> bool:
+    """Return whether a replica's access log shows a /health that nginx (``ADDRESS:``) passed on."""
+    return any(nginx in line and '"GET /health HTTP/1.1" 200' in line for line in log.splitlines())
+
+
 def check_health(engine: Engine, client: httpx.Client) -> list[str]:
     health = wait_healthy(client)
     replicas = engine.containers("service")
@@ -186,6 +192,18 @@ def check_health(engine: Engine, client: httpx.Client) -> list[str]:
     for service in ("postgres", "dask-scheduler"):
         check(engine.is_healthy(engine.one(service)), f"'{service}' fails its health check")
     report(f"health: ok through nginx (causalplan {health['version']}); replicas {', '.join(replicas)} healthy")
+    # nginx sets aside a replica that refused a connection while it started (for fail_timeout,
+    # 10 s): ask until /health through nginx has reached each replica, as their logs show.
+    nginx = f"{engine.address(engine.one('nginx'))}:"
+    deadline = time.monotonic() + WAIT_SECONDS
+    unreached = replicas
+    while unreached and time.monotonic() < deadline:
+        check(client.get("/health").status_code == 200, "/health through nginx stopped answering 200")
+        unreached = [name for name in unreached if not forwarded_health(engine.logs(name), nginx)]
+        if unreached:
+            time.sleep(1)
+    check(not unreached, f"/health through nginx never reached {unreached}")
+    report(f"nginx: /health through it reached each of {', '.join(replicas)}")
     revision = health["database"]["expected_revision"]
     stored = engine.sql("SELECT version_num FROM alembic_version")
     check(stored == [revision], f"alembic_version holds {stored}, expected [{revision!r}]")
