@@ -11,9 +11,9 @@
 # service still answering through nginx with a replica killed. Each check prints what it saw;
 # on a failure the containers' last log lines follow.
 #
-# With podman it builds the service and nginx images only when missing (docker/podman-ci.sh
-# builds them) and PostgreSQL's from docker/postgres, Debian's package (the official image cannot
-# be pulled here; an unchanged one comes from the build cache), and runs podman as docker/podman/containers.conf says (runc, the
+# With podman it builds the images on a Debian base made locally (from the build cache, after
+# docker/podman-ci.sh), PostgreSQL's from docker/postgres (Debian's package: the official image
+# cannot be pulled here), and runs podman as docker/podman/containers.conf says (runc, the
 # rlimits it may set). podman before 4.6 cannot wait for a health check, so the database is
 # started, and found healthy, before the rest.
 #
@@ -50,13 +50,12 @@ case "$engine" in
         # The images' anonymous volumes (VOLUME) go with their containers.
         down=("${PODMAN_COMPOSE:-.venv/bin/podman-compose}" --podman-rm-args=-v -f docker/compose.yaml down -v)
         ensure_base_image "$scratch"
-        if ! podman image exists localhost/causalplan-service; then
-            build_image localhost/causalplan-service -f docker/Dockerfile \
-                --ignorefile docker/Dockerfile.dockerignore --target service .
-        fi
-        if ! podman image exists localhost/causalplan-nginx; then build_image localhost/causalplan-nginx docker/nginx; fi
+        # Built every time, so the stack runs the working tree: unchanged layers come from the cache.
+        build_image localhost/causalplan-service -f docker/Dockerfile \
+            --ignorefile docker/Dockerfile.dockerignore --target service .
+        build_image localhost/causalplan-nginx docker/nginx
         if [ "$CAUSALPLAN_POSTGRES_IMAGE" = localhost/causalplan-postgres ]; then
-            build_image localhost/causalplan-postgres docker/postgres  # cached layers when nothing changed
+            build_image localhost/causalplan-postgres docker/postgres
         fi
         rmdir "$scratch"
         ;;

@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # What docker/podman-ci.sh and docker/compose-smoke.sh share (sourced, not run): podman's
 # settings for these machines and the base image made from Debian's packages.
 #
@@ -6,6 +7,7 @@
 # network, CA bundle and pip configuration, mounted read-only.
 
 podman=(podman --runtime runc)
+# shellcheck disable=SC2034  # used by the scripts that source this file
 limits=(--ulimit nofile=4096:4096 --ulimit nproc=4096:4096)
 volumes=()  # the host's CA bundle and pip configuration, for builds and containers alike
 for file in /etc/ssl/certs/ca-certificates.crt /etc/pip.conf /etc/xdg/pip "${PIP_FIND_LINKS:-}"; do
