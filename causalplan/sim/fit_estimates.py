@@ -15,6 +15,10 @@ it) and how tilted. It succeeds when both are within the fit's own tolerance
 less than a clip), else it fails ``misaligned``; a part more than the grasp tolerance off
 fails ``grasp_lost``, and when the robot cannot do the joint at all, every trial fails with
 the robot's code.
+
+Each fit's noises come from one seeded stream and are all drawn before any trial runs, so the
+trials can go in chunks (``estimate_fits(..., map_chunks=...)``, e.g. on a Dask cluster) with
+the numbers of the run in one process.
 """
 
 from __future__ import annotations
