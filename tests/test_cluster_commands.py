@@ -133,6 +133,12 @@ def test_cluster_and_workers_together_are_refused_by_every_command(command: list
     assert "Give --cluster (an existing cluster) or --workers (a local one), not both." in result.output
 
 
+def test_a_chunk_size_without_a_cluster_is_refused() -> None:
+    result = runner.invoke(app, ["estimate-fits", "desk_lamp", "--chunk-size", "10"])
+    assert result.exit_code == 2
+    assert "--chunk-size sizes the tasks of a cluster: give --cluster or --workers too." in result.output
+
+
 def test_an_unreachable_scheduler_is_a_clear_error_of_the_command(tmp_path: Path) -> None:
     crowd = _population(tmp_path / "crowd.jsonl", 2, "flashlight")
     result = runner.invoke(

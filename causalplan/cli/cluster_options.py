@@ -40,7 +40,7 @@ def cluster_options(unit: str = "trials", default_chunk_size: int = 250) -> Call
     """Return a decorator adding --cluster, --workers and --chunk-size (``unit`` go in a chunk).
 
     The command receives ``on_cluster``: a ``ClusterChoice``, or None when neither --cluster nor
-    --workers is given.
+    --workers is given (then --chunk-size on the command line is an error, not silently unused).
     """
 
     def decorate(command: Command) -> Command:
@@ -48,6 +48,9 @@ def cluster_options(unit: str = "trials", default_chunk_size: int = 250) -> Call
         def with_cluster(*args: Any, cluster: str | None, workers: int | None, chunk_size: int, **kwargs: Any) -> None:
             if cluster is not None and workers is not None:
                 fail("invalid_option", "Give --cluster (an existing cluster) or --workers (a local one), not both.")
+            given = click.get_current_context().get_parameter_source("chunk_size")
+            if cluster is None and workers is None and given is click.core.ParameterSource.COMMANDLINE:
+                fail("invalid_option", "--chunk-size sizes the tasks of a cluster: give --cluster or --workers too.")
             chosen = None if cluster is None and workers is None else ClusterChoice(cluster, workers, chunk_size)
             command(*args, on_cluster=chosen, **kwargs)
 
