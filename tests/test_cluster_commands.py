@@ -133,6 +133,13 @@ def test_cluster_and_workers_together_are_refused_by_every_command(command: list
     assert "Give --cluster (an existing cluster) or --workers (a local one), not both." in result.output
 
 
+@pytest.mark.parametrize("address", ["foo", "tcp://host", "tcp://host:port"])
+def test_a_scheduler_address_without_a_port_is_refused_before_any_work(address: str) -> None:
+    result = runner.invoke(app, ["crowd-curve", "--cluster", address])
+    assert result.exit_code == 2
+    assert "Invalid value for '--cluster'" in result.output and "looks like tcp://10.0.0.5:8786" in result.output
+
+
 def test_a_chunk_size_without_a_cluster_is_refused() -> None:
     result = runner.invoke(app, ["estimate-fits", "desk_lamp", "--chunk-size", "10"])
     assert result.exit_code == 2

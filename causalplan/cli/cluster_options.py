@@ -36,6 +36,19 @@ class ClusterChoice:
     chunk_size: int
 
 
+def _scheduler_address(context: click.Context, parameter: click.Parameter, address: str | None) -> str | None:
+    """Return ``address`` when it names a host and port (Dask is loaded only when one is given)."""
+    if address is None:
+        return None
+    from distributed.comm.addressing import get_address_host_port
+
+    try:
+        get_address_host_port(address)
+    except ValueError as exc:
+        raise click.BadParameter(f"{exc}; a scheduler's address looks like tcp://10.0.0.5:8786.") from exc
+    return address
+
+
 def cluster_options(unit: str = "trials", default_chunk_size: int = 250) -> Callable[[Command], Command]:
     """Return a decorator adding --cluster, --workers and --chunk-size (``unit`` go in a chunk).
 
@@ -58,6 +71,7 @@ def cluster_options(unit: str = "trials", default_chunk_size: int = 250) -> Call
             click.option(
                 "--cluster",
                 metavar="ADDRESS",
+                callback=_scheduler_address,
                 help="Run on the Dask cluster whose scheduler is at ADDRESS, e.g. tcp://10.0.0.5:8786, in chunks "
                 "(the catalog travels with the work; the workers' Python needs causalplan installed).",
             ),
