@@ -58,6 +58,10 @@ def main() -> int:
     for workers in (1, 2):
         seconds = timings[f"{workers}"]
         print(f"{workers} local worker(s)      {seconds:8.2f} s  {seconds / timings['here']:.2f}x the reference time")
+    for name, estimates in (("here", here), ("1 worker", results["1"])):
+        robot = sum(estimate.timing.get("robot", 0.0) for estimate in estimates)
+        trials = sum(estimate.timing.get("trials", 0.0) for estimate in estimates)
+        print(f"{name}: nominal robot runs {robot / (robot + trials):.0%} of the estimating time")
     print(f"speed-up of 2 workers over 1: {timings['1'] / timings['2']:.2f}x (cluster start-up included)")
     same = all(result == here for result in results.values())
     print("estimates identical to the reference: " + ("yes" if same else "NO"))
