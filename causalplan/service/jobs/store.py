@@ -76,6 +76,31 @@ def get_job(engine: Engine, job_id: uuid.UUID, now: datetime | None = None) -> J
     return record
 
 
+def get_job_file(engine: Engine, job_id: uuid.UUID) -> tuple[bytes, str] | None:
+    """Return the file the job made (bytes, media type); None when it made none (yet).
+
+    JobNotFoundError when there is no such job, or it has expired.
+    """
+    get_job(engine, job_id)
+    with Session(engine) as session, storage_errors(session):
+        row = session.execute(
+            select(JobRecord.file_data, JobRecord.file_type).where(JobRecord.id == job_id)
+        ).one_or_none()
+    if row is None or row.file_data is None or row.file_type is None:
+        return None
+    return bytes(row.file_data), str(row.file_type)
+
+
+def count_unfinished(engine: Engine) -> dict[str, int]:
+    """Return how many jobs are queued and how many running, across all replicas."""
+    with Session(engine) as session, storage_errors(session):
+        rows = session.execute(
+            select(JobRecord.status, func.count()).where(JobRecord.status.in_(UNFINISHED)).group_by(JobRecord.status)
+        ).all()
+    counts = {str(status): int(count) for status, count in rows}
+    return {status.value: counts.get(status.value, 0) for status in UNFINISHED}
+
+
 def cancel_job(engine: Engine, job_id: uuid.UUID, keep_seconds: float) -> JobRecord:
     """Cancel a queued or running job (its runner stops at its next progress report); return it.
 
@@ -190,8 +215,12 @@ def finish_job(
     keep_seconds: float,
     result: dict[str, Any] | None = None,
     error: dict[str, Any] | None = None,
+    file: tuple[bytes, str] | None = None,
 ) -> bool:
-    """Store ``owner``'s result (or error) and end the job; False when the job was no longer ``owner``'s."""
+    """Store ``owner``'s result (or error) and end the job; False when the job was no longer ``owner``'s.
+
+    ``file``: (bytes, media type) of a file the job made, kept with the job and expiring with it.
+    """
     now = utc_now()
     values: dict[str, Any] = {
         "status": JobStatus.FAILED if error is not None else JobStatus.SUCCEEDED,
@@ -204,6 +233,8 @@ def finish_job(
     }
     if error is None:
         values["done"] = JobRecord.total
+    if file is not None and error is None:
+        values["file_data"], values["file_type"] = file
     with Session(engine) as session, storage_errors(session):
         changed = session.execute(update(JobRecord).where(_mine(job_id, owner)).values(**values))
         session.commit()
