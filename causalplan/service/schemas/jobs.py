@@ -155,7 +155,13 @@ def _examples() -> dict[str, dict[str, Any]]:
 
     from causalplan.service.schemas.common import MAPPING_DOCUMENT_SCHEMA, MODEL_DOCUMENT_SCHEMA
 
-    model, mapping = MODEL_DOCUMENT_SCHEMA["examples"][0], MAPPING_DOCUMENT_SCHEMA["examples"][0]
+    model = MODEL_DOCUMENT_SCHEMA["examples"][0]
+    # The paper's flashlight mapping (examples/paper): the desk lamp's model transfers, so there is a plan to film.
+    mapping = {**MAPPING_DOCUMENT_SCHEMA["examples"][0]}
+    mapping["functions"] = {
+        "batteries": ["provide electricity"],
+        "head": ["turn electricity into light", "close the circuit"],
+    }
     trial = json.dumps({"id": "t1", "model": model, "mapping": mapping})
     crowd = "\n".join(json.dumps({"id": person, "model": model, "mapping": mapping}) for person in ("a", "b", "c"))
     values: dict[JobKind, tuple[str, dict[str, Any]]] = {
