@@ -12,6 +12,7 @@ cancelled. The film's bytes go into the job's row, so any replica serves them
 
 from __future__ import annotations
 
+import logging
 import tempfile
 import threading
 from pathlib import Path
@@ -26,6 +27,8 @@ if TYPE_CHECKING:
     from causalplan.service.deps import Services
     from causalplan.service.documents import PlanInputs
     from causalplan.service.schemas.jobs import VideoPlanIn
+
+logger = logging.getLogger(__name__)
 
 WATCH_SECONDS = 1.0
 """How often the runner reads the film's progress (and so how soon a cancel reaches the worker)."""
@@ -145,6 +148,7 @@ def run_video_job(request: dict[str, Any], services: Services, progress: Progres
             data = _film_in_worker(request, services, progress_file, stop)
         except CausalPlanError as exc:
             if exc.code == FilmStoppedError.code:
+                logger.info("filming stopped in its worker: the job was cancelled")
                 raise JobCancelledError from None
             raise
         finally:
