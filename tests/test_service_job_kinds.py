@@ -10,15 +10,22 @@ import json
 import logging
 import uuid
 from collections.abc import Iterator
+from datetime import timedelta
 from pathlib import Path
 from typing import Any
 
 import pytest
 from click.testing import CliRunner
 from fastapi.testclient import TestClient
+from sqlalchemy import update
+from sqlalchemy.orm import Session
 
 from causalplan.cli import app as cli
 from causalplan.objects.catalog import load_catalog
+from causalplan.service.db.migrate import upgrade
+from causalplan.service.db.models import JobRecord, utc_now
+from causalplan.service.db.session import create_database_engine
+from causalplan.service.errors import JobNotFoundError
 from causalplan.service.jobs import store
 from causalplan.service.pool.robot_jobs import FilmStoppedError, robot_film_job
 from causalplan.service.schemas.jobs import JOB_EXAMPLES
@@ -39,13 +46,13 @@ SMALL = {"robot_video_width": 96, "robot_video_height": 72}
 
 
 @pytest.fixture(scope="module")
-def database_url(tmp_path_factory: pytest.TempPathFactory) -> str:
+def kinds_database(tmp_path_factory: pytest.TempPathFactory) -> str:
     return sqlite_url(tmp_path_factory.mktemp("db"))
 
 
 @pytest.fixture(scope="module")
-def kinds_client(database_url: str) -> Iterator[TestClient]:
-    settings = settings_for(database_url, job_poll_seconds=0.05, job_lease_seconds=3.0, **SMALL)
+def kinds_client(kinds_database: str) -> Iterator[TestClient]:
+    settings = settings_for(kinds_database, job_poll_seconds=0.05, job_lease_seconds=3.0, **SMALL)
     with running_client(settings) as client:
         yield client
 
@@ -69,9 +76,9 @@ def test_a_video_job_films_the_robot_and_serves_the_film(kinds_client: TestClien
     assert served.content[4:8] == b"ftyp" and len(served.content) == result["video"]["bytes"]
 
 
-def test_another_replica_serves_the_film_from_the_database(database_url: str, film: dict[str, Any]) -> None:
+def test_another_replica_serves_the_film_from_the_database(kinds_database: str, film: dict[str, Any]) -> None:
     # An app with no runner on the same database: what another replica behind the load balancer is.
-    with running_client(settings_for(database_url, planning_workers=1, job_runners=0)) as other:
+    with running_client(settings_for(kinds_database, planning_workers=1, job_runners=0)) as other:
         served = other.get(film["result"]["video"]["url"])
         assert served.status_code == 200 and len(served.content) == film["result"]["video"]["bytes"]
         assert other.get(film["url"]).json()["result"]["video"]["url"] == film["result"]["video"]["url"]
@@ -226,3 +233,59 @@ def test_openapi_documents_each_kind_with_an_example_and_the_video_route(kinds_c
     assert set(body["examples"]) == set(JOB_EXAMPLES) == {"batch", "simulation", "consensus", "video", "fit_estimation"}
     video = document["paths"]["/v1/jobs/{job_id}/video"]["get"]["responses"]["200"]["content"]
     assert set(video) == {"video/mp4", "image/gif"}
+
+
+# -- what the table keeps, on both databases ------------------------------------------------------
+
+
+def test_a_jobs_file_is_kept_with_it_and_expires_with_it(database_url: str) -> None:
+    engine = create_database_engine(database_url)
+    upgrade(engine)
+    film = bytes(range(256)) * 64  # every byte value: stored as bytes, not text
+    job_id = store.create_job(engine, "video", {"video": "mp4"}, 1, 10).id
+    assert store.claim_job(engine, "replica-a", 30, ["video"]) is not None
+    assert store.get_job_file(engine, job_id) is None  # not made yet
+    assert store.finish_job(engine, job_id, "replica-a", 60, result={"video": {}}, file=(film, "video/mp4"))
+    assert store.get_job_file(engine, job_id) == (film, "video/mp4")
+    assert store.get_job(engine, job_id).file_type == "video/mp4"
+    with Session(engine) as session:
+        session.execute(
+            update(JobRecord).where(JobRecord.id == job_id).values(expires_at=utc_now() - timedelta(seconds=1))
+        )
+        session.commit()
+    with pytest.raises(JobNotFoundError):
+        store.get_job_file(engine, job_id)
+    assert store.delete_expired(engine) == 1
+    with Session(engine) as session:
+        assert session.get(JobRecord, job_id) is None
+    engine.dispose()
+
+
+def test_a_failed_job_keeps_no_file(database_url: str) -> None:
+    engine = create_database_engine(database_url)
+    upgrade(engine)
+    job_id = store.create_job(engine, "video", {"video": "mp4"}, 1, 10).id
+    assert store.claim_job(engine, "replica-a", 30, ["video"]) is not None
+    error = {"code": "x", "message": "failed", "details": {}}
+    assert store.finish_job(engine, job_id, "replica-a", 60, error=error, file=(b"half a film", "video/mp4"))
+    assert store.get_job_file(engine, job_id) is None
+    engine.dispose()
+
+
+# -- DELETE stops a running job's work ----------------------------------------------------------------
+
+
+def test_a_cancelled_batch_stops_sending_chunks_to_the_workers(tmp_path: Path) -> None:
+    settings = settings_for(sqlite_url(tmp_path), planning_workers=1, job_poll_seconds=0.05)
+    with running_client(settings) as client:
+        pool = services_of(client).pool
+        one = first_trials(1).strip()
+        chunks = 20
+        url = start(client, {"kind": "batch", "trials": "\n".join([one] * (20 * chunks)), "simulate": True})
+        wait_until(lambda: client.get(url).json()["progress"]["done"] >= 20, 120.0)  # a chunk is done
+        before = pool.stats().completed
+        assert client.delete(url).json()["status"] == "cancelled"
+        wait_until(lambda: client.get("/health").json()["jobs"]["runners_busy"] == 0, 120.0)
+        # The runner let the job go: at most the chunk in hand (and one that ended as the cancel came), not 18.
+        assert pool.stats().completed - before <= 2
+        assert client.get(url).json()["status"] == "cancelled"
