@@ -34,6 +34,8 @@ WATCH_SECONDS = 1.0
 """How often the runner reads the film's progress (and so how soon a cancel reaches the worker)."""
 FITS_KEY = "fits"
 """A stored request with this key is the participant page's: film these fits of ``object``."""
+FILM_KEY = "film"
+"""The participant page's film's key (``films.film_key``) in its stored request: one job per film, reused."""
 
 
 def video_url(job_id: object) -> str:
@@ -99,9 +101,9 @@ def prepare_video(request: dict[str, Any], services: Services) -> dict[str, Any]
     }
 
 
-def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str) -> dict[str, Any]:
-    """Return the stored request of a film of ``fit_ids`` of the object (the participant page's)."""
-    return {"object": object_id, FITS_KEY: list(fit_ids), "video": video}
+def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key: str) -> dict[str, Any]:
+    """Return the stored request of the film ``key`` of ``fit_ids`` of the object (the participant page's)."""
+    return {"object": object_id, FITS_KEY: list(fit_ids), "video": video, FILM_KEY: key}
 
 
 def _film_in_worker(request: dict[str, Any], services: Services, progress_file: Path, stop: Path) -> dict[str, Any]:
