@@ -40,6 +40,7 @@ from tests.service_fixtures import (
     wait_until,
 )
 from tests.test_service_jobs import finished, start
+from tests.web_flows import new_participant, post
 
 SMALL = {"robot_video_width": 96, "robot_video_height": 72}
 """A small film keeps the tests quick; the robot's run is the same at any size."""
@@ -82,6 +83,27 @@ def test_another_replica_serves_the_film_from_the_database(kinds_database: str, 
         served = other.get(film["result"]["video"]["url"])
         assert served.status_code == 200 and len(served.content) == film["result"]["video"]["bytes"]
         assert other.get(film["url"]).json()["result"]["video"]["url"] == film["result"]["video"]["url"]
+
+
+def test_a_participants_film_asked_of_one_replica_is_followed_and_served_by_another(tmp_path: Path) -> None:
+    url = sqlite_url(tmp_path)
+    answering = settings_for(url, planning_workers=1, job_runners=0, **SMALL)  # this one cannot film
+    filming = settings_for(url, planning_workers=1, job_poll_seconds=0.05, **SMALL)
+    with running_client(answering) as first, running_client(filming) as second:
+        code = new_participant(first)
+        post(first, f"/p/{code}/step1/1", {"part:base_with_cables": "provide electricity", "part:light_bulb": "x"})
+        rules = {"rules": "provide electricity AND x CAUSES light"}
+        (plan,) = first.post(f"/p/{code}/plan", json=rules).json()["plans"]
+        asked = first.post(f"/p/{code}/films", json={"object": "desk_lamp", "fits": plan["fits"]})
+        assert asked.status_code == 200, asked.text
+        status_url = asked.json()["status_url"]
+        wait_until(lambda: second.get(status_url).json()["state"] != "filming", 300.0)
+        film = second.get(status_url).json()
+        assert film["state"] == "ready" and film["robot"]["carried_out"] is True, film
+        assert film["frames"] == film["expected_frames"] and film["bytes"] > 0
+        served = first.get(film["video_url"])
+        assert served.status_code == 200 and served.headers["content-type"] == "video/mp4"
+        assert len(served.content) == film["bytes"]
 
 
 def test_a_job_without_a_film_says_so(kinds_client: TestClient) -> None:
@@ -289,3 +311,25 @@ def test_a_cancelled_batch_stops_sending_chunks_to_the_workers(tmp_path: Path) -
         # The runner let the job go: at most the chunk in hand (and one that ended as the cancel came), not 18.
         assert pool.stats().completed - before <= 2
         assert client.get(url).json()["status"] == "cancelled"
+
+
+def test_a_film_is_taken_before_older_jobs_of_other_kinds(tmp_path: Path) -> None:
+    engine = create_database_engine(sqlite_url(tmp_path))
+    upgrade(engine)
+    batch = store.create_job(engine, "batch", {"trials": "x"}, 1, 10).id
+    film = store.create_job(engine, "video", {"video": "mp4"}, 1, 10).id
+    first, second = (store.claim_job(engine, "replica", 30, ["batch", "video"]) for _ in range(2))
+    assert first is not None and second is not None and (first.id, second.id) == (film, batch)
+    engine.dispose()
+
+
+def test_a_participants_film_is_found_again_unless_it_failed(tmp_path: Path) -> None:
+    engine = create_database_engine(sqlite_url(tmp_path))
+    upgrade(engine)
+    made = store.create_job(engine, "video", {"film": "k1"}, 1, 10).id
+    assert store.find_job(engine, "video", "film", "k2") is None
+    found = store.find_job(engine, "video", "film", "k1")
+    assert found is not None and found.id == made
+    store.cancel_job(engine, made, 60)
+    assert store.find_job(engine, "video", "film", "k1") is None  # a cancelled film is filmed again
+    engine.dispose()
