@@ -24,6 +24,13 @@ from causalplan.service.schemas.jobs import JOB_EXAMPLES, JobIn, JobOut
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses=error_responses(503), route_class=StrictJSONRoute)
 
+_JOB_ID = {"job_id": "$response.body#/id"}
+_LINKS = {
+    "ReadJob": {"operationId": "read_job", "parameters": _JOB_ID, "description": "Follow the job (its `url`)."},
+    "CancelJob": {"operationId": "cancel_job", "parameters": _JOB_ID, "description": "Cancel it."},
+    "ReadJobVideo": {"operationId": "read_job_video", "parameters": _JOB_ID, "description": "A video job's film."},
+}
+"""OpenAPI links from a posted job to what can be done with it (clients and stateful tests follow them)."""
 _NOT_FOUND: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorOut, "description": "No such job, or its result has expired."}
 }
@@ -68,9 +75,11 @@ def job_out(record: JobRecord) -> JobOut:
     response_model=JobOut,
     summary="Start a job",
     responses={
+        202: {"description": "Queued: follow `url` (also in `Location`).", "links": _LINKS},
         **error_responses(404, 413, 422),
         429: {"model": ErrorOut, "description": "The service holds as many unfinished jobs as it takes."},
     },
+    operation_id="create_job",
 )
 async def create_job(
     body: Annotated[JobIn, Body(openapi_examples=JOB_EXAMPLES)], services: ServicesDep, response: Response
@@ -99,7 +108,13 @@ async def create_job(
     return job_out(record)
 
 
-@router.get("/{job_id}", response_model=JobOut, summary="A job's status, progress and result", responses=_NOT_FOUND)
+@router.get(
+    "/{job_id}",
+    response_model=JobOut,
+    summary="A job's status, progress and result",
+    responses=_NOT_FOUND,
+    operation_id="read_job",
+)
 async def read_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
     """Return the job: `status` (queued, running, succeeded, failed, cancelled), `progress`, then `result`."""
     return job_out(await anyio.to_thread.run_sync(store.get_job, services.engine, job_id))
@@ -110,6 +125,7 @@ async def read_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
     response_model=JobOut,
     summary="Cancel a job",
     responses={**_NOT_FOUND, 409: {"model": ErrorOut, "description": "The job has finished already."}},
+    operation_id="cancel_job",
 )
 async def cancel_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
     """Cancel a queued or running job (a running one stops at its next step); answer the cancelled job."""
@@ -125,6 +141,7 @@ async def cancel_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
         200: {"content": {"video/mp4": {}, "image/gif": {}}, "description": "The film."},
         404: {"model": ErrorOut, "description": "No such job, it has expired, or it has made no film (yet)."},
     },
+    operation_id="read_job_video",
 )
 async def read_job_video(job_id: uuid.UUID, services: ServicesDep) -> Response:
     """Return the film of a finished `video` job, from whichever replica is asked, until the job expires."""
