@@ -76,6 +76,7 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/transfers",
         "/v1/jobs",
         "/v1/jobs/{job_id}",
+        "/v1/jobs/{job_id}/video",
         "/v1/objects",
         "/v1/objects/{object_id}",
         "/v1/trials",
