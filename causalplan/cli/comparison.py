@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from causalplan.cli.cluster_options import cluster_options
 from causalplan.cli.common import (
     FILE,
     catalog_from,
@@ -25,6 +26,7 @@ from causalplan.cli.common import (
 )
 
 if TYPE_CHECKING:
+    from causalplan.cli.cluster_options import ClusterChoice
     from causalplan.objects.catalog import Catalog
     from causalplan.transfer.batch import Trial, TrialResult
     from causalplan.transfer.cluster import JudgeOptions
@@ -138,9 +140,7 @@ def _on_cluster(
     trials: list[Trial],
     objects: Catalog,
     options: JudgeOptions,
-    address: str | None,
-    workers: int | None,
-    chunk_size: int,
+    on_cluster: ClusterChoice,
     out: Path,
     advance: Callable[[int], None],
 ) -> list[TrialResult]:
@@ -157,7 +157,13 @@ def _on_cluster(
 
         with exit_on_error():
             return run_batch_on_cluster(
-                trials, objects, options, address=address, workers=workers, chunk_size=chunk_size, on_chunk=write
+                trials,
+                objects,
+                options,
+                address=on_cluster.address,
+                workers=on_cluster.workers,
+                chunk_size=on_cluster.chunk_size,
+                on_chunk=write,
             )
 
 
@@ -174,23 +180,7 @@ def _on_cluster(
     "with robot_cannot_execute.",
 )
 @click.option("--out", type=FILE, default=Path("out/batch"), help="Folder for verdicts.csv and verdicts.json.")
-@click.option(
-    "--cluster",
-    metavar="ADDRESS",
-    help="Judge on the Dask cluster whose scheduler is at ADDRESS, e.g. tcp://10.0.0.5:8786 "
-    "(the catalog is sent to its workers; their Python needs causalplan installed).",
-)
-@click.option(
-    "--workers",
-    type=click.IntRange(1, 256),
-    help="Judge on a local Dask cluster of this many worker processes (one trial at a time each).",
-)
-@click.option(
-    "--chunk-size",
-    type=click.IntRange(1, 1_000_000),
-    default=250,
-    help="Trials per cluster task (with --cluster or --workers).",
-)
+@cluster_options("trials", default_chunk_size=250)
 @catalog_option
 def batch(
     trials_file: Path,
@@ -200,9 +190,7 @@ def batch(
     val: bool,
     robot: bool,
     out: Path,
-    cluster: str | None,
-    workers: int | None,
-    chunk_size: int,
+    on_cluster: ClusterChoice | None,
     catalog: tuple[Path, ...],
 ) -> None:
     """Judge many transfer trials (e.g. a study's participants) and write their verdicts and reasons.
@@ -231,8 +219,6 @@ def batch(
         fail("file_not_found", f"There is no file {trials_file}.")
     trials = list(read_trials(trials_file))
     make_folder(out)
-    if cluster is not None and workers is not None:
-        fail("invalid_option", "Give --cluster (an existing cluster) or --workers (a local one), not both.")
     judge = None
     if robot:
         from causalplan.sim.robot_verdict import robot_judged
@@ -241,7 +227,7 @@ def batch(
     started = time.perf_counter()
     with progress_bar() as progress:
         bar = progress.add_task("judging trials", total=len(trials))
-        if cluster is None and workers is None:
+        if on_cluster is None:
             results = run_batch(
                 trials, objects, planner, time_limit, simulate, lambda: progress.advance(bar), val=val, judge=judge
             )
@@ -250,9 +236,7 @@ def batch(
                 trials,
                 objects,
                 JudgeOptions(planner, time_limit, simulate, val, judge),
-                cluster,
-                workers,
-                chunk_size,
+                on_cluster,
                 out,
                 lambda count: progress.advance(bar, count),
             )
