@@ -16,6 +16,7 @@ from typing import Any
 
 import pytest
 from click.testing import CliRunner
+from distributed import LocalCluster
 from fastapi.testclient import TestClient
 from sqlalchemy import update
 from sqlalchemy.orm import Session
@@ -176,7 +177,7 @@ def test_a_fit_estimation_gives_the_numbers_of_the_cli(kinds_client: TestClient)
     job = finished(kinds_client, start(kinds_client, body), 300.0)
     assert job["status"] == "succeeded", job
     fits = len(load_catalog(()).get("flashlight").fits)
-    assert job["progress"] == {"done": fits, "total": fits}  # one unit a fit
+    assert job["progress"] == {"done": 30 * fits, "total": 30 * fits}  # trials
     expected = cli_estimates("flashlight", "--trials", "30", "--seed", "7", "--noise-mm", "1.5")
     result = job["result"]
     assert {key: result[key] for key in ("object", "noise", "seed", "fits")} == {
@@ -185,6 +186,20 @@ def test_a_fit_estimation_gives_the_numbers_of_the_cli(kinds_client: TestClient)
     overlay = result["overlay"]["objects"]["flashlight"]
     assert set(overlay) == {row["id"] for row in expected["fits"]}
     assert result["overlay"]["estimated_by"].startswith("causalplan estimate-fits flashlight --trials 30 --seed 7")
+
+
+def test_a_fit_estimation_on_a_dask_cluster_gives_the_numbers_of_the_cli(tmp_path: Path) -> None:
+    with LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None, silence_logs=logging.ERROR) as cluster:
+        settings = settings_for(
+            sqlite_url(tmp_path), planning_workers=1, job_poll_seconds=0.05, dask_scheduler=cluster.scheduler_address
+        )
+        with running_client(settings) as client:
+            assert client.get("/health").json()["jobs"]["cluster"] is True
+            body = {"kind": "fit_estimation", "object": "flashlight", "trials": 30, "seed": 7, "noise_mm": 1.5}
+            job = finished(client, start(client, body), 300.0)
+    assert job["status"] == "succeeded", job
+    expected = cli_estimates("flashlight", "--trials", "30", "--seed", "7", "--noise-mm", "1.5")
+    assert job["result"]["fits"] == expected["fits"]
 
 
 def test_one_fit_of_an_object_can_be_estimated(kinds_client: TestClient) -> None:

@@ -35,7 +35,9 @@ class JobsHealthOut(OutputModel):
     runners: int = Field(description="This replica's runner threads (the setting job_runners; 0: it only answers).")
     runners_busy: int = Field(description="This replica's runner threads doing a job now.")
     kinds: list[str] = Field(description="The kinds of job this replica can do.")
-    cluster: bool = Field(description="Whether batch jobs run on a Dask cluster (else in this replica's pool).")
+    cluster: bool = Field(
+        description="Whether batch and fit_estimation jobs run on a Dask cluster (else in this replica's pool)."
+    )
     problem: str | None = None
 
 

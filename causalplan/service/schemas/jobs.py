@@ -85,7 +85,8 @@ class FitEstimationJobIn(InputModel):
     """Measure each fit's success probability by noisy robot insertions, as `causalplan estimate-fits`.
 
     The result is what `causalplan estimate-fits --json` prints (the same numbers for the same
-    seed), and `overlay`: the catalog overlay `--out` writes. Progress counts fits.
+    seed), and `overlay`: the catalog overlay `--out` writes. Progress counts trials (a fit at a time,
+    or a chunk at a time on a cluster).
     """
 
     kind: Literal["fit_estimation"]
@@ -124,7 +125,7 @@ JobIn = Annotated[
 
 
 class ProgressOut(OutputModel):
-    done: int = Field(description="Units of work done: trials (batch), frames (video), fits (fit_estimation).")
+    done: int = Field(description="Units of work done: trials (batch, fit_estimation), frames (video).")
     total: int = Field(description="Units of work in all (0 until the job has started).")
 
 
