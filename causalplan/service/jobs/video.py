@@ -127,7 +127,11 @@ def _film_in_worker(request: dict[str, Any], services: Services, progress_file: 
 
 
 def run_video_job(request: dict[str, Any], services: Services, progress: Progress) -> Outcome:
-    """Film the plan, reporting frames drawn of frames expected; stop the worker's filming on a cancel."""
+    """Film the plan, reporting frames drawn of frames expected; stop the worker's filming on a cancel.
+
+    A cancel that comes while the worker still plans, or runs the robot before filming, stops
+    it at the first frame.
+    """
     progress(0, 1)
     with tempfile.TemporaryDirectory(prefix="causalplan-film-job-") as folder:
         progress_file, stop = Path(folder) / "progress.json", Path(folder) / "stop"
@@ -137,8 +141,8 @@ def run_video_job(request: dict[str, Any], services: Services, progress: Progres
         def watch() -> None:
             while not finished.wait(WATCH_SECONDS):
                 frames, expected = read_progress(progress_file)
-                try:
-                    progress(frames, expected) if expected else progress(0, 1)
+                try:  # before the first frame the robot is still planning: 0 of 1
+                    progress(frames, expected or 1)
                 except JobCancelledError:
                     cancelled.set()
                     stop.touch()
