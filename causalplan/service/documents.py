@@ -9,8 +9,6 @@ planner and time limit. Routes then ask ``answers`` for the answer.
 from __future__ import annotations
 
 import json
-import json.decoder
-import json.scanner
 import re
 import uuid
 from collections.abc import Callable, Coroutine, Mapping
@@ -21,7 +19,7 @@ from fastapi import Request, Response
 from fastapi.routing import APIRoute
 
 from causalplan.causal.diagnostics import Diagnostic, Report
-from causalplan.causal.documents import SourceMap
+from causalplan.causal.documents import DuplicateKeyError, SourceMap, located_duplicate_key, refuse_duplicate_keys
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
@@ -43,104 +41,58 @@ class BodyJSONError(json.JSONDecodeError):
     """A request body this service does not read as JSON, with what is wrong and where (line, column)."""
 
 
-_WHITESPACE = re.compile(r"[ \t\n\r]*")
-# The pure-Python scanner's parts (not in the stubs): it takes our object and array parsers.
-_make_scanner: Callable[[json.JSONDecoder], Any] = json.scanner.py_make_scanner  # type: ignore[attr-defined]
-_scan_string: Callable[[str, int, bool], tuple[str, int]] = json.decoder.scanstring  # type: ignore[attr-defined]
-_scan_array: Callable[[tuple[str, int], Any], tuple[list[Any], int]] = json.decoder.JSONArray  # type: ignore[attr-defined]
+_BRACKET_OR_STRING = re.compile(r'"(?:[^"\\]+|\\.)*"|[\[\]{}]')
 
 
-def _skip(text: str, at: int) -> int:
-    match = _WHITESPACE.match(text, at)
-    assert match is not None  # it matches the empty string too
-    return match.end()
-
-
-class _StrictDecoder(json.JSONDecoder):
-    """``json``'s own pure-Python scanner, refusing what ``json.loads`` takes silently or fails on obscurely.
-
-    A key twice in one object (``json.loads`` keeps the last), nesting deeper than the documents
-    need, integers longer than any document needs, and NaN or Infinity.
-    """
-
-    def __init__(self, text: str) -> None:
-        super().__init__(strict=True)
-        self.text = text
-        self.depth = 0
-        self.parse_object = self._object
-        self.parse_array = self._array
-        self.parse_int = self._integer
-        self.parse_constant = self._constant
-        self.memo: dict[str, str] = {}
-        self.scan_once = _make_scanner(self)
-
-    def _enter(self, text: str, at: int) -> None:
-        self.depth += 1
-        if self.depth > MAX_NESTING:
-            raise BodyJSONError(f"nested more than {MAX_NESTING} levels deep", text, at)
-
-    def _object(
-        self, text_and_end: tuple[str, int], strict: bool, scan_once: Any, *_: Any
-    ) -> tuple[dict[str, Any], int]:
-        text, end = text_and_end
-        self._enter(text, end - 1)
-        result: dict[str, Any] = {}
-        end = _skip(text, end)
-        if text[end : end + 1] == "}":
-            self.depth -= 1
-            return result, end + 1
-        while True:
-            if text[end : end + 1] != '"':
-                raise BodyJSONError("expecting a key in double quotes", text, end)
-            key_at = end
-            key, end = _scan_string(text, end + 1, strict)
-            if key in result:
-                raise BodyJSONError(f"the key {json.dumps(key)} appears twice in one object", text, key_at)
-            end = _skip(text, end)
-            if text[end : end + 1] != ":":
-                raise BodyJSONError("expecting ':' after a key", text, end)
-            end = _skip(text, end + 1)
-            try:
-                result[key], end = scan_once(text, end)
-            except StopIteration as stop:
-                raise BodyJSONError("expecting a value", text, stop.value) from None
-            end = _skip(text, end)
-            delimiter = text[end : end + 1]
-            if delimiter == "}":
-                self.depth -= 1
-                return result, end + 1
-            if delimiter != ",":
-                raise BodyJSONError("expecting ',' or '}'", text, end)
-            end = _skip(text, end + 1)
-
-    def _array(self, text_and_end: tuple[str, int], scan_once: Any) -> tuple[list[Any], int]:
-        self._enter(text_and_end[0], text_and_end[1] - 1)
-        values, end = _scan_array(text_and_end, scan_once)
-        self.depth -= 1
-        return values, end
-
-    def _integer(self, digits: str) -> int:
-        if len(digits.lstrip("-")) > MAX_NUMBER_DIGITS:
-            raise BodyJSONError(
-                f"a number of {len(digits.lstrip('-'))} digits (at most {MAX_NUMBER_DIGITS})",
-                self.text,
-                max(self.text.find(digits), 0),
-            )
-        return int(digits)
-
-    def _constant(self, name: str) -> Any:
-        raise BodyJSONError(f"{name} is not a JSON value", self.text, max(self.text.find(name), 0))
+def _too_deep_at(text: str) -> int | None:
+    """Return where the first object or array deeper than MAX_NESTING opens in ``text`` (None: none is)."""
+    depth = 0
+    for token in _BRACKET_OR_STRING.finditer(text):
+        if token.group() in ("[", "{"):
+            depth += 1
+            if depth > MAX_NESTING:
+                return token.start()
+        elif token.group() in ("]", "}"):
+            depth -= 1
+    return None
 
 
 def parse_json(body: bytes) -> Any:
-    """Return the JSON value of a request body; BodyJSONError says what is wrong and at which line and column."""
+    """Return the JSON value of a request body; BodyJSONError says what is wrong and at which line and column.
+
+    ``json.loads`` keeps the last of a key named twice, recurses as deep as a body nests, takes
+    integers of thousands of digits and NaN: each is refused here, saying which it is and where.
+    """
     try:
         text = body.decode("utf-8")
     except UnicodeDecodeError as exc:
         shown = body.decode("utf-8", "replace")
         at = len(body[: exc.start].decode("utf-8", "replace"))
         raise BodyJSONError(f"not UTF-8 (byte {exc.start})", shown, at) from None
-    return _StrictDecoder(text).decode(text)
+
+    def integer(digits: str) -> int:
+        if len(digits.lstrip("-")) > MAX_NUMBER_DIGITS:
+            where = max(text.find(digits), 0)
+            raise BodyJSONError(
+                f"a number of {len(digits.lstrip('-'))} digits (at most {MAX_NUMBER_DIGITS})", text, where
+            )
+        return int(digits)
+
+    def constant(name: str) -> Any:
+        raise BodyJSONError(f"{name} is not a JSON value", text, max(text.find(name), 0))
+
+    too_deep_at = _too_deep_at(text)  # first, so json.loads never recurses deeper than this
+    if too_deep_at is not None:
+        raise BodyJSONError(f"nested more than {MAX_NESTING} levels deep", text, too_deep_at)
+    try:
+        return json.loads(text, object_pairs_hook=refuse_duplicate_keys, parse_int=integer, parse_constant=constant)
+    except DuplicateKeyError as exc:
+        where = located_duplicate_key(text.replace("\t", " "), exc).index or 0
+        raise BodyJSONError(f"the key {json.dumps(exc.key)} appears twice in one object", text, where) from None
+    except BodyJSONError:
+        raise
+    except json.JSONDecodeError as exc:
+        raise BodyJSONError(exc.msg[:1].lower() + exc.msg[1:], text, exc.pos) from None
 
 
 class StrictJSONRequest(Request):
