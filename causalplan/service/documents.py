@@ -23,7 +23,7 @@ from causalplan.causal.documents import DuplicateKeyError, SourceMap, located_du
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
-from causalplan.service.answers import model_text, resolve_planner, resolve_time_limit, text_hash
+from causalplan.service.answers import model_hash, resolve_planner, resolve_time_limit
 from causalplan.service.db.crud import MAX_NESTING, ClientIds, clean_json, get_model, new_model_record, save
 from causalplan.service.db.models import ModelRecord
 from causalplan.service.deps import Services, open_session
@@ -207,22 +207,17 @@ def read_model(document: dict[str, Any], services: Services, client: ClientIds) 
     storable = clean_json(document, "the model")  # refuses NaN and deep nesting
     check_model_limits(document, services.settings)
     model, report = _read(document, services.catalog)
-    is_valid = model is not None and report.is_valid
+    valid_model = model if model is not None and report.is_valid else None
     record = new_model_record(
         storable,
         model.object_id if model is not None else "",
-        is_valid,
+        valid_model is not None,
         clean_json(report.as_dict()),
-        model_hash_or_none(model) if is_valid else None,
+        model_hash(valid_model) if valid_model is not None else None,
         client,
         cleaned=True,
     )
     return ModelSubmission(model, report, record, is_new=True)
-
-
-def model_hash_or_none(model: CausalModel | None) -> str | None:
-    """Return the stored hash of a model's canonical form (None without a model)."""
-    return text_hash(model_text(model)) if model is not None else None
 
 
 def stored_model(record: ModelRecord, catalog: Catalog) -> ModelSubmission:
