@@ -120,34 +120,32 @@ def _too_long(settings: Settings, label: object) -> bool:
     return isinstance(label, str) and len(label) > settings.max_label_length
 
 
+def _over_limit(code: str, what_is: str, limit: int, actual: int, **where: object) -> LimitExceededError:
+    """Return the error of a document over one limit: ``what_is`` says what it has, then the limit."""
+    return LimitExceededError(
+        code, f"{what_is}; the limit is {limit}.", details={"limit": limit, "actual": actual, **where}
+    )
+
+
 def check_labelling_limits(document: Mapping[str, Any], settings: Settings, what: str) -> None:
     """Raise LimitExceededError when a model's or mapping's ``functions`` are over the limits."""
     functions = document.get("functions")
     if not isinstance(functions, Mapping):
         return  # the reader reports the wrong type with its own code
     if len(functions) > settings.max_parts:
-        raise LimitExceededError(
-            "too_many_parts",
-            f"The {what} labels {len(functions)} parts; the limit is {settings.max_parts}.",
-            details={"limit": settings.max_parts, "actual": len(functions), "field": "functions"},
+        count = len(functions)
+        raise _over_limit(
+            "too_many_parts", f"The {what} labels {count} parts", settings.max_parts, count, field="functions"
         )
     for part, labels in functions.items():
         items = labels if isinstance(labels, list) else [labels]
         if len(items) > settings.max_labels_per_part:
-            raise LimitExceededError(
-                "too_many_labels",
-                f"Part '{part}' of the {what} has {len(items)} function labels; the limit is "
-                f"{settings.max_labels_per_part}.",
-                details={"limit": settings.max_labels_per_part, "actual": len(items), "part": str(part)},
-            )
+            what_is = f"Part '{part}' of the {what} has {len(items)} function labels"
+            raise _over_limit("too_many_labels", what_is, settings.max_labels_per_part, len(items), part=str(part))
         for label in items:
             if _too_long(settings, label):
-                raise LimitExceededError(
-                    "label_too_long",
-                    f"A function label of part '{part}' is {len(label)} characters long; the limit is "
-                    f"{settings.max_label_length}.",
-                    details={"limit": settings.max_label_length, "actual": len(label), "part": str(part)},
-                )
+                what_is = f"A function label of part '{part}' is {len(label)} characters long"
+                raise _over_limit("label_too_long", what_is, settings.max_label_length, len(label), part=str(part))
 
 
 def check_model_limits(document: Mapping[str, Any], settings: Settings) -> None:
@@ -155,30 +153,21 @@ def check_model_limits(document: Mapping[str, Any], settings: Settings) -> None:
     check_labelling_limits(document, settings, "model")
     goal = document.get("goal")
     if isinstance(goal, str) and _too_long(settings, goal):
-        raise LimitExceededError(
-            "label_too_long",
-            f"The goal is {len(goal)} characters long; the limit is {settings.max_label_length}.",
-            details={"limit": settings.max_label_length, "actual": len(goal), "field": "goal"},
-        )
+        what_is = f"The goal is {len(goal)} characters long"
+        raise _over_limit("label_too_long", what_is, settings.max_label_length, len(goal), field="goal")
     rules = document.get("rules")
     if isinstance(rules, str):
         rules = [line for line in rules.splitlines() if line.strip()]
     if not isinstance(rules, list):
         return
     if len(rules) > settings.max_rules:
-        raise LimitExceededError(
-            "too_many_rules",
-            f"The model has {len(rules)} rules; the limit is {settings.max_rules}.",
-            details={"limit": settings.max_rules, "actual": len(rules), "field": "rules"},
-        )
+        count = len(rules)
+        raise _over_limit("too_many_rules", f"The model has {count} rules", settings.max_rules, count, field="rules")
     longest = RULE_LENGTH_FACTOR * settings.max_label_length
     for index, rule in enumerate(rules, start=1):
         if isinstance(rule, str) and len(rule) > longest:
-            raise LimitExceededError(
-                "label_too_long",
-                f"Rule {index} is {len(rule)} characters long; the limit is {longest}.",
-                details={"limit": longest, "actual": len(rule), "rule": index},
-            )
+            what_is = f"Rule {index} is {len(rule)} characters long"
+            raise _over_limit("label_too_long", what_is, longest, len(rule), rule=index)
 
 
 @dataclass
