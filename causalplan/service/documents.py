@@ -44,17 +44,26 @@ class BodyJSONError(json.JSONDecodeError):
 _BRACKET_OR_STRING = re.compile(r'"(?:[^"\\]+|\\.)*"|[\[\]{}]')
 
 
-def _too_deep_at(text: str) -> int | None:
-    """Return where the first object or array deeper than MAX_NESTING opens in ``text`` (None: none is)."""
+def _nesting(value: Any) -> int:
+    """Return how many objects and arrays deep ``value`` nests (0 for a string, a number, ...)."""
+    if isinstance(value, dict):
+        value = list(value.values())
+    if not isinstance(value, list):
+        return 0
+    return 1 + max((_nesting(item) for item in value), default=0)
+
+
+def _too_deep(text: str) -> BodyJSONError:
+    """Return the error of a body nested too deep, at the first object or array deeper than MAX_NESTING."""
     depth = 0
     for token in _BRACKET_OR_STRING.finditer(text):
         if token.group() in ("[", "{"):
             depth += 1
             if depth > MAX_NESTING:
-                return token.start()
+                return BodyJSONError(f"nested more than {MAX_NESTING} levels deep", text, token.start())
         elif token.group() in ("]", "}"):
             depth -= 1
-    return None
+    return BodyJSONError(f"nested more than {MAX_NESTING} levels deep", text, 0)
 
 
 def parse_json(body: bytes) -> Any:
@@ -81,18 +90,20 @@ def parse_json(body: bytes) -> Any:
     def constant(name: str) -> Any:
         raise BodyJSONError(f"{name} is not a JSON value", text, max(text.find(name), 0))
 
-    too_deep_at = _too_deep_at(text)  # first, so json.loads never recurses deeper than this
-    if too_deep_at is not None:
-        raise BodyJSONError(f"nested more than {MAX_NESTING} levels deep", text, too_deep_at)
     try:
-        return json.loads(text, object_pairs_hook=refuse_duplicate_keys, parse_int=integer, parse_constant=constant)
+        value = json.loads(text, object_pairs_hook=refuse_duplicate_keys, parse_int=integer, parse_constant=constant)
     except DuplicateKeyError as exc:
         where = located_duplicate_key(text.replace("\t", " "), exc).index or 0
         raise BodyJSONError(f"the key {json.dumps(exc.key)} appears twice in one object", text, where) from None
+    except RecursionError:
+        raise _too_deep(text) from None
     except BodyJSONError:
         raise
     except json.JSONDecodeError as exc:
         raise BodyJSONError(exc.msg[:1].lower() + exc.msg[1:], text, exc.pos) from None
+    if _nesting(value) > MAX_NESTING:
+        raise _too_deep(text)
+    return value
 
 
 class StrictJSONRequest(Request):
