@@ -97,6 +97,7 @@ def test_a_fit_that_never_worked_is_written_as_barely_possible() -> None:
         ("objects: {desk_lamp: {bulb_into_socket: {probability: high}}}", "needs 'probability', a number"),
         ("fits: []", "needs 'objects'"),
         ("objects: [", "is not YAML or JSON"),
+        ("objects:\n  desk_lamp: {}\n  desk_lamp: {}\n", "names 'desk_lamp' twice (line 3)"),
     ],
 )
 def test_a_wrong_overlay_says_what_is_wrong_and_where(tmp_path: Path, text: str, says: str) -> None:

@@ -51,6 +51,11 @@ class _UniqueKeyLoader(SAFE_LOADER):  # type: ignore[misc, valid-type]
         return mapping
 
 
+def load_yaml_refusing_duplicates(text: str) -> object:
+    """Return the YAML (or JSON) document in ``text``; DuplicateKeyError names a key written twice and its line."""
+    return yaml.load(text, Loader=_UniqueKeyLoader)
+
+
 def refuse_duplicate_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
     """``json``'s ``object_pairs_hook``: the object, or DuplicateKeyError for a key named twice (no line yet).
 

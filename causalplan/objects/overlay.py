@@ -18,6 +18,7 @@ from pathlib import Path
 
 import yaml
 
+from causalplan.causal.documents import DuplicateKeyError, load_yaml_refusing_duplicates
 from causalplan.errors import CatalogError
 from causalplan.objects.catalog import Catalog
 
@@ -47,7 +48,11 @@ def _problem(where: str, message: str, path: Path) -> CatalogError:
 def read_overlay(path: Path) -> dict[str, dict[str, float]]:
     """Return the probabilities an overlay file gives, per object and fit; CatalogError says what is wrong."""
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        data = load_yaml_refusing_duplicates(path.read_text(encoding="utf-8"))
+    except DuplicateKeyError as exc:
+        where = f" (line {exc.line})" if exc.line is not None else ""
+        message = f"{path} names {exc.key!r} twice{where}: keep one."
+        raise CatalogError(message, details={"file": str(path), "line": exc.line}) from None
     except OSError as exc:
         raise CatalogError(f"Cannot read the overlay {path}: {exc.strerror}.", details={"file": str(path)}) from None
     except (UnicodeDecodeError, yaml.YAMLError) as exc:
