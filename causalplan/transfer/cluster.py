@@ -21,6 +21,7 @@ the workers get to do.
 from __future__ import annotations
 
 import logging
+import multiprocessing
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -44,6 +45,14 @@ if TYPE_CHECKING:
 
 DEFAULT_CHUNK_SIZE = 250
 CONNECT_TIMEOUT = "10s"
+LOCAL_CLUSTER_SETTINGS = {
+    "distributed.admin.tick.interval": "1s",  # the event loops' health check, 20 ms by default
+    "distributed.worker.profile.enabled": False,  # samples every task's stack for a dashboard we do not start
+    "distributed.worker.memory.monitor-interval": "1s",  # 100 ms by default; a batch's memory grows slowly
+    "distributed.admin.system-monitor.interval": "2s",  # CPU and network statistics for the dashboard
+}
+"""Dask settings of a local cluster (``--workers``): its own housekeeping, at Dask's defaults, keeps
+the client's process and every worker busy even when idle, on the same cores the trials need."""
 
 
 class ClusterError(CausalPlanError):
@@ -134,6 +143,7 @@ def connect(address: str | None, workers: int | None) -> tuple[Client, Any]:
 
     The second value is the local cluster to close after the client (None for a remote one).
     """
+    import dask
     from distributed import Client, LocalCluster
 
     if address is not None:
@@ -144,14 +154,27 @@ def connect(address: str | None, workers: int | None) -> tuple[Client, Any]:
                 f"Cannot reach the Dask scheduler at {address}: {exc}. Is `dask scheduler` running there?",
                 details={"address": address},
             ) from exc
-    cluster = LocalCluster(
-        n_workers=workers or 1,
-        threads_per_worker=1,  # the planners keep per-process state; one trial at a time per process
-        processes=True,
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-    )
-    return Client(cluster), cluster
+    settings = {**LOCAL_CLUSTER_SETTINGS, "distributed.worker.multiprocessing-method": _local_start_method()}
+    with dask.config.set(settings):  # read when the scheduler, nannies, workers and client start
+        cluster = LocalCluster(
+            n_workers=workers or 1,
+            threads_per_worker=1,  # the planners keep per-process state; one trial at a time per process
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+        return Client(cluster), cluster
+
+
+def _local_start_method() -> str:
+    """Return how a local cluster starts its worker processes: ``fork`` where there is one.
+
+    A forked worker starts with this process's modules already imported (Dask's default,
+    ``spawn``, starts a fresh interpreter that imports Dask and then causalplan again), which
+    on a busy machine is seconds per worker. A worker the nanny restarts later (after a
+    crash) is spawned, Dask's default: that only costs time.
+    """
+    return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
 
 
 def run_batch_on_cluster(
