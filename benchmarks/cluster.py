@@ -32,6 +32,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ROOT / "examples" / "batch" / "trials.jsonl"
@@ -77,9 +78,9 @@ def batch_run(trials: Path, out: Path, chunk_size: int, options: tuple[str, ...]
     return seconds, children_cpu() - cpu
 
 
-def verdicts(out: Path) -> list[dict[str, object]]:
+def verdicts(out: Path) -> list[dict[str, Any]]:
     """Return a run's verdicts without what differs between runs (the planner's timings, its cache)."""
-    entries: list[dict[str, object]] = json.loads((out / "verdicts.json").read_text(encoding="utf-8"))
+    entries: list[dict[str, Any]] = json.loads((out / "verdicts.json").read_text(encoding="utf-8"))
     for entry in entries:
         if isinstance(entry.get("planning"), dict):
             entry["planning"] = {k: v for k, v in entry["planning"].items() if k not in ("timing", "cached")}
@@ -96,7 +97,7 @@ def breakdown(trials: Path, chunk_size: int, workers: int) -> str:
     watcher, cluster = connect(None, workers)  # as --workers starts it
     start = time.perf_counter() - started
     try:
-        worker_cpu_before = watcher.run(time.process_time)
+        worker_cpu_before: dict[str, float] = watcher.run(time.process_time)
         cpu, started = time.process_time(), time.perf_counter()
         write_batch_on_cluster(
             file_chunks(trials, chunk_size), catalog, JudgeOptions(simulate=False), address=cluster.scheduler_address
@@ -104,7 +105,7 @@ def breakdown(trials: Path, chunk_size: int, workers: int) -> str:
         wall, client_cpu = time.perf_counter() - started, time.process_time() - cpu
         worker_cpu = [seconds - worker_cpu_before[name] for name, seconds in watcher.run(time.process_time).items()]
     finally:
-        watcher.close()
+        watcher.close()  # type: ignore[no-untyped-call]
         cluster.close()
     each = ", ".join(f"{seconds:.1f}" for seconds in worker_cpu)
     return (

@@ -231,10 +231,13 @@ def _judge_on_cluster(
     client, cluster = connect(address, workers)
     try:
         shared = client.scatter(catalog, broadcast=True)
-        futures = {client.submit(task, part, shared, options, pure=False): index for index, part in enumerate(parts)}
+        futures = [client.submit(task, part, shared, options, pure=False) for part in parts]
+        index_of = {future.key: index for index, future in enumerate(futures)}
+        pending = as_completed(futures)
+        del futures  # a chunk's future, once read, is let go, and the worker forgets the chunk's results
         done: dict[int, list[Result]] = {}
-        for future in as_completed(futures):
-            index = futures[future]
+        for future in pending:
+            index = index_of[future.key]
             try:
                 results = future.result()
             except Exception as exc:  # Dask re-raises whatever the chunk raised, or KilledWorker
