@@ -11,45 +11,23 @@
 #    Debian's, installed in the image);
 # 4. the service container's smoke test (docker/smoke.py: health, one plan, one transfer).
 #
-# Facts of these machines it works around: podman needs `--runtime runc` (crun fails on
-# setrlimit) and rlimits it may set (the defaults are refused); builds and pip need the host's
-# network, CA bundle and pip configuration, mounted read-only.
+# podman's settings for these machines, and the base image: docker/podman-common.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scratch=${1:-$(mktemp -d /tmp/causalplan-podman.XXXXXX)}
 mkdir -p "$scratch"
+# shellcheck source=docker/podman-common.sh
+source docker/podman-common.sh
 
-podman=(podman --runtime runc)
-limits=(--ulimit nofile=4096:4096 --ulimit nproc=4096:4096)
-volumes=()  # the host's CA bundle and pip configuration, for builds and containers alike
-for file in /etc/ssl/certs/ca-certificates.crt /etc/pip.conf /etc/xdg/pip "${PIP_FIND_LINKS:-}"; do
-    if [ -n "$file" ] && [ -e "$file" ]; then volumes+=(-v "$file:$file:ro"); fi
-done
-environment=()  # pip's settings from the environment, for the tests container's pip
-for name in PIP_INDEX_URL PIP_EXTRA_INDEX_URL PIP_CERT PIP_FIND_LINKS PIP_DEFAULT_TIMEOUT; do
-    if [ -n "${!name:-}" ]; then environment+=(-e "$name"); fi
-done
-
-stage() { echo "== $(date -u +%H:%M:%S) $*"; }
-
-if [ "${CAUSALPLAN_REBUILD_BASE:-0}" = 1 ] || ! podman image exists localhost/bookworm-py; then
-    stage "base image from Debian's packages (mmdebstrap)"
-    mmdebstrap --quiet --variant=minbase --include=python3,python3-venv,ca-certificates bookworm "$scratch/rootfs.tar"
-    podman import --quiet "$scratch/rootfs.tar" localhost/bookworm-py >/dev/null
-    rm -f "$scratch/rootfs.tar"
-fi
+ensure_base_image "$scratch"
 
 for target in service tests; do
-    stage "build localhost/causalplan-$target"
-    # --format docker keeps the HEALTHCHECK (the OCI format has none), which compose waits on.
-    "${podman[@]}" build --quiet --format docker --network=host "${volumes[@]}" \
-        -f docker/Dockerfile --ignorefile docker/Dockerfile.dockerignore \
-        --build-arg BASE=localhost/bookworm-py --target "$target" -t "localhost/causalplan-$target" . >/dev/null
+    build_image "localhost/causalplan-$target" -f docker/Dockerfile --ignorefile docker/Dockerfile.dockerignore \
+        --target "$target" .
 done
 
-stage "build localhost/causalplan-nginx (the load balancer) and check its configuration"
-"${podman[@]}" build --quiet --format docker --network=host "${volumes[@]}" \
-    --build-arg BASE=localhost/bookworm-py -t localhost/causalplan-nginx docker/nginx >/dev/null
+build_image localhost/causalplan-nginx docker/nginx
+stage "check the load balancer's configuration"
 # nginx resolves its upstream when it reads the file: name compose's `service` for the check.
 "${podman[@]}" run --rm "${limits[@]}" --add-host service:127.0.0.1 localhost/causalplan-nginx nginx -t -q
 

@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import ipaddress
 import re
 from pathlib import Path
 from typing import Any
@@ -66,3 +67,43 @@ def test_the_tests_image_installs_what_the_tests_need_from_debian() -> None:
     assert "libatomic1" in tests_stage  # Playwright's Node driver does not start without it
     tests_service = compose()["services"]["tests"]
     assert tests_service["init"] is True  # orphans must not become the test process's children
+
+
+def test_postgresql_is_the_official_image_unless_a_variable_names_the_debian_one() -> None:
+    postgres = compose()["services"]["postgres"]
+    assert postgres["image"] == "${CAUSALPLAN_POSTGRES_IMAGE:-postgres:15-bookworm}"
+    dockerfile = (DOCKER / "postgres" / "Dockerfile").read_text(encoding="utf-8")
+    entrypoint = (DOCKER / "postgres" / "entrypoint.sh").read_text(encoding="utf-8")
+    # The Debian image reads every setting compose gives the official one, and keeps its data where
+    # the official one does (the volume compose mounts).
+    assert set(postgres["environment"]) <= set(re.findall(r"\$\{?(POSTGRES_[A-Z]+)", entrypoint))
+    pgdata = re.search(r"^ENV PGDATA=(\S+)$", dockerfile, re.MULTILINE)
+    assert pgdata is not None and postgres["volumes"] == [f"postgres-data:{pgdata.group(1)}"]
+    assert re.search(r"^ARG BASE=\S+bookworm\S*$", dockerfile, re.MULTILINE)
+    assert re.search(r"^FROM \$\{BASE\}", dockerfile, re.MULTILINE)
+
+
+def test_nginx_address_is_outside_the_range_handed_to_other_containers() -> None:
+    data = compose()
+    (ipam,) = data["networks"]["causalplan"]["ipam"]["config"]
+    nginx_address = ipaddress.ip_address(data["services"]["nginx"]["networks"]["causalplan"]["ipv4_address"])
+    assert nginx_address in ipaddress.ip_network(ipam["subnet"])
+    assert nginx_address not in ipaddress.ip_network(ipam["ip_range"])
+
+
+def test_the_dask_containers_share_the_service_image_but_not_its_health_check() -> None:
+    services = compose()["services"]
+    image = services["service"]["image"]
+    assert "build" in services["service"]
+    for name in ("dask-scheduler", "dask-worker"):
+        assert services[name]["image"] == image and "build" not in services[name]  # built once, by `service`
+        # The image's HEALTHCHECK asks the service's /health, which the scheduler and workers do not serve.
+        check = services[name]["healthcheck"]
+        assert check.get("disable") is True or "8787/health" in " ".join(check["test"])
+
+
+def test_every_replicated_service_says_so_for_podman_compose() -> None:
+    # podman-compose reads deploy.replicas only when deploy.mode is said (Docker takes it as the default).
+    for name, service in compose()["services"].items():
+        if "replicas" in service.get("deploy", {}):
+            assert service["deploy"]["mode"] == "replicated", name

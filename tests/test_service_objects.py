@@ -47,8 +47,8 @@ def test_health_reports_planners_database_pool_and_limits(client: TestClient) ->
     assert health["database"] == {
         "reachable": True,
         "backend": "sqlite",
-        "revision": "0005",
-        "expected_revision": "0005",
+        "revision": "0006",
+        "expected_revision": "0006",
         "problem": None,
     }
     assert health["pool"]["workers"] == 2 and health["pool"]["max_in_flight"] == 18
@@ -76,6 +76,7 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/transfers",
         "/v1/jobs",
         "/v1/jobs/{job_id}",
+        "/v1/jobs/{job_id}/video",
         "/v1/objects",
         "/v1/objects/{object_id}",
         "/v1/trials",

@@ -19,12 +19,16 @@ SAFE_LOADER: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoade
 
 
 class DuplicateKeyError(ValueError):
-    """A mapping names the same key twice (``line`` is 1-based, None when unknown)."""
+    """A mapping names the same key twice, at ``line`` (1-based) and ``index`` (0-based, in characters).
 
-    def __init__(self, key: object, line: int | None) -> None:
+    Both are None when unknown: ``json``'s hook sees the key but not where it stands.
+    """
+
+    def __init__(self, key: object, line: int | None = None, index: int | None = None) -> None:
         super().__init__(f"duplicate key {key!r}")
         self.key = key
         self.line = line
+        self.index = index
 
 
 class _UniqueKeyLoader(SAFE_LOADER):  # type: ignore[misc, valid-type]
@@ -41,7 +45,7 @@ class _UniqueKeyLoader(SAFE_LOADER):  # type: ignore[misc, valid-type]
             except TypeError:  # an unhashable key: construct_mapping below reports it
                 continue
             if is_repeated:
-                raise DuplicateKeyError(key, key_node.start_mark.line + 1)
+                raise DuplicateKeyError(key, key_node.start_mark.line + 1, key_node.start_mark.index)
             seen.add(key)
         mapping: dict[object, object] = super().construct_mapping(node, deep=deep)
         return mapping
@@ -56,20 +60,24 @@ def refuse_duplicate_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
     result: dict[str, object] = {}
     for key, value in pairs:
         if key in result:
-            raise DuplicateKeyError(key, None)
+            raise DuplicateKeyError(key)
         result[key] = value
     return result
 
 
-def duplicate_key_line(text: str, key: object) -> int | None:
-    """Return the line of the second ``key`` in one mapping of ``text`` (JSON read as YAML), if found."""
+def located_duplicate_key(text: str, exc: DuplicateKeyError) -> DuplicateKeyError:
+    """Return ``exc`` with the line and index of its second key in ``text`` (JSON read as YAML), when found.
+
+    ``text`` must have its tabs replaced by spaces: JSON allows them between tokens, YAML does not.
+    """
     try:
         yaml.load(text, Loader=_UniqueKeyLoader)
-    except DuplicateKeyError as exc:
-        return exc.line if exc.key == key else None
+    except DuplicateKeyError as located:
+        if located.key == exc.key:
+            return located
     except (yaml.YAMLError, RecursionError):
-        return None
-    return None
+        pass
+    return exc
 
 
 def _duplicate_key(file_name: str | None, exc: DuplicateKeyError) -> tuple[object, SourceMap, list[Diagnostic]]:
@@ -167,8 +175,7 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
         try:
             data = json.loads(text, object_pairs_hook=refuse_duplicate_keys)
         except DuplicateKeyError as exc:
-            exc.line = duplicate_key_line(text.replace("\t", " "), exc.key)
-            return _duplicate_key(file_name, exc)
+            return _duplicate_key(file_name, located_duplicate_key(text.replace("\t", " "), exc))
         except RecursionError:
             return _too_deep(file_name)
         except json.JSONDecodeError as exc:

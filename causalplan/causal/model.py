@@ -134,52 +134,57 @@ _FIELD_HINTS = {
 }
 
 
-def _read_label(
-    value: object, path: tuple[str | int, ...], source: SourceMap, part: str, problems: list[Diagnostic]
-) -> str | None:
-    where = source.locate(*path, part=part)
+def _label_problem(
+    value: object, where: Location, words: Mapping[str, tuple[str, str | None]], part: str = ""
+) -> Diagnostic | None:
+    """Return why ``value`` cannot be a label (not text, empty, control characters, too long), or None.
+
+    The checks are the same for a part's function and for the goal; ``words`` gives each code's
+    message and hint, as templates of ``type``, ``value``, ``length`` and ``part``.
+    """
     if not isinstance(value, str):
-        problems.append(
-            error(
-                "invalid_type",
-                f"A function label of part '{part}' is {type(value).__name__}, not text.",
-                where,
-                "Write labels as text, e.g. 'provide electricity'; put words such as yes, "
-                "no, on, off or numbers in quotes.",
-            )
-        )
+        code = "invalid_type"
+    elif not value.strip():
+        code = "empty_label"
+    elif has_control_characters(value):
+        code = "invalid_character"
+    elif len(value) > MAX_LABEL_LENGTH:
+        code = "label_too_long"
+    else:
         return None
-    if not value.strip():
-        problems.append(
-            error(
-                "empty_label",
-                f"Part '{part}' has an empty function label.",
-                where,
-                "Write what the part does, e.g. 'provide electricity', or remove the entry.",
-            )
-        )
-        return None
-    if has_control_characters(value):
-        problems.append(
-            error(
-                "invalid_character",
-                f"The label {value!r} of part '{part}' contains control characters.",
-                where,
-                "Retype the label using ordinary letters, digits and punctuation.",
-            )
-        )
-        return None
-    if len(value) > MAX_LABEL_LENGTH:
-        problems.append(
-            error(
-                "label_too_long",
-                f"A label of part '{part}' is {len(value)} characters long; the limit is {MAX_LABEL_LENGTH}.",
-                where,
-                "Say it in fewer words.",
-            )
-        )
-        return None
-    return display_label(value)
+    message, hint = words[code]
+    length = len(value) if isinstance(value, str) else 0
+    return error(code, message.format(type=type(value).__name__, value=value, length=length, part=part), where, hint)
+
+
+_TOO_LONG = f"is {{length}} characters long; the limit is {MAX_LABEL_LENGTH}."
+_PART_LABEL_WORDS = {
+    "invalid_type": (
+        "A function label of part '{part}' is {type}, not text.",
+        "Write labels as text, e.g. 'provide electricity'; put words such as yes, no, on, off or numbers in quotes.",
+    ),
+    "empty_label": (
+        "Part '{part}' has an empty function label.",
+        "Write what the part does, e.g. 'provide electricity', or remove the entry.",
+    ),
+    "invalid_character": (
+        "The label {value!r} of part '{part}' contains control characters.",
+        "Retype the label using ordinary letters, digits and punctuation.",
+    ),
+    "label_too_long": ("A label of part '{part}' " + _TOO_LONG, "Say it in fewer words."),
+}
+_GOAL_WORDS = {
+    "invalid_type": (
+        "'goal' is {type}, not text.",
+        "Write the goal as a label, e.g. 'goal: light' (in quotes if it is a number).",
+    ),
+    "empty_label": ("'goal' must be a non-empty label, e.g. 'light'.", None),
+    "invalid_character": (
+        "'goal' contains control characters.",
+        "Retype it using ordinary letters, digits and punctuation.",
+    ),
+    "label_too_long": ("'goal' " + _TOO_LONG, "Say it in fewer words."),
+}
 
 
 def _keyword_warning(label: str, part: str, keywords: list[str], where: Location) -> Diagnostic:
@@ -228,9 +233,12 @@ def _read_functions(value: object, source: SourceMap, problems: list[Diagnostic]
         labels: list[str] = []
         seen: set[str] = set()
         for index, item in enumerate(items):
-            label = _read_label(item, ("functions", part, index), source, part, problems)
-            if label is None:
+            problem = _label_problem(item, source.locate("functions", part, index, part=part), _PART_LABEL_WORDS, part)
+            if problem is not None:
+                problems.append(problem)
                 continue
+            assert isinstance(item, str)
+            label = display_label(item)
             if normalize_label(label) in seen:
                 problems.append(
                     warning(
@@ -271,39 +279,12 @@ def _read_object_id(data: Mapping[object, object], source: SourceMap, problems: 
 
 def _read_goal(data: Mapping[object, object], source: SourceMap, problems: list[Diagnostic]) -> str:
     value = data.get("goal", DEFAULT_GOAL)
-    where = source.locate("goal")
-    if not isinstance(value, str):
-        problems.append(
-            error(
-                "invalid_type",
-                f"'goal' is {type(value).__name__}, not text.",
-                where,
-                "Write the goal as a label, e.g. 'goal: light' (in quotes if it is a number).",
-            )
-        )
-    elif not value.strip():
-        problems.append(error("empty_label", "'goal' must be a non-empty label, e.g. 'light'.", where))
-    elif has_control_characters(value):
-        problems.append(
-            error(
-                "invalid_character",
-                "'goal' contains control characters.",
-                where,
-                "Retype it using ordinary letters, digits and punctuation.",
-            )
-        )
-    elif len(value) > MAX_LABEL_LENGTH:
-        problems.append(
-            error(
-                "label_too_long",
-                f"'goal' is {len(value)} characters long; the limit is {MAX_LABEL_LENGTH}.",
-                where,
-                "Say it in fewer words.",
-            )
-        )
-    else:
-        return display_label(value)
-    return DEFAULT_GOAL
+    problem = _label_problem(value, source.locate("goal"), _GOAL_WORDS)
+    if problem is not None:
+        problems.append(problem)
+        return DEFAULT_GOAL
+    assert isinstance(value, str)
+    return display_label(value)
 
 
 def _read_rules(value: object, source: SourceMap, problems: list[Diagnostic]) -> tuple[Rule, ...]:

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from causalplan.cli.cluster_options import cluster_options
 from causalplan.cli.common import (
     FILE,
     catalog_from,
@@ -25,6 +26,7 @@ from causalplan.cli.common import (
 if TYPE_CHECKING:
     from rich.progress import Progress
 
+    from causalplan.cli.cluster_options import ClusterChoice
     from causalplan.objects.catalog import Catalog
     from causalplan.transfer.batch import WrittenResult
     from causalplan.transfer.cluster import JudgeOptions
@@ -138,16 +140,14 @@ def _on_cluster(
     trials_file: Path,
     objects: Catalog,
     options: JudgeOptions,
-    address: str | None,
-    workers: int | None,
-    chunk_size: int,
+    on_cluster: ClusterChoice,
     out: Path,
     progress: Progress,
 ) -> list[WrittenResult]:
     """Return the trials' results judged on a Dask cluster, appending each chunk's to verdicts.jsonl as it comes."""
     from causalplan.transfer.cluster import file_chunks, trials_in, write_batch_on_cluster
 
-    parts = file_chunks(trials_file, chunk_size)
+    parts = file_chunks(trials_file, on_cluster.chunk_size)
     bar = progress.add_task("judging trials", total=trials_in(parts))
     with (out / "verdicts.jsonl").open("w", encoding="utf-8") as stream:
 
@@ -157,7 +157,9 @@ def _on_cluster(
             progress.advance(bar, len(results))
 
         with exit_on_error():
-            return write_batch_on_cluster(parts, objects, options, address=address, workers=workers, on_chunk=write)
+            return write_batch_on_cluster(
+                parts, objects, options, address=on_cluster.address, workers=on_cluster.workers, on_chunk=write
+            )
 
 
 @click.command(short_help="Judge many transfer trials; write their verdicts and reasons.")
@@ -173,23 +175,7 @@ def _on_cluster(
     "with robot_cannot_execute.",
 )
 @click.option("--out", type=FILE, default=Path("out/batch"), help="Folder for verdicts.csv and verdicts.json.")
-@click.option(
-    "--cluster",
-    metavar="ADDRESS",
-    help="Judge on the Dask cluster whose scheduler is at ADDRESS, e.g. tcp://10.0.0.5:8786 "
-    "(the catalog is sent to its workers; their Python needs causalplan installed).",
-)
-@click.option(
-    "--workers",
-    type=click.IntRange(1, 256),
-    help="Judge on a local Dask cluster of this many worker processes (one trial at a time each).",
-)
-@click.option(
-    "--chunk-size",
-    type=click.IntRange(1, 1_000_000),
-    default=250,
-    help="Trials per cluster task (with --cluster or --workers).",
-)
+@cluster_options("trials", default_chunk_size=250)
 @catalog_option
 def batch(
     trials_file: Path,
@@ -199,9 +185,7 @@ def batch(
     val: bool,
     robot: bool,
     out: Path,
-    cluster: str | None,
-    workers: int | None,
-    chunk_size: int,
+    on_cluster: ClusterChoice | None,
     catalog: tuple[Path, ...],
 ) -> None:
     """Judge many transfer trials (e.g. a study's participants) and write their verdicts and reasons.
@@ -229,8 +213,6 @@ def batch(
     if not trials_file.is_file():
         fail("file_not_found", f"There is no file {trials_file}.")
     make_folder(out)
-    if cluster is not None and workers is not None:
-        fail("invalid_option", "Give --cluster (an existing cluster) or --workers (a local one), not both.")
     judge = None
     if robot:
         from causalplan.sim.robot_verdict import robot_judged
@@ -238,7 +220,7 @@ def batch(
         judge = robot_judged
     started = time.perf_counter()
     with progress_bar() as progress:
-        if cluster is None and workers is None:
+        if on_cluster is None:
             trials = list(read_trials(trials_file))
             bar = progress.add_task("judging trials", total=len(trials))
             judged = run_batch(
@@ -247,7 +229,7 @@ def batch(
             results = [result.written() for result in judged]
         else:
             options = JudgeOptions(planner, time_limit, simulate, val, judge)
-            results = _on_cluster(trials_file, objects, options, cluster, workers, chunk_size, out, progress)
+            results = _on_cluster(trials_file, objects, options, on_cluster, out, progress)
     seconds = time.perf_counter() - started
     with (out / "verdicts.csv").open("w", newline="", encoding="utf-8") as handle:
         writer = csv.DictWriter(handle, fieldnames=CSV_COLUMNS)

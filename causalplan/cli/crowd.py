@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from causalplan.cli.cluster_options import cluster_options, trial_judge
 from causalplan.cli.common import (
     EXIT_INVALID,
     EXIT_NO_PLAN,
@@ -30,6 +31,7 @@ from causalplan.cli.common import (
 )
 
 if TYPE_CHECKING:
+    from causalplan.cli.cluster_options import ClusterChoice
     from causalplan.consensus.judging import Judged
     from causalplan.objects.catalog import Catalog
 
@@ -56,6 +58,7 @@ def _write_yaml(path: Path, data: object, header: str) -> None:
 @planner_option
 @time_limit_option
 @click.option("--simulate/--no-simulate", default=True, help="Check plans in the physics simulator (as transfer does).")
+@cluster_options("trials", default_chunk_size=250)
 @catalog_option
 def consensus(
     trials_file: Path,
@@ -64,6 +67,7 @@ def consensus(
     planner: str,
     time_limit: float,
     simulate: bool,
+    on_cluster: ClusterChoice | None,
     catalog: tuple[Path, ...],
 ) -> None:
     """Build the crowd's model from many participants trained on the same object, and judge it.
@@ -77,8 +81,11 @@ def consensus(
     support and holders, the label clusters, every verdict, individual_transfer_rate,
     consensus_verdict) and consensus_graph.png/.svg (line width = support).
 
+    With --cluster or --workers the members' trials and the consensus's are judged on a Dask
+    cluster in chunks of --chunk-size (the same verdicts as here; the bar moves per chunk).
+
     Example: causalplan population desk_lamp --n 30 --out crowd.jsonl &&
-    causalplan consensus crowd.jsonl --out out/consensus
+    causalplan consensus crowd.jsonl --out out/consensus --workers 2
     """
     from causalplan.consensus.build import build_consensus
     from causalplan.consensus.drawing import draw_consensus
@@ -96,7 +103,13 @@ def consensus(
     with progress_bar() as progress:
         total = sum(len(p.mappings) for p in participants if p.id in crowd.members) + len(crowd.mappings)
         bar = progress.add_task("judging the crowd and its consensus", total=total)
-        judged = judge(crowd, participants, objects, planner, time_limit, simulate, lambda: progress.advance(bar))
+        judged = judge(
+            crowd,
+            participants,
+            objects,
+            progress=lambda count: progress.advance(bar, count),
+            judge_trials=trial_judge(on_cluster, objects, planner, time_limit, simulate),
+        )
     _write_yaml(
         out / "consensus_model.yaml",
         crowd.model_data,
@@ -203,9 +216,13 @@ def population(training_object: str, count: int, seed: int, tests: tuple[str, ..
 
     Each line is {"id", "model", "mapping", "errors"}, as `batch` and `consensus` read; "errors"
     lists the error kinds that participant made. Every kind happens to a participant with its
-    own --rate-<kind>.
+    own --rate-<kind>. Making them is quick; judging them is the work, and `batch` and
+    `consensus` do it on a Dask cluster with --cluster ADDRESS or --workers N.
 
-    Example: causalplan population desk_lamp --n 30 --seed 1 --rate-effect-as-cause 0.6 --out crowd.jsonl
+    \b
+    Example:
+        causalplan population desk_lamp --n 30 --seed 1 --rate-effect-as-cause 0.6 --out crowd.jsonl
+        causalplan batch crowd.jsonl --workers 2 --out out/crowd
     """
     from causalplan.consensus.population import population as make_population
 
@@ -235,6 +252,7 @@ def population(training_object: str, count: int, seed: int, tests: tuple[str, ..
 @click.option("--out", type=FILE, default=Path("out/crowd-curve"), help="Folder for curve.csv, curve.json, curve.png.")
 @planner_option
 @time_limit_option
+@cluster_options("trials", default_chunk_size=250)
 @catalog_option
 @_rate_options
 def crowd_curve(
@@ -248,6 +266,7 @@ def crowd_curve(
     out: Path,
     planner: str,
     time_limit: float,
+    on_cluster: ClusterChoice | None,
     catalog: tuple[Path, ...],
     **rates: float,
 ) -> None:
@@ -256,8 +275,10 @@ def crowd_curve(
     For each draw, a synthetic population of OBJECT's participants (see `population`) is judged,
     and the consensus of its first n members is built and judged, for each crowd size n. Prints
     a table and writes curve.csv, curve.json and curve.png (rates with 95% intervals over draws).
+    All the draws' trials are judged as one batch: with --cluster or --workers, on a Dask cluster
+    in chunks of --chunk-size (the same curve as here; the bar moves per chunk).
 
-    Example: causalplan crowd-curve desk_lamp --draws 20 --rate-object-specific 0.7
+    Example: causalplan crowd-curve desk_lamp --draws 20 --rate-object-specific 0.7 --workers 2
     """
     import csv
 
@@ -277,7 +298,11 @@ def crowd_curve(
     make_folder(out)
     chosen = _rates(rates)
     with progress_bar() as progress:
-        bar = progress.add_task("building and judging crowds", total=draws * len(crowd_sizes))
+        bar = progress.add_task("building crowds", total=None)
+
+        def judged(done: int, total: int) -> None:
+            progress.update(bar, description="judging crowds and their consensus", completed=done, total=total)
+
         with exit_on_error():
             points = measure(
                 training_object,
@@ -288,10 +313,8 @@ def crowd_curve(
                 chosen,
                 tests,
                 min_support,
-                planner,
-                time_limit,
-                simulate,
-                lambda: progress.advance(bar),
+                progress=judged,
+                judge_trials=trial_judge(on_cluster, objects, planner, time_limit, simulate),
             )
     rows = [point.as_dict() for point in points]
     with (out / "curve.csv").open("w", newline="", encoding="utf-8") as handle:

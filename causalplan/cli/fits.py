@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from causalplan.cli import common
+from causalplan.cli.cluster_options import chunk_mapper, cluster_options
 from causalplan.cli.common import (
     FILE,
     catalog_from,
@@ -18,6 +20,9 @@ from causalplan.cli.common import (
     say,
     writing,
 )
+
+if TYPE_CHECKING:
+    from causalplan.cli.cluster_options import ClusterChoice
 
 
 @click.command("estimate-fits", short_help="Measure each fit's success probability by noisy robot insertions.")
@@ -42,6 +47,8 @@ from causalplan.cli.common import (
     type=FILE,
     help="Write the probabilities as a catalog overlay (YAML) for `plan --catalog-overlay`.",
 )
+# 1000 is sim.fit_estimates.DEFAULT_CHUNK_INSERTIONS, written out: importing sim here loads PyBullet on every start.
+@cluster_options("insertions", default_chunk_size=1000)
 @json_option
 @catalog_option
 def estimate_fits_command(
@@ -52,6 +59,7 @@ def estimate_fits_command(
     noise_deg: float,
     fit_ids: tuple[str, ...],
     out: Path | None,
+    on_cluster: ClusterChoice | None,
     as_json: bool,
     catalog: tuple[Path, ...],
 ) -> None:
@@ -62,14 +70,20 @@ def estimate_fits_command(
     axis) and turn (--noise-deg), follows the robot's commands, and succeeds when it does not
     jam on the way and its connector still arrives within the fit's own tolerance (a thread
     is stricter than a clip). Prints each fit's success rate with its 95% Wilson interval and
-    the commonest failure codes. For example:
+    the commonest failure codes.
+
+    With --cluster or --workers every fit's insertions go to a Dask cluster in chunks of
+    --chunk-size, all fits at once; each chunk repeats the robot's nominal run (the same run
+    everywhere), so keep chunks large. The noises are drawn before the chunks are cut, so the
+    numbers are those of the run here for the same --seed. For example:
 
     \b
         causalplan estimate-fits desk_lamp --trials 500 --noise-mm 0.5 --out overlay.yaml
         causalplan plan examples/paper/desk_lamp.yaml --planner mdp --catalog-overlay overlay.yaml
+        causalplan estimate-fits desk_lamp --trials 20000 --workers 2
     """
     from causalplan.objects.overlay import overlay_data
-    from causalplan.sim.fit_estimates import estimate_fit
+    from causalplan.sim.fit_estimates import DEFAULT_CHUNK_INSERTIONS, estimate_fits
 
     objects = catalog_from(catalog)
     with exit_on_error():
@@ -81,13 +95,20 @@ def estimate_fits_command(
     chosen = [fit for fit in obj.fits if not fit_ids or fit.id in fit_ids]
     if not chosen:
         fail("unknown_fit", f"The {obj.name} has no fits to estimate.")
-    estimates = []
+    where = "here" if on_cluster is None else "on the cluster"
     with exit_on_error(), common.progress_bar() as progress:
-        bar = progress.add_task("estimating", total=len(chosen))
-        for fit in chosen:
-            progress.update(bar, description=f"{fit.id}: {trials} trials")
-            estimates.append(estimate_fit(obj, fit, trials, seed, noise_mm, noise_deg))
-            progress.update(bar, advance=1)
+        bar = progress.add_task(f"{len(chosen)} fits, {trials} insertions each, {where}", total=len(chosen) * trials)
+        estimates = estimate_fits(
+            obj,
+            trials,
+            seed,
+            noise_mm,
+            noise_deg,
+            [fit.id for fit in chosen],
+            map_chunks=chunk_mapper(on_cluster),
+            chunk_size=on_cluster.chunk_size if on_cluster is not None else DEFAULT_CHUNK_INSERTIONS,
+            progress=lambda count: progress.advance(bar, count),
+        )
     rows = [estimate.as_dict() for estimate in estimates]
     data = {"object": obj.id, "noise": {"mm": noise_mm, "deg": noise_deg}, "seed": seed, "fits": rows}
     if out is not None:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import re
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.labels import normalize_label
@@ -51,13 +51,7 @@ class Node:
         return {person for people in self.writings.values() for person in people}
 
     def as_dict(self) -> dict[str, object]:
-        return {
-            "id": self.id,
-            "kind": self.kind,
-            "label": self.label,
-            "writings": {text: list(people) for text, people in self.writings.items()},
-            "parts": self.parts,
-        }
+        return {**asdict(self), "writings": {text: list(people) for text, people in self.writings.items()}}
 
 
 @dataclass(frozen=True)

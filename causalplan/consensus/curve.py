@@ -4,7 +4,8 @@ For each draw a fresh synthetic population is made (seed + draw), every member's
 judged once, and the consensus of its first n members is built and judged, for each crowd
 size n. Per size and test object it reports the consensus's transfer rate over the draws
 (with a Wilson 95% interval) and the mean individual's rate (the crowd's own members, with the
-2.5-97.5 percentiles over draws).
+2.5-97.5 percentiles over draws). All the draws' trials are judged as one batch, so a cluster
+gets chunks of every draw at once.
 """
 
 from __future__ import annotations
@@ -16,12 +17,12 @@ from pathlib import Path
 import numpy as np
 
 from causalplan.consensus.build import MIN_SUPPORT, build_consensus
-from causalplan.consensus.judging import consensus_trials
+from causalplan.consensus.judging import TrialJudge, consensus_trials, local_judge
 from causalplan.consensus.participants import Participant
 from causalplan.consensus.population import population, scenario_for
 from causalplan.objects.catalog import Catalog
 from causalplan.studies.statistics import wilson
-from causalplan.transfer.batch import Trial, run_batch
+from causalplan.transfer.batch import Trial
 from causalplan.transfer.verdict import Verdict
 
 CROWD_SIZES = (1, 3, 10, 30, 100)
@@ -62,6 +63,16 @@ def _wilson(successes: int, total: int) -> tuple[float, float]:
     return share.low, share.high
 
 
+@dataclass(frozen=True)
+class _Crowd:
+    """One draw's crowd of one size: what its consensus has mappings for, and whether its model is valid."""
+
+    size: int
+    members: list[str]
+    mapped: list[str]
+    is_valid: bool
+
+
 def crowd_curve(
     training: str,
     catalog: Catalog,
@@ -74,37 +85,59 @@ def crowd_curve(
     planner: str = "auto",
     time_limit: float = 30.0,
     simulate: bool = True,
-    progress: Callable[[], None] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    *,
+    judge_trials: TrialJudge | None = None,
 ) -> list[CurvePoint]:
-    """Return one point per crowd size and test object, over ``draws`` independent populations."""
+    """Return one point per crowd size and test object, over ``draws`` independent populations.
+
+    Every draw's populations and consensuses are made first, then all their trials are judged
+    as one batch, by ``judge_trials`` (which then decides the planner, time limit and
+    simulation; e.g. on a Dask cluster) or here by ``run_batch``. ``progress`` is called with
+    (trials judged, trials in all) as the batch goes.
+    """
     chosen = tests or tuple(scenario_for(training).test_parts)
     largest = max(sizes)
-    consensus_hits: dict[tuple[int, str], list[bool]] = {}
-    individual_means: dict[tuple[int, str], list[float]] = {}
+    trials: list[Trial] = []
+    made: list[tuple[list[Participant], list[_Crowd]]] = []
     for draw in range(draws):
         people = _participants(population(training, largest, seed + draw, rates, chosen))
-        trials = [Trial(p.id, p.model, p.mappings[test], None) for p in people for test in chosen]
-        results = run_batch(trials, catalog, planner, time_limit, simulate)
-        transfers = {
-            (result.trial_id, test): result.verdict.verdict is Verdict.TRANSFERS
-            for result, (_, test) in zip(results, [(p.id, t) for p in people for t in chosen], strict=True)
-        }
+        trials += [Trial(p.id, p.model, p.mappings[test], None) for p in people for test in chosen]
+        crowds = []
         for size in sizes:
-            crowd = people[:size]
-            consensus = build_consensus(crowd, catalog, min_support)
-            own = consensus_trials(consensus)
-            verdicts = dict(
-                zip(consensus.mappings, run_batch(own, catalog, planner, time_limit, simulate), strict=True)
-            )
+            consensus = build_consensus(people[:size], catalog, min_support)
+            trials += consensus_trials(consensus)
+            members = [person.id for person in people[:size]]
+            crowds.append(_Crowd(size, members, list(consensus.mappings), consensus.loaded.is_valid))
+        made.append((people, crowds))
+    judged = 0
+
+    def advance(count: int) -> None:
+        nonlocal judged
+        judged += count
+        if progress is not None:
+            progress(judged, len(trials))
+
+    if progress is not None:
+        progress(0, len(trials))
+    judging = judge_trials or local_judge(catalog, planner, time_limit, simulate)
+    results = iter(judging(trials, advance))
+    consensus_hits: dict[tuple[int, str], list[bool]] = {}
+    individual_means: dict[tuple[int, str], list[float]] = {}
+    for people, crowds in made:
+        transfers: dict[tuple[str, str], bool] = {}
+        for person in people:  # the results come in the order the trials were made
+            for test in chosen:
+                transfers[(person.id, test)] = next(results).verdict.verdict is Verdict.TRANSFERS
+        for crowd in crowds:
+            verdicts = {test: next(results) for test in crowd.mapped}
             for test in chosen:
                 result = verdicts.get(test)
-                hit = result is not None and result.verdict.verdict is Verdict.TRANSFERS and consensus.loaded.is_valid
-                consensus_hits.setdefault((size, test), []).append(hit)
-                individual_means.setdefault((size, test), []).append(
-                    float(np.mean([transfers[(person.id, test)] for person in crowd]))
+                hit = result is not None and result.verdict.verdict is Verdict.TRANSFERS and crowd.is_valid
+                consensus_hits.setdefault((crowd.size, test), []).append(hit)
+                individual_means.setdefault((crowd.size, test), []).append(
+                    float(np.mean([transfers[(member, test)] for member in crowd.members]))
                 )
-            if progress is not None:
-                progress()
     points = []
     for test in chosen:
         kind = "near" if catalog.get(test).category == catalog.get(training).category else "far"

@@ -17,6 +17,21 @@ from causalplan.transfer.verdict import Verdict
 
 CONSENSUS_ID = "consensus"
 
+TrialJudge = Callable[[list[Trial], Callable[[int], None] | None], list[TrialResult]]
+"""Judges a list of trials and returns their results in order, calling the second argument with how many
+trials were just judged (after each trial here, after each chunk on a cluster). ``local_judge`` makes
+the one that runs here; the command line makes one that judges on a Dask cluster."""
+
+
+def local_judge(catalog: Catalog, planner: str = "auto", time_limit: float = 30.0, simulate: bool = True) -> TrialJudge:
+    """Return a trial judge that runs ``run_batch`` here, in this process."""
+
+    def judge_here(trials: list[Trial], progress: Callable[[int], None] | None) -> list[TrialResult]:
+        advance = None if progress is None else (lambda: progress(1))
+        return run_batch(trials, catalog, planner, time_limit, simulate, advance)
+
+    return judge_here
+
 
 @dataclass(frozen=True)
 class Judged:
@@ -64,12 +79,20 @@ def judge(
     planner: str = "auto",
     time_limit: float = 30.0,
     simulate: bool = True,
-    progress: Callable[[], None] | None = None,
+    progress: Callable[[int], None] | None = None,
+    *,
+    judge_trials: TrialJudge | None = None,
 ) -> Judged:
-    """Return the verdicts of the members' trials and of the consensus on each test object."""
+    """Return the verdicts of the members' trials and of the consensus on each test object.
+
+    All of them are one batch, judged by ``judge_trials`` (which then decides the planner, time
+    limit and simulation), or here by ``run_batch`` with ``planner``, ``time_limit`` and
+    ``simulate``. ``progress`` is called with how many trials were just judged.
+    """
     mine = member_trials(consensus, participants)
     own = consensus_trials(consensus)
-    results = run_batch(mine + own, catalog, planner, time_limit, simulate, progress)
+    judging = judge_trials or local_judge(catalog, planner, time_limit, simulate)
+    results = judging(mine + own, progress)
     tests = list(consensus.mappings)
     return Judged(consensus, results[: len(mine)], dict(zip(tests, results[len(mine) :], strict=True)))
 

@@ -241,21 +241,14 @@ def solve_mdp(task: PlanningTask, time_limit: float = 10.0) -> MdpSolution:
     start: State = (0, 0)
     try:
         root = solver.solve(start, solver.c.base, 0)
-    except _TooLarge:
-        return MdpSolution(
-            PlanStatus.TOO_LARGE,
-            states=len(solver.values),
-            relevant_fits=len(fits),
-            message=f"The exact MDP over {len(fits)} relevant fits passed {len(solver.values):,} "
-            f"states or {time_limit:g} s; it was stopped.",
+    except (_TooLarge, RecursionError) as exc:
+        message = (
+            "The MDP's plans are too long to solve exactly."
+            if isinstance(exc, RecursionError)
+            else f"The exact MDP over {len(fits)} relevant fits passed {len(solver.values):,} "
+            f"states or {time_limit:g} s; it was stopped."
         )
-    except RecursionError:
-        return MdpSolution(
-            PlanStatus.TOO_LARGE,
-            states=len(solver.values),
-            relevant_fits=len(fits),
-            message="The MDP's plans are too long to solve exactly.",
-        )
+        return MdpSolution(PlanStatus.TOO_LARGE, states=len(solver.values), relevant_fits=len(fits), message=message)
     if root.success == 0.0:
         return MdpSolution(
             PlanStatus.UNSOLVABLE,

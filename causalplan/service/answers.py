@@ -123,14 +123,9 @@ def mapping_text(mapping: Labelling | None) -> str:
     return canonical_text(canonical_labelling(mapping) if mapping is not None else None)
 
 
-def text_hash(canonical: str) -> str:
-    """Return the stored hash of a model's canonical text."""
-    return hashlib.sha256(canonical.encode("utf-8", "replace")).hexdigest()
-
-
 def model_hash(model: CausalModel) -> str:
-    """Return the hash of the model's canonical form (equal for models that differ only in layout)."""
-    return text_hash(model_text(model))
+    """Return the stored hash of the model's canonical form (equal for models that differ only in layout)."""
+    return hashlib.sha256(model_text(model).encode("utf-8", "replace")).hexdigest()
 
 
 def answer_key(kind: str, model: str, mapping: str, planner: str, time_limit: float, catalog: str) -> str:

@@ -9,8 +9,6 @@ planner and time limit. Routes then ask ``answers`` for the answer.
 from __future__ import annotations
 
 import json
-import json.decoder
-import json.scanner
 import re
 import uuid
 from collections.abc import Callable, Coroutine, Mapping
@@ -21,11 +19,11 @@ from fastapi import Request, Response
 from fastapi.routing import APIRoute
 
 from causalplan.causal.diagnostics import Diagnostic, Report
-from causalplan.causal.documents import SourceMap
+from causalplan.causal.documents import DuplicateKeyError, SourceMap, located_duplicate_key, refuse_duplicate_keys
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
-from causalplan.service.answers import model_text, resolve_planner, resolve_time_limit, text_hash
+from causalplan.service.answers import model_hash, resolve_planner, resolve_time_limit
 from causalplan.service.db.crud import MAX_NESTING, ClientIds, clean_json, get_model, new_model_record, save
 from causalplan.service.db.models import ModelRecord
 from causalplan.service.deps import Services, open_session
@@ -43,104 +41,69 @@ class BodyJSONError(json.JSONDecodeError):
     """A request body this service does not read as JSON, with what is wrong and where (line, column)."""
 
 
-_WHITESPACE = re.compile(r"[ \t\n\r]*")
-# The pure-Python scanner's parts (not in the stubs): it takes our object and array parsers.
-_make_scanner: Callable[[json.JSONDecoder], Any] = json.scanner.py_make_scanner  # type: ignore[attr-defined]
-_scan_string: Callable[[str, int, bool], tuple[str, int]] = json.decoder.scanstring  # type: ignore[attr-defined]
-_scan_array: Callable[[tuple[str, int], Any], tuple[list[Any], int]] = json.decoder.JSONArray  # type: ignore[attr-defined]
+_BRACKET_OR_STRING = re.compile(r'"(?:[^"\\]+|\\.)*"|[\[\]{}]')
 
 
-def _skip(text: str, at: int) -> int:
-    match = _WHITESPACE.match(text, at)
-    assert match is not None  # it matches the empty string too
-    return match.end()
+def _nesting(value: Any) -> int:
+    """Return how many objects and arrays deep ``value`` nests (0 for a string, a number, ...)."""
+    if isinstance(value, dict):
+        value = list(value.values())
+    if not isinstance(value, list):
+        return 0
+    return 1 + max((_nesting(item) for item in value), default=0)
 
 
-class _StrictDecoder(json.JSONDecoder):
-    """``json``'s own pure-Python scanner, refusing what ``json.loads`` takes silently or fails on obscurely.
-
-    A key twice in one object (``json.loads`` keeps the last), nesting deeper than the documents
-    need, integers longer than any document needs, and NaN or Infinity.
-    """
-
-    def __init__(self, text: str) -> None:
-        super().__init__(strict=True)
-        self.text = text
-        self.depth = 0
-        self.parse_object = self._object
-        self.parse_array = self._array
-        self.parse_int = self._integer
-        self.parse_constant = self._constant
-        self.memo: dict[str, str] = {}
-        self.scan_once = _make_scanner(self)
-
-    def _enter(self, text: str, at: int) -> None:
-        self.depth += 1
-        if self.depth > MAX_NESTING:
-            raise BodyJSONError(f"nested more than {MAX_NESTING} levels deep", text, at)
-
-    def _object(
-        self, text_and_end: tuple[str, int], strict: bool, scan_once: Any, *_: Any
-    ) -> tuple[dict[str, Any], int]:
-        text, end = text_and_end
-        self._enter(text, end - 1)
-        result: dict[str, Any] = {}
-        end = _skip(text, end)
-        if text[end : end + 1] == "}":
-            self.depth -= 1
-            return result, end + 1
-        while True:
-            if text[end : end + 1] != '"':
-                raise BodyJSONError("expecting a key in double quotes", text, end)
-            key_at = end
-            key, end = _scan_string(text, end + 1, strict)
-            if key in result:
-                raise BodyJSONError(f"the key {json.dumps(key)} appears twice in one object", text, key_at)
-            end = _skip(text, end)
-            if text[end : end + 1] != ":":
-                raise BodyJSONError("expecting ':' after a key", text, end)
-            end = _skip(text, end + 1)
-            try:
-                result[key], end = scan_once(text, end)
-            except StopIteration as stop:
-                raise BodyJSONError("expecting a value", text, stop.value) from None
-            end = _skip(text, end)
-            delimiter = text[end : end + 1]
-            if delimiter == "}":
-                self.depth -= 1
-                return result, end + 1
-            if delimiter != ",":
-                raise BodyJSONError("expecting ',' or '}'", text, end)
-            end = _skip(text, end + 1)
-
-    def _array(self, text_and_end: tuple[str, int], scan_once: Any) -> tuple[list[Any], int]:
-        self._enter(text_and_end[0], text_and_end[1] - 1)
-        values, end = _scan_array(text_and_end, scan_once)
-        self.depth -= 1
-        return values, end
-
-    def _integer(self, digits: str) -> int:
-        if len(digits.lstrip("-")) > MAX_NUMBER_DIGITS:
-            raise BodyJSONError(
-                f"a number of {len(digits.lstrip('-'))} digits (at most {MAX_NUMBER_DIGITS})",
-                self.text,
-                max(self.text.find(digits), 0),
-            )
-        return int(digits)
-
-    def _constant(self, name: str) -> Any:
-        raise BodyJSONError(f"{name} is not a JSON value", self.text, max(self.text.find(name), 0))
+def _too_deep(text: str) -> BodyJSONError:
+    """Return the error of a body nested too deep, at the first object or array deeper than MAX_NESTING."""
+    depth = 0
+    for token in _BRACKET_OR_STRING.finditer(text):
+        if token.group() in ("[", "{"):
+            depth += 1
+            if depth > MAX_NESTING:
+                return BodyJSONError(f"nested more than {MAX_NESTING} levels deep", text, token.start())
+        elif token.group() in ("]", "}"):
+            depth -= 1
+    return BodyJSONError(f"nested more than {MAX_NESTING} levels deep", text, 0)
 
 
 def parse_json(body: bytes) -> Any:
-    """Return the JSON value of a request body; BodyJSONError says what is wrong and at which line and column."""
+    """Return the JSON value of a request body; BodyJSONError says what is wrong and at which line and column.
+
+    ``json.loads`` keeps the last of a key named twice, recurses as deep as a body nests, takes
+    integers of thousands of digits and NaN: each is refused here, saying which it is and where.
+    """
     try:
         text = body.decode("utf-8")
     except UnicodeDecodeError as exc:
         shown = body.decode("utf-8", "replace")
         at = len(body[: exc.start].decode("utf-8", "replace"))
         raise BodyJSONError(f"not UTF-8 (byte {exc.start})", shown, at) from None
-    return _StrictDecoder(text).decode(text)
+
+    def integer(digits: str) -> int:
+        if len(digits.lstrip("-")) > MAX_NUMBER_DIGITS:
+            where = max(text.find(digits), 0)
+            raise BodyJSONError(
+                f"a number of {len(digits.lstrip('-'))} digits (at most {MAX_NUMBER_DIGITS})", text, where
+            )
+        return int(digits)
+
+    def constant(name: str) -> Any:
+        raise BodyJSONError(f"{name} is not a JSON value", text, max(text.find(name), 0))
+
+    try:
+        value = json.loads(text, object_pairs_hook=refuse_duplicate_keys, parse_int=integer, parse_constant=constant)
+    except DuplicateKeyError as exc:
+        where = located_duplicate_key(text.replace("\t", " "), exc).index or 0
+        raise BodyJSONError(f"the key {json.dumps(exc.key)} appears twice in one object", text, where) from None
+    except RecursionError:
+        raise _too_deep(text) from None
+    except BodyJSONError:
+        raise
+    except json.JSONDecodeError as exc:
+        raise BodyJSONError(exc.msg[:1].lower() + exc.msg[1:], text, exc.pos) from None
+    if _nesting(value) > MAX_NESTING:
+        raise _too_deep(text)
+    return value
 
 
 class StrictJSONRequest(Request):
@@ -168,34 +131,32 @@ def _too_long(settings: Settings, label: object) -> bool:
     return isinstance(label, str) and len(label) > settings.max_label_length
 
 
+def _over_limit(code: str, what_is: str, limit: int, actual: int, **where: object) -> LimitExceededError:
+    """Return the error of a document over one limit: ``what_is`` says what it has, then the limit."""
+    return LimitExceededError(
+        code, f"{what_is}; the limit is {limit}.", details={"limit": limit, "actual": actual, **where}
+    )
+
+
 def check_labelling_limits(document: Mapping[str, Any], settings: Settings, what: str) -> None:
     """Raise LimitExceededError when a model's or mapping's ``functions`` are over the limits."""
     functions = document.get("functions")
     if not isinstance(functions, Mapping):
         return  # the reader reports the wrong type with its own code
     if len(functions) > settings.max_parts:
-        raise LimitExceededError(
-            "too_many_parts",
-            f"The {what} labels {len(functions)} parts; the limit is {settings.max_parts}.",
-            details={"limit": settings.max_parts, "actual": len(functions), "field": "functions"},
+        count = len(functions)
+        raise _over_limit(
+            "too_many_parts", f"The {what} labels {count} parts", settings.max_parts, count, field="functions"
         )
     for part, labels in functions.items():
         items = labels if isinstance(labels, list) else [labels]
         if len(items) > settings.max_labels_per_part:
-            raise LimitExceededError(
-                "too_many_labels",
-                f"Part '{part}' of the {what} has {len(items)} function labels; the limit is "
-                f"{settings.max_labels_per_part}.",
-                details={"limit": settings.max_labels_per_part, "actual": len(items), "part": str(part)},
-            )
+            what_is = f"Part '{part}' of the {what} has {len(items)} function labels"
+            raise _over_limit("too_many_labels", what_is, settings.max_labels_per_part, len(items), part=str(part))
         for label in items:
             if _too_long(settings, label):
-                raise LimitExceededError(
-                    "label_too_long",
-                    f"A function label of part '{part}' is {len(label)} characters long; the limit is "
-                    f"{settings.max_label_length}.",
-                    details={"limit": settings.max_label_length, "actual": len(label), "part": str(part)},
-                )
+                what_is = f"A function label of part '{part}' is {len(label)} characters long"
+                raise _over_limit("label_too_long", what_is, settings.max_label_length, len(label), part=str(part))
 
 
 def check_model_limits(document: Mapping[str, Any], settings: Settings) -> None:
@@ -203,30 +164,21 @@ def check_model_limits(document: Mapping[str, Any], settings: Settings) -> None:
     check_labelling_limits(document, settings, "model")
     goal = document.get("goal")
     if isinstance(goal, str) and _too_long(settings, goal):
-        raise LimitExceededError(
-            "label_too_long",
-            f"The goal is {len(goal)} characters long; the limit is {settings.max_label_length}.",
-            details={"limit": settings.max_label_length, "actual": len(goal), "field": "goal"},
-        )
+        what_is = f"The goal is {len(goal)} characters long"
+        raise _over_limit("label_too_long", what_is, settings.max_label_length, len(goal), field="goal")
     rules = document.get("rules")
     if isinstance(rules, str):
         rules = [line for line in rules.splitlines() if line.strip()]
     if not isinstance(rules, list):
         return
     if len(rules) > settings.max_rules:
-        raise LimitExceededError(
-            "too_many_rules",
-            f"The model has {len(rules)} rules; the limit is {settings.max_rules}.",
-            details={"limit": settings.max_rules, "actual": len(rules), "field": "rules"},
-        )
+        count = len(rules)
+        raise _over_limit("too_many_rules", f"The model has {count} rules", settings.max_rules, count, field="rules")
     longest = RULE_LENGTH_FACTOR * settings.max_label_length
     for index, rule in enumerate(rules, start=1):
         if isinstance(rule, str) and len(rule) > longest:
-            raise LimitExceededError(
-                "label_too_long",
-                f"Rule {index} is {len(rule)} characters long; the limit is {longest}.",
-                details={"limit": longest, "actual": len(rule), "rule": index},
-            )
+            what_is = f"Rule {index} is {len(rule)} characters long"
+            raise _over_limit("label_too_long", what_is, longest, len(rule), rule=index)
 
 
 @dataclass
@@ -255,22 +207,17 @@ def read_model(document: dict[str, Any], services: Services, client: ClientIds) 
     storable = clean_json(document, "the model")  # refuses NaN and deep nesting
     check_model_limits(document, services.settings)
     model, report = _read(document, services.catalog)
-    is_valid = model is not None and report.is_valid
+    valid_model = model if model is not None and report.is_valid else None
     record = new_model_record(
         storable,
         model.object_id if model is not None else "",
-        is_valid,
+        valid_model is not None,
         clean_json(report.as_dict()),
-        model_hash_or_none(model) if is_valid else None,
+        model_hash(valid_model) if valid_model is not None else None,
         client,
         cleaned=True,
     )
     return ModelSubmission(model, report, record, is_new=True)
-
-
-def model_hash_or_none(model: CausalModel | None) -> str | None:
-    """Return the stored hash of a model's canonical form (None without a model)."""
-    return text_hash(model_text(model)) if model is not None else None
 
 
 def stored_model(record: ModelRecord, catalog: Catalog) -> ModelSubmission:

@@ -91,25 +91,29 @@ class ResearchDisabledError(ServiceError):
     status_code = 403
 
 
-class QueueFullError(ServiceError):
-    """Every planner worker is busy and the queue is full; ``Retry-After`` says when to try again."""
+class TryLaterError(ServiceError):
+    """Too much at once (429); ``retry_after``, in the details and as ``Retry-After``, says when to try again.
 
-    code = "queue_full"
-    status_code = 429
+    Only its children, each with its own code, are raised.
+    """
 
-    def __init__(self, message: str, retry_after: int) -> None:
-        super().__init__(message, details={"retry_after": retry_after}, headers={"Retry-After": str(retry_after)})
-
-
-class TooManyAttemptsError(ServiceError):
-    """Too many wrong research tokens came from this client address; ``Retry-After`` says when to try again."""
-
-    code = "too_many_attempts"
     status_code = 429
 
     def __init__(self, message: str, retry_after: int) -> None:
         super().__init__(message, details={"retry_after": retry_after}, headers={"Retry-After": str(retry_after)})
         self.retry_after = retry_after
+
+
+class QueueFullError(TryLaterError):
+    """Every planner worker is busy and the queue is full."""
+
+    code = "queue_full"
+
+
+class TooManyAttemptsError(TryLaterError):
+    """Too many wrong research tokens came from this client address."""
+
+    code = "too_many_attempts"
 
 
 class JobNotFoundError(NotFoundError):
@@ -125,14 +129,10 @@ class JobFinishedError(ServiceError):
     status_code = 409
 
 
-class TooManyJobsError(ServiceError):
-    """The service holds as many unfinished jobs as it takes; ``Retry-After`` says when to try again."""
+class TooManyJobsError(TryLaterError):
+    """The service holds as many unfinished jobs as it takes."""
 
     code = "too_many_jobs"
-    status_code = 429
-
-    def __init__(self, message: str, retry_after: int) -> None:
-        super().__init__(message, details={"retry_after": retry_after}, headers={"Retry-After": str(retry_after)})
 
 
 class PlanningTimeoutError(ServiceError):

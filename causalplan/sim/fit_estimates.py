@@ -15,6 +15,10 @@ it) and how tilted. It succeeds when both are within the fit's own tolerance
 less than a clip), else it fails ``misaligned``; a part more than the grasp tolerance off
 fails ``grasp_lost``, and when the robot cannot do the joint at all, every trial fails with
 the robot's code.
+
+Each fit's noises come from one seeded stream and are all drawn before any trial runs, so the
+trials can go in chunks (``estimate_fits(..., map_chunks=...)``, e.g. on a Dask cluster) with
+the numbers of the run in one process.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from __future__ import annotations
 import math
 import random
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from causalplan.objects.model import AssemblyObject, Fit
@@ -202,6 +206,92 @@ def _trial(insertion: _Insertion, parts: dict[str, Solid], noise: Pose) -> str |
     return None if across <= tolerance_mm and tilt <= tolerance_deg else Failure.MISALIGNED.value
 
 
+def draw_noises(obj: AssemblyObject, fit: Fit, trials: int, seed: int, noise_mm: float, noise_deg: float) -> list[Pose]:
+    """Return the grasp errors of the fit's ``trials`` insertions, in order, from its own seeded stream.
+
+    Every noise is drawn before any trial runs, so cutting the trials into chunks (on a
+    cluster) cannot change which insertion gets which noise.
+    """
+    chance = random.Random(f"{seed}:{obj.id}:{fit.id}")
+    return [_noise(chance, noise_mm, noise_deg) for _ in range(trials)]
+
+
+@dataclass(frozen=True)
+class InsertionChunk:
+    """Some of one fit's noisy insertions, as one task: the object, the fit, the grasp errors to try."""
+
+    obj: AssemblyObject
+    fit_id: str
+    noises: tuple[Pose, ...]
+
+
+@dataclass(frozen=True)
+class ChunkOutcome:
+    """How a chunk's insertions went: how many, how many engaged, how the others failed, and seconds spent."""
+
+    fit: str
+    trials: int
+    successes: int
+    failures: dict[str, int]
+    timing: dict[str, float]
+
+
+ChunkMapper = Callable[
+    [Callable[[InsertionChunk], ChunkOutcome], Sequence[InsertionChunk], Callable[[ChunkOutcome], None] | None],
+    list[ChunkOutcome],
+]
+"""Runs a top-level function on every chunk and returns the outcomes in the chunks' order, calling the
+third argument with each outcome as it comes (e.g. ``transfer.cluster.map_on_cluster`` on a chosen
+cluster; passed in, since ``sim`` knows nothing of the cluster)."""
+
+DEFAULT_CHUNK_INSERTIONS = 1000
+"""Insertions per cluster task. Each task makes the robot's nominal run again (it is deterministic,
+so every chunk sees the same one) before its trials, so a chunk holds many trials to make that
+repeated run a small share of the task."""
+
+
+def _insert(obj: AssemblyObject, fit: Fit, noises: Sequence[Pose]) -> ChunkOutcome:
+    """Return the outcome of one noisy insertion of ``fit`` per noise, after the robot's nominal run."""
+    parts = solids(obj)
+    scene_parts = {part: parts[part] for part in obj.part_ids}
+    with Scene(scene_parts, drawn=False) as scene:
+        started = time.perf_counter()
+        insertion = _nominal_run(obj, fit, parts, scene)
+        timing = {"robot": time.perf_counter() - started}
+        if insertion.failure is not None:
+            return ChunkOutcome(fit.id, len(noises), 0, {insertion.failure: len(noises)}, {**timing, "trials": 0.0})
+        started = time.perf_counter()
+        failures: dict[str, int] = {}
+        successes = 0
+        for noise in noises:
+            failed = _trial(insertion, parts, noise)
+            if failed is None:
+                successes += 1
+            else:
+                failures[failed] = failures.get(failed, 0) + 1
+        timing["trials"] = time.perf_counter() - started
+    return ChunkOutcome(fit.id, len(noises), successes, failures, timing)
+
+
+def insert_chunk(chunk: InsertionChunk) -> ChunkOutcome:
+    """Return the outcome of a chunk's insertions (the task a cluster worker runs)."""
+    return _insert(chunk.obj, chunk.obj.fit(chunk.fit_id), chunk.noises)
+
+
+def _estimate(fit_id: str, outcomes: Sequence[ChunkOutcome]) -> FitEstimate:
+    """Return the fit's estimate from its chunks' outcomes (sums: the chunks' order does not matter)."""
+    trials = sum(outcome.trials for outcome in outcomes)
+    successes = sum(outcome.successes for outcome in outcomes)
+    failures: dict[str, int] = {}
+    timing: dict[str, float] = {}
+    for outcome in outcomes:
+        for code, count in outcome.failures.items():
+            failures[code] = failures.get(code, 0) + count
+        for what, seconds in outcome.timing.items():
+            timing[what] = timing.get(what, 0.0) + seconds
+    return FitEstimate(fit_id, trials, successes, wilson_interval(successes, trials), failures, timing)
+
+
 def estimate_fit(
     obj: AssemblyObject,
     fit: Fit,
@@ -211,27 +301,7 @@ def estimate_fit(
     noise_deg: float = DEFAULT_NOISE_DEG,
 ) -> FitEstimate:
     """Return the fit's success rate over ``trials`` noisy insertions (the same seed, the same numbers)."""
-    parts = solids(obj)
-    scene_parts = {part: parts[part] for part in obj.part_ids}
-    with Scene(scene_parts, drawn=False) as scene:
-        started = time.perf_counter()
-        insertion = _nominal_run(obj, fit, parts, scene)
-        timing = {"robot": time.perf_counter() - started}
-        failures: dict[str, int] = {}
-        if insertion.failure is not None:
-            failures[insertion.failure] = trials
-            return FitEstimate(fit.id, trials, 0, wilson_interval(0, trials), failures, {**timing, "trials": 0.0})
-        started = time.perf_counter()
-        chance = random.Random(f"{seed}:{obj.id}:{fit.id}")
-        successes = 0
-        for _ in range(trials):
-            failed = _trial(insertion, parts, _noise(chance, noise_mm, noise_deg))
-            if failed is None:
-                successes += 1
-            else:
-                failures[failed] = failures.get(failed, 0) + 1
-        timing["trials"] = time.perf_counter() - started
-    return FitEstimate(fit.id, trials, successes, wilson_interval(successes, trials), failures, timing)
+    return _estimate(fit.id, [_insert(obj, fit, draw_noises(obj, fit, trials, seed, noise_mm, noise_deg))])
 
 
 def estimate_fits(
@@ -241,7 +311,39 @@ def estimate_fits(
     noise_mm: float = DEFAULT_NOISE_MM,
     noise_deg: float = DEFAULT_NOISE_DEG,
     fit_ids: Sequence[str] = (),
+    *,
+    map_chunks: ChunkMapper | None = None,
+    chunk_size: int = DEFAULT_CHUNK_INSERTIONS,
+    progress: Callable[[int], None] | None = None,
 ) -> list[FitEstimate]:
-    """Return the estimate of every fit of ``obj`` (or of ``fit_ids``), in catalog order."""
+    """Return the estimate of every fit of ``obj`` (or of ``fit_ids``), in catalog order.
+
+    Without ``map_chunks`` the fits are measured here, one after another. With it, every fit's
+    insertions are cut into chunks of ``chunk_size`` and ``map_chunks`` runs them (e.g. on a
+    Dask cluster, all fits at once); the numbers are those of the run here, for the same seed.
+    ``progress`` is called with how many insertions were just done (per fit here, per chunk there).
+    """
     chosen = [fit for fit in obj.fits if not fit_ids or fit.id in fit_ids]
-    return [estimate_fit(obj, fit, trials, seed, noise_mm, noise_deg) for fit in chosen]
+    if map_chunks is None:
+        estimates = []
+        for fit in chosen:
+            estimates.append(estimate_fit(obj, fit, trials, seed, noise_mm, noise_deg))
+            if progress is not None:
+                progress(trials)
+        return estimates
+    if chunk_size < 1:
+        raise ValueError(f"The chunk size must be at least 1; got {chunk_size}.")
+    tasks = []
+    for fit in chosen:
+        noises = draw_noises(obj, fit, trials, seed, noise_mm, noise_deg)
+        tasks += [
+            InsertionChunk(obj, fit.id, tuple(noises[start : start + chunk_size]))
+            for start in range(0, trials, chunk_size)
+        ]
+
+    def done(outcome: ChunkOutcome) -> None:
+        if progress is not None:
+            progress(outcome.trials)
+
+    outcomes = map_chunks(insert_chunk, tasks, done)
+    return [_estimate(fit.id, [outcome for outcome in outcomes if outcome.fit == fit.id]) for fit in chosen]

@@ -282,20 +282,8 @@ class Robot:
         what: str,
         allowed: frozenset[str] = frozenset(),
         with_held: bool = True,
-    ) -> RobotFailure | None:
-        """Follow gripper poses one after the other by IK (a straight line), checking every one."""
-        return self._line_part(kind, gripper, targets, what, allowed, with_held)[0]
-
-    def _line_part(
-        self,
-        kind: str,
-        gripper: Gripper,
-        targets: Sequence[Pose],
-        what: str,
-        allowed: frozenset[str] = frozenset(),
-        with_held: bool = True,
     ) -> tuple[RobotFailure | None, int]:
-        """Follow gripper poses by IK; return the failure, if any, and how many poses were reached.
+        """Follow gripper poses one by one by IK (a straight line); return the failure, if any, and the poses reached.
 
         ``with_held``: whether the held part's touches count too (not along the connector axis,
         where the simulator's own path check judges the part).
@@ -331,7 +319,7 @@ class Robot:
         try:
             failure = self._go("transit", "open", backed, f"above the {name}")
             if failure is None:
-                failure = self._line("transit", "open", line_poses(backed, grasp), f"at the {name}'s grasp")
+                failure, _ = self._line("transit", "open", line_poses(backed, grasp), f"at the {name}'s grasp")
         finally:
             self.ignored = set()
         if failure is not None:
@@ -359,7 +347,7 @@ class Robot:
         held = self.held
         here = self.panda.gripper_pose()
         lifted = here.translated((0.0, 0.0, LIFT))
-        failure = self._line("carry", "closed", line_poses(here, lifted), "lifting the part")
+        failure, _ = self._line("carry", "closed", line_poses(here, lifted), "lifting the part")
         if failure is None:
             targets = [pose * held.grasp for pose in then]
             allowed = frozenset({mate}) if mate else frozenset()
@@ -373,7 +361,7 @@ class Robot:
         """
         assert self.held is not None
         targets = [pose * self.held.grasp for pose in part_poses]
-        return self._line(kind, "closed", targets, what, frozenset({mate}), with_held=False)
+        return self._line(kind, "closed", targets, what, frozenset({mate}), with_held=False)[0]
 
     def screw(self, part_poses: Sequence[Pose], what: str, mate: str) -> RobotFailure | None:
         """Turn the held part down its thread, regrasping (a half turn back) whenever joint 7 runs out."""
@@ -381,7 +369,7 @@ class Robot:
         while index < len(part_poses):
             assert self.held is not None
             targets = [pose * self.held.grasp for pose in part_poses[index:]]
-            failure, done = self._line_part("screw", "closed", targets, what, frozenset({mate}), with_held=False)
+            failure, done = self._line("screw", "closed", targets, what, frozenset({mate}), with_held=False)
             index += done
             if failure is None:
                 return None
@@ -433,7 +421,7 @@ class Robot:
         self.ignored = {held.part}
         try:
             allowed = frozenset({mate}) if mate else frozenset()
-            return self._line("retreat", "open", line_poses(here, backed), "backing away", allowed)
+            return self._line("retreat", "open", line_poses(here, backed), "backing away", allowed)[0]
         finally:
             self.ignored = set()
 

@@ -85,16 +85,10 @@ def robot_transfer_verdict(
     loaded_mapping: LoadedMapping,
     catalog: Catalog,
     planner: str = "auto",
-    time_limit: float | None = None,
+    time_limit: float = DEFAULT_TIME_LIMIT,
 ) -> TransferVerdict:
-    """Return ``transfer_verdict`` with the robot as the last judge (``decided_by`` "robot" when it fails).
-
-    ``time_limit`` None is the planner's own default.
-    """
-    verdict = transfer_verdict(
-        loaded_model, loaded_mapping, catalog, planner, DEFAULT_TIME_LIMIT if time_limit is None else time_limit
-    )
-    return robot_judged(verdict, catalog)
+    """Return ``transfer_verdict`` with the robot as the last judge (``decided_by`` "robot" when it fails)."""
+    return robot_judged(transfer_verdict(loaded_model, loaded_mapping, catalog, planner, time_limit), catalog)
 
 
 def robot_judged(verdict: TransferVerdict, catalog: Catalog) -> TransferVerdict:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 CONFIDENCE = 0.95
 
@@ -117,12 +117,7 @@ class Effect:
     p_value: float
 
     def as_dict(self) -> dict[str, object]:
-        return {
-            "name": self.name,
-            "odds_ratio": self.odds_ratio,
-            "interval": list(self.interval),
-            "p_value": self.p_value,
-        }
+        return {**asdict(self), "interval": list(self.interval)}
 
 
 @dataclass(frozen=True)

@@ -250,3 +250,48 @@ def _judge_on_cluster(
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+Item = TypeVar("Item")
+Outcome = TypeVar("Outcome")
+
+
+def map_on_cluster(
+    function: Callable[[Item], Outcome],
+    items: Sequence[Item],
+    *,
+    address: str | None = None,
+    workers: int | None = None,
+    on_result: Callable[[Outcome], None] | None = None,
+) -> list[Outcome]:
+    """Return ``function(item)`` for every item, in the items' order, each item one task on a Dask cluster.
+
+    The cluster is the one at ``address``, or a new local one of ``workers`` processes (as
+    ``connect`` makes). ``function`` should be a top-level function (or a ``functools.partial``
+    of one), so that it travels to the workers by name; each item is usually a chunk of work
+    worth far more than Dask's overhead of about a millisecond a task. ``on_result`` is called
+    with each result as soon as its task is done (in the order the tasks finish), so a caller
+    can show progress. A task that raises is a ``ClusterError`` naming which one; a worker that
+    dies has its task run again elsewhere (Dask's ``allowed-failures``).
+    """
+    from distributed import as_completed
+
+    if not items:
+        return []
+    client, cluster = connect(address, workers)
+    try:
+        futures = {client.submit(function, item, pure=False): index for index, item in enumerate(items)}
+        done: dict[int, Outcome] = {}
+        for future in as_completed(futures):
+            index = futures[future]
+            try:
+                done[index] = future.result()
+            except Exception as exc:  # Dask re-raises whatever the task raised, or KilledWorker
+                raise ClusterError(f"Task {index + 1} of {len(items)} failed on the cluster: {exc!r}.") from exc
+            if on_result is not None:
+                on_result(done[index])
+        return [done[index] for index in range(len(items))]
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

@@ -136,25 +136,15 @@ def _mapping_reasons(model: CausalModel, mapping: Labelling, test: AssemblyObjec
     for key, label in needed_functions(model).items():
         if key in carriers:
             continue
-        if reachable:
-            reasons.append(
-                Reason(
-                    "missing_function",
-                    Severity.WARNING,
-                    f"No part of the {test.name} carries '{label}'; the model can still produce "
-                    f"{model.goal} through another rule.",
-                    (label,),
-                )
-            )
-        else:
-            reasons.append(
-                Reason(
-                    "missing_function",
-                    Severity.ERROR,
-                    f"No part of the {test.name} carries '{label}', which the model needs for {model.goal}.",
-                    (label,),
-                )
-            )
+        # A missing function is fatal only when no other rule can still produce the goal.
+        severity = Severity.WARNING if reachable else Severity.ERROR
+        consequence = (
+            f"; the model can still produce {model.goal} through another rule."
+            if reachable
+            else f", which the model needs for {model.goal}."
+        )
+        message = f"No part of the {test.name} carries '{label}'{consequence}"
+        reasons.append(Reason("missing_function", severity, message, (label,)))
     used = model.used_labels()
     mapped_labels = mapping.labels()
     for key, parts in carriers.items():
@@ -253,35 +243,26 @@ def evaluate_transfer(
         return TransferVerdict(
             Verdict.FAILS, training.id, test.id, kind, "simulator", tuple(reasons), result, simulation=simulation
         )
+    verdict = Verdict.FAILS
     if result.status is PlanStatus.SOLVED:
-        unmet = "; ".join(result.unmet_requirements)
-        reasons.append(
-            Reason(
-                "violates_true_mechanism",
-                Severity.ERROR,
-                f"The plan satisfies the model, but the real {test.name} would not produce {test.goal}; "
-                f"it also needs: {unmet}.",
-                result.unmet_requirements,
-            )
-        )
-        return TransferVerdict(Verdict.FAILS, training.id, test.id, kind, "planner", tuple(reasons), result)
-    if result.status is PlanStatus.UNSOLVABLE:
-        reasons.append(
-            Reason(
-                "no_assembly_sequence",
-                Severity.ERROR,
-                f"Every function the model needs is carried by some part, but no order of connecting "
-                f"the {test.name}'s parts brings them together.",
-                (),
-            )
-        )
-        return TransferVerdict(Verdict.FAILS, training.id, test.id, kind, "planner", tuple(reasons), result)
-    reasons.append(
-        Reason(
-            "planner_error",
+        reason = Reason(
+            "violates_true_mechanism",
             Severity.ERROR,
-            f"The planner could not decide ({result.status.value}): {result.message}",
-            (),
+            f"The plan satisfies the model, but the real {test.name} would not produce {test.goal}; "
+            f"it also needs: {'; '.join(result.unmet_requirements)}.",
+            result.unmet_requirements,
         )
-    )
-    return TransferVerdict(Verdict.UNDECIDED, training.id, test.id, kind, "planner", tuple(reasons), result)
+    elif result.status is PlanStatus.UNSOLVABLE:
+        reason = Reason(
+            "no_assembly_sequence",
+            Severity.ERROR,
+            f"Every function the model needs is carried by some part, but no order of connecting "
+            f"the {test.name}'s parts brings them together.",
+        )
+    else:
+        verdict = Verdict.UNDECIDED
+        reason = Reason(
+            "planner_error", Severity.ERROR, f"The planner could not decide ({result.status.value}): {result.message}"
+        )
+    reasons.append(reason)
+    return TransferVerdict(verdict, training.id, test.id, kind, "planner", tuple(reasons), result)

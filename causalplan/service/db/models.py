@@ -18,6 +18,7 @@ from sqlalchemy import (
     ForeignKey,
     Index,
     Integer,
+    LargeBinary,
     MetaData,
     String,
     UniqueConstraint,
@@ -283,3 +284,7 @@ class JobRecord(Base):
     total: Mapped[int] = mapped_column(Integer, default=0)
     result: Mapped[dict[str, Any] | None] = mapped_column(JSON)
     error: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    file_type: Mapped[str | None] = mapped_column(String(64))
+    """The media type of the file the job made (the robot's film), when it made one."""
+    file_data: Mapped[bytes | None] = mapped_column(LargeBinary, deferred=True)
+    """The file's bytes: read only when the file is asked for, never with the job."""

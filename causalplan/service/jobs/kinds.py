@@ -3,7 +3,8 @@
 A kind is a ``JobKind`` with two functions: ``prepare`` (at POST time, on the request's
 thread: refuse what is wrong with a clear error before anything is queued, and return the
 request to store) and ``run`` (in a runner thread of whichever replica took the job). Adding a
-kind (the robot's video, say) is one enum member and one entry in ``KINDS``.
+kind is one enum member and one entry in ``KINDS``; the longer kinds live in modules of their
+own (``video``, ``fit_estimation``).
 """
 
 from __future__ import annotations
@@ -12,21 +13,19 @@ import csv
 import io
 import json
 import tempfile
-import time
-from collections.abc import Callable
-from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
-from causalplan.service.errors import InvalidRequestError, LimitExceededError, QueueFullError
+from causalplan.service.errors import InvalidRequestError, LimitExceededError
+from causalplan.service.jobs.fit_estimation import prepare_fit_estimation, run_fit_estimation_job
+from causalplan.service.jobs.video import prepare_video, run_video_job
+from causalplan.service.jobs.work import Kind, Progress, in_pool
 from causalplan.service.pool import jobs as worker_jobs
 from causalplan.transfer.batch import Trial, TrialResult, read_trials, run_batch
 
 if TYPE_CHECKING:
     from causalplan.service.deps import Services
-
-T = TypeVar("T")
 
 CHUNK_SIZE = 20
 """Trials a planner worker judges per call: small enough for steady progress and a prompt cancel."""
@@ -44,32 +43,10 @@ class JobKind(StrEnum):
     """A plan run in the physics simulator, with the picture of the final assembly."""
     CONSENSUS = "consensus"
     """The crowd's consensus model of participants uploaded as JSON Lines, judged."""
-
-
-class JobCancelledError(Exception):
-    """The job was cancelled (or its lease lost) while it ran: stop, store nothing."""
-
-
-Progress = Callable[[int, int], None]
-"""Called by a job's work with (done, total); raises JobCancelledError when the job is no longer ours."""
-
-
-@dataclass(frozen=True)
-class Kind:
-    prepare: Callable[[dict[str, Any], Services], dict[str, Any]]
-    run: Callable[[dict[str, Any], Services, Progress], dict[str, Any]]
-
-
-def in_pool(services: Services, function: Callable[..., T], args: tuple[Any, ...], timeout: float) -> T:
-    """Return ``function(*args)`` run in a planner worker, waiting while interactive requests fill the queue.
-
-    A job is not in a hurry: a full queue (QueueFullError) means wait and try again, not fail.
-    """
-    while True:
-        try:
-            return services.pool.run(function, args, timeout)
-        except QueueFullError as exc:
-            time.sleep(float(exc.details.get("retry_after", 1)))  # type: ignore[arg-type]
+    VIDEO = "video"
+    """The robot carrying out a plan, filmed; the film is served from the job (``service.jobs.video``)."""
+    FIT_ESTIMATION = "fit_estimation"
+    """Each fit's success probability by noisy robot insertions, as ``causalplan estimate-fits``."""
 
 
 # -- batch --------------------------------------------------------------------------------------
@@ -197,6 +174,12 @@ def prepare_simulation(request: dict[str, Any], services: Services) -> dict[str,
     from causalplan.service.schemas.plans import SimulationIn
 
     body = SimulationIn.model_validate({key: value for key, value in request.items() if key != "kind"})
+    if body.video is not None:
+        raise InvalidRequestError(
+            'A simulation job makes no film: post the same request with "kind": "video" (the film is '
+            "then served from the job, by any replica).",
+            details={"field": "video"},
+        )
     inputs = plan_inputs(body, services, ClientIds())
     inputs.store(services)
     return {
@@ -205,6 +188,7 @@ def prepare_simulation(request: dict[str, Any], services: Services) -> dict[str,
         "planner": inputs.planner,
         "time_limit": inputs.time_limit,
         "picture": body.picture,
+        "robot": body.robot,
     }
 
 
@@ -223,8 +207,12 @@ def run_simulation_job(request: dict[str, Any], services: Services, progress: Pr
         inputs.time_limit,
         tuple(services.settings.catalog_folders),
         body.picture,
+        body.robot,
     )
-    data = in_pool(services, worker_jobs.simulate_job, args, inputs.time_limit + services.settings.solve_grace_seconds)
+    timeout = inputs.time_limit + services.settings.solve_grace_seconds
+    if body.robot:
+        timeout += services.settings.robot_seconds
+    data = in_pool(services, worker_jobs.simulate_job, args, timeout)
     progress(1, 1)
     return {**data, "model_id": request["model_id"]}
 
@@ -294,4 +282,6 @@ KINDS: dict[JobKind, Kind] = {
     JobKind.BATCH: Kind(prepare_batch, run_batch_job),
     JobKind.SIMULATION: Kind(prepare_simulation, run_simulation_job),
     JobKind.CONSENSUS: Kind(prepare_consensus, run_consensus_job),
+    JobKind.VIDEO: Kind(prepare_video, run_video_job),
+    JobKind.FIT_ESTIMATION: Kind(prepare_fit_estimation, run_fit_estimation_job),
 }

@@ -21,7 +21,8 @@ from causalplan.errors import CausalPlanError
 from causalplan.service.db.models import JobRecord
 from causalplan.service.errors import InternalError
 from causalplan.service.jobs import store
-from causalplan.service.jobs.kinds import KINDS, JobCancelledError, JobKind, Progress
+from causalplan.service.jobs.kinds import KINDS, JobKind
+from causalplan.service.jobs.work import JobCancelledError, Outcome, Progress
 
 if TYPE_CHECKING:
     from causalplan.service.deps import Services
@@ -51,6 +52,15 @@ class JobRunner:
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
         self._last_sweep = 0.0
+        self._lock = threading.Lock()
+        self._busy = 0
+
+    def stats(self) -> dict[str, int]:
+        """Return this replica's runner threads: how many, how many alive, how many doing a job now."""
+        with self._lock:
+            busy = self._busy
+        alive = sum(thread.is_alive() for thread in self._threads)
+        return {"threads": len(self._threads), "alive": alive, "busy": busy}
 
     def start(self) -> None:
         """Start the runner threads (none when ``job_runners`` is 0)."""
@@ -88,10 +98,15 @@ class JobRunner:
             if job is None:
                 self._stop.wait(settings.job_poll_seconds)
                 continue
+            with self._lock:
+                self._busy += 1
             try:
                 self._run(job)
             except CausalPlanError as exc:  # the result could not be stored: the lease lapses, the job is redone
                 logger.warning("job %s could not be stored: %s", job.id, exc.message)
+            finally:
+                with self._lock:
+                    self._busy -= 1
 
     def _sweep(self) -> None:
         if time.monotonic() - self._last_sweep >= SWEEP_SECONDS:
@@ -125,8 +140,10 @@ class JobRunner:
         beating = threading.Thread(target=heartbeat, name=f"causalplan-lease-{job.id}", daemon=True)
         beating.start()
         try:
-            result = self._work(job, progress)
-            store.finish_job(engine, job.id, self.owner, keep, result=result)
+            outcome = self._work(job, progress)
+            made = outcome.file
+            file = (made.data, made.content_type) if made is not None else None
+            store.finish_job(engine, job.id, self.owner, keep, result=outcome.result, file=file)
         except JobCancelledError:
             if self._stop.is_set() and not lost.is_set():
                 store.release_job(engine, job.id, self.owner)
@@ -139,11 +156,12 @@ class JobRunner:
             finished.set()
             beating.join()
 
-    def _work(self, job: JobRecord, progress: Progress) -> dict[str, Any]:
-        """Return the job's result; raise the CausalPlanError that failed it (a bug becomes internal_error)."""
+    def _work(self, job: JobRecord, progress: Progress) -> Outcome:
+        """Return the job's result and file; raise the CausalPlanError that failed it (a bug: internal_error)."""
         kind = KINDS[JobKind(job.kind)]  # claim_job takes only the kinds of KINDS
         try:
-            return kind.run(job.request, self.services, progress)
+            done = kind.run(job.request, self.services, progress)
+            return done if isinstance(done, Outcome) else Outcome(done)
         except (CausalPlanError, JobCancelledError):
             raise
         except Exception as exc:

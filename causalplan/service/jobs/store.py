@@ -23,6 +23,8 @@ from causalplan.service.errors import JobFinishedError, JobNotFoundError, TooMan
 
 MAX_ATTEMPTS = 3
 """Runs of a job whose replica stopped before finishing it, before it is given up as failed."""
+FIRST_KINDS = ("video",)
+"""Kinds a runner takes before older jobs of other kinds: a person is usually watching the page for a film."""
 
 
 class JobStatus(StrEnum):
@@ -68,12 +70,55 @@ def get_job(engine: Engine, job_id: uuid.UUID, now: datetime | None = None) -> J
     now = now or utc_now()
     with Session(engine, expire_on_commit=False) as session, storage_errors(session):
         record = session.get(JobRecord, job_id)
-    if record is None or (record.expires_at is not None and _aware(record.expires_at) <= now):
+    if record is None or (record.expires_at is not None and aware(record.expires_at) <= now):
         raise JobNotFoundError(
             f"There is no job {job_id}: it never existed, or it finished and its result has expired.",
             details={"job_id": str(job_id)},
         )
     return record
+
+
+def find_job(engine: Engine, kind: str, field: str, value: str) -> JobRecord | None:
+    """Return the newest job of ``kind`` whose request has ``field`` == ``value`` and that is unfinished or
+    succeeded and not expired; None when there is none (a failed or cancelled one is not reused)."""
+    now = utc_now()
+    with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        return session.scalars(
+            select(JobRecord)
+            .where(
+                JobRecord.kind == kind,
+                JobRecord.request[field].as_string() == value,
+                JobRecord.status.in_((*UNFINISHED, JobStatus.SUCCEEDED)),
+                or_(JobRecord.expires_at.is_(None), JobRecord.expires_at > now),
+            )
+            .order_by(JobRecord.created_at.desc())
+            .limit(1)
+        ).first()
+
+
+def get_job_file(engine: Engine, job_id: uuid.UUID) -> tuple[bytes, str] | None:
+    """Return the file the job made (bytes, media type); None when it made none (yet).
+
+    JobNotFoundError when there is no such job, or it has expired.
+    """
+    get_job(engine, job_id)
+    with Session(engine) as session, storage_errors(session):
+        row = session.execute(
+            select(JobRecord.file_data, JobRecord.file_type).where(JobRecord.id == job_id)
+        ).one_or_none()
+    if row is None or row.file_data is None or row.file_type is None:
+        return None
+    return bytes(row.file_data), str(row.file_type)
+
+
+def count_unfinished(engine: Engine) -> dict[str, int]:
+    """Return how many jobs are queued and how many running, across all replicas."""
+    with Session(engine) as session, storage_errors(session):
+        rows = session.execute(
+            select(JobRecord.status, func.count()).where(JobRecord.status.in_(UNFINISHED)).group_by(JobRecord.status)
+        ).all()
+    counts = {str(status): int(count) for status, count in rows}
+    return {status.value: counts.get(status.value, 0) for status in UNFINISHED}
 
 
 def cancel_job(engine: Engine, job_id: uuid.UUID, keep_seconds: float) -> JobRecord:
@@ -105,8 +150,8 @@ def cancel_job(engine: Engine, job_id: uuid.UUID, keep_seconds: float) -> JobRec
     return record
 
 
-def _aware(value: datetime) -> datetime:
-    # SQLite hands timestamps back without their zone; they were written in UTC.
+def aware(value: datetime) -> datetime:
+    """Return a stored timestamp with its zone (SQLite hands them back without; they were written in UTC)."""
     return value.replace(tzinfo=UTC) if value.tzinfo is None else value
 
 
@@ -114,6 +159,8 @@ def claim_job(
     engine: Engine, owner: str, lease_seconds: float, kinds: Sequence[str], keep_seconds: float = 86_400.0
 ) -> JobRecord | None:
     """Take the oldest queued job of ``kinds``, or a running one whose lease has lapsed; None when there is none.
+
+    Jobs of ``FIRST_KINDS`` (films) come before older jobs of other kinds.
 
     Only ``kinds`` (what this replica can do): during an upgrade, an older replica leaves a new
     kind to the newer ones. A job taken over for the ``MAX_ATTEMPTS``-th time is marked failed
@@ -129,7 +176,10 @@ def claim_job(
     )
     with Session(engine, expire_on_commit=False) as session, storage_errors(session):
         for job_id, attempts in session.execute(
-            select(JobRecord.id, JobRecord.attempts).where(claimable).order_by(JobRecord.created_at).limit(10)
+            select(JobRecord.id, JobRecord.attempts)
+            .where(claimable)
+            .order_by(JobRecord.kind.not_in(FIRST_KINDS), JobRecord.created_at)
+            .limit(10)
         ).all():
             if attempts >= MAX_ATTEMPTS:
                 session.execute(
@@ -190,8 +240,12 @@ def finish_job(
     keep_seconds: float,
     result: dict[str, Any] | None = None,
     error: dict[str, Any] | None = None,
+    file: tuple[bytes, str] | None = None,
 ) -> bool:
-    """Store ``owner``'s result (or error) and end the job; False when the job was no longer ``owner``'s."""
+    """Store ``owner``'s result (or error) and end the job; False when the job was no longer ``owner``'s.
+
+    ``file``: (bytes, media type) of a file the job made, kept with the job and expiring with it.
+    """
     now = utc_now()
     values: dict[str, Any] = {
         "status": JobStatus.FAILED if error is not None else JobStatus.SUCCEEDED,
@@ -204,6 +258,8 @@ def finish_job(
     }
     if error is None:
         values["done"] = JobRecord.total
+    if file is not None and error is None:
+        values["file_data"], values["file_type"] = file
     with Session(engine) as session, storage_errors(session):
         changed = session.execute(update(JobRecord).where(_mine(job_id, owner)).values(**values))
         session.commit()

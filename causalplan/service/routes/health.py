@@ -1,4 +1,4 @@
-"""GET /health: the planners, the database, free space, the pool, the cache and the limits."""
+"""GET /health: the planners, the database, free space, the pool, the jobs, the cache and the limits."""
 
 from __future__ import annotations
 
@@ -13,11 +13,20 @@ from sqlalchemy import text
 from sqlalchemy.exc import SQLAlchemyError
 
 import causalplan
+from causalplan.errors import CausalPlanError
 from causalplan.service.answers import default_planner
 from causalplan.service.db.migrate import current_revision
 from causalplan.service.db.session import sqlite_path
 from causalplan.service.deps import Services, ServicesDep
-from causalplan.service.schemas.health import DatabaseHealthOut, FastDownwardHealthOut, HealthOut, StorageHealthOut
+from causalplan.service.jobs import store as job_store
+from causalplan.service.jobs.kinds import KINDS
+from causalplan.service.schemas.health import (
+    DatabaseHealthOut,
+    FastDownwardHealthOut,
+    HealthOut,
+    JobsHealthOut,
+    StorageHealthOut,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -83,10 +92,31 @@ def storage_health(services: Services) -> StorageHealthOut:
     return StorageHealthOut(free_mb=free_mb, min_free_mb=settings.min_free_disk_mb, problem=problem)
 
 
+def jobs_health(services: Services) -> JobsHealthOut:
+    """Return the jobs queued and running across replicas, and this replica's runners."""
+    runner = services.runner.stats() if services.runner is not None else {"threads": 0, "busy": 0}
+    counts: dict[str, int | None] = {"queued": None, "running": None}
+    problem = None
+    try:
+        counts.update(job_store.count_unfinished(services.engine))
+    except (CausalPlanError, SQLAlchemyError):
+        problem = "the jobs could not be counted: the database did not answer"
+    return JobsHealthOut(
+        queued=counts["queued"],
+        running=counts["running"],
+        runners=runner["threads"],
+        runners_busy=runner["busy"],
+        kinds=[kind.value for kind in KINDS],
+        cluster=services.settings.dask_scheduler is not None,
+        problem=problem,
+    )
+
+
 @router.get("/health", response_model=HealthOut, summary="Is the service able to plan and store?")
 def health(services: ServicesDep) -> HealthOut:
     """Report the planner registry, Fast Downward, optional backends that failed to import, the
-    database, free space, the worker pool, the cache and the request limits.
+    database, free space, the worker pool, the jobs (queued and running across replicas, this
+    replica's runners), the cache and the request limits.
 
     `status` is 'ok' when Fast Downward can run, the database answers and takes writes at the
     right schema, and there is enough free space; else 'degraded' (the answer is still 200:
@@ -110,6 +140,7 @@ def health(services: ServicesDep) -> HealthOut:
         database=database,
         storage=storage,
         pool=services.pool.stats().as_dict(),
+        jobs=jobs_health(services),
         cache=services.cache.stats(),
         limits={
             "max_body_bytes": settings.max_body_bytes,
@@ -120,5 +151,7 @@ def health(services: ServicesDep) -> HealthOut:
             "default_time_limit": settings.default_time_limit,
             "max_time_limit": settings.max_time_limit,
             "robot_seconds": settings.robot_seconds,
+            "max_job_trials": settings.max_job_trials,
+            "max_queued_jobs": settings.max_queued_jobs,
         },
     )

@@ -18,7 +18,6 @@ from causalplan.service.schemas.research import ExportOut, StoredModelOut, Trial
 router = APIRouter(prefix="/v1", tags=["research"], responses=RESEARCH_ERROR_RESPONSES)
 
 MAX_PAGE = 1000
-CSV_TABLES = ("trials", "models")
 
 
 @router.get("/trials", response_model=TrialsOut, summary="List transfer trials")

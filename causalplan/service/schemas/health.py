@@ -29,6 +29,18 @@ class StorageHealthOut(OutputModel):
     problem: str | None = None
 
 
+class JobsHealthOut(OutputModel):
+    queued: int | None = Field(description="Jobs waiting for a runner, across all replicas (null: database down).")
+    running: int | None = Field(description="Jobs some replica's runner is doing now (null: database down).")
+    runners: int = Field(description="This replica's runner threads (the setting job_runners; 0: it only answers).")
+    runners_busy: int = Field(description="This replica's runner threads doing a job now.")
+    kinds: list[str] = Field(description="The kinds of job this replica can do.")
+    cluster: bool = Field(
+        description="Whether batch and fit_estimation jobs run on a Dask cluster (else in this replica's pool)."
+    )
+    problem: str | None = None
+
+
 class PlannerHealthOut(OutputModel):
     name: str
     available: bool
@@ -51,5 +63,6 @@ class HealthOut(OutputModel):
     database: DatabaseHealthOut
     storage: StorageHealthOut
     pool: dict[str, int]
+    jobs: JobsHealthOut
     cache: dict[str, int]
     limits: dict[str, int | float]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import logging
 import threading
 from collections.abc import Iterator
-from itertools import combinations
+from itertools import combinations, islice
 
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import CausalModel, read_model
@@ -28,14 +28,9 @@ MAX_PART_SETS = 32
 
 
 def part_sets(obj: AssemblyObject) -> Iterator[tuple[str, ...]]:
-    """Yield the object's sets of two or more parts (one part needs no step), largest first, MAX_PART_SETS at most."""
-    count = 0
-    for size in range(len(obj.part_ids), 1, -1):
-        for parts in combinations(obj.part_ids, size):
-            if count == MAX_PART_SETS:
-                return
-            count += 1
-            yield parts
+    """Return the object's sets of two or more parts (one part needs no step), largest first, MAX_PART_SETS at most."""
+    largest_first = (parts for size in range(len(obj.part_ids), 1, -1) for parts in combinations(obj.part_ids, size))
+    return islice(largest_first, MAX_PART_SETS)
 
 
 def needing(obj: AssemblyObject, parts: tuple[str, ...]) -> CausalModel:

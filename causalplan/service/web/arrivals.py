@@ -55,12 +55,7 @@ def places(session: Session, experiment: ExperimentRecord) -> list[Place]:
         rows = {row.condition: row for row in session.scalars(query.execution_options(populate_existing=True))}
         missing = [condition.name for condition in design.conditions if condition.name not in rows]
         if missing:
-            counted = session.execute(
-                select(ParticipantRecord.condition, func.count())
-                .where(ParticipantRecord.experiment_id == experiment.id)
-                .group_by(ParticipantRecord.condition)
-            ).all()
-            counts = {str(name): int(number) for name, number in counted}
+            counts = store.participants_per_condition(session, experiment.id)
             # Links made before the public link count as taken places, so numbering goes on from them.
             made = [StudyPlaceRecord(experiment_id=experiment.id, condition=n, taken=counts.get(n, 0)) for n in missing]
             try:

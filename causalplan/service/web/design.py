@@ -7,7 +7,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 from causalplan.causal.labels import closest, display_label, has_control_characters, normalize_label
@@ -50,14 +50,7 @@ class Design:
         raise KeyError(name)
 
     def as_dict(self) -> dict[str, Any]:
-        return {
-            "conditions": [condition.as_dict() for condition in self.conditions],
-            "counterbalance_training": self.counterbalance_training,
-            "counterbalance_tests": self.counterbalance_tests,
-            "show_verdict": self.show_verdict,
-            "tutorial": self.tutorial,
-            "robot_verdict": self.robot_verdict,
-        }
+        return {**asdict(self), "conditions": [condition.as_dict() for condition in self.conditions]}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Design:

@@ -6,7 +6,7 @@ an HTML page (see ``templating.PageRoute``).
 
 from __future__ import annotations
 
-from causalplan.service.errors import InvalidRequestError, NotFoundError, ServiceError
+from causalplan.service.errors import InvalidRequestError, NotFoundError, ServiceError, TryLaterError
 
 
 class ParticipantNotFoundError(NotFoundError):
@@ -54,12 +54,7 @@ class CrossSiteRequestError(ServiceError):
     status_code = 403
 
 
-class TooManyDemoStartsError(ServiceError):
+class TooManyDemoStartsError(TryLaterError):
     """One client started more demo participants this minute than the service allows."""
 
     code = "too_many_demo_starts"
-    status_code = 429
-
-    def __init__(self, message: str, retry_after: int) -> None:
-        super().__init__(message, details={"retry_after": retry_after}, headers={"Retry-After": str(retry_after)})
-        self.retry_after = retry_after

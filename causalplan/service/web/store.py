@@ -100,6 +100,17 @@ def demo_experiment(session: Session, design: Design) -> ExperimentRecord:
     return create_experiment(session, DEMO_NAME, description, design, is_demo=True)
 
 
+def participants_per_condition(session: Session, experiment_id: uuid.UUID) -> Counter[str]:
+    """Return how many participants each condition of an experiment has (made links and arrivals)."""
+    with storage_errors(session):
+        rows = session.execute(
+            select(ParticipantRecord.condition, func.count())
+            .where(ParticipantRecord.experiment_id == experiment_id)
+            .group_by(ParticipantRecord.condition)
+        ).all()
+    return Counter({str(name): int(number) for name, number in rows})
+
+
 def add_participants(
     session: Session, experiment: ExperimentRecord, count: int, condition_name: str | None
 ) -> list[ParticipantRecord]:
@@ -120,15 +131,9 @@ def add_participants(
             f"The experiment has no condition '{condition_name}'; its conditions are: {names}.",
             details={"condition": condition_name},
         )
-    with storage_errors(session):
-        rows = session.execute(
-            select(ParticipantRecord.condition, func.count())
-            .where(ParticipantRecord.experiment_id == experiment.id)
-            .group_by(ParticipantRecord.condition)
-        ).all()
     # Two researchers making links at the same moment may number a participant twice: that only
     # repeats an order, which counterbalancing tolerates; it never loses a participant.
-    taken: Counter[str] = Counter({str(name): int(number) for name, number in rows})
+    taken = participants_per_condition(session, experiment.id)
     made: list[ParticipantRecord] = []
     for _ in range(count):
         condition = (

@@ -274,7 +274,6 @@ def _step3_page(
     journey: Journey,
     index: int,
     session: SessionDep,
-    catalog: CatalogDep,
     report: Report | None = None,
     status_code: int = 200,
 ) -> Response:
@@ -305,10 +304,10 @@ def _step3_page(
 
 
 @router.get("/step3/{number}")
-def step3(request: Request, journey: JourneyDep, number: Number, session: SessionDep, catalog: CatalogDep) -> Response:
+def step3(request: Request, journey: JourneyDep, number: Number, session: SessionDep) -> Response:
     if not journey.may_open(Stage.STEP3, number - 1):
         return here(journey)
-    return _step3_page(request, journey, number - 1, session, catalog)
+    return _step3_page(request, journey, number - 1, session)
 
 
 def mapping_entries_from_form(form_fields: Form, obj: AssemblyObject, labels: list[str]) -> dict[str, dict[str, Any]]:
@@ -348,7 +347,7 @@ async def submit_step3(
     store.save(session, journey.participant)
     checked = check_mapping(mapping_document(obj, entries), catalog, settings)
     if not checked.is_valid:
-        return _step3_page(request, journey, index, session, catalog, checked.report, status_code=422)
+        return _step3_page(request, journey, index, session, checked.report, status_code=422)
     run_trial(services, session, journey, index, checked)
     return redirect(f"/p/{journey.participant.code}/step3/{number}")
 

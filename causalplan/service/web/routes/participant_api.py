@@ -13,7 +13,7 @@ from causalplan.service.db.models import utc_now
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep
 from causalplan.service.errors import InvalidRequestError, NotFoundError
 from causalplan.service.web import store
-from causalplan.service.web.drawings import SVG_HEADERS, document_key, graph_svg, plan_picture
+from causalplan.service.web.drawings import document_key, fresh_svg, graph_svg, plan_picture
 from causalplan.service.web.errors import StepLockedError
 from causalplan.service.web.journey import Journey
 from causalplan.service.web.participation import invalid_model_error, plans
@@ -129,12 +129,11 @@ def show_plan(
     return PlansOut.model_validate({"plans": found})
 
 
-def _nothing_to_draw() -> bytes:
-    return (
-        b'<svg xmlns="http://www.w3.org/2000/svg" width="320" height="60" role="img">'
-        b'<text x="10" y="35" font-family="sans-serif" font-size="14" fill="#555">'
-        b"Nothing to draw yet: write a rule.</text></svg>"
-    )
+NOTHING_TO_DRAW = (
+    b'<svg xmlns="http://www.w3.org/2000/svg" width="320" height="60" role="img">'
+    b'<text x="10" y="35" font-family="sans-serif" font-size="14" fill="#555">'
+    b"Nothing to draw yet: write a rule.</text></svg>"
+)
 
 
 @router.get("/graph.svg")
@@ -158,9 +157,7 @@ def graph(
     svg = None
     if model is not None:
         svg = graph_svg(document_key(model.merged_document()), lambda: check_model(model, catalog, settings).model)
-    return Response(
-        svg or _nothing_to_draw(), media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"}
-    )
+    return fresh_svg(svg or NOTHING_TO_DRAW)
 
 
 @router.get("/pictures/{object_id}.png")

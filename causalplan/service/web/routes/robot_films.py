@@ -1,21 +1,28 @@
-"""'Watch the robot' on step 2: film the robot carrying out the plan, in the background, and say how far it is.
+"""'Watch the robot' on step 2: film the robot carrying out the plan as a job, and say how far it is.
 
-``POST /p/<code>/films`` starts filming (or finds the film kept: one per object, plan and
-size) and answers at once; the page polls ``GET /p/<code>/films/<key>`` for the frames drawn
-and plays the MP4 from ``/v1/simulations/videos/<key>`` once it is ready.
+``POST /p/<code>/films`` finds the film's job (one per object, plan, format and size, shared by
+every participant while it is kept) or queues it, and answers at once; the page polls ``GET
+/p/<code>/films/<key>`` for the frames drawn and plays the film from ``/v1/jobs/<id>/video``
+once it is ready. The job, its progress and the film live in the database, so the replica that
+answers a poll, or serves the film, need not be the one filming (``service.jobs.video``).
 """
 
 from __future__ import annotations
 
-from pathlib import Path as FilePath
+import uuid
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Path
 
+from causalplan.service.db.models import JobRecord, utc_now
 from causalplan.service.deps import ServicesDep
 from causalplan.service.errors import InvalidRequestError, NotFoundError
-from causalplan.service.films import Film, film_key, video_url
-from causalplan.service.pool.robot_jobs import robot_film_job
+from causalplan.service.films import FilmNotFoundError, film_key
+from causalplan.service.jobs import store
+from causalplan.service.jobs.kinds import JobKind
+from causalplan.service.jobs.store import JobStatus
+from causalplan.service.jobs.video import FILM_KEY, fits_film_request, video_url
+from causalplan.service.pool.robot_jobs import CONTENT_TYPES
 from causalplan.service.routes.simulations import VIDEO_KEY
 from causalplan.service.web.routes.journeys import JourneyDep
 from causalplan.service.web.schemas import FilmIn, FilmOut
@@ -24,17 +31,39 @@ router = APIRouter(prefix="/p/{code}/films", include_in_schema=False)
 
 FILM_FORMAT = "mp4"
 """What the page plays: every browser's <video> plays H.264 MP4."""
+_FILMING = {JobStatus.QUEUED.value, JobStatus.RUNNING.value}
 
 
-def _out(code: str, film: Film) -> FilmOut:
-    status = film.status()
-    ready = film.state == "ready"
+def _seconds(job: JobRecord) -> float:
+    began = store.aware(job.started_at or job.created_at)
+    ended = store.aware(job.finished_at) if job.finished_at is not None else utc_now()
+    return round(max(0.0, (ended - began).total_seconds()), 1)
+
+
+def _out(code: str, job: JobRecord) -> FilmOut:
+    result: dict[str, Any] = job.result or {}
+    film: dict[str, Any] = result.get("video") or {}
+    ready = job.status == JobStatus.SUCCEEDED and job.file_type is not None
+    error = None
+    if job.status == JobStatus.SUCCEEDED and not ready:
+        error = {"code": "no_video", "message": "The robot made no film of this plan."}
+    elif job.status not in _FILMING and not ready:
+        failed = job.error or {"code": "job_cancelled", "message": "The film was cancelled."}
+        error = {"code": str(failed["code"]), "message": str(failed["message"])}
+    key = job.id.hex
     return FilmOut.model_validate(
         {
-            **status,
-            "key": film.key,
-            "status_url": f"/p/{code}/films/{film.key}",
-            "video_url": video_url(film.key) if ready else None,
+            "key": key,
+            "state": "filming" if job.status in _FILMING else "ready" if ready else "failed",
+            "frames": job.done if job.total > 1 else 0,  # 1 of 1: nothing drawn yet, the robot is planning
+            "expected_frames": job.total if job.total > 1 else None,
+            "seconds": _seconds(job),
+            "status_url": f"/p/{code}/films/{key}",
+            "video_url": video_url(job.id) if ready else None,
+            "content_type": film.get("content_type") or CONTENT_TYPES[FILM_FORMAT],
+            "bytes": int(film.get("bytes") or 0),
+            "robot": result.get("robot"),
+            "error": error,
         }
     )
 
@@ -55,14 +84,12 @@ def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesD
     size = (settings.robot_video_width, settings.robot_video_height)
     fits = tuple(body.fits)
     key = film_key(services.catalog_key, obj.id, fits, FILM_FORMAT, size)
-    folders = tuple(settings.catalog_folders)
-
-    def make(progress: FilePath) -> dict[str, Any]:
-        args = (obj.id, fits, folders, FILM_FORMAT, size, progress)
-        made: dict[str, Any] = services.pool.run(robot_film_job, args, settings.robot_seconds)
-        return made
-
-    return _out(code, services.films.start(key, FILM_FORMAT, make))
+    kind = JobKind.VIDEO.value
+    job = store.find_job(services.engine, kind, FILM_KEY, key)
+    if job is None:  # two participants asking at once may each start one: harmless, and rare
+        request = fits_film_request(obj.id, fits, FILM_FORMAT, key)
+        job = store.create_job(services.engine, kind, request, 1, settings.max_queued_jobs)
+    return _out(code, job)
 
 
 @router.get("/{key}", response_model=FilmOut)
@@ -71,4 +98,7 @@ def film_status(
 ) -> FilmOut:
     """Return how far the film is: filming (frames drawn of those expected), ready (where it is) or failed (why)."""
     del journey  # only participants may ask
-    return _out(code, services.films.get(key))
+    job = store.get_job(services.engine, uuid.UUID(hex=key))
+    if job.kind != JobKind.VIDEO or FILM_KEY not in job.request:
+        raise FilmNotFoundError(f"No film is made under '{key}'.", details={"key": key})
+    return _out(code, job)

@@ -1,0 +1,171 @@
+"""The ``video`` kind of job: the robot carrying out a plan, filmed; the film is stored with the job.
+
+Two requests make a film. The API's (``POST /v1/jobs`` with ``kind: video``) is a plan
+request: the model is planned (on the mapping's object), then the Panda carries out the plan
+on camera. The participant page's ("Watch the robot") names the object and the fits of a plan
+it has shown already. Either way the planner worker films and writes its progress (frames
+drawn, frames expected) to a file that this replica's runner reads and reports, and it stops
+at the next frame once a stop file appears, which the runner writes when the job is
+cancelled. The film's bytes go into the job's row, so any replica serves them
+(``GET /v1/jobs/{id}/video``) until the job expires.
+"""
+
+from __future__ import annotations
+
+import logging
+import tempfile
+import threading
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from causalplan.errors import CausalPlanError
+from causalplan.service.jobs.work import JobCancelledError, JobFile, Outcome, Progress, in_pool
+from causalplan.service.pool.robot_jobs import CONTENT_TYPES, FilmStoppedError, read_progress
+
+if TYPE_CHECKING:
+    from causalplan.causal.model import CausalModel, Labelling
+    from causalplan.service.deps import Services
+    from causalplan.service.documents import PlanInputs
+    from causalplan.service.schemas.jobs import VideoPlanIn
+
+logger = logging.getLogger(__name__)
+
+WATCH_SECONDS = 1.0
+"""How often the runner reads the film's progress (and so how soon a cancel reaches the worker)."""
+FITS_KEY = "fits"
+"""A stored request with this key is the participant page's: film these fits of ``object``."""
+FILM_KEY = "film"
+"""The participant page's film's key (``films.film_key``) in its stored request: one job per film, reused."""
+
+
+def video_url(job_id: object) -> str:
+    """Return where the API serves the film of job ``job_id``."""
+    return f"/v1/jobs/{job_id}/video"
+
+
+def film_plan_job(
+    model: CausalModel,
+    mapping: Labelling | None,
+    planner: str,
+    time_limit: float,
+    catalog_folders: tuple[Path, ...],
+    validate: bool,
+    video: str,
+    size: tuple[int, int],
+    progress: Path,
+    stop: Path,
+) -> dict[str, object]:
+    """Plan ``model`` and film the robot carrying the plan out (runs in a planner worker).
+
+    Returns ``planning`` (as ``causalplan plan --json``), ``simulation`` and ``robot`` (as POST
+    /v1/simulations with ``robot``) and ``video``: the film's bytes, or None when there is no plan.
+    """
+    from causalplan.pddl.task import catalog_task
+    from causalplan.planners import pipeline
+    from causalplan.service.pool.jobs import worker_catalog
+    from causalplan.service.pool.robot_jobs import robot_outcome, robot_simulation
+
+    task = catalog_task(model, worker_catalog(catalog_folders), mapping)
+    result = pipeline.plan_task(task, planner, time_limit, val=validate)
+    data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "robot": None, "video": None}
+    if not result.has_plan:
+        return data
+    report, film = robot_simulation(task.obj, result.steps, video, size, progress, stop)
+    data.update(simulation=report.as_dict(), robot=robot_outcome(report), video=film)
+    return data
+
+
+def _plan_inputs(body: VideoPlanIn, services: Services) -> PlanInputs:
+    """Return the plan inputs of a film's request, read as POST /v1/plans reads its body."""
+    from causalplan.service.db.crud import ClientIds
+    from causalplan.service.documents import plan_inputs
+    from causalplan.service.schemas.plans import PlanIn
+
+    plan = PlanIn.model_validate(body.model_dump(mode="json", by_alias=True, exclude={"video"}))
+    return plan_inputs(plan, services, ClientIds())
+
+
+def prepare_video(request: dict[str, Any], services: Services) -> dict[str, Any]:
+    from causalplan.service.schemas.jobs import VideoPlanIn
+
+    body = VideoPlanIn.model_validate({key: value for key, value in request.items() if key != "kind"})
+    inputs = _plan_inputs(body, services)
+    inputs.store(services)
+    return {
+        "model_id": str(inputs.submission.record.id),
+        "mapping": body.mapping,
+        "planner": inputs.planner,
+        "time_limit": inputs.time_limit,
+        "validate": body.validate_plan,
+        "video": body.video,
+    }
+
+
+def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key: str) -> dict[str, Any]:
+    """Return the stored request of the film ``key`` of ``fit_ids`` of the object (the participant page's)."""
+    return {"object": object_id, FITS_KEY: list(fit_ids), "video": video, FILM_KEY: key}
+
+
+def _film_in_worker(request: dict[str, Any], services: Services, progress_file: Path, stop: Path) -> dict[str, Any]:
+    from causalplan.service.pool.robot_jobs import robot_film_job
+    from causalplan.service.schemas.jobs import VideoPlanIn
+
+    settings = services.settings
+    size = (settings.robot_video_width, settings.robot_video_height)
+    folders = tuple(settings.catalog_folders)
+    video = str(request["video"])
+    if FITS_KEY in request:
+        args: tuple[Any, ...] = (str(request["object"]), tuple(request[FITS_KEY]), folders, video, size, progress_file)
+        made: dict[str, Any] = in_pool(services, robot_film_job, (*args, stop), settings.robot_seconds)
+        return made
+    body = VideoPlanIn.model_validate(request)
+    inputs = _plan_inputs(body, services)
+    args = (inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, folders, body.validate_plan, video, size)
+    timeout = inputs.time_limit + settings.solve_grace_seconds + settings.robot_seconds
+    data: dict[str, Any] = in_pool(services, film_plan_job, (*args, progress_file, stop), timeout)
+    return {**data, "model_id": request["model_id"]}
+
+
+def run_video_job(request: dict[str, Any], services: Services, progress: Progress) -> Outcome:
+    """Film the plan, reporting frames drawn of frames expected; stop the worker's filming on a cancel.
+
+    A cancel that comes while the worker still plans, or runs the robot before filming, stops
+    it at the first frame.
+    """
+    progress(0, 1)
+    with tempfile.TemporaryDirectory(prefix="causalplan-film-job-") as folder:
+        progress_file, stop = Path(folder) / "progress.json", Path(folder) / "stop"
+        finished = threading.Event()
+        cancelled = threading.Event()
+
+        def watch() -> None:
+            while not finished.wait(WATCH_SECONDS):
+                frames, expected = read_progress(progress_file)
+                try:  # before the first frame the robot is still planning: 0 of 1
+                    progress(frames, expected or 1)
+                except JobCancelledError:
+                    cancelled.set()
+                    stop.touch()
+                    return
+
+        watcher = threading.Thread(target=watch, name="causalplan-film-watch", daemon=True)
+        watcher.start()
+        try:
+            data = _film_in_worker(request, services, progress_file, stop)
+        except CausalPlanError as exc:
+            if exc.code == FilmStoppedError.code:
+                logger.info("filming stopped in its worker: the job was cancelled")
+                raise JobCancelledError from None
+            raise
+        finally:
+            finished.set()
+            watcher.join()
+    if cancelled.is_set():
+        raise JobCancelledError
+    film = data.pop("video", None)
+    video = str(request["video"])
+    if not isinstance(film, bytes):
+        return Outcome({**data, "video": None})
+    # The URL is the route's to say (``video_url``, filled in when the job is read).
+    described = {"url": None, "content_type": CONTENT_TYPES[video], "bytes": len(film)}
+    return Outcome({**data, "video": described}, JobFile(film, CONTENT_TYPES[video]))
