@@ -69,7 +69,9 @@ def children_cpu() -> float:
 def batch_run(trials: Path, out: Path, chunk_size: int, options: tuple[str, ...]) -> tuple[float, float]:
     """Return the wall and CPU seconds (with every process it started) of one ``causalplan batch``."""
     command = [str(Path(sys.executable).with_name("causalplan")), "batch", str(trials), "--out", str(out)]
-    command += ["--no-simulate", "--no-val", "--chunk-size", str(chunk_size), *options]
+    command += ["--no-simulate", "--no-val", *options]
+    if options:  # --chunk-size sizes a cluster's tasks: the plain batch refuses it
+        command += ["--chunk-size", str(chunk_size)]
     cpu, started = children_cpu(), time.perf_counter()
     finished = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
     seconds = time.perf_counter() - started
