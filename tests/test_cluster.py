@@ -12,8 +12,17 @@ import pytest
 from distributed import Client, LocalCluster
 
 from causalplan.objects.catalog import Catalog, load_catalog
-from causalplan.transfer.batch import TrialResult, read_trials, run_batch
-from causalplan.transfer.cluster import ClusterError, JudgeOptions, chunks, run_batch_on_cluster
+from causalplan.transfer.batch import TrialResult, WrittenResult, read_trials, run_batch
+from causalplan.transfer.cluster import (
+    ClusterError,
+    JudgeOptions,
+    NumberedLines,
+    chunks,
+    file_chunks,
+    run_batch_on_cluster,
+    trials_in,
+    write_batch_on_cluster,
+)
 
 TRIALS = Path(__file__).resolve().parent.parent / "examples" / "batch" / "trials.jsonl"
 OPTIONS = JudgeOptions(simulate=False)
@@ -42,6 +51,48 @@ def test_chunks_keep_every_trial_once_in_order() -> None:
     assert all(len(part) == 7 for part in parts[:-1])
 
 
+def _written(results: list[WrittenResult]) -> list[tuple[dict[str, object], dict[str, object]]]:
+    """Return each trial's CSV row and JSON verdict without what differs between runs."""
+    written = []
+    for result in results:
+        data = json.loads(result.json_line)
+        if isinstance(data.get("planning"), dict):
+            data["planning"] = {k: v for k, v in data["planning"].items() if k not in ("timing", "cached")}
+        written.append(({k: v for k, v in result.row.items() if k != "seconds"}, data))
+    return written
+
+
+def test_a_json_lines_file_is_cut_into_raw_lines_that_read_as_the_file_reads(tmp_path: Path) -> None:
+    lines = tmp_path / "trials.jsonl"
+    text = TRIALS.read_text(encoding="utf-8").splitlines()
+    lines.write_bytes(b"\n".join([text[0].encode(), b"", b'{"id": "\xff"}', b"  \r", *(t.encode() for t in text[1:])]))
+    parts = file_chunks(lines, 5)
+    assert all(isinstance(part, NumberedLines) for part in parts)
+    trials = [trial for part in parts if isinstance(part, NumberedLines) for trial in part.trials()]
+    assert trials == list(read_trials(lines))
+    assert trials_in(parts) == len(trials) == len(text) + 1  # the blank lines are no trials
+    assert trials[1].problem == "Line 3 could not be read: it is not UTF-8 text (byte 8)."
+
+
+def test_another_batch_file_is_read_by_the_client_and_cut_into_trials(tmp_path: Path) -> None:
+    listing = tmp_path / "trials.json"
+    listing.write_text(json.dumps([json.loads(line) for line in TRIALS.read_text().splitlines()[:3]]))
+    parts = file_chunks(listing, 2)
+    assert parts == chunks(list(read_trials(listing)), 2) and trials_in(parts) == 3
+    with pytest.raises(ClusterError, match="at least 1; got 0"):
+        file_chunks(listing, 0)
+
+
+def test_the_batch_commands_way_gives_the_rows_and_json_of_the_local_batch(catalog: Catalog) -> None:
+    local = [result.written() for result in run_batch(list(read_trials(TRIALS)), catalog, simulate=False)]
+    seen: list[int] = []
+    on_cluster = write_batch_on_cluster(
+        file_chunks(TRIALS, 8), catalog, OPTIONS, workers=2, on_chunk=lambda results: seen.append(len(results))
+    )
+    assert _written(on_cluster) == _written(local)
+    assert sorted(seen) == sorted([8] * 5 + [2])
+
+
 def test_a_local_cluster_gives_the_verdicts_of_the_local_batch(catalog: Catalog) -> None:
     trials = list(read_trials(TRIALS))
     local = run_batch(trials, catalog, simulate=False)
@@ -53,24 +104,36 @@ def test_a_local_cluster_gives_the_verdicts_of_the_local_batch(catalog: Catalog)
     assert sum(seen) == len(trials)
 
 
-def test_a_worker_killed_mid_batch_loses_nothing_and_counts_nothing_twice(catalog: Catalog) -> None:
-    trials = list(read_trials(TRIALS)) * 4
+@pytest.mark.parametrize("way", ["run_batch_on_cluster", "write_batch_on_cluster"])
+def test_a_worker_killed_mid_batch_loses_nothing_and_counts_nothing_twice(
+    catalog: Catalog, way: str, tmp_path: Path
+) -> None:
+    four_times = tmp_path / "trials.jsonl"
+    four_times.write_bytes(TRIALS.read_bytes() * 4)
+    trials = list(read_trials(four_times))
     local = run_batch(trials, catalog, simulate=False)
     with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=logging.ERROR) as cluster:
         with Client(cluster) as watcher:
             pids = list(watcher.run(os.getpid).values())
         killed: list[int] = []
 
-        def kill_one_worker(results: list[TrialResult]) -> None:
+        def kill_one_worker(results: object) -> None:
             if not killed:
                 killed.append(pids[0])
                 os.kill(pids[0], signal.SIGKILL)
 
-        on_cluster = run_batch_on_cluster(
-            trials, catalog, OPTIONS, address=cluster.scheduler_address, chunk_size=3, on_chunk=kill_one_worker
-        )
+        address = cluster.scheduler_address
+        if way == "run_batch_on_cluster":
+            on_cluster = run_batch_on_cluster(
+                trials, catalog, OPTIONS, address=address, chunk_size=3, on_chunk=kill_one_worker
+            )
+            assert _verdicts(on_cluster) == _verdicts(local)
+        else:
+            written = write_batch_on_cluster(
+                file_chunks(four_times, 3), catalog, OPTIONS, address=address, on_chunk=kill_one_worker
+            )
+            assert _written(written) == _written([result.written() for result in local])
     assert killed
-    assert _verdicts(on_cluster) == _verdicts(local)
 
 
 def test_an_unreachable_scheduler_is_a_clear_error(catalog: Catalog) -> None:

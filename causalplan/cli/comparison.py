@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -26,9 +24,11 @@ from causalplan.cli.common import (
 )
 
 if TYPE_CHECKING:
+    from rich.progress import Progress
+
     from causalplan.cli.cluster_options import ClusterChoice
     from causalplan.objects.catalog import Catalog
-    from causalplan.transfer.batch import Trial, TrialResult
+    from causalplan.transfer.batch import WrittenResult
     from causalplan.transfer.cluster import JudgeOptions
 
 
@@ -137,33 +137,28 @@ def compare(
 
 
 def _on_cluster(
-    trials: list[Trial],
+    trials_file: Path,
     objects: Catalog,
     options: JudgeOptions,
     on_cluster: ClusterChoice,
     out: Path,
-    advance: Callable[[int], None],
-) -> list[TrialResult]:
+    progress: Progress,
+) -> list[WrittenResult]:
     """Return the trials' results judged on a Dask cluster, appending each chunk's to verdicts.jsonl as it comes."""
-    from causalplan.transfer.cluster import run_batch_on_cluster
+    from causalplan.transfer.cluster import file_chunks, trials_in, write_batch_on_cluster
 
+    parts = file_chunks(trials_file, on_cluster.chunk_size)
+    bar = progress.add_task("judging trials", total=trials_in(parts))
     with (out / "verdicts.jsonl").open("w", encoding="utf-8") as stream:
 
-        def write(results: list[TrialResult]) -> None:
-            for result in results:
-                stream.write(json.dumps({"id": result.trial_id, **result.verdict.as_dict()}) + "\n")
+        def write(results: list[WrittenResult]) -> None:
+            stream.writelines(result.json_line + "\n" for result in results)
             stream.flush()
-            advance(len(results))
+            progress.advance(bar, len(results))
 
         with exit_on_error():
-            return run_batch_on_cluster(
-                trials,
-                objects,
-                options,
-                address=on_cluster.address,
-                workers=on_cluster.workers,
-                chunk_size=on_cluster.chunk_size,
-                on_chunk=write,
+            return write_batch_on_cluster(
+                parts, objects, options, address=on_cluster.address, workers=on_cluster.workers, on_chunk=write
             )
 
 
@@ -217,7 +212,6 @@ def batch(
     objects = catalog_from(catalog)
     if not trials_file.is_file():
         fail("file_not_found", f"There is no file {trials_file}.")
-    trials = list(read_trials(trials_file))
     make_folder(out)
     judge = None
     if robot:
@@ -226,38 +220,31 @@ def batch(
         judge = robot_judged
     started = time.perf_counter()
     with progress_bar() as progress:
-        bar = progress.add_task("judging trials", total=len(trials))
         if on_cluster is None:
-            results = run_batch(
+            trials = list(read_trials(trials_file))
+            bar = progress.add_task("judging trials", total=len(trials))
+            judged = run_batch(
                 trials, objects, planner, time_limit, simulate, lambda: progress.advance(bar), val=val, judge=judge
             )
+            results = [result.written() for result in judged]
         else:
-            results = _on_cluster(
-                trials,
-                objects,
-                JudgeOptions(planner, time_limit, simulate, val, judge),
-                on_cluster,
-                out,
-                lambda count: progress.advance(bar, count),
-            )
+            options = JudgeOptions(planner, time_limit, simulate, val, judge)
+            results = _on_cluster(trials_file, objects, options, on_cluster, out, progress)
     seconds = time.perf_counter() - started
     with (out / "verdicts.csv").open("w", newline="", encoding="utf-8") as handle:
         writer = csv.DictWriter(handle, fieldnames=CSV_COLUMNS)
         writer.writeheader()
-        writer.writerows(result.row() for result in results)
-    (out / "verdicts.json").write_text(
-        json.dumps([{"id": result.trial_id, **result.verdict.as_dict()} for result in results], indent=1) + "\n",
-        encoding="utf-8",
-    )
+        writer.writerows(result.row for result in results)
+    with (out / "verdicts.json").open("w", encoding="utf-8") as handle:  # a list, one trial a line
+        handle.write("[\n" + ",\n".join(result.json_line for result in results) + "\n]\n" if results else "[]\n")
     console = make_console()
     table = Table("verdict", "trials", "decided by", title=f"{len(results)} trials from {trials_file}")
-    verdicts = sorted({result.verdict.verdict.value for result in results})
-    for value in verdicts:
-        mine = [result for result in results if result.verdict.verdict.value == value]
-        deciders: dict[str, int] = {}
-        for result in mine:
-            deciders[result.verdict.decided_by] = deciders.get(result.verdict.decided_by, 0) + 1
-        table.add_row(value, str(len(mine)), ", ".join(f"{name} {count}" for name, count in sorted(deciders.items())))
+    deciders: dict[str, dict[str, int]] = {}
+    for result in results:
+        counts = deciders.setdefault(str(result.row["verdict"]), {})
+        counts[str(result.row["decided_by"])] = counts.get(str(result.row["decided_by"]), 0) + 1
+    for value, counts in sorted(deciders.items()):
+        table.add_row(value, str(sum(counts.values())), ", ".join(f"{name} {n}" for name, n in sorted(counts.items())))
     console.print(table)
     rate = len(results) / seconds if seconds > 0 else float("inf")
     console.print(

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -67,6 +67,26 @@ class TrialResult:
             "plan_length": len(plan.steps) if plan and plan.has_plan else "",
             "seconds": round(self.seconds, 6),
         }
+
+    def json_line(self) -> str:
+        """Return the trial's id and whole verdict as one line of JSON (no newline)."""
+        return json.dumps({"id": self.trial_id, **self.verdict.as_dict()})
+
+    def written(self) -> WrittenResult:
+        """Return the result as the batch files hold it."""
+        return WrittenResult(self.row(), self.json_line())
+
+
+@dataclass(frozen=True)
+class WrittenResult:
+    """A trial's result as the batch files hold it: its CSV row and its line of JSON.
+
+    What a cluster worker sends back instead of the whole verdict: plain strings and numbers
+    are cheap to ship, and the caller writes them as they are.
+    """
+
+    row: dict[str, object]
+    json_line: str
 
 
 CSV_COLUMNS = (
@@ -118,17 +138,33 @@ def _read_json_lines(path: Path) -> Iterator[Trial]:
         yield _unreadable_trial("file", None, f"The batch file could not be read: {exc.strerror}.")
         return
     with handle:
-        for number, raw in enumerate(handle, start=1):
-            entry, why = _parse_line(raw)
-            where = f"Line {number}"
-            if why is not None:
-                yield _unreadable_trial(f"line-{number}", number, f"{where} could not be read: {why}.")
-            elif entry is not _BLANK:
-                yield _trial(entry, f"entry-{number}", where, number)
+        yield from trials_of_lines(enumerate(handle, start=1))
+
+
+def trials_of_lines(lines: Iterable[tuple[int, bytes]]) -> Iterator[Trial]:
+    """Yield the trials of numbered raw lines of a JSON Lines file; blank lines are skipped.
+
+    Apart from the file, so that a cluster worker can parse its own chunk of lines.
+    """
+    for number, raw in lines:
+        entry, why = _parse_line(raw)
+        where = f"Line {number}"
+        if why is not None:
+            yield _unreadable_trial(f"line-{number}", number, f"{where} could not be read: {why}.")
+        elif entry is not _BLANK:
+            yield _trial(entry, f"entry-{number}", where, number)
 
 
 _BLANK = object()
 """What a blank line parses to: it is skipped."""
+
+
+def is_blank_line(raw: bytes) -> bool:
+    """Return whether a raw line of a JSON Lines file is blank: it is skipped, not a trial (as ``_parse_line``)."""
+    try:
+        return not raw.decode("utf-8-sig").strip()
+    except UnicodeDecodeError:
+        return False
 
 
 def _parse_line(raw: bytes) -> tuple[object, str | None]:

@@ -8,24 +8,51 @@ that worker gets), and the chunks' results come back as they finish. A worker th
 the middle of a chunk has that chunk run again elsewhere, which Dask does on its own (its
 ``allowed-failures`` setting); the chunk's future then holds exactly one result, so nothing is
 lost or counted twice. The verdicts are those of the local batch, in the trials' order.
+
+Two ways in. ``run_batch_on_cluster`` takes trials and gives back whole ``TrialResult``s.
+``write_batch_on_cluster`` is the ``batch`` command's way and the cheaper one: the client only
+reads the file's raw lines (``file_chunks``), the workers parse them, judge them and send back
+each trial's CSV row and JSON line (``WrittenResult``), which the client writes as they are.
+Whole verdicts are thousands of small objects each, slow to pickle on a worker and slower to
+unpickle in the client; the client shares the cores with the workers, so what it does not do
+the workers get to do.
 """
 
 from __future__ import annotations
 
 import logging
+import multiprocessing
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import Catalog
-from causalplan.transfer.batch import Judge, Trial, TrialResult, run_batch
+from causalplan.transfer.batch import (
+    Judge,
+    Trial,
+    TrialResult,
+    WrittenResult,
+    is_blank_line,
+    read_trials,
+    run_batch,
+    trials_of_lines,
+)
 
 if TYPE_CHECKING:
     from distributed import Client
 
 DEFAULT_CHUNK_SIZE = 250
 CONNECT_TIMEOUT = "10s"
+LOCAL_CLUSTER_SETTINGS = {
+    "distributed.admin.tick.interval": "1s",  # the event loops' health check, 20 ms by default
+    "distributed.worker.profile.enabled": False,  # samples every task's stack for a dashboard we do not start
+    "distributed.worker.memory.monitor-interval": "1s",  # 100 ms by default; a batch's memory grows slowly
+    "distributed.admin.system-monitor.interval": "2s",  # CPU and network statistics for the dashboard
+}
+"""Dask settings of a local cluster (``--workers``): its own housekeeping, at Dask's defaults, keeps
+the client's process and every worker busy even when idle, on the same cores the trials need."""
 
 
 class ClusterError(CausalPlanError):
@@ -54,9 +81,61 @@ def judge_chunk(trials: list[Trial], catalog: Catalog, options: JudgeOptions) ->
     )
 
 
+@dataclass(frozen=True)
+class NumberedLines:
+    """Consecutive raw lines of a JSON Lines batch file from ``first_line`` on: a chunk the worker parses."""
+
+    first_line: int
+    lines: list[bytes]
+    trial_count: int
+    """How many of the lines are trials (the others are blank)."""
+
+    def trials(self) -> list[Trial]:
+        """Return the chunk's trials, read exactly as ``read_trials`` reads the file."""
+        return list(trials_of_lines(enumerate(self.lines, start=self.first_line)))
+
+
+TrialChunk = list[Trial] | NumberedLines
+"""What one task judges: trials already read, or raw lines of a JSON Lines file."""
+
+
+def write_chunk(chunk: TrialChunk, catalog: Catalog, options: JudgeOptions) -> list[WrittenResult]:
+    """Return one chunk's results as the batch files hold them (the task a worker runs for ``batch``)."""
+    trials = chunk.trials() if isinstance(chunk, NumberedLines) else chunk
+    return [result.written() for result in judge_chunk(trials, catalog, options)]
+
+
 def chunks(trials: Sequence[Trial], size: int) -> list[list[Trial]]:
     """Return the trials cut into consecutive chunks of ``size`` (the last may be shorter)."""
     return [list(trials[start : start + size]) for start in range(0, len(trials), size)]
+
+
+def file_chunks(path: Path, size: int) -> list[TrialChunk]:
+    """Return a batch file cut into chunks of ``size`` trials, in the file's order.
+
+    A JSON Lines file is cut into raw lines, left for the workers to parse; any other file (or
+    one that cannot be opened, which ``read_trials`` turns into an unreadable trial) is read here.
+    """
+    if size < 1:
+        raise ClusterError(f"The chunk size must be at least 1; got {size}.")
+    if path.suffix.lower() == ".jsonl":
+        try:
+            with path.open("rb") as handle:
+                lines = list(handle)  # split as read_trials splits the file: at b"\n" only
+        except OSError:
+            pass
+        else:
+            return [
+                NumberedLines(start + 1, part, sum(not is_blank_line(line) for line in part))
+                for start in range(0, len(lines), size)
+                if (part := lines[start : start + size])
+            ]
+    return list(chunks(list(read_trials(path)), size))
+
+
+def trials_in(parts: Sequence[TrialChunk]) -> int:
+    """Return how many trials the chunks hold."""
+    return sum(part.trial_count if isinstance(part, NumberedLines) else len(part) for part in parts)
 
 
 def connect(address: str | None, workers: int | None) -> tuple[Client, Any]:
@@ -64,6 +143,7 @@ def connect(address: str | None, workers: int | None) -> tuple[Client, Any]:
 
     The second value is the local cluster to close after the client (None for a remote one).
     """
+    import dask
     from distributed import Client, LocalCluster
 
     if address is not None:
@@ -74,14 +154,27 @@ def connect(address: str | None, workers: int | None) -> tuple[Client, Any]:
                 f"Cannot reach the Dask scheduler at {address}: {exc}. Is `dask scheduler` running there?",
                 details={"address": address},
             ) from exc
-    cluster = LocalCluster(
-        n_workers=workers or 1,
-        threads_per_worker=1,  # the planners keep per-process state; one trial at a time per process
-        processes=True,
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-    )
-    return Client(cluster), cluster
+    settings = {**LOCAL_CLUSTER_SETTINGS, "distributed.worker.multiprocessing-method": _local_start_method()}
+    with dask.config.set(settings):  # read when the scheduler, nannies, workers and client start
+        cluster = LocalCluster(
+            n_workers=workers or 1,
+            threads_per_worker=1,  # the planners keep per-process state; one trial at a time per process
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+        return Client(cluster), cluster
+
+
+def _local_start_method() -> str:
+    """Return how a local cluster starts its worker processes: ``fork`` where there is one.
+
+    A forked worker starts with this process's modules already imported (Dask's default,
+    ``spawn``, starts a fresh interpreter that imports Dask and then causalplan again), which
+    on a busy machine is seconds per worker. A worker the nanny restarts later (after a
+    crash) is spawned, Dask's default: that only costs time.
+    """
+    return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
 
 
 def run_batch_on_cluster(
@@ -99,20 +192,52 @@ def run_batch_on_cluster(
     ``on_chunk`` is called with each chunk's results as soon as it is done (in the order the
     chunks finish), so a caller can write them out and show progress as they come.
     """
-    from distributed import as_completed
-
     if chunk_size < 1:
         raise ClusterError(f"The chunk size must be at least 1; got {chunk_size}.")
-    parts = chunks(trials, chunk_size)
+    return _judge_on_cluster(judge_chunk, chunks(trials, chunk_size), catalog, options, address, workers, on_chunk)
+
+
+def write_batch_on_cluster(
+    parts: Sequence[TrialChunk],
+    catalog: Catalog,
+    options: JudgeOptions = JudgeOptions(),
+    *,
+    address: str | None = None,
+    workers: int | None = None,
+    on_chunk: Callable[[list[WrittenResult]], None] | None = None,
+) -> list[WrittenResult]:
+    """Return the CSV row and JSON line of every trial of the chunks (e.g. ``file_chunks``), in order.
+
+    ``on_chunk`` is called as in ``run_batch_on_cluster``.
+    """
+    return _judge_on_cluster(write_chunk, list(parts), catalog, options, address, workers, on_chunk)
+
+
+Result = TypeVar("Result")
+
+
+def _judge_on_cluster(
+    task: Callable[[Any, Catalog, JudgeOptions], list[Result]],
+    parts: list[Any],
+    catalog: Catalog,
+    options: JudgeOptions,
+    address: str | None,
+    workers: int | None,
+    on_chunk: Callable[[list[Result]], None] | None,
+) -> list[Result]:
+    """Return ``task``'s results of every chunk, in the chunks' order, each chunk a task on the cluster."""
+    from distributed import as_completed
+
     client, cluster = connect(address, workers)
     try:
         shared = client.scatter(catalog, broadcast=True)
-        futures = {
-            client.submit(judge_chunk, part, shared, options, pure=False): index for index, part in enumerate(parts)
-        }
-        done: dict[int, list[TrialResult]] = {}
-        for future in as_completed(futures):
-            index = futures[future]
+        futures = [client.submit(task, part, shared, options, pure=False) for part in parts]
+        index_of = {future.key: index for index, future in enumerate(futures)}
+        pending = as_completed(futures)
+        del futures  # a chunk's future, once read, is let go, and the worker forgets the chunk's results
+        done: dict[int, list[Result]] = {}
+        for future in pending:
+            index = index_of[future.key]
             try:
                 results = future.result()
             except Exception as exc:  # Dask re-raises whatever the chunk raised, or KilledWorker
