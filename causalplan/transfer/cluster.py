@@ -46,9 +46,9 @@ if TYPE_CHECKING:
 DEFAULT_CHUNK_SIZE = 250
 CONNECT_TIMEOUT = "10s"
 LOCAL_CLUSTER_SETTINGS = {
-    "distributed.admin.tick.interval": "1s",  # the event loops' health check, 20 ms by default
+    "distributed.admin.tick.interval": "1s",  # the event loops' health check, far more often by default
     "distributed.worker.profile.enabled": False,  # samples every task's stack for a dashboard we do not start
-    "distributed.worker.memory.monitor-interval": "1s",  # 100 ms by default; a batch's memory grows slowly
+    "distributed.worker.memory.monitor-interval": "1s",  # a batch's memory grows slowly
     "distributed.admin.system-monitor.interval": "2s",  # CPU and network statistics for the dashboard
 }
 """Dask settings of a local cluster (``--workers``): its own housekeeping, at Dask's defaults, keeps
