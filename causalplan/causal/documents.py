@@ -73,10 +73,11 @@ def refuse_duplicate_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
 def located_duplicate_key(text: str, exc: DuplicateKeyError) -> DuplicateKeyError:
     """Return ``exc`` with the line and index of its second key in ``text`` (JSON read as YAML), when found.
 
-    ``text`` must have its tabs replaced by spaces: JSON allows them between tokens, YAML does not.
+    Tabs become spaces first (one for one, so lines and indexes stay): JSON allows them between
+    tokens, YAML does not.
     """
     try:
-        yaml.load(text, Loader=_UniqueKeyLoader)
+        load_yaml_refusing_duplicates(text.replace("\t", " "))
     except DuplicateKeyError as located:
         if located.key == exc.key:
             return located
@@ -180,7 +181,7 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
         try:
             data = json.loads(text, object_pairs_hook=refuse_duplicate_keys)
         except DuplicateKeyError as exc:
-            return _duplicate_key(file_name, located_duplicate_key(text.replace("\t", " "), exc))
+            return _duplicate_key(file_name, located_duplicate_key(text, exc))
         except RecursionError:
             return _too_deep(file_name)
         except json.JSONDecodeError as exc:
@@ -196,7 +197,7 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
         # JSON allows tabs between tokens (never inside strings); YAML does not.
         return data, SourceMap(file_name, text.replace("\t", " ")), []
     try:
-        data = yaml.load(text, Loader=_UniqueKeyLoader)
+        data = load_yaml_refusing_duplicates(text)
     except DuplicateKeyError as exc:
         return _duplicate_key(file_name, exc)
     except RecursionError:

@@ -93,7 +93,7 @@ def parse_json(body: bytes) -> Any:
     try:
         value = json.loads(text, object_pairs_hook=refuse_duplicate_keys, parse_int=integer, parse_constant=constant)
     except DuplicateKeyError as exc:
-        where = located_duplicate_key(text.replace("\t", " "), exc).index or 0
+        where = located_duplicate_key(text, exc).index or 0
         raise BodyJSONError(f"the key {json.dumps(exc.key)} appears twice in one object", text, where) from None
     except RecursionError:
         raise _too_deep(text) from None

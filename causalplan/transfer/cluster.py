@@ -130,7 +130,7 @@ def file_chunks(path: Path, size: int) -> list[TrialChunk]:
                 for start in range(0, len(lines), size)
                 if (part := lines[start : start + size])
             ]
-    return list(chunks(list(read_trials(path)), size))
+    return list(chunks(list(read_trials(path)), size))  # a list of TrialChunk, not of list[Trial]
 
 
 def trials_in(parts: Sequence[TrialChunk]) -> int:
@@ -226,30 +226,39 @@ def _judge_on_cluster(
     on_chunk: Callable[[list[Result]], None] | None,
 ) -> list[Result]:
     """Return ``task``'s results of every chunk, in the chunks' order, each chunk a task on the cluster."""
-    from distributed import as_completed
-
     client, cluster = connect(address, workers)
     try:
         shared = client.scatter(catalog, broadcast=True)
         futures = [client.submit(task, part, shared, options, pure=False) for part in parts]
-        index_of = {future.key: index for index, future in enumerate(futures)}
-        pending = as_completed(futures)
-        del futures  # a chunk's future, once read, is let go, and the worker forgets the chunk's results
-        done: dict[int, list[Result]] = {}
-        for future in pending:
-            index = index_of[future.key]
-            try:
-                results = future.result()
-            except Exception as exc:  # Dask re-raises whatever the chunk raised, or KilledWorker
-                raise ClusterError(f"Chunk {index + 1} of {len(parts)} failed on the cluster: {exc!r}.") from exc
-            done[index] = results
-            if on_chunk is not None:
-                on_chunk(results)
-        return [result for index in range(len(parts)) for result in done[index]]
+        done = _in_order(futures, "Chunk", on_chunk)
+        return [result for results in done for result in results]
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _in_order(futures: list[Any], what: str, on_each: Callable[[Any], None] | None) -> list[Any]:
+    """Return the futures' results in their order, calling ``on_each`` with each as it comes.
+
+    The list is emptied: a future once read is let go, so its worker forgets the result.
+    """
+    from distributed import as_completed
+
+    count = len(futures)
+    index_of = {future.key: index for index, future in enumerate(futures)}
+    pending = as_completed(futures)
+    futures.clear()
+    done: dict[int, Any] = {}
+    for future in pending:
+        index = index_of[future.key]
+        try:
+            done[index] = future.result()
+        except Exception as exc:  # Dask re-raises whatever the task raised, or KilledWorker
+            raise ClusterError(f"{what} {index + 1} of {count} failed on the cluster: {exc!r}.") from exc
+        if on_each is not None:
+            on_each(done[index])
+    return [done[index] for index in range(count)]
 
 
 Item = TypeVar("Item")
@@ -274,23 +283,11 @@ def map_on_cluster(
     can show progress. A task that raises is a ``ClusterError`` naming which one; a worker that
     dies has its task run again elsewhere (Dask's ``allowed-failures``).
     """
-    from distributed import as_completed
-
     if not items:
         return []
     client, cluster = connect(address, workers)
     try:
-        futures = {client.submit(function, item, pure=False): index for index, item in enumerate(items)}
-        done: dict[int, Outcome] = {}
-        for future in as_completed(futures):
-            index = futures[future]
-            try:
-                done[index] = future.result()
-            except Exception as exc:  # Dask re-raises whatever the task raised, or KilledWorker
-                raise ClusterError(f"Task {index + 1} of {len(items)} failed on the cluster: {exc!r}.") from exc
-            if on_result is not None:
-                on_result(done[index])
-        return [done[index] for index in range(len(items))]
+        return _in_order([client.submit(function, item, pure=False) for item in items], "Task", on_result)
     finally:
         client.close()
         if cluster is not None:

@@ -58,18 +58,18 @@ def prepare_fit_estimation(request: dict[str, Any], services: Services) -> dict[
     if not chosen:
         raise InvalidRequestError(f"The {obj.name} has no fits to estimate.", details={"object": obj.id})
     trials = int(request["trials"])
-    limit = services.settings.max_job_trials
-    if trials * len(chosen) > limit:
+    limit, count = services.settings.max_job_trials, trials * len(chosen)
+    if count > limit:
         raise LimitExceededError(
             "too_many_trials",
-            f"{len(chosen)} fit(s) of {trials} trials each are {trials * len(chosen)} trials; "
+            f"{len(chosen)} fit(s) of {trials} trials each are {count} trials; "
             f"this server takes at most {limit} per job.",
-            details={"limit": limit, "actual": trials * len(chosen)},
+            details={"limit": limit, "actual": count},
         )
     return {
         "object": obj.id,
         "fits": chosen,
-        "count": trials * len(chosen),
+        "count": count,
         "trials": trials,
         "seed": int(request["seed"]),
         "noise_mm": float(request["noise_mm"]),

@@ -56,11 +56,9 @@ class JobRunner:
         self._busy = 0
 
     def stats(self) -> dict[str, int]:
-        """Return this replica's runner threads: how many, how many alive, how many doing a job now."""
+        """Return this replica's runner threads: how many, and how many are doing a job now."""
         with self._lock:
-            busy = self._busy
-        alive = sum(thread.is_alive() for thread in self._threads)
-        return {"threads": len(self._threads), "alive": alive, "busy": busy}
+            return {"threads": len(self._threads), "busy": self._busy}
 
     def start(self) -> None:
         """Start the runner threads (none when ``job_runners`` is 0)."""

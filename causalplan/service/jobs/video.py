@@ -163,9 +163,9 @@ def run_video_job(request: dict[str, Any], services: Services, progress: Progres
     if cancelled.is_set():
         raise JobCancelledError
     film = data.pop("video", None)
-    video = str(request["video"])
+    content_type = CONTENT_TYPES[str(request["video"])]
     if not isinstance(film, bytes):
         return Outcome({**data, "video": None})
     # The URL is the route's to say (``video_url``, filled in when the job is read).
-    described = {"url": None, "content_type": CONTENT_TYPES[video], "bytes": len(film)}
-    return Outcome({**data, "video": described}, JobFile(film, CONTENT_TYPES[video]))
+    described = {"url": None, "content_type": content_type, "bytes": len(film)}
+    return Outcome({**data, "video": described}, JobFile(film, content_type))

@@ -56,4 +56,4 @@ def in_pool(services: Services, function: Callable[..., T], args: tuple[Any, ...
         try:
             return services.pool.run(function, args, timeout)
         except QueueFullError as exc:
-            time.sleep(float(exc.details.get("retry_after", 1)))  # type: ignore[arg-type]
+            time.sleep(exc.retry_after)

@@ -31,7 +31,6 @@ router = APIRouter(prefix="/p/{code}/films", include_in_schema=False)
 
 FILM_FORMAT = "mp4"
 """What the page plays: every browser's <video> plays H.264 MP4."""
-_FILMING = {JobStatus.QUEUED.value, JobStatus.RUNNING.value}
 
 
 def _seconds(job: JobRecord) -> float:
@@ -47,14 +46,14 @@ def _out(code: str, job: JobRecord) -> FilmOut:
     error = None
     if job.status == JobStatus.SUCCEEDED and not ready:
         error = {"code": "no_video", "message": "The robot made no film of this plan."}
-    elif job.status not in _FILMING and not ready:
+    elif job.status not in store.UNFINISHED and not ready:
         failed = job.error or {"code": "job_cancelled", "message": "The film was cancelled."}
         error = {"code": str(failed["code"]), "message": str(failed["message"])}
     key = job.id.hex
     return FilmOut.model_validate(
         {
             "key": key,
-            "state": "filming" if job.status in _FILMING else "ready" if ready else "failed",
+            "state": "filming" if job.status in store.UNFINISHED else "ready" if ready else "failed",
             "frames": job.done if job.total > 1 else 0,  # 1 of 1: nothing drawn yet, the robot is planning
             "expected_frames": job.total if job.total > 1 else None,
             "seconds": _seconds(job),
