@@ -15,7 +15,7 @@ reads the file's raw lines (``file_chunks``), the workers parse them, judge them
 each trial's CSV row and JSON line (``WrittenResult``), which the client writes as they are.
 Whole verdicts are thousands of small objects each, slow to pickle on a worker and slower to
 unpickle in the client; the client shares the cores with the workers, so what it does not do
-the workers get to do.
+the workers get to do. Every task's result comes back in a box (``Boxed``), one pickle.
 """
 
 from __future__ import annotations
@@ -216,6 +216,20 @@ def write_batch_on_cluster(
 Result = TypeVar("Result")
 
 
+@dataclass(frozen=True)
+class Boxed:
+    """A task's result as it travels back: Dask serializes a list or a tuple item by item, a frame
+    for each (thousands for a chunk's results, each framed, sent and read on its own), a box as
+    one pickle."""
+
+    value: Any
+
+
+def boxed(function: Callable[..., Any], *args: Any) -> Boxed:
+    """Return ``function(*args)`` in a box (what a worker runs for every task)."""
+    return Boxed(function(*args))
+
+
 def _judge_on_cluster(
     task: Callable[[Any, Catalog, JudgeOptions], list[Result]],
     parts: list[Any],
@@ -229,7 +243,7 @@ def _judge_on_cluster(
     client, cluster = connect(address, workers)
     try:
         shared = client.scatter(catalog, broadcast=True)
-        futures = [client.submit(task, part, shared, options, pure=False) for part in parts]
+        futures = [client.submit(boxed, task, part, shared, options, pure=False) for part in parts]
         done = _in_order(futures, "Chunk", on_chunk)
         return [result for results in done for result in results]
     finally:
@@ -239,7 +253,7 @@ def _judge_on_cluster(
 
 
 def _in_order(futures: list[Any], what: str, on_each: Callable[[Any], None] | None) -> list[Any]:
-    """Return the futures' results in their order, calling ``on_each`` with each as it comes.
+    """Return the futures' (boxed) results in their order, calling ``on_each`` with each as it comes.
 
     The list is emptied: a future once read is let go, so its worker forgets the result.
     """
@@ -253,7 +267,7 @@ def _in_order(futures: list[Any], what: str, on_each: Callable[[Any], None] | No
     for future in pending:
         index = index_of[future.key]
         try:
-            done[index] = future.result()
+            done[index] = future.result().value
         except Exception as exc:  # Dask re-raises whatever the task raised, or KilledWorker
             raise ClusterError(f"{what} {index + 1} of {count} failed on the cluster: {exc!r}.") from exc
         if on_each is not None:
@@ -287,7 +301,8 @@ def map_on_cluster(
         return []
     client, cluster = connect(address, workers)
     try:
-        return _in_order([client.submit(function, item, pure=False) for item in items], "Task", on_result)
+        futures = [client.submit(boxed, function, item, pure=False) for item in items]
+        return _in_order(futures, "Task", on_result)
     finally:
         client.close()
         if cluster is not None:
