@@ -42,6 +42,13 @@ class Settings(BaseSettings):
         description="SQLAlchemy URL: sqlite:///PATH (created on first start) or postgresql://USER:PASSWORD@HOST/DB; "
         "empty: causalplan.sqlite3 in data_folder.",
     )
+    database_wait_seconds: float = Field(
+        default=30.0,
+        ge=0,
+        le=3600,
+        description="How long a starting server waits for a PostgreSQL server that does not take connections "
+        "yet (a replica that starts before its database); 0: fail at once.",
+    )
     research_token: SecretStr | None = Field(
         default=None, description="Bearer token for GET /v1/trials and /v1/export; unset, they are disabled."
     )

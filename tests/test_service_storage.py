@@ -2,8 +2,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
+import socket
+import threading
+import time
 import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +32,7 @@ from tests.service_fixtures import (
     DESK_LAMP,
     FLASHLIGHT_MAPPING,
     error_of,
+    free_port,
     postgres_database,
     running_client,
     services_of,
@@ -245,12 +253,73 @@ def test_an_unreachable_database_is_503_and_health_says_so(postgres_admin_url: s
         assert client.post("/v1/plans", json={"model_id": str(uuid.uuid4())}).status_code == 503
 
 
-def test_a_database_that_cannot_be_reached_at_start_is_a_clear_error() -> None:
+def test_a_database_that_cannot_be_reached_at_start_is_a_clear_error(caplog: pytest.LogCaptureFixture) -> None:
     engine = create_database_engine("postgresql+psycopg://nobody@127.0.0.1:1/none")
-    with pytest.raises(StorageError, match="Cannot prepare the database"):
-        upgrade(engine)
+    with pytest.raises(StorageError, match=r"did not take a connection within 0 s .*refused"):
+        upgrade(engine)  # no wait: one try
+    started = time.monotonic()
+    waited = pytest.raises(StorageError, match=r"within 1.2 s \(CAUSALPLAN_DATABASE_WAIT_SECONDS\)")
+    with caplog.at_level(logging.WARNING, logger="causalplan.service.db.migrate"), waited:
+        upgrade(engine, wait_seconds=1.2)
+    assert time.monotonic() - started >= 1.2
+    assert any("database not up yet" in record.getMessage() for record in caplog.records)
     with pytest.raises(StorageError, match="not valid"):
         create_database_engine("not a url")
+
+
+@contextmanager
+def forwarded_later(target: tuple[str, int], after: float) -> Iterator[int]:
+    """Yield a free port that, from ``after`` seconds on, forwards every connection to ``target``.
+
+    A database server that comes up while a replica is already starting.
+    """
+    port, done = free_port(), threading.Event()
+
+    def pipe(source: socket.socket, sink: socket.socket) -> None:
+        with contextlib.suppress(OSError):
+            while data := source.recv(65536):
+                sink.sendall(data)
+        for end in (source, sink):
+            with contextlib.suppress(OSError):
+                end.shutdown(socket.SHUT_RDWR)
+
+    def serve() -> None:
+        if done.wait(after):
+            return
+        with socket.create_server(("127.0.0.1", port)) as listener:
+            listener.settimeout(0.1)
+            while not done.is_set():
+                try:
+                    accepted, _ = listener.accept()
+                except TimeoutError:
+                    continue
+                upstream = socket.create_connection(target)
+                for ends in ((accepted, upstream), (upstream, accepted)):
+                    threading.Thread(target=pipe, args=ends, daemon=True).start()
+
+    server = threading.Thread(target=serve, daemon=True)
+    server.start()
+    try:
+        yield port
+    finally:
+        done.set()
+        server.join()
+
+
+def test_a_replica_that_starts_before_its_database_waits_for_it(
+    postgres_admin_url: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    with postgres_database(postgres_admin_url) as url:
+        server = make_url(url)
+        with forwarded_later((str(server.host), int(server.port or 5432)), after=1.0) as port:
+            engine = create_database_engine(server.set(host="127.0.0.1", port=port).render_as_string(False))
+            try:
+                with caplog.at_level(logging.WARNING, logger="causalplan.service.db.migrate"):
+                    assert upgrade(engine, wait_seconds=30) == head_revision()
+                assert current_revision(engine) == head_revision()
+            finally:
+                engine.dispose()
+    assert any("database not up yet" in record.getMessage() for record in caplog.records)
 
 
 def test_health_says_degraded_when_the_database_takes_no_writes(postgres_admin_url: str) -> None:

@@ -56,7 +56,7 @@ def start_services(settings: Settings) -> Services:
     catalog = load_catalog(settings.catalog_folders)
     engine = create_database_engine(settings.database_url)
     try:
-        revision = upgrade(engine)
+        revision = upgrade(engine, settings.database_wait_seconds)
         pool = PlannerPool(
             settings.planning_workers, settings.queue_size, settings.worker_memory_mb, settings.queue_wait_seconds
         )
@@ -93,7 +93,7 @@ def check_startup(settings: Settings) -> str:
     load_catalog(settings.catalog_folders)
     engine = create_database_engine(settings.database_url)
     try:
-        upgrade(engine)
+        upgrade(engine, settings.database_wait_seconds)
         return engine.url.render_as_string()
     finally:
         engine.dispose()

@@ -9,8 +9,10 @@ To add a revision after changing ``models.py`` (from a checkout)::
 from __future__ import annotations
 
 import fcntl
+import logging
 import sys
 import tempfile
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -20,13 +22,16 @@ from alembic.config import Config
 from alembic.runtime.migration import MigrationContext
 from alembic.script import ScriptDirectory
 from sqlalchemy import Connection, Engine, text
-from sqlalchemy.exc import SQLAlchemyError
+from sqlalchemy.exc import OperationalError, SQLAlchemyError
 
 from causalplan.service.db.session import sqlite_path
 from causalplan.service.errors import StorageError
 
 SCRIPT_LOCATION = "causalplan.service.db:migrations"
 _MIGRATION_LOCK_ID = 0x63617573  # any constant: PostgreSQL advisory lock held while migrating
+_LONGEST_PAUSE_SECONDS = 5.0
+
+logger = logging.getLogger(__name__)
 
 
 def alembic_config(connection: Connection | None = None, url: str | None = None) -> Config:
@@ -72,12 +77,43 @@ def _sqlite_file_lock(engine: Engine) -> Iterator[None]:
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def upgrade(engine: Engine) -> str:
+def wait_until_up(engine: Engine, seconds: float) -> None:
+    """Wait up to ``seconds`` for a database server to take a connection; StorageError if it does not.
+
+    A replica or container often starts before its database does (or while it restarts). Any
+    failure to connect (refused, not yet accepting, a name not yet resolvable) is tried again,
+    after pauses that double up to five seconds; the error at the end names the last one.
+    SQLite needs no server, so it is not waited for.
+    """
+    if engine.dialect.name == "sqlite":
+        return
+    deadline, pause = time.monotonic() + seconds, 0.25
+    while True:
+        try:
+            with engine.connect():
+                return
+        except OperationalError as exc:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise StorageError(
+                    f"The database {engine.url.render_as_string()} did not take a connection within "
+                    f"{seconds:g} s (CAUSALPLAN_DATABASE_WAIT_SECONDS): {str(exc.orig).strip()}",
+                    details={"database": engine.url.render_as_string()},
+                ) from None
+            pause = min(pause * 2, _LONGEST_PAUSE_SECONDS, left)
+            logger.warning("database not up yet (%s); trying again in %.1f s", str(exc.orig).strip(), pause)
+            time.sleep(pause)
+
+
+def upgrade(engine: Engine, wait_seconds: float = 0.0) -> str:
     """Migrate the database to the newest schema; return its revision. StorageError says why not.
 
-    Servers started together migrate once: a PostgreSQL advisory lock, or a file lock beside a
-    SQLite database, makes the others wait and then find the schema up to date.
+    A database server that does not take connections yet is waited for up to ``wait_seconds``
+    (``wait_until_up``). Servers started together migrate once: a PostgreSQL advisory lock, or
+    a file lock beside a SQLite database, makes the others wait and then find the schema up to
+    date.
     """
+    wait_until_up(engine, wait_seconds)
     try:
         with _sqlite_file_lock(engine), engine.begin() as connection:
             if connection.dialect.name == "postgresql":
