@@ -169,6 +169,7 @@ def test_the_batch_command_on_two_local_workers_writes_what_a_local_run_writes(t
     assert [row.rsplit(",", 1)[0] for row in cluster_rows] == [row.rsplit(",", 1)[0] for row in local_rows]
     streamed = (tmp_path / "cluster" / "verdicts.jsonl").read_text().splitlines()
     assert sorted(json.loads(line)["id"] for line in streamed) == sorted(row.split(",")[0] for row in local_rows[1:])
+    assert "verdicts.jsonl" in " ".join(on_cluster.output.split()) and "verdicts.jsonl" not in local.output
 
 
 def test_cluster_and_workers_together_are_refused(tmp_path: Path) -> None:

@@ -247,7 +247,8 @@ def batch(
         table.add_row(value, str(sum(counts.values())), ", ".join(f"{name} {n}" for name, n in sorted(counts.items())))
     console.print(table)
     rate = len(results) / seconds if seconds > 0 else float("inf")
+    written = [out / "verdicts.csv", out / "verdicts.json"] + ([] if on_cluster is None else [out / "verdicts.jsonl"])
     console.print(
         f"{len(results)} trials in {seconds:.2f} s ({rate:.0f} trials/s). "
-        f"Wrote {out / 'verdicts.csv'} and {out / 'verdicts.json'}"
+        f"Wrote {', '.join(map(str, written[:-1]))} and {written[-1]}"
     )
