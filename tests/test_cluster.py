@@ -18,6 +18,7 @@ from causalplan.transfer.cluster import (
     JudgeOptions,
     NumberedLines,
     chunks,
+    connect,
     file_chunks,
     run_batch_on_cluster,
     trials_in,
@@ -180,3 +181,15 @@ def test_cluster_and_workers_together_are_refused(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["batch", str(TRIALS), "--cluster", "tcp://127.0.0.1:9", "--workers", "2"])
     assert result.exit_code == 2
     assert "not both" in result.output
+
+
+def test_two_local_clusters_at_once_start_without_a_port_warning(recwarn: pytest.WarningsRecorder) -> None:
+    first, first_cluster = connect(None, 1)
+    second, second_cluster = connect(None, 1)
+    try:
+        assert first.scheduler_info()["address"] != second.scheduler_info()["address"]
+    finally:
+        for client, cluster in ((first, first_cluster), (second, second_cluster)):
+            client.close()  # type: ignore[no-untyped-call]
+            cluster.close()
+    assert not [warning for warning in recwarn if "already in use" in str(warning.message)]

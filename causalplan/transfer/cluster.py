@@ -161,6 +161,9 @@ def connect(address: str | None, workers: int | None) -> tuple[Client, Any]:
             threads_per_worker=1,  # the planners keep per-process state; one trial at a time per process
             processes=True,
             dashboard_address=None,
+            # Without a dashboard the scheduler still serves its HTTP routes, on port 8787 by default:
+            # a free port instead, so a second cluster at once starts without a warning.
+            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
             silence_logs=logging.ERROR,
         )
         return Client(cluster), cluster
