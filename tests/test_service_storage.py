@@ -267,6 +267,18 @@ def test_a_database_that_cannot_be_reached_at_start_is_a_clear_error(caplog: pyt
         create_database_engine("not a url")
 
 
+def test_a_server_that_takes_the_connection_but_never_answers_is_given_up_on(monkeypatch: pytest.MonkeyPatch) -> None:
+    from causalplan.service.db import session
+
+    monkeypatch.setattr(session, "CONNECT_TIMEOUT_SECONDS", 1)
+    with socket.create_server(("127.0.0.1", 0)) as silent:  # the kernel takes connections; nobody answers
+        engine = create_database_engine(f"postgresql+psycopg://nobody@127.0.0.1:{silent.getsockname()[1]}/none")
+        started = time.monotonic()
+        with pytest.raises(StorageError, match=r"did not take a connection within 0 s .*timeout"):
+            upgrade(engine)
+        assert time.monotonic() - started < 5  # without the timeout it waits for as long as TCP keeps trying
+
+
 @contextmanager
 def forwarded_later(target: tuple[str, int], after: float) -> Iterator[int]:
     """Yield a free port that, from ``after`` seconds on, forwards every connection to ``target``.

@@ -14,6 +14,10 @@ WAL_SIZE_LIMIT_BYTES = 8 * 1024 * 1024
 """What SQLite truncates its write-ahead log to after a checkpoint (``PRAGMA journal_size_limit``)."""
 WAL_CHECKPOINT_PAGES = 1000
 """SQLite checkpoints the log when a commit brings it over this many pages (its default, said out loud)."""
+CONNECT_TIMEOUT_SECONDS = 10
+"""How long a new PostgreSQL connection may take (libpq's ``connect_timeout``; a URL's own wins).
+Without it, a server that takes the TCP connection but never answers holds the caller for as
+long as the kernel keeps trying."""
 
 
 def sqlite_path(url: str) -> Path | None:
@@ -61,7 +65,8 @@ def create_database_engine(url: str) -> Engine:
             engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 10})
             event.listen(engine, "connect", _tune_sqlite)
         else:
-            engine = create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20)
+            timeout = {} if "connect_timeout" in parsed.query else {"connect_timeout": CONNECT_TIMEOUT_SECONDS}
+            engine = create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20, connect_args=timeout)
     except Exception as exc:  # noqa: BLE001 - a missing driver or a bad option, reported as such
         raise StorageError(f"Cannot use the database {parsed.render_as_string()}: {exc}") from None
     return engine
