@@ -10,9 +10,10 @@ with ``--workers 1`` and with ``--workers 2``, in that order, in rounds (``--rou
 each figure is the median of its rounds. Rounds, not one run each, because on these shared
 machines the speed of a core drifts within minutes: three runs in a row measure the drift as
 much as the code. The cluster runs include what a user of ``--workers`` waits for: the local
-cluster's start and close. The trials are the paper's scenarios of ``examples/batch/trials.jsonl`` repeated with
-new ids, written to a file as a user would have them. Every run must give the plain batch's
-verdicts (verdicts.json, less the planner's timings and whether its cache answered).
+cluster's start and close. The trials are the paper's scenarios of
+``examples/batch/trials.jsonl`` repeated with new ids, written to a file as a user would have
+them. Every run must give the plain batch's verdicts (verdicts.json, less the planner's timings
+and whether its cache answered).
 
 Targets: two workers at least 1.7x faster than one; one worker at most 10% slower than the
 plain batch. Exit 0 when both are met.

@@ -93,15 +93,16 @@ def wait_until_up(engine: Engine, seconds: float) -> None:
             with engine.connect():
                 return
         except OperationalError as exc:
-            left = deadline - time.monotonic()
+            cause, left = str(exc.orig).strip(), deadline - time.monotonic()
             if left <= 0:
+                database = engine.url.render_as_string()
                 raise StorageError(
-                    f"The database {engine.url.render_as_string()} did not take a connection within "
-                    f"{seconds:g} s (CAUSALPLAN_DATABASE_WAIT_SECONDS): {str(exc.orig).strip()}",
-                    details={"database": engine.url.render_as_string()},
+                    f"The database {database} did not take a connection within {seconds:g} s "
+                    f"(CAUSALPLAN_DATABASE_WAIT_SECONDS): {cause}",
+                    details={"database": database},
                 ) from None
             pause = min(pause * 2, _LONGEST_PAUSE_SECONDS, left)
-            logger.warning("database not up yet (%s); trying again in %.1f s", str(exc.orig).strip(), pause)
+            logger.warning("database not up yet (%s); trying again in %.1f s", cause, pause)
             time.sleep(pause)
 
 
