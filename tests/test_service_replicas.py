@@ -243,12 +243,13 @@ def test_a_load_run_over_two_replicas_loses_no_trial(pair: list[Replica], databa
 
 
 def test_a_job_whose_replica_is_killed_is_finished_by_another(postgres_admin_url: str, tmp_path: Path) -> None:
-    # Long enough that the kill lands mid-way: 200 trials that differ (one label numbered in
-    # each), so no answer is reused and each is planned and simulated.
+    # Long enough that the kill lands mid-way. The trials differ (one label numbered in each),
+    # but equal planning problems under other labels are still answered from the caches: after
+    # the first chunk the rest go fast, so it takes many trials for the job to outlast a poll.
     trial = json.dumps({"model": DESK_LAMP, "mapping": FLASHLIGHT_MAPPING})
     trials = [
         json.dumps({**json.loads(trial.replace("provide electricity", f"provide electricity {n}")), "id": f"t{n}"})
-        for n in range(200)
+        for n in range(2000)
     ]
     with postgres_database(postgres_admin_url) as url:
         doomed = launch(url, tmp_path, "doomed", job_lease_seconds="2")
