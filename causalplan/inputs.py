@@ -74,3 +74,10 @@ def model_from_text(text: str, catalog: Catalog, file_name: str | None = None) -
     if problems:
         return LoadedModel(None, Report(tuple(problems)))
     return model_from_data(data, source, catalog)
+
+
+def clean_text(text: str) -> str:
+    """Return ``text`` with NUL and unpaired surrogates replaced by U+FFFD (storable everywhere)."""
+    if text.isascii() and "\x00" not in text:
+        return text
+    return "".join("\ufffd" if char == "\x00" or "\ud800" <= char <= "\udfff" else char for char in text)

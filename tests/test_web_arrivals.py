@@ -16,8 +16,8 @@ from causalplan.service.db.models import ExperimentRecord, ParticipantRecord
 from causalplan.service.db.session import create_database_engine
 from causalplan.service.web import arrivals, store
 from causalplan.service.web.arrivals import Place, choose
-from causalplan.service.web.design import Condition, Design
-from causalplan.service.web.recruitment import PlatformVisit
+from causalplan.studies.design import Condition, Design
+from causalplan.studies.recruitment import PlatformVisit
 
 TWO_CONDITIONS = Design(
     (

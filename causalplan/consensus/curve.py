@@ -23,6 +23,7 @@ from causalplan.consensus.population import population, scenario_for
 from causalplan.objects.catalog import Catalog
 from causalplan.studies.statistics import wilson
 from causalplan.transfer.batch import Trial
+from causalplan.transfer.generalization import near_or_far
 from causalplan.transfer.verdict import Verdict
 
 CROWD_SIZES = (1, 3, 10, 30, 100)
@@ -140,7 +141,7 @@ def crowd_curve(
                 )
     points = []
     for test in chosen:
-        kind = "near" if catalog.get(test).category == catalog.get(training).category else "far"
+        kind = near_or_far([catalog.get(training).category], catalog.get(test).category)
         for size in sizes:
             hits, means = consensus_hits[(size, test)], individual_means[(size, test)]
             low, high = _wilson(sum(hits), len(hits))

@@ -20,12 +20,12 @@ from cachetools import LRUCache
 
 from causalplan.causal.labels import display_label
 from causalplan.causal.model import CausalModel, Labelling
+from causalplan.limits import LimitExceededError
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import catalog_task
 from causalplan.pddl.writer import compile_task
 from causalplan.planners import pipeline
 from causalplan.planners.result import PlanStatus
-from causalplan.service.errors import LimitExceededError
 from causalplan.service.films import FilmStore, film_key, video_url
 from causalplan.service.pool import jobs
 from causalplan.service.pool.pool import PlannerPool

@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import re
 import uuid
-from collections.abc import Callable, Coroutine, Mapping
+from collections.abc import Callable, Coroutine
 from dataclasses import dataclass
 from typing import Any
 
@@ -22,17 +22,15 @@ from causalplan.causal.diagnostics import Diagnostic, Report
 from causalplan.causal.documents import DuplicateKeyError, SourceMap, located_duplicate_key, refuse_duplicate_keys
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.inputs import mapping_from_data, model_from_data
+from causalplan.limits import check_labelling_limits, check_model_limits
 from causalplan.objects.catalog import Catalog
 from causalplan.service.answers import model_hash, resolve_planner, resolve_time_limit
 from causalplan.service.db.crud import MAX_NESTING, ClientIds, clean_json, get_model, new_model_record, save
 from causalplan.service.db.models import ModelRecord
 from causalplan.service.deps import Services, open_session
-from causalplan.service.errors import InvalidMappingError, InvalidModelError, LimitExceededError
+from causalplan.service.errors import InvalidMappingError, InvalidModelError
 from causalplan.service.schemas.plans import PlanIn
-from causalplan.settings import Settings
 
-RULE_LENGTH_FACTOR = 4
-"""A rule may be this many labels long (as in ``causalplan.causal.model``)."""
 MAX_NUMBER_DIGITS = 100
 """No document needs a longer integer; Python refuses ones over 4,300 digits anyway."""
 
@@ -125,60 +123,6 @@ class StrictJSONRoute(APIRoute):
             return await handler(StrictJSONRequest(request.scope, request.receive))
 
         return strict_handler
-
-
-def _too_long(settings: Settings, label: object) -> bool:
-    return isinstance(label, str) and len(label) > settings.max_label_length
-
-
-def _over_limit(code: str, what_is: str, limit: int, actual: int, **where: object) -> LimitExceededError:
-    """Return the error of a document over one limit: ``what_is`` says what it has, then the limit."""
-    return LimitExceededError(
-        code, f"{what_is}; the limit is {limit}.", details={"limit": limit, "actual": actual, **where}
-    )
-
-
-def check_labelling_limits(document: Mapping[str, Any], settings: Settings, what: str) -> None:
-    """Raise LimitExceededError when a model's or mapping's ``functions`` are over the limits."""
-    functions = document.get("functions")
-    if not isinstance(functions, Mapping):
-        return  # the reader reports the wrong type with its own code
-    if len(functions) > settings.max_parts:
-        count = len(functions)
-        raise _over_limit(
-            "too_many_parts", f"The {what} labels {count} parts", settings.max_parts, count, field="functions"
-        )
-    for part, labels in functions.items():
-        items = labels if isinstance(labels, list) else [labels]
-        if len(items) > settings.max_labels_per_part:
-            what_is = f"Part '{part}' of the {what} has {len(items)} function labels"
-            raise _over_limit("too_many_labels", what_is, settings.max_labels_per_part, len(items), part=str(part))
-        for label in items:
-            if _too_long(settings, label):
-                what_is = f"A function label of part '{part}' is {len(label)} characters long"
-                raise _over_limit("label_too_long", what_is, settings.max_label_length, len(label), part=str(part))
-
-
-def check_model_limits(document: Mapping[str, Any], settings: Settings) -> None:
-    """Raise LimitExceededError when a model document is over the service's limits."""
-    check_labelling_limits(document, settings, "model")
-    goal = document.get("goal")
-    if isinstance(goal, str) and _too_long(settings, goal):
-        what_is = f"The goal is {len(goal)} characters long"
-        raise _over_limit("label_too_long", what_is, settings.max_label_length, len(goal), field="goal")
-    rules = document.get("rules")
-    if isinstance(rules, str):
-        rules = [line for line in rules.splitlines() if line.strip()]
-    if not isinstance(rules, list):
-        return
-    if len(rules) > settings.max_rules:
-        count = len(rules)
-        raise _over_limit("too_many_rules", f"The model has {count} rules", settings.max_rules, count, field="rules")
-    longest = RULE_LENGTH_FACTOR * settings.max_label_length
-    for index, rule in enumerate(rules, start=1):
-        if isinstance(rule, str) and len(rule) > longest:
-            what_is = f"Rule {index} is {len(rule)} characters long"
-            raise _over_limit("label_too_long", what_is, longest, len(rule), rule=index)
 
 
 @dataclass

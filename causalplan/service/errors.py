@@ -7,6 +7,8 @@ handler in ``main`` turn every one of them into ``{"error": {"code", "message", 
 from __future__ import annotations
 
 from causalplan.errors import CatalogError, CausalPlanError, InputFileError, PlannerUnavailableError, UnknownObjectError
+from causalplan.limits import LimitExceededError
+from causalplan.studies.errors import InvalidExperimentError, InvalidRecruitmentError, StepLockedError
 
 
 class ServiceError(CausalPlanError):
@@ -41,17 +43,6 @@ class InvalidMappingError(ServiceError):
 
     code = "invalid_mapping"
     status_code = 422
-
-
-class LimitExceededError(ServiceError):
-    """A request is over one of the service's limits (parts, rules, label length, time limit)."""
-
-    code = "limit_exceeded"
-    status_code = 422
-
-    def __init__(self, code: str, message: str, *, details: dict[str, object] | None = None) -> None:
-        super().__init__(message, details=details)
-        self.code = code
 
 
 class BodyTooLargeError(ServiceError):
@@ -192,6 +183,10 @@ _LOWER_STATUS: dict[type[CausalPlanError], int] = {
     InputFileError: 422,
     PlannerUnavailableError: 503,
     CatalogError: 500,
+    LimitExceededError: 422,
+    InvalidExperimentError: 422,
+    InvalidRecruitmentError: 422,
+    StepLockedError: 409,
 }
 
 

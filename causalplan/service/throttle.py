@@ -28,7 +28,8 @@ from sqlalchemy import CursorResult, Engine, and_, delete, func, insert, select,
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from causalplan.service.db.crud import clean_text, storage_errors
+from causalplan.inputs import clean_text
+from causalplan.service.db.crud import storage_errors
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH, FailedAttemptRecord, WindowCountRecord
 from causalplan.service.errors import TooManyAttemptsError
 

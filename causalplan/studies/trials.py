@@ -16,6 +16,7 @@ from typing import Any
 
 from causalplan.errors import CausalPlanError, UnknownObjectError
 from causalplan.objects.catalog import Catalog
+from causalplan.transfer.generalization import near_or_far
 
 VERDICTS = ("transfers", "fails", "invalid", "undecided")
 
@@ -127,7 +128,7 @@ def trial_rows(export: Mapping[str, Any], catalog: Catalog) -> list[TrialRow]:
                 test_object=test,
                 test_category=test_category,
                 trained_category=test_category in trained,
-                generalization="near" if test_category in trained else "far",
+                generalization=near_or_far(trained, test_category),
                 position=int(item.get("position") or 0),
                 verdict=verdict,
                 decided_by=str(item.get("decided_by") or ""),

@@ -24,6 +24,7 @@ from causalplan.planners import fd
 from causalplan.planners.fd import DEFAULT_TIME_LIMIT
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult, PlanStatus, PlanStep
+from causalplan.transfer.generalization import near_or_far
 
 if TYPE_CHECKING:
     from causalplan.inputs import LoadedMapping, LoadedModel
@@ -92,7 +93,7 @@ def generalization(training: AssemblyObject, test: AssemblyObject) -> str:
     """Return ``near`` (same category), ``far`` (other category) or ``same_object``."""
     if training.id == test.id:
         return "same_object"
-    return "near" if training.category == test.category else "far"
+    return near_or_far([training.category], test.category)
 
 
 def invalid_verdict(

@@ -20,6 +20,7 @@ from sqlalchemy import Engine, func, select
 from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session
 
+from causalplan.inputs import clean_text
 from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH, ModelRecord, TrialRecord, utc_now
 from causalplan.service.errors import InvalidRequestError, ModelNotFoundError, StorageError
 
@@ -54,13 +55,6 @@ def storage_errors(session: Session | None = None) -> Iterator[None]:
             "The database could not be used, so nothing was stored; the server log says why.",
             details={"operation": "storage"},
         ) from None
-
-
-def clean_text(text: str) -> str:
-    """Return ``text`` with NUL and unpaired surrogates replaced by U+FFFD (storable everywhere)."""
-    if text.isascii() and "\x00" not in text:
-        return text
-    return "".join("\ufffd" if char == "\x00" or "\ud800" <= char <= "\udfff" else char for char in text)
 
 
 def clean_json(value: object, what: str = "the document") -> Any:

@@ -26,6 +26,8 @@ from sqlalchemy import (
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
+from causalplan.studies.recruitment import MAX_PLATFORM_ID_LENGTH
+
 MAX_CLIENT_ID_LENGTH = 128
 """Longest participant or session id a client may send."""
 
@@ -161,10 +163,6 @@ class ParticipantTrialRecord(Base):
 
     participant: Mapped[ParticipantRecord] = relationship(back_populates="trials")
     trial: Mapped[TrialRecord] = relationship()
-
-
-MAX_PLATFORM_ID_LENGTH = 64
-"""Longest platform id (Prolific's are 24 hex digits, MTurk's about 14 to 30 letters and digits)."""
 
 
 class StudyPlaceRecord(Base):

@@ -15,7 +15,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from causalplan.service.errors import InvalidRequestError, LimitExceededError
+from causalplan.limits import LimitExceededError
+from causalplan.service.errors import InvalidRequestError
 from causalplan.service.jobs.work import Progress, in_pool
 
 if TYPE_CHECKING:

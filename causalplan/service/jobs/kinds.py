@@ -17,7 +17,8 @@ from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from causalplan.service.errors import InvalidRequestError, LimitExceededError
+from causalplan.limits import LimitExceededError
+from causalplan.service.errors import InvalidRequestError
 from causalplan.service.jobs.fit_estimation import prepare_fit_estimation, run_fit_estimation_job
 from causalplan.service.jobs.video import prepare_video, run_video_job
 from causalplan.service.jobs.work import Kind, Progress, in_pool

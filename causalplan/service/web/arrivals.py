@@ -27,8 +27,8 @@ from causalplan.service.db.models import (
 )
 from causalplan.service.errors import StorageError
 from causalplan.service.web import store
-from causalplan.service.web.design import Condition, Design
-from causalplan.service.web.recruitment import PlatformVisit
+from causalplan.studies.design import Condition, Design
+from causalplan.studies.recruitment import PlatformVisit
 
 MAX_CLAIM_ATTEMPTS = 50
 """Tries to take a place while others take them at the same moment (each lost race means one was taken)."""

@@ -10,6 +10,7 @@ from typing import Any
 
 from fastapi import Response
 
+from causalplan.causal.diagram import diagram_svg
 from causalplan.causal.model import CausalModel
 from causalplan.causal.render import DRAW_LOCK
 from causalplan.errors import CausalPlanError
@@ -17,9 +18,8 @@ from causalplan.objects.model import AssemblyObject
 from causalplan.service.deps import Services
 from causalplan.service.routes.models import SVG_SECURITY_HEADERS
 from causalplan.service.web import pictures
-from causalplan.service.web.diagram import diagram_svg
 from causalplan.service.web.pictures import PictureCache
-from causalplan.service.web.results import Rate, chart_svg
+from causalplan.studies.results import Rate, chart_svg
 
 logger = logging.getLogger(__name__)
 

@@ -21,19 +21,6 @@ class ExperimentNotFoundError(NotFoundError):
     code = "experiment_not_found"
 
 
-class StepLockedError(ServiceError):
-    """The participant's work on this step is finished (or not reached yet), so it cannot change."""
-
-    code = "step_locked"
-    status_code = 409
-
-
-class InvalidExperimentError(InvalidRequestError):
-    """An experiment definition is incomplete or inconsistent; ``details['errors']`` lists each problem."""
-
-    code = "invalid_experiment"
-
-
 class InvalidFormError(InvalidRequestError):
     """A submitted form is malformed (a field missing, repeated, too long, or not one of the choices)."""
 

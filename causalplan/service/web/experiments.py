@@ -18,20 +18,19 @@ from causalplan.objects.catalog import Catalog
 from causalplan.service.db.models import ExperimentRecord, ParticipantRecord
 from causalplan.service.responses import SafeJSONResponse, csv_bytes
 from causalplan.service.web import arrivals, store
-from causalplan.service.web.design import Design, read_design
-from causalplan.service.web.journey import Journey
-from causalplan.service.web.recruitment import Recruitment, read_quotas, read_recruitment
-from causalplan.service.web.results import (
+from causalplan.service.web.exports import (
     PARTICIPANT_COLUMNS,
     TRIAL_COLUMNS,
-    Rate,
     experiment_dict,
     participant_dict,
-    transfer_rates,
     trial_dict,
 )
 from causalplan.service.web.schemas import ExperimentIn, ExperimentOut, ParticipantOut, RecruitmentIn, RecruitmentOut
+from causalplan.service.web.store import ParticipantJourney
 from causalplan.studies.analysis import Analysis, analyse
+from causalplan.studies.design import Design, read_design
+from causalplan.studies.recruitment import Recruitment, read_quotas, read_recruitment
+from causalplan.studies.results import Rate, transfer_rates
 from causalplan.studies.trials import ExportError, trial_rows
 
 
@@ -75,7 +74,7 @@ def participant_link(request: Request, participant: ParticipantRecord) -> str:
 def progress(participant: ParticipantRecord, catalog: Catalog) -> str:
     """Return how far a participant got, in words."""
     try:
-        return Journey.of(participant, catalog).progress()
+        return ParticipantJourney.of(participant, catalog).progress()
     except UnknownObjectError:  # the catalog lost one of the experiment's objects
         return participant.stage
 

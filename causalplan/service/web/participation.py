@@ -20,12 +20,12 @@ from causalplan.service.db.models import ParticipantTrialRecord, utc_now
 from causalplan.service.deps import Services
 from causalplan.service.documents import first_errors
 from causalplan.service.errors import InvalidModelError
-from causalplan.service.web.errors import StepLockedError
-from causalplan.service.web.journey import Journey
-from causalplan.service.web.study import MappingCheck, ParticipantModel, Stage, model_on
+from causalplan.service.web.store import ParticipantJourney
+from causalplan.studies.errors import StepLockedError
+from causalplan.studies.steps import MappingCheck, ParticipantModel, Stage, model_on
 
 
-def client_ids(journey: Journey) -> ClientIds:
+def client_ids(journey: ParticipantJourney) -> ClientIds:
     """Return who the stored records are from: the participant's id and the experiment's."""
     return ClientIds(str(journey.participant.id), f"experiment:{journey.participant.experiment_id}")
 
@@ -44,7 +44,7 @@ def picture_url(code: str, object_id: str, steps: list[dict[str, Any]] | None) -
     return f"/p/{code}/pictures/{object_id}.png?fits={','.join(fits)}" if fits and all(fits) else None
 
 
-def plans(services: Services, journey: Journey, participant_model: ParticipantModel) -> list[dict[str, Any]]:
+def plans(services: Services, journey: ParticipantJourney, participant_model: ParticipantModel) -> list[dict[str, Any]]:
     """Return the robot's plan of the (valid) model on each training object, with where its picture is."""
     planner = default_planner()
     found = []
@@ -68,7 +68,9 @@ def plans(services: Services, journey: Journey, participant_model: ParticipantMo
     return found
 
 
-def submit_model(session: Session, journey: Journey, participant_model: ParticipantModel, check: LoadedModel) -> None:
+def submit_model(
+    session: Session, journey: ParticipantJourney, participant_model: ParticipantModel, check: LoadedModel
+) -> None:
     """Store the valid model (as the first training object's model file), freeze it, and begin step 3."""
     journey.require_open(Stage.STEP2)
     if not check.is_valid or check.model is None:
@@ -90,7 +92,9 @@ def submit_model(session: Session, journey: Journey, participant_model: Particip
         session.commit()
 
 
-def run_trial(services: Services, session: Session, journey: Journey, index: int, mapping: MappingCheck) -> None:
+def run_trial(
+    services: Services, session: Session, journey: ParticipantJourney, index: int, mapping: MappingCheck
+) -> None:
     """Try the participant's model on test object ``index`` through their mapping; store the trial.
 
     The caller has checked that the participant has no trial on this object yet (a second one

@@ -21,10 +21,11 @@ from causalplan.service.db.models import (
     utc_now,
 )
 from causalplan.service.errors import InvalidRequestError
-from causalplan.service.web.counterbalance import object_orders
-from causalplan.service.web.design import Condition, Design
 from causalplan.service.web.errors import ExperimentNotFoundError, ParticipantNotFoundError
-from causalplan.service.web.study import Stage
+from causalplan.studies.counterbalance import object_orders
+from causalplan.studies.design import Condition, Design
+from causalplan.studies.journey import Journey
+from causalplan.studies.steps import Stage
 
 CODE_ALPHABET = string.ascii_letters + string.digits
 CODE_LENGTH = 22
@@ -35,6 +36,7 @@ mistakes one starting with '-' for a formula.
 """
 CODE_PATTERN = re.compile(r"[A-Za-z0-9_-]{16,64}")
 MAX_LINKS_PER_REQUEST = 500
+
 DEMO_NAME = "Try it yourself: desk lamp, then flashlight"
 
 
@@ -195,6 +197,13 @@ def participants_of(session: Session, experiment_id: uuid.UUID) -> list[Particip
         )
 
 
+@dataclass
+class ParticipantJourney(Journey):
+    """A stored participant's way through their experiment (the whole record, for storing it)."""
+
+    participant: ParticipantRecord
+
+
 @dataclass(frozen=True)
 class StoredTrial:
     """One step-3 trial of an experiment, with its participant and the stored trial."""
@@ -202,6 +211,18 @@ class StoredTrial:
     link: ParticipantTrialRecord
     participant: ParticipantRecord
     trial: TrialRecord
+
+    @property
+    def condition(self) -> str:
+        return self.participant.condition
+
+    @property
+    def test_object(self) -> str:
+        return self.link.test_object
+
+    @property
+    def verdict(self) -> str:
+        return self.trial.verdict
 
 
 def _stored_trials() -> Select[ParticipantTrialRecord, ParticipantRecord, TrialRecord]:

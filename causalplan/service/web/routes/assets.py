@@ -11,9 +11,9 @@ from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, Setting
 from causalplan.service.errors import NotFoundError
 from causalplan.service.web import store
 from causalplan.service.web.demo import DemoStarts
-from causalplan.service.web.design import Condition, Design
 from causalplan.service.web.drawings import SVG_HEADERS, part_picture
 from causalplan.service.web.templating import PageRoute, redirect, render
+from causalplan.studies.design import Condition, Design
 
 router = APIRouter(include_in_schema=False)
 pages = APIRouter(route_class=PageRoute, include_in_schema=False)

@@ -11,22 +11,24 @@ from typing import Any
 from fastapi import APIRouter, Request, Response
 
 from causalplan.service.deps import SessionDep
-from causalplan.service.web import recruitment, store
+from causalplan.service.web import arrivals, store
 from causalplan.service.web.errors import InvalidFormError
 from causalplan.service.web.forms import read_form
-from causalplan.service.web.journey import Journey
 from causalplan.service.web.routes.journeys import JourneyDep, common, framing, here, page
-from causalplan.service.web.screening import too_fast
-from causalplan.service.web.study import Stage
+from causalplan.service.web.store import ParticipantJourney
 from causalplan.service.web.templating import PageRoute, render
+from causalplan.studies import recruitment
+from causalplan.studies.screening import too_fast
+from causalplan.studies.steps import Stage
 
 router = APIRouter(prefix="/p/{code}", route_class=PageRoute, include_in_schema=False)
 
 
-def save_progress(session: SessionDep, journey: Journey) -> None:
+def save_progress(session: SessionDep, journey: ParticipantJourney) -> None:
     """Store the participant's move; one who has just finished too fast is flagged, with the reason."""
     flagged = too_fast(journey)
-    store.save(session, journey.participant, *([flagged] if flagged is not None else []))
+    excluded = [arrivals.exclusion(journey.participant, flagged.reason, flagged.detail)] if flagged else []
+    store.save(session, journey.participant, *excluded)
 
 
 @router.get("/about")
@@ -56,7 +58,7 @@ async def finish_about(request: Request, journey: JourneyDep, session: SessionDe
     return here(journey)
 
 
-def finish_page(request: Request, journey: Journey, template: str, outcome: str, **context: Any) -> Response:
+def finish_page(request: Request, journey: ParticipantJourney, template: str, outcome: str, **context: Any) -> Response:
     """Return a page that ends the study, with the way back to the participant's platform."""
     arrival = journey.participant.arrival
     codes = {"completed": journey.recruitment.completion_code, "screened_out": journey.recruitment.screened_out_code}

@@ -8,26 +8,26 @@ from fastapi import Depends, Path, Request, Response
 
 from causalplan.service.deps import CatalogDep, SessionDep
 from causalplan.service.web import store
-from causalplan.service.web.journey import Journey
-from causalplan.service.web.recruitment import MTURK_FRAME_ORIGINS
+from causalplan.service.web.store import ParticipantJourney
 from causalplan.service.web.templating import redirect, render
+from causalplan.studies.recruitment import MTURK_FRAME_ORIGINS
 
 Code = Annotated[str, Path(max_length=64)]
 Number = Annotated[int, Path(ge=1, le=100)]
 
 
-def get_journey(code: Code, session: SessionDep, catalog: CatalogDep) -> Journey:
-    return Journey.of(store.participant_by_code(session, code), catalog)
+def get_journey(code: Code, session: SessionDep, catalog: CatalogDep) -> ParticipantJourney:
+    return ParticipantJourney.of(store.participant_by_code(session, code), catalog)
 
 
-JourneyDep = Annotated[Journey, Depends(get_journey)]
+JourneyDep = Annotated[ParticipantJourney, Depends(get_journey)]
 
 
-def here(journey: Journey) -> Response:
+def here(journey: ParticipantJourney) -> Response:
     return redirect(f"/p/{journey.participant.code}/{journey.current_page()}")
 
 
-def common(journey: Journey) -> dict[str, Any]:
+def common(journey: ParticipantJourney) -> dict[str, Any]:
     """Return what every participant page shows: the code, where they are, the steps and objects."""
     return {
         "code": journey.participant.code,
@@ -39,13 +39,15 @@ def common(journey: Journey) -> dict[str, Any]:
     }
 
 
-def framing(journey: Journey) -> tuple[str, ...]:
+def framing(journey: ParticipantJourney) -> tuple[str, ...]:
     """Return the origins that may frame the participant's pages (MTurk's, for MTurk workers)."""
     arrival = journey.participant.arrival
     return MTURK_FRAME_ORIGINS if arrival is not None and arrival.platform == "mturk" else ()
 
 
-def page(request: Request, journey: Journey, template: str, status_code: int = 200, **context: Any) -> Response:
+def page(
+    request: Request, journey: ParticipantJourney, template: str, status_code: int = 200, **context: Any
+) -> Response:
     """Return one of the participant's pages (secret address; framed by their platform when it must be)."""
     return render(
         request,

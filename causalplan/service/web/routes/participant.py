@@ -15,17 +15,18 @@ from causalplan.causal.diagnostics import Report
 from causalplan.inputs import LoadedModel
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep
-from causalplan.service.web import store
+from causalplan.service.web import arrivals, store
 from causalplan.service.web.drawings import document_key
 from causalplan.service.web.errors import InvalidFormError
 from causalplan.service.web.forms import Form, read_form
-from causalplan.service.web.journey import Journey
 from causalplan.service.web.participation import picture_url, run_trial, submit_model
 from causalplan.service.web.routes.ending import save_progress
 from causalplan.service.web.routes.journeys import JourneyDep, Number, here, page
 from causalplan.service.web.schemas import MAX_PART_TEXT, MAX_RULES_TEXT
-from causalplan.service.web.screening import comprehension_try
-from causalplan.service.web.study import (
+from causalplan.service.web.store import ParticipantJourney
+from causalplan.service.web.templating import PageRoute, redirect
+from causalplan.studies.screening import comprehension_try
+from causalplan.studies.steps import (
     Stage,
     check_functions,
     check_mapping,
@@ -35,8 +36,7 @@ from causalplan.service.web.study import (
     rules_from_text,
     unusable_label_notes,
 )
-from causalplan.service.web.templating import PageRoute, redirect
-from causalplan.service.web.tutorial import (
+from causalplan.studies.tutorial import (
     EXAMPLE_RULES,
     QUESTIONS,
     TUTORIAL_FUNCTIONS,
@@ -82,7 +82,7 @@ def current(journey: JourneyDep) -> Response:
 
 def _tutorial_page(
     request: Request,
-    journey: Journey,
+    journey: ParticipantJourney,
     catalog: CatalogDep,
     settings: SettingsDep,
     feedback: bool = False,
@@ -115,7 +115,7 @@ def _tutorial_page(
     )
 
 
-def _tries_left(journey: Journey) -> int | None:
+def _tries_left(journey: ParticipantJourney) -> int | None:
     """Return how many tries of the comprehension check are left (None: no limit, or passed)."""
     limit = journey.recruitment.comprehension_tries
     if limit is None or journey.has_passed_comprehension():
@@ -142,7 +142,9 @@ async def finish_tutorial(
     wrong = wrong_answers(answers)
     excluded = comprehension_try(journey, answers, not wrong)
     if excluded is not None:
-        store.save(session, journey.participant, excluded)
+        store.save(
+            session, journey.participant, arrivals.exclusion(journey.participant, excluded.reason, excluded.detail)
+        )
         return here(journey)
     rules, _ = rules_from_text(rules_text)
     practice_ok = bool(rules) and check_model(practice_model(tuple(rules), catalog), catalog, settings).is_valid
@@ -159,7 +161,7 @@ async def finish_tutorial(
 
 def _step1_page(
     request: Request,
-    journey: Journey,
+    journey: ParticipantJourney,
     index: int,
     report: Report | None = None,
     status_code: int = 200,
@@ -222,7 +224,7 @@ async def finish_step1(
 
 
 def _step2_page(
-    request: Request, journey: Journey, catalog: CatalogDep, settings: SettingsDep, status_code: int = 200
+    request: Request, journey: ParticipantJourney, catalog: CatalogDep, settings: SettingsDep, status_code: int = 200
 ) -> Response:
     model = journey.draft_model()
     rules_text = journey.rules_text()
@@ -271,7 +273,7 @@ async def finish_step2(
 
 def _step3_page(
     request: Request,
-    journey: Journey,
+    journey: ParticipantJourney,
     index: int,
     session: SessionDep,
     report: Report | None = None,

@@ -14,8 +14,6 @@ from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, Setting
 from causalplan.service.errors import InvalidRequestError, NotFoundError
 from causalplan.service.web import store
 from causalplan.service.web.drawings import document_key, fresh_svg, graph_svg, plan_picture
-from causalplan.service.web.errors import StepLockedError
-from causalplan.service.web.journey import Journey
 from causalplan.service.web.participation import invalid_model_error, plans
 from causalplan.service.web.routes.journeys import JourneyDep
 from causalplan.service.web.routes.participant import check_view, graph_url
@@ -30,8 +28,10 @@ from causalplan.service.web.schemas import (
     SavedOut,
     TutorialDraftIn,
 )
-from causalplan.service.web.study import ParticipantModel, Stage, check_model, rules_from_text
-from causalplan.service.web.tutorial import QUESTIONS, practice_model
+from causalplan.service.web.store import ParticipantJourney
+from causalplan.studies.errors import StepLockedError
+from causalplan.studies.steps import ParticipantModel, Stage, check_model, rules_from_text
+from causalplan.studies.tutorial import QUESTIONS, practice_model
 
 router = APIRouter(prefix="/p/{code}", include_in_schema=False)
 
@@ -47,7 +47,7 @@ def _unknown_parts(parts: list[str], allowed: tuple[str, ...], object_name: str)
 
 
 def _save_draft(
-    journey: Journey, draft: TutorialDraftIn | FunctionsDraftIn | MappingDraftIn, session: SessionDep
+    journey: ParticipantJourney, draft: TutorialDraftIn | FunctionsDraftIn | MappingDraftIn, session: SessionDep
 ) -> None:
     if isinstance(draft, TutorialDraftIn):
         journey.require_open(Stage.TUTORIAL)

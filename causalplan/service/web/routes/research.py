@@ -14,19 +14,20 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Query, Request, Response
 from pydantic import ValidationError
 
+from causalplan.errors import CausalPlanError
 from causalplan.service.db.models import ExperimentRecord
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep, check_research_token
 from causalplan.service.errors import InvalidRequestError, TooManyAttemptsError
 from causalplan.service.web import experiments, store
 from causalplan.service.web.auth import ResearchPageDep, sign_in, sign_out
 from causalplan.service.web.drawings import fresh_svg, rates_chart
-from causalplan.service.web.errors import InvalidExperimentError
 from causalplan.service.web.forms import Form, read_form
-from causalplan.service.web.recruitment import DEMOGRAPHICS
 from causalplan.service.web.schemas import ExperimentIn, RecruitmentIn
 from causalplan.service.web.templating import PageRoute, redirect, render
 from causalplan.settings import Settings
+from causalplan.studies.errors import InvalidExperimentError, InvalidRecruitmentError
 from causalplan.studies.outputs import plot
+from causalplan.studies.recruitment import DEMOGRAPHICS
 
 router = APIRouter(prefix="/research", route_class=PageRoute, include_in_schema=False)
 
@@ -146,7 +147,7 @@ def _experiment_values(form: Form) -> dict[str, Any]:
     }
 
 
-def _problems(exc: ValidationError | InvalidRequestError) -> list[str]:
+def _problems(exc: ValidationError | CausalPlanError) -> list[str]:
     """Return what is wrong with a submitted research form, one sentence a problem, as the page lists them."""
     if isinstance(exc, ValidationError):
         return [" > ".join(str(piece) for piece in e["loc"]) + f": {e['msg']}" for e in exc.errors()]
@@ -243,7 +244,7 @@ async def set_recruitment(
             }
         )
         experiments.set_recruitment(session, experiment, body)
-    except (ValidationError, InvalidRequestError) as exc:
+    except (ValidationError, InvalidRequestError, InvalidRecruitmentError) as exc:
         return _experiment_page(request, session, catalog, experiment, _problems(exc))
     return redirect(f"/research/experiments/{experiment_id}#recruiting")
 

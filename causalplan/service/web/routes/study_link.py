@@ -16,11 +16,12 @@ from fastapi import APIRouter, Request, Response
 
 from causalplan.service.db.models import ExperimentRecord
 from causalplan.service.deps import SessionDep
-from causalplan.service.web import arrivals, recruitment, store
+from causalplan.service.web import arrivals, store
 from causalplan.service.web.errors import InvalidFormError
 from causalplan.service.web.forms import read_form
-from causalplan.service.web.recruitment import MTURK_FRAME_ORIGINS, PlatformVisit, Recruitment, finish, read_visit
 from causalplan.service.web.templating import PageRoute, redirect, render
+from causalplan.studies import recruitment
+from causalplan.studies.recruitment import MTURK_FRAME_ORIGINS, PlatformVisit, Recruitment, finish, read_visit
 
 router = APIRouter(prefix="/s/{experiment_id}", route_class=PageRoute, include_in_schema=False)
 

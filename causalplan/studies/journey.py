@@ -12,20 +12,50 @@ import copy
 import uuid
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
-from typing import Any
+from typing import Any, Protocol, Self
 
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject
-from causalplan.service.db.models import ParticipantRecord, utc_now
-from causalplan.service.web.design import Design
-from causalplan.service.web.errors import StepLockedError
-from causalplan.service.web.recruitment import Recruitment
-from causalplan.service.web.study import ParticipantModel, Stage, labels_from_text, rules_from_text
+from causalplan.studies.design import Design
+from causalplan.studies.errors import StepLockedError
+from causalplan.studies.recruitment import Recruitment
+from causalplan.studies.steps import ParticipantModel, Stage, labels_from_text, rules_from_text
 
 
 def as_utc(moment: datetime) -> datetime:
     """Return ``moment`` timezone-aware (SQLite gives back stored UTC times without their zone)."""
     return moment if moment.tzinfo is not None else moment.replace(tzinfo=UTC)
+
+
+class StoredExperiment(Protocol):
+    """What a journey reads of a stored experiment: its design and recruiting settings, as dicts."""
+
+    @property
+    def design(self) -> dict[str, Any]: ...
+
+    @property
+    def recruitment(self) -> dict[str, Any] | None: ...
+
+
+class StoredParticipant(Protocol):
+    """What a journey reads and writes of a stored participant (the service's record has all of it)."""
+
+    stage: str
+    position: int
+    work: dict[str, Any]
+    model_id: uuid.UUID | None
+    started_at: datetime | None
+    updated_at: datetime | None
+    finished_at: datetime | None
+
+    @property
+    def training_order(self) -> list[str]: ...
+
+    @property
+    def test_order(self) -> list[str]: ...
+
+    @property
+    def experiment(self) -> StoredExperiment: ...
 
 
 MAX_PLAN_REQUESTS_KEPT = 50
@@ -36,14 +66,14 @@ MAX_PLAN_REQUESTS_KEPT = 50
 class Journey:
     """A participant record with its experiment's design and objects (in the participant's order)."""
 
-    participant: ParticipantRecord
+    participant: StoredParticipant
     design: Design
     training: tuple[AssemblyObject, ...]
     tests: tuple[AssemblyObject, ...]
     recruitment: Recruitment = field(default_factory=Recruitment)
 
     @classmethod
-    def of(cls, participant: ParticipantRecord, catalog: Catalog) -> Journey:
+    def of(cls, participant: StoredParticipant, catalog: Catalog) -> Self:
         """Return the journey of a stored participant (UnknownObjectError if the catalog lost an object)."""
         design = Design.from_dict(participant.experiment.design)
         return cls(
@@ -123,7 +153,7 @@ class Journey:
         self._touch()
 
     def _touch(self) -> None:
-        now = utc_now()
+        now = datetime.now(UTC)
         self.participant.updated_at = now
         if self.participant.started_at is None:
             self.participant.started_at = now
@@ -146,7 +176,7 @@ class Journey:
         work = self._work()
         tutorial = work.setdefault("tutorial", {})
         tries = tutorial.setdefault("tries", [])
-        tries.append({"at": utc_now().isoformat(), "answers": answers, "all_correct": all_correct})
+        tries.append({"at": datetime.now(UTC).isoformat(), "answers": answers, "all_correct": all_correct})
         if all_correct:
             tutorial.setdefault("passed_on_try", len(tries))
         self._save(work)
@@ -272,7 +302,7 @@ class Journey:
 
     def _move(self, stage: Stage, position: int) -> None:
         # The time on the page being left is kept with the work (the export's step_seconds).
-        now = utc_now()
+        now = datetime.now(UTC)
         work = self._work()
         entered = work.get("entered_at")
         since = as_utc(datetime.fromisoformat(entered) if entered else self.participant.started_at or now)

@@ -7,11 +7,11 @@ from datetime import timedelta
 
 from causalplan.objects.catalog import Catalog
 from causalplan.service.db.models import ParticipantRecord, utc_now
-from causalplan.service.web.design import Condition, Design
-from causalplan.service.web.journey import Journey
-from causalplan.service.web.recruitment import Recruitment
-from causalplan.service.web.screening import comprehension_try, too_fast
-from causalplan.service.web.study import Stage
+from causalplan.studies.design import Condition, Design
+from causalplan.studies.journey import Journey
+from causalplan.studies.recruitment import Recruitment
+from causalplan.studies.screening import comprehension_try, too_fast
+from causalplan.studies.steps import Stage
 
 DESIGN = Design((Condition("near", ("desk_lamp",), ("flashlight",)),))
 RIGHT = {"sticker": "no", "diffuse": "no", "and": "and"}
@@ -40,7 +40,7 @@ def test_two_wrong_tries_screen_out_under_a_two_try_rule(catalog: Catalog) -> No
     assert comprehension_try(journey, WRONG, all_correct=False) is None
     excluded = comprehension_try(journey, WRONG, all_correct=False)
     assert excluded is not None and excluded.reason == "comprehension"
-    assert excluded.participant_id == journey.participant.id
+    assert excluded.detail == "not every comprehension question right within 2 tries"
     assert journey.stage is Stage.SCREENED and journey.participant.finished_at is not None
     assert [item["all_correct"] for item in journey.tutorial_work()["tries"]] == [False, False]
 

@@ -24,10 +24,9 @@ from causalplan.causal.labels import display_label, normalize_label
 from causalplan.causal.model import CausalModel, read_model
 from causalplan.causal.validation import ObjectSummary, validate_model
 from causalplan.inputs import LoadedMapping, LoadedModel, mapping_from_data, model_from_data
+from causalplan.limits import LimitExceededError, check_labelling_limits, check_model_limits
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject
-from causalplan.service.documents import check_labelling_limits, check_model_limits
-from causalplan.service.errors import LimitExceededError
 from causalplan.settings import Settings
 
 

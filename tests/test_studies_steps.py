@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import pytest
 
+from causalplan.causal.diagram import diagram_svg
 from causalplan.causal.documents import SourceMap
 from causalplan.inputs import model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.service.responses import csv_bytes
 from causalplan.service.web.auth import cookie_session, session_cookie
-from causalplan.service.web.design import read_design
-from causalplan.service.web.diagram import diagram_svg
-from causalplan.service.web.errors import InvalidExperimentError
-from causalplan.service.web.study import (
+from causalplan.settings import Settings
+from causalplan.studies.design import read_design
+from causalplan.studies.errors import InvalidExperimentError
+from causalplan.studies.steps import (
     ParticipantModel,
     check_functions,
     check_mapping,
@@ -23,8 +24,7 @@ from causalplan.service.web.study import (
     rule_lines,
     rules_from_text,
 )
-from causalplan.service.web.tutorial import EXAMPLE_RULES, QUESTIONS, practice_model, wrong_answers
-from causalplan.settings import Settings
+from causalplan.studies.tutorial import EXAMPLE_RULES, QUESTIONS, practice_model, wrong_answers
 
 SETTINGS = Settings(database_url="sqlite://")
 DESK_LAMP = {"base_with_cables": ["provide electricity"], "light_bulb": ["turn electricity into light"]}

@@ -11,7 +11,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from causalplan.objects.catalog import Catalog
-from causalplan.service.web.study import ParticipantModel
+from causalplan.studies.steps import ParticipantModel
 
 TUTORIAL_OBJECT = "toy_car"
 TUTORIAL_FUNCTIONS: dict[str, tuple[str, ...]] = {

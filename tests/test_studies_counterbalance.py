@@ -7,7 +7,7 @@ from itertools import pairwise
 
 import pytest
 
-from causalplan.service.web.counterbalance import latin_square, object_orders
+from causalplan.studies.counterbalance import latin_square, object_orders
 
 
 @pytest.mark.parametrize("size", [1, 2, 3, 4, 5, 6, 7, 8])

@@ -12,7 +12,8 @@ from typing import Any
 
 from causalplan.causal.labels import closest, display_label, has_control_characters, normalize_label
 from causalplan.objects.catalog import Catalog
-from causalplan.service.web.errors import InvalidExperimentError
+from causalplan.studies.errors import InvalidExperimentError
+from causalplan.transfer.generalization import near_or_far
 
 MAX_TRAINING_OBJECTS = 2
 """One model explains one training object, or two (the paper's far-generalization experiment)."""
@@ -164,5 +165,4 @@ def read_design(
 
 def generalization(training: Sequence[str], test: str, catalog: Catalog) -> str:
     """Return ``near`` when the test object shares a category with a training object, else ``far``."""
-    categories = {catalog.get(object_id).category for object_id in training}
-    return "near" if catalog.get(test).category in categories else "far"
+    return near_or_far((catalog.get(object_id).category for object_id in training), catalog.get(test).category)

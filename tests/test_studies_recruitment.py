@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from causalplan.service.errors import InvalidRequestError
-from causalplan.service.web.recruitment import (
+from causalplan.studies.errors import InvalidRecruitmentError
+from causalplan.studies.recruitment import (
     DEFAULT_CONSENT,
     Recruitment,
     finish,
@@ -66,7 +66,7 @@ def test_a_link_without_platform_ids_is_a_direct_arrival() -> None:
     ],
 )
 def test_a_bad_id_is_refused_naming_the_parameter_never_its_value(parameters: dict[str, str], named: str) -> None:
-    with pytest.raises(InvalidRequestError) as raised:
+    with pytest.raises(InvalidRecruitmentError) as raised:
         read_visit(parameters)
     assert raised.value.details == {"parameter": named}
     assert "<script>" not in raised.value.message and "x" * 65 not in raised.value.message
@@ -86,7 +86,7 @@ def test_a_bad_id_is_refused_naming_the_parameter_never_its_value(parameters: di
     ],
 )
 def test_turk_submit_to_must_be_one_of_mturks_two_hosts(host: str) -> None:
-    with pytest.raises(InvalidRequestError):
+    with pytest.raises(InvalidRecruitmentError):
         read_visit({**MTURK, "turkSubmitTo": host})
 
 
@@ -120,7 +120,7 @@ def test_recruiting_settings_are_checked_and_round_trip() -> None:
 
 
 def test_every_problem_of_recruiting_settings_is_listed() -> None:
-    with pytest.raises(InvalidRequestError) as raised:
+    with pytest.raises(InvalidRecruitmentError) as raised:
         read_recruitment(
             {"completion_code": "not a code!", "comprehension_tries": 0, "too_fast_seconds": -5, "demographics": ["iq"]}
         )
@@ -131,9 +131,9 @@ def test_every_problem_of_recruiting_settings_is_listed() -> None:
 
 def test_quotas_name_known_conditions_and_default_to_no_limit() -> None:
     assert read_quotas({"near": 10}, ["near", "far"]) == {"near": 10, "far": None}
-    with pytest.raises(InvalidRequestError):
+    with pytest.raises(InvalidRecruitmentError):
         read_quotas({"nera": 10}, ["near", "far"])
-    with pytest.raises(InvalidRequestError):
+    with pytest.raises(InvalidRecruitmentError):
         read_quotas({"near": -1}, ["near"])
 
 

@@ -16,9 +16,8 @@ from dataclasses import dataclass, field
 from typing import Any
 from urllib.parse import urlencode, urlsplit
 
-from causalplan.service.db.crud import clean_text
-from causalplan.service.db.models import MAX_PLATFORM_ID_LENGTH
-from causalplan.service.errors import InvalidRequestError
+from causalplan.inputs import clean_text
+from causalplan.studies.errors import InvalidRecruitmentError
 
 DEFAULT_CONSENT = (
     "You are invited to take part in a research study about how people explain the way objects work. "
@@ -29,6 +28,8 @@ DEFAULT_CONSENT = (
 MAX_CONSENT_TEXT = 10_000
 CODE_PATTERN = re.compile(r"[A-Za-z0-9]{1,32}")
 """A completion code as Prolific makes them (letters and digits); MTurk needs none."""
+MAX_PLATFORM_ID_LENGTH = 64
+"""Longest platform id (Prolific's are 24 hex digits, MTurk's about 14 to 30 letters and digits)."""
 PLATFORM_ID_PATTERN = re.compile(rf"[A-Za-z0-9_-]{{1,{MAX_PLATFORM_ID_LENGTH}}}")
 MTURK_HOSTS = ("www.mturk.com", "workersandbox.mturk.com")
 """The only hosts ``turkSubmitTo`` may name: MTurk's production and sandbox sites."""
@@ -120,7 +121,7 @@ def _bounded(value: int | None, low: int, high: int, what: str, problems: list[s
 
 
 def read_recruitment(values: Mapping[str, Any]) -> Recruitment:
-    """Return checked recruiting settings; InvalidRequestError lists every problem (``details['errors']``)."""
+    """Return checked recruiting settings; InvalidRecruitmentError lists every problem (``details['errors']``)."""
     problems: list[str] = []
     consent = clean_text(str(values.get("consent_text") or "")).strip() or DEFAULT_CONSENT
     if len(consent) > MAX_CONSENT_TEXT:
@@ -143,7 +144,7 @@ def read_recruitment(values: Mapping[str, Any]) -> Recruitment:
     if unknown:
         problems.append(f"There is no demographic question '{unknown[0]}'; choose from {', '.join(DEMOGRAPHICS)}.")
     if problems:
-        raise InvalidRequestError(
+        raise InvalidRecruitmentError(
             "The recruiting settings are not valid: " + " ".join(problems), details={"errors": problems}
         )
     return Recruitment(
@@ -152,10 +153,10 @@ def read_recruitment(values: Mapping[str, Any]) -> Recruitment:
 
 
 def read_quotas(values: Mapping[str, int | None], conditions: list[str]) -> dict[str, int | None]:
-    """Return a quota (or None: no limit) per condition; InvalidRequestError for an unknown condition or bad number."""
+    """Return a quota (or None: no limit) per condition; an error for an unknown condition or a bad number."""
     unknown = sorted(set(values) - set(conditions))
     if unknown:
-        raise InvalidRequestError(
+        raise InvalidRecruitmentError(
             f"The experiment has no condition '{unknown[0]}'; its conditions are: {', '.join(conditions)}.",
             details={"condition": unknown[0]},
         )
@@ -163,7 +164,7 @@ def read_quotas(values: Mapping[str, int | None], conditions: list[str]) -> dict
     for name, quota in values.items():
         _bounded(quota, 0, MAX_QUOTA, f"The quota of condition '{name}'", problems)
     if problems:
-        raise InvalidRequestError(" ".join(problems), details={"errors": problems})
+        raise InvalidRecruitmentError(" ".join(problems), details={"errors": problems})
     return {name: values.get(name) for name in conditions}
 
 
@@ -189,7 +190,7 @@ def _platform_id(parameters: Mapping[str, str], name: str) -> str:
     value = parameters.get(name, "")
     if not PLATFORM_ID_PATTERN.fullmatch(value):
         # The value itself is never repeated back: it may be anything a link was made to carry.
-        raise InvalidRequestError(
+        raise InvalidRecruitmentError(
             f"The link's '{name}' must be 1 to {MAX_PLATFORM_ID_LENGTH} letters, digits, '-' or '_'. "
             "Open the study again from the platform's page.",
             details={"parameter": name},
@@ -198,7 +199,7 @@ def _platform_id(parameters: Mapping[str, str], name: str) -> str:
 
 
 def mturk_host(value: str) -> str:
-    """Return ``turkSubmitTo`` as a clean origin; InvalidRequestError unless it is one of MTurk's two hosts."""
+    """Return ``turkSubmitTo`` as a clean origin; InvalidRecruitmentError unless it is one of MTurk's two hosts."""
     parts = urlsplit(value) if len(value) <= 64 else None
     if (
         parts is None
@@ -209,7 +210,7 @@ def mturk_host(value: str) -> str:
         or parts.query
         or parts.fragment
     ):
-        raise InvalidRequestError(
+        raise InvalidRecruitmentError(
             f"The link's 'turkSubmitTo' must be https://{MTURK_HOSTS[0]} or https://{MTURK_HOSTS[1]}.",
             details={"parameter": "turkSubmitTo"},
         )
@@ -217,7 +218,7 @@ def mturk_host(value: str) -> str:
 
 
 def read_visit(parameters: Mapping[str, str]) -> PlatformVisit:
-    """Return who arrived according to the link's query; InvalidRequestError names the first bad parameter."""
+    """Return who arrived according to the link's query; InvalidRecruitmentError names the first bad parameter."""
     if any(name in parameters for name in PROLIFIC_PARAMETERS):
         pid, study, session = (_platform_id(parameters, name) for name in PROLIFIC_PARAMETERS)
         return PlatformVisit("prolific", pid, study, session)
