@@ -5,9 +5,8 @@ catalog) -> ``pddl`` (compilation) -> ``planners`` -> ``transfer`` -> ``sim`` ->
 and ``cli``. The Python API (see ``causalplan.api``) is re-exported here.
 """
 
-__version__ = "0.1.0"
-
 from causalplan.api import InvalidInputError, catalog, load_mapping, load_model, plan, simulate, transfer_verdict
+from causalplan.version import __version__
 
 __all__ = [
     "InvalidInputError",

@@ -133,6 +133,15 @@ def test_help_lists_the_commands() -> None:
         assert command in result.output
 
 
+def test_version_is_the_installed_packages() -> None:
+    from importlib.metadata import version
+
+    result = run("--version")
+    assert result.exit_code == 0
+    assert result.output == f"causalplan {version('causalplan')}\n"
+    assert run("-V").output == result.output
+
+
 # --- check ----------------------------------------------------------------------------------------
 
 

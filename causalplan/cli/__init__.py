@@ -12,6 +12,7 @@ One module per family of commands; `common` holds what they share. A new command
 import click
 
 from causalplan.cli import comparison, crowd, fits, models, planning, serving, simulation, studies
+from causalplan.version import __version__
 
 
 @click.group(
@@ -20,6 +21,7 @@ from causalplan.cli import comparison, crowd, fits, models, planning, serving, s
     epilog="Exit codes: 0 done, 1 no plan or no transfer, 2 invalid input, 3 the planner could not decide. "
     "Run `causalplan COMMAND --help` for a command's options.",
 )
+@click.version_option(__version__, "-V", "--version", prog_name="causalplan", message="%(prog)s %(version)s")
 def app() -> None:
     """Teach a robot why an object works, then plan with that knowledge.
 

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import platformdirs
 
-from causalplan import __version__
 from causalplan.objects.model import AssemblyObject
+from causalplan.version import __version__
 
 logger = logging.getLogger(__name__)
 

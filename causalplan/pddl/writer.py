@@ -12,10 +12,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from causalplan import __version__
 from causalplan.objects.model import AssemblyObject, Fit
 from causalplan.pddl.identifiers import comment, node_identifiers
 from causalplan.pddl.task import PlanningTask
+from causalplan.version import __version__
 
 REQUIREMENTS = ":strips :typing :negative-preconditions :conditional-effects :derived-predicates"
 

@@ -6,7 +6,7 @@ import secrets
 import threading
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Annotated
+from typing import Annotated, Protocol
 
 from fastapi import Depends, Header, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
@@ -23,8 +23,17 @@ from causalplan.service.pool.pool import PlannerPool
 from causalplan.service.throttle import FailedAttempts
 from causalplan.settings import Settings
 
-if TYPE_CHECKING:
-    from causalplan.service.jobs.runner import JobRunner
+
+class Runner(Protocol):
+    """This replica's job runner as the app drives it (``service.jobs.runner.JobRunner``, which needs ``Services``)."""
+
+    def start(self) -> None: ...
+
+    def stop(self, seconds: float = 2.0) -> None: ...
+
+    def join(self, seconds: float) -> None: ...
+
+    def stats(self) -> dict[str, int]: ...
 
 
 @dataclass
@@ -41,7 +50,7 @@ class Services:
     """The catalog's fingerprint, part of every answer's cache key."""
     failed_attempts: FailedAttempts
     """Wrong research tokens by client and in total, to refuse guessing at full speed."""
-    runner: JobRunner | None = None
+    runner: Runner | None = None
     """This replica's job runner (started after the pool)."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)

@@ -24,7 +24,6 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.routing import BaseRoute, Match
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-import causalplan
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.answers import ResultCache, catalog_key
@@ -41,6 +40,7 @@ from causalplan.service.schemas.common import error_responses
 from causalplan.service.throttle import FailedAttempts
 from causalplan.service.web import routers as web_routers
 from causalplan.settings import Settings
+from causalplan.version import __version__
 
 if TYPE_CHECKING:
     import uvicorn
@@ -325,7 +325,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     # FastAPIOffline: /docs and /redoc load Swagger UI and ReDoc from the package, not a CDN.
     app = FastAPIOffline(
         title="causalplan",
-        version=causalplan.__version__,
+        version=__version__,
         summary="Teach a robot why an object works, then plan with that knowledge.",
         description=(
             "Post a causal model (which parts carry which functions, and keyword rules that produce "

@@ -37,7 +37,7 @@ def estimate_fit_job(
     catalog_folders: tuple[Path, ...],
 ) -> dict[str, object]:
     """Return ``FitEstimate.as_dict()`` of one fit of the object (runs in a planner worker)."""
-    from causalplan.service.pool.jobs import worker_catalog
+    from causalplan.service.pool.catalog import worker_catalog
     from causalplan.sim.fit_estimates import estimate_fits
 
     obj = worker_catalog(catalog_folders).get(object_id)

@@ -13,16 +13,17 @@ import csv
 import io
 import json
 import tempfile
-from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from causalplan.limits import LimitExceededError
 from causalplan.service.errors import InvalidRequestError
 from causalplan.service.jobs.fit_estimation import prepare_fit_estimation, run_fit_estimation_job
+from causalplan.service.jobs.store import JobKind
 from causalplan.service.jobs.video import prepare_video, run_video_job
 from causalplan.service.jobs.work import Kind, Progress, in_pool
 from causalplan.service.pool import jobs as worker_jobs
+from causalplan.service.pool.catalog import worker_catalog
 from causalplan.transfer.batch import Trial, TrialResult, read_trials, run_batch
 
 if TYPE_CHECKING:
@@ -33,21 +34,6 @@ CHUNK_SIZE = 20
 CONSENSUS_GRACE_SECONDS = 60.0
 """A consensus job's worker may take this long beyond its trials' time limits (building, aligning)."""
 CSV_FIELDS = ("id", "model", "mapping")
-
-
-class JobKind(StrEnum):
-    """The kinds of job ``POST /v1/jobs`` takes."""
-
-    BATCH = "batch"
-    """Transfer trials uploaded as JSON Lines or CSV, judged as ``causalplan batch`` does."""
-    SIMULATION = "simulation"
-    """A plan run in the physics simulator, with the picture of the final assembly."""
-    CONSENSUS = "consensus"
-    """The crowd's consensus model of participants uploaded as JSON Lines, judged."""
-    VIDEO = "video"
-    """The robot carrying out a plan, filmed; the film is served from the job (``service.jobs.video``)."""
-    FIT_ESTIMATION = "fit_estimation"
-    """Each fit's success probability by noisy robot insertions, as ``causalplan estimate-fits``."""
 
 
 # -- batch --------------------------------------------------------------------------------------
@@ -122,7 +108,7 @@ def judge_trials(
     trials: list[Trial], planner: str, time_limit: float, simulate: bool, folders: tuple[Path, ...]
 ) -> list[TrialResult]:
     """Return the results of a chunk of trials (what a planner worker runs)."""
-    return run_batch(trials, worker_jobs.worker_catalog(folders), planner, time_limit, simulate)
+    return run_batch(trials, worker_catalog(folders), planner, time_limit, simulate)
 
 
 def _summary(results: list[TrialResult]) -> dict[str, Any]:
@@ -252,7 +238,7 @@ def consensus_report(
     from causalplan.consensus.judging import judge, report
     from causalplan.consensus.participants import read_participants
 
-    catalog = worker_jobs.worker_catalog(folders)
+    catalog = worker_catalog(folders)
     with tempfile.TemporaryDirectory(prefix="causalplan-upload-") as folder:
         path = Path(folder) / "crowd.jsonl"
         path.write_text(text, encoding="utf-8", errors="surrogatepass")

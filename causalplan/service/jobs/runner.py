@@ -21,7 +21,8 @@ from causalplan.errors import CausalPlanError
 from causalplan.service.db.models import JobRecord
 from causalplan.service.errors import InternalError
 from causalplan.service.jobs import store
-from causalplan.service.jobs.kinds import KINDS, JobKind
+from causalplan.service.jobs.kinds import KINDS
+from causalplan.service.jobs.store import JobKind
 from causalplan.service.jobs.work import JobCancelledError, Outcome, Progress
 
 if TYPE_CHECKING:

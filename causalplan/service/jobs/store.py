@@ -27,6 +27,21 @@ FIRST_KINDS = ("video",)
 """Kinds a runner takes before older jobs of other kinds: a person is usually watching the page for a film."""
 
 
+class JobKind(StrEnum):
+    """The kinds of job ``POST /v1/jobs`` takes."""
+
+    BATCH = "batch"
+    """Transfer trials uploaded as JSON Lines or CSV, judged as ``causalplan batch`` does."""
+    SIMULATION = "simulation"
+    """A plan run in the physics simulator, with the picture of the final assembly."""
+    CONSENSUS = "consensus"
+    """The crowd's consensus model of participants uploaded as JSON Lines, judged."""
+    VIDEO = "video"
+    """The robot carrying out a plan, filmed; the film is served from the job (``service.jobs.video``)."""
+    FIT_ESTIMATION = "fit_estimation"
+    """Each fit's success probability by noisy robot insertions, as ``causalplan estimate-fits``."""
+
+
 class JobStatus(StrEnum):
     QUEUED = "queued"
     RUNNING = "running"

@@ -62,7 +62,7 @@ def film_plan_job(
     """
     from causalplan.pddl.task import catalog_task
     from causalplan.planners import pipeline
-    from causalplan.service.pool.jobs import worker_catalog
+    from causalplan.service.pool.catalog import worker_catalog
     from causalplan.service.pool.robot_jobs import robot_outcome, robot_simulation
 
     task = catalog_task(model, worker_catalog(catalog_folders), mapping)

@@ -9,16 +9,15 @@ from __future__ import annotations
 import importlib
 import re
 from contextlib import suppress
-from functools import cache
 from importlib import metadata
 from importlib.util import find_spec
 from pathlib import Path
 
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.errors import CausalPlanError
-from causalplan.objects.catalog import Catalog, load_catalog
 from causalplan.pddl.task import catalog_task
 from causalplan.planners import fd, pipeline
+from causalplan.service.pool.catalog import worker_catalog
 from causalplan.settings import Settings
 from causalplan.transfer.verdict import evaluate_transfer
 
@@ -42,12 +41,6 @@ def warm_up() -> None:
     fd.prestart(fd.CONFIGS["fd"])  # the default search, waiting for its first task
     with suppress(CausalPlanError):
         worker_catalog(())
-
-
-@cache
-def worker_catalog(folders: tuple[Path, ...]) -> Catalog:
-    """Return the catalog with the objects in ``folders``, read once per worker process."""
-    return load_catalog(folders)
 
 
 def plan_job(

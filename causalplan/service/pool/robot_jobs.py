@@ -118,7 +118,7 @@ def robot_film_job(
 
     ``{"video": bytes, "simulation": report.as_dict(), "robot": robot_outcome(report)}``.
     """
-    from causalplan.service.pool.jobs import worker_catalog
+    from causalplan.service.pool.catalog import worker_catalog
 
     obj = worker_catalog(catalog_folders).get(object_id)
     report, film = robot_simulation(obj, steps_of(obj, fit_ids), video, size, progress, stop)

@@ -12,7 +12,6 @@ from fastapi import APIRouter
 from sqlalchemy import text
 from sqlalchemy.exc import SQLAlchemyError
 
-import causalplan
 from causalplan.errors import CausalPlanError
 from causalplan.service.answers import default_planner
 from causalplan.service.db.migrate import current_revision
@@ -27,6 +26,7 @@ from causalplan.service.schemas.health import (
     JobsHealthOut,
     StorageHealthOut,
 )
+from causalplan.version import __version__
 
 logger = logging.getLogger(__name__)
 
@@ -132,7 +132,7 @@ def health(services: ServicesDep) -> HealthOut:
     settings = services.settings
     return HealthOut(
         status="ok" if is_ok else "degraded",
-        version=causalplan.__version__,
+        version=__version__,
         planners=probe.get("planners"),
         default_planner=default_planner(),
         fast_downward=FastDownwardHealthOut.model_validate(fast_downward) if fast_downward else None,

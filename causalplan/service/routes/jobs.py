@@ -17,7 +17,8 @@ from causalplan.service.deps import ServicesDep
 from causalplan.service.documents import StrictJSONRoute
 from causalplan.service.films import FilmNotFoundError
 from causalplan.service.jobs import store
-from causalplan.service.jobs.kinds import KINDS, JobKind
+from causalplan.service.jobs.kinds import KINDS
+from causalplan.service.jobs.store import JobKind
 from causalplan.service.jobs.video import video_url
 from causalplan.service.schemas.common import ErrorOut, error_responses
 from causalplan.service.schemas.jobs import JOB_EXAMPLES, JobIn, JobOut

@@ -8,8 +8,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
-from causalplan.service.jobs.kinds import JobKind
-from causalplan.service.jobs.store import JobStatus
+from causalplan.service.jobs.store import JobKind, JobStatus
 from causalplan.service.schemas.common import (
     ErrorDetailOut,
     InputModel,

@@ -15,7 +15,7 @@ from xml.sax.saxutils import escape
 
 from cachetools import LRUCache
 
-from causalplan.service.pool.jobs import worker_catalog
+from causalplan.service.pool.catalog import worker_catalog
 
 PART_PICTURE_SIZE = (320, 240)
 PLAN_PICTURE_SIZE = (480, 360)

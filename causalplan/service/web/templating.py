@@ -19,10 +19,10 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, RedirectResponse
 from fastapi.routing import APIRoute
 
-import causalplan
 from causalplan.errors import CausalPlanError
 from causalplan.service.errors import http_status
 from causalplan.service.web.errors import LoginRequiredError
+from causalplan.version import __version__
 
 logger = logging.getLogger(__name__)
 
@@ -52,7 +52,7 @@ def environment() -> jinja2.Environment:
         trim_blocks=True,
         lstrip_blocks=True,
     )
-    env.globals["version"] = causalplan.__version__
+    env.globals["version"] = __version__
     env.filters["nice"] = lambda identifier: str(identifier).replace("_", " ")
     return env
 

@@ -19,8 +19,7 @@ from causalplan.service.deps import ServicesDep
 from causalplan.service.errors import InvalidRequestError, NotFoundError
 from causalplan.service.films import FilmNotFoundError, film_key
 from causalplan.service.jobs import store
-from causalplan.service.jobs.kinds import JobKind
-from causalplan.service.jobs.store import JobStatus
+from causalplan.service.jobs.store import JobKind, JobStatus
 from causalplan.service.jobs.video import FILM_KEY, fits_film_request, video_url
 from causalplan.service.pool.robot_jobs import CONTENT_TYPES
 from causalplan.service.routes.simulations import VIDEO_KEY
