@@ -37,7 +37,7 @@ import uvicorn
 from playwright.sync_api import Page, sync_playwright
 
 from causalplan.service.main import create_app
-from causalplan.service.web.drawings import forget_plan_pictures
+from causalplan.service.pages.drawings import forget_plan_pictures
 from causalplan.settings import Settings
 
 CHROMIUM = "/usr/bin/chromium"

@@ -5,7 +5,7 @@
 For each paper object's full plan (every part in place): the median of K robot runs without
 a film (``simulate_plan(..., robot=True)``, the reference, in the same run), then one film
 per size (``simulate_plan(..., video=True)`` and the MP4 encoding), its frames and bytes and
-its cost as a ratio of the run. Last, what filming every plan ``service.web.ahead`` would
+its cost as a ratio of the run. Last, what filming every plan ``service.pages.ahead`` would
 draw ahead (one per set of two or more parts, up to ``MAX_PART_SETS`` per object) would
 cost one worker at the service's size: the sum over objects of their part sets times the
 film's time.
@@ -26,7 +26,7 @@ from rich.table import Table
 from causalplan.objects.catalog import load_catalog
 from causalplan.pddl.task import build_task
 from causalplan.planners.pipeline import plan_task
-from causalplan.service.web.ahead import needing, part_sets
+from causalplan.service.pages.ahead import needing, part_sets
 from causalplan.sim import RenderMode, simulate_plan
 from causalplan.sim.video import encode
 
@@ -96,7 +96,7 @@ def main() -> int:
     console.print(table)
     width, height = sizes[-1]
     console.print(
-        f"Filming ahead every plan service.web.ahead draws ({ahead_films} plans) at {width}x{height}: "
+        f"Filming ahead every plan service.pages.ahead draws ({ahead_films} plans) at {width}x{height}: "
         f"at most {ahead_seconds / 60:.1f} min of one worker."
     )
     return 0

@@ -107,7 +107,7 @@ class Settings(BaseSettings):
     max_labels_per_part: int = Field(default=16, ge=1, description="Most function labels one part may carry.")
     max_rules: int = Field(default=200, ge=1, description="Most rules a model may have.")
 
-    # The participant pages (causalplan.service.web).
+    # The participant pages (causalplan.service.pages).
     demo_starts_per_minute: int = Field(
         default=10,
         ge=0,

@@ -24,8 +24,8 @@ cd "$scratch"  # away from the source tree, so only the installed package is use
 "$venv/bin/python" - "$scratch/check.sqlite3" <<'PYTHON'
 import sys
 
-from causalplan.service.db.migrate import upgrade
-from causalplan.service.db.session import create_database_engine
+from causalplan.service.storage.migrate import upgrade
+from causalplan.service.storage.session import create_database_engine
 
 engine = create_database_engine(f"sqlite:///{sys.argv[1]}")
 print(f"database schema {upgrade(engine)} installs from the package")

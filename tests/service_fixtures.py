@@ -28,10 +28,10 @@ from fastapi.testclient import TestClient
 from sqlalchemy import Engine
 from sqlalchemy.engine import make_url
 
-from causalplan.service.db.migrate import upgrade
-from causalplan.service.db.session import create_database_engine
 from causalplan.service.deps import Services
 from causalplan.service.main import create_app, uvicorn_config
+from causalplan.service.storage.migrate import upgrade
+from causalplan.service.storage.session import create_database_engine
 from causalplan.settings import Settings
 from tests.conftest import EXAMPLES
 

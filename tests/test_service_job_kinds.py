@@ -23,13 +23,13 @@ from sqlalchemy.orm import Session
 
 from causalplan.cli import app as cli
 from causalplan.objects.catalog import load_catalog
-from causalplan.service.db.migrate import upgrade
-from causalplan.service.db.models import JobRecord, utc_now
-from causalplan.service.db.session import create_database_engine
+from causalplan.service.api.schemas.jobs import JOB_EXAMPLES
 from causalplan.service.errors import JobNotFoundError
-from causalplan.service.jobs import store
 from causalplan.service.pool.robot_jobs import FilmStoppedError, robot_film_job
-from causalplan.service.schemas.jobs import JOB_EXAMPLES
+from causalplan.service.storage import jobs as store
+from causalplan.service.storage.migrate import upgrade
+from causalplan.service.storage.records import JobRecord, utc_now
+from causalplan.service.storage.session import create_database_engine
 from tests.service_fixtures import (
     DESK_LAMP,
     error_of,

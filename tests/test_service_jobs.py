@@ -23,10 +23,10 @@ from sqlalchemy.orm import Session
 
 from causalplan.consensus.population import population
 from causalplan.objects.catalog import load_catalog
-from causalplan.service.db.models import JobRecord, utc_now
-from causalplan.service.jobs import store
 from causalplan.service.jobs.kinds import KINDS, csv_to_json_lines
-from causalplan.service.jobs.store import MAX_ATTEMPTS
+from causalplan.service.storage import jobs as store
+from causalplan.service.storage.jobs import MAX_ATTEMPTS
+from causalplan.service.storage.records import JobRecord, utc_now
 from causalplan.transfer.batch import read_trials, run_batch
 from tests.service_fixtures import (
     DESK_LAMP,

@@ -27,8 +27,8 @@ import pytest
 from sqlalchemy import create_engine, func, select, text
 from sqlalchemy.orm import Session
 
-from causalplan.service.db.migrate import head_revision
-from causalplan.service.db.models import ParticipantRecord, ParticipantTrialRecord, TrialRecord
+from causalplan.service.storage.migrate import head_revision
+from causalplan.service.storage.records import ParticipantRecord, ParticipantTrialRecord, TrialRecord
 from tests.conftest import EXAMPLES
 from tests.service_fixtures import (
     AUTH,

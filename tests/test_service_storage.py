@@ -22,11 +22,11 @@ from sqlalchemy import func, inspect, select
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session
 
-from causalplan.service.db import crud
-from causalplan.service.db.migrate import current_revision, head_revision, upgrade
-from causalplan.service.db.models import Base, ModelRecord, TrialRecord
-from causalplan.service.db.session import WAL_SIZE_LIMIT_BYTES, create_database_engine
 from causalplan.service.errors import StorageError
+from causalplan.service.storage import crud
+from causalplan.service.storage.migrate import current_revision, head_revision, upgrade
+from causalplan.service.storage.records import Base, ModelRecord, TrialRecord
+from causalplan.service.storage.session import WAL_SIZE_LIMIT_BYTES, create_database_engine
 from tests.service_fixtures import (
     AUTH,
     DESK_LAMP,
@@ -259,7 +259,7 @@ def test_a_database_that_cannot_be_reached_at_start_is_a_clear_error(caplog: pyt
         upgrade(engine)  # no wait: one try
     started = time.monotonic()
     waited = pytest.raises(StorageError, match=r"within 1.2 s \(CAUSALPLAN_DATABASE_WAIT_SECONDS\)")
-    with caplog.at_level(logging.WARNING, logger="causalplan.service.db.migrate"), waited:
+    with caplog.at_level(logging.WARNING, logger="causalplan.service.storage.migrate"), waited:
         upgrade(engine, wait_seconds=1.2)
     assert time.monotonic() - started >= 1.2
     assert any("database not up yet" in record.getMessage() for record in caplog.records)
@@ -268,7 +268,7 @@ def test_a_database_that_cannot_be_reached_at_start_is_a_clear_error(caplog: pyt
 
 
 def test_a_server_that_takes_the_connection_but_never_answers_is_given_up_on(monkeypatch: pytest.MonkeyPatch) -> None:
-    from causalplan.service.db import session
+    from causalplan.service.storage import session
 
     monkeypatch.setattr(session, "CONNECT_TIMEOUT_SECONDS", 1)
     with socket.create_server(("127.0.0.1", 0)) as silent:  # the kernel takes connections; nobody answers
@@ -326,7 +326,7 @@ def test_a_replica_that_starts_before_its_database_waits_for_it(
         with forwarded_later((str(server.host), int(server.port or 5432)), after=1.0) as port:
             engine = create_database_engine(server.set(host="127.0.0.1", port=port).render_as_string(False))
             try:
-                with caplog.at_level(logging.WARNING, logger="causalplan.service.db.migrate"):
+                with caplog.at_level(logging.WARNING, logger="causalplan.service.storage.migrate"):
                     assert upgrade(engine, wait_seconds=30) == head_revision()
                 assert current_revision(engine) == head_revision()
             finally:

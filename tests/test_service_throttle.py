@@ -14,9 +14,9 @@ from pydantic import ValidationError
 from sqlalchemy import Engine, delete, func, select
 from sqlalchemy.orm import Session
 
-from causalplan.service.db.models import FailedAttemptRecord
 from causalplan.service.errors import TooManyAttemptsError
-from causalplan.service.throttle import FailedAttempts
+from causalplan.service.storage.records import FailedAttemptRecord
+from causalplan.service.storage.throttle import FailedAttempts
 from causalplan.settings import Settings
 from tests.service_fixtures import (
     AUTH,

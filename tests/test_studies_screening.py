@@ -6,7 +6,7 @@ import uuid
 from datetime import timedelta
 
 from causalplan.objects.catalog import Catalog
-from causalplan.service.db.models import ParticipantRecord, utc_now
+from causalplan.service.storage.records import ParticipantRecord, utc_now
 from causalplan.studies.design import Condition, Design
 from causalplan.studies.journey import Journey
 from causalplan.studies.recruitment import Recruitment

@@ -8,8 +8,8 @@ from causalplan.causal.diagram import diagram_svg
 from causalplan.causal.documents import SourceMap
 from causalplan.inputs import model_from_data
 from causalplan.objects.catalog import Catalog
+from causalplan.service.pages.auth import cookie_session, session_cookie
 from causalplan.service.responses import csv_bytes
-from causalplan.service.web.auth import cookie_session, session_cookie
 from causalplan.settings import Settings
 from causalplan.studies.design import read_design
 from causalplan.studies.errors import InvalidExperimentError
@@ -178,7 +178,7 @@ def test_csv_cells_that_look_like_formulas_are_defused() -> None:
 
 
 def test_pictures_are_drawn_once_and_failures_are_not_kept() -> None:
-    from causalplan.service.web.pictures import PictureCache, drawing
+    from causalplan.service.pages.pictures import PictureCache, drawing
 
     cache = PictureCache(size=2)
     calls: list[str] = []

@@ -7,8 +7,8 @@ import threading
 from fastapi.testclient import TestClient
 
 from causalplan.causal.graph import goal_holds
-from causalplan.service.web import ahead
-from causalplan.service.web.drawings import forget_plan_pictures, is_plan_picture_kept
+from causalplan.service.pages import ahead
+from causalplan.service.pages.drawings import forget_plan_pictures, is_plan_picture_kept
 from tests.conftest import builtin_catalog
 from tests.service_fixtures import services_of
 from tests.web_flows import LAMP_FUNCTIONS, LAMP_RULES, new_participant, post

@@ -11,11 +11,12 @@ import pytest
 from sqlalchemy import Engine, func, select
 from sqlalchemy.orm import Session
 
-from causalplan.service.db.migrate import upgrade
-from causalplan.service.db.models import ExperimentRecord, ParticipantRecord
-from causalplan.service.db.session import create_database_engine
-from causalplan.service.web import arrivals, store
-from causalplan.service.web.arrivals import Place, choose
+from causalplan.service.storage import arrivals
+from causalplan.service.storage import experiments as store
+from causalplan.service.storage.migrate import upgrade
+from causalplan.service.storage.records import ExperimentRecord, ParticipantRecord
+from causalplan.service.storage.session import create_database_engine
+from causalplan.studies.assignment import Place, choose
 from causalplan.studies.design import Condition, Design
 from causalplan.studies.recruitment import PlatformVisit
 

@@ -8,8 +8,9 @@ from pathlib import Path
 from fastapi.testclient import TestClient
 from sqlalchemy.orm import Session
 
-from causalplan.service.db.models import RevokedResearchSessionRecord
-from causalplan.service.web.auth import COOKIE_NAME, cookie_session, forget_lapsed_revocations, session_cookie
+from causalplan.service.pages.auth import COOKIE_NAME, cookie_session, session_cookie
+from causalplan.service.storage.records import RevokedResearchSessionRecord
+from causalplan.service.storage.revocations import forget_lapsed_revocations
 from tests.service_fixtures import RESEARCH_TOKEN, migrated_engine, running_client, settings_for
 
 

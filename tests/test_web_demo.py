@@ -10,10 +10,10 @@ import pytest
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
-from causalplan.service.db.models import ModelRecord, ParticipantRecord, TrialRecord, utc_now
-from causalplan.service.web.demo import WINDOW_SECONDS, DemoStarts, purge_demo_participants
-from causalplan.service.web.errors import TooManyDemoStartsError
-from causalplan.service.web.upkeep import purge_interval
+from causalplan.service.errors import TooManyDemoStartsError
+from causalplan.service.pages.upkeep import purge_interval
+from causalplan.service.storage.demo import WINDOW_SECONDS, DemoStarts, purge_demo_participants
+from causalplan.service.storage.records import ModelRecord, ParticipantRecord, TrialRecord, utc_now
 from tests.service_fixtures import migrated_engine, running_client, services_of, settings_for, wait_until
 from tests.web_flows import FLASHLIGHT_CHOICES, complete, experiment, links
 

@@ -13,9 +13,9 @@ from fastapi.testclient import TestClient
 from sqlalchemy import func, inspect, select
 from sqlalchemy.orm import Session
 
-from causalplan.service.db.migrate import current_revision, head_revision, upgrade
-from causalplan.service.db.models import ParticipantTrialRecord, TrialRecord
-from causalplan.service.db.session import create_database_engine
+from causalplan.service.storage.migrate import current_revision, head_revision, upgrade
+from causalplan.service.storage.records import ParticipantTrialRecord, TrialRecord
+from causalplan.service.storage.session import create_database_engine
 from tests.service_fixtures import AUTH, RESEARCH_TOKEN, error_of, running_client, services_of, settings_for
 from tests.web_flows import complete, experiment, links
 

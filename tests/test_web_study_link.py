@@ -14,7 +14,7 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from causalplan.cli import app
-from causalplan.service.db.models import ArrivalRecord, ParticipantRecord
+from causalplan.service.storage.records import ArrivalRecord, ParticipantRecord
 from tests.service_fixtures import AUTH, services_of
 from tests.web_flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, post
 

@@ -15,12 +15,12 @@ from sqlalchemy.orm import Session
 
 from causalplan.objects.catalog import Catalog
 from causalplan.service.answers import Answerer, ResultCache
-from causalplan.service.db.crud import ClientIds
-from causalplan.service.db.models import MAX_CLIENT_ID_LENGTH
 from causalplan.service.errors import NotAuthenticatedError, ResearchDisabledError
 from causalplan.service.films import FilmStore
 from causalplan.service.pool.pool import PlannerPool
-from causalplan.service.throttle import FailedAttempts
+from causalplan.service.storage.crud import ClientIds
+from causalplan.service.storage.records import MAX_CLIENT_ID_LENGTH
+from causalplan.service.storage.throttle import FailedAttempts
 from causalplan.settings import Settings
 
 

@@ -25,11 +25,11 @@ from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.limits import check_labelling_limits, check_model_limits
 from causalplan.objects.catalog import Catalog
 from causalplan.service.answers import model_hash, resolve_planner, resolve_time_limit
-from causalplan.service.db.crud import MAX_NESTING, ClientIds, clean_json, get_model, new_model_record, save
-from causalplan.service.db.models import ModelRecord
+from causalplan.service.api.schemas.plans import PlanIn
 from causalplan.service.deps import Services, open_session
 from causalplan.service.errors import InvalidMappingError, InvalidModelError
-from causalplan.service.schemas.plans import PlanIn
+from causalplan.service.storage.crud import MAX_NESTING, ClientIds, clean_json, get_model, new_model_record, save
+from causalplan.service.storage.records import ModelRecord
 
 MAX_NUMBER_DIGITS = 100
 """No document needs a longer integer; Python refuses ones over 4,300 digits anyway."""

@@ -171,6 +171,47 @@ class InternalError(ServiceError):
     status_code = 500
 
 
+# -- the participant and research pages (rendered as an HTML page there, see ``pages.templating``) --
+
+
+class ParticipantNotFoundError(NotFoundError):
+    """No participant has this link code."""
+
+    code = "participant_not_found"
+
+
+class ExperimentNotFoundError(NotFoundError):
+    """No experiment has this id."""
+
+    code = "experiment_not_found"
+
+
+class InvalidFormError(InvalidRequestError):
+    """A submitted form is malformed (a field missing, repeated, too long, or not one of the choices)."""
+
+    code = "invalid_form"
+
+
+class LoginRequiredError(ServiceError):
+    """A research page was opened without the research token (cookie or bearer)."""
+
+    code = "login_required"
+    status_code = 401
+
+
+class CrossSiteRequestError(ServiceError):
+    """A research form was posted from another site (its Origin is not this server)."""
+
+    code = "cross_site_request"
+    status_code = 403
+
+
+class TooManyDemoStartsError(TryLaterError):
+    """One client started more demo participants this minute than the service allows."""
+
+    code = "too_many_demo_starts"
+
+
 _STATUS_BY_CODE = {
     "unknown_planner": 422,
     "plan_rejected_by_val": 500,  # our compilation and VAL disagree: a fault of ours, with VAL's words

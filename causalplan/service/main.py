@@ -27,18 +27,28 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.answers import ResultCache, catalog_key
-from causalplan.service.db.migrate import upgrade
-from causalplan.service.db.session import create_database_engine
+from causalplan.service.api.routes import (
+    experiments,
+    health,
+    jobs,
+    models,
+    objects,
+    plans,
+    research,
+    simulations,
+    transfers,
+)
+from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
 from causalplan.service.jobs.runner import JobRunner
+from causalplan.service.pages import routers as web_routers
 from causalplan.service.pool.jobs import probe_job
 from causalplan.service.pool.pool import PlannerPool
 from causalplan.service.responses import SafeJSONResponse
-from causalplan.service.routes import health, jobs, models, objects, plans, research, simulations, transfers
-from causalplan.service.schemas.common import error_responses
-from causalplan.service.throttle import FailedAttempts
-from causalplan.service.web import routers as web_routers
+from causalplan.service.storage.migrate import upgrade
+from causalplan.service.storage.session import create_database_engine
+from causalplan.service.storage.throttle import FailedAttempts
 from causalplan.settings import Settings
 from causalplan.version import __version__
 
@@ -343,9 +353,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_exception_handler(StarletteHTTPException, handle_http_error)
     app.add_middleware(UnexpectedErrorMiddleware)
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes, upload_bytes=settings.max_upload_bytes)
-    for module in (models, plans, simulations, transfers, jobs, objects, research, health):
+    for module in (models, plans, simulations, transfers, jobs, objects, research, health, experiments):
         app.include_router(module.router)
-    for router in web_routers():  # the participant and research pages, and /v1/experiments
+    for router in web_routers():  # the participant and research pages
         app.include_router(router)
     return app
 

@@ -19,11 +19,11 @@ from typing import TYPE_CHECKING, Any
 from causalplan.limits import LimitExceededError
 from causalplan.service.errors import InvalidRequestError
 from causalplan.service.jobs.fit_estimation import prepare_fit_estimation, run_fit_estimation_job
-from causalplan.service.jobs.store import JobKind
 from causalplan.service.jobs.video import prepare_video, run_video_job
 from causalplan.service.jobs.work import Kind, Progress, in_pool
 from causalplan.service.pool import jobs as worker_jobs
 from causalplan.service.pool.catalog import worker_catalog
+from causalplan.service.storage.jobs import JobKind
 from causalplan.transfer.batch import Trial, TrialResult, read_trials, run_batch
 
 if TYPE_CHECKING:
@@ -156,9 +156,9 @@ def run_batch_job(request: dict[str, Any], services: Services, progress: Progres
 
 
 def prepare_simulation(request: dict[str, Any], services: Services) -> dict[str, Any]:
-    from causalplan.service.db.crud import ClientIds
+    from causalplan.service.api.schemas.plans import SimulationIn
     from causalplan.service.documents import plan_inputs
-    from causalplan.service.schemas.plans import SimulationIn
+    from causalplan.service.storage.crud import ClientIds
 
     body = SimulationIn.model_validate({key: value for key, value in request.items() if key != "kind"})
     if body.video is not None:
@@ -180,9 +180,9 @@ def prepare_simulation(request: dict[str, Any], services: Services) -> dict[str,
 
 
 def run_simulation_job(request: dict[str, Any], services: Services, progress: Progress) -> dict[str, Any]:
-    from causalplan.service.db.crud import ClientIds
+    from causalplan.service.api.schemas.plans import SimulationIn
     from causalplan.service.documents import plan_inputs
-    from causalplan.service.schemas.plans import SimulationIn
+    from causalplan.service.storage.crud import ClientIds
 
     body = SimulationIn.model_validate(request)
     inputs = plan_inputs(body, services, ClientIds())

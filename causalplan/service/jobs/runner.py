@@ -18,12 +18,12 @@ import uuid
 from typing import TYPE_CHECKING, Any
 
 from causalplan.errors import CausalPlanError
-from causalplan.service.db.models import JobRecord
 from causalplan.service.errors import InternalError
-from causalplan.service.jobs import store
 from causalplan.service.jobs.kinds import KINDS
-from causalplan.service.jobs.store import JobKind
 from causalplan.service.jobs.work import JobCancelledError, Outcome, Progress
+from causalplan.service.storage import jobs as store
+from causalplan.service.storage.jobs import JobKind
+from causalplan.service.storage.records import JobRecord
 
 if TYPE_CHECKING:
     from causalplan.service.deps import Services

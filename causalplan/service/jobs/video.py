@@ -24,9 +24,9 @@ from causalplan.service.pool.robot_jobs import CONTENT_TYPES, FilmStoppedError, 
 
 if TYPE_CHECKING:
     from causalplan.causal.model import CausalModel, Labelling
+    from causalplan.service.api.schemas.jobs import VideoPlanIn
     from causalplan.service.deps import Services
     from causalplan.service.documents import PlanInputs
-    from causalplan.service.schemas.jobs import VideoPlanIn
 
 logger = logging.getLogger(__name__)
 
@@ -77,16 +77,16 @@ def film_plan_job(
 
 def _plan_inputs(body: VideoPlanIn, services: Services) -> PlanInputs:
     """Return the plan inputs of a film's request, read as POST /v1/plans reads its body."""
-    from causalplan.service.db.crud import ClientIds
+    from causalplan.service.api.schemas.plans import PlanIn
     from causalplan.service.documents import plan_inputs
-    from causalplan.service.schemas.plans import PlanIn
+    from causalplan.service.storage.crud import ClientIds
 
     plan = PlanIn.model_validate(body.model_dump(mode="json", by_alias=True, exclude={"video"}))
     return plan_inputs(plan, services, ClientIds())
 
 
 def prepare_video(request: dict[str, Any], services: Services) -> dict[str, Any]:
-    from causalplan.service.schemas.jobs import VideoPlanIn
+    from causalplan.service.api.schemas.jobs import VideoPlanIn
 
     body = VideoPlanIn.model_validate({key: value for key, value in request.items() if key != "kind"})
     inputs = _plan_inputs(body, services)
@@ -107,8 +107,8 @@ def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key:
 
 
 def _film_in_worker(request: dict[str, Any], services: Services, progress_file: Path, stop: Path) -> dict[str, Any]:
+    from causalplan.service.api.schemas.jobs import VideoPlanIn
     from causalplan.service.pool.robot_jobs import robot_film_job
-    from causalplan.service.schemas.jobs import VideoPlanIn
 
     settings = services.settings
     size = (settings.robot_video_width, settings.robot_video_height)

@@ -1,0 +1,1 @@
+"""The JSON API: every ``/v1`` route (``routes/<resource>.py``) with its request and response schemas."""

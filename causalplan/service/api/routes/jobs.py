@@ -1,0 +1,161 @@
+"""/v1/jobs: post long work (trials, a simulation, a consensus, a film, fits), follow it, fetch its result, cancel it.
+
+Any replica answers for any job: jobs live in the database, and whichever replica's runner
+took a job does its work (see ``service.jobs``).
+"""
+
+from __future__ import annotations
+
+import uuid
+from typing import Annotated, Any
+
+import anyio.to_thread
+from fastapi import APIRouter, Body, Response
+
+from causalplan.service.api.schemas.common import ErrorOut, error_responses
+from causalplan.service.api.schemas.jobs import JOB_EXAMPLES, JobIn, JobOut
+from causalplan.service.deps import ServicesDep
+from causalplan.service.documents import StrictJSONRoute
+from causalplan.service.films import FilmNotFoundError
+from causalplan.service.jobs.kinds import KINDS
+from causalplan.service.jobs.video import video_url
+from causalplan.service.storage import jobs as store
+from causalplan.service.storage.jobs import JobKind
+from causalplan.service.storage.records import JobRecord
+
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses=error_responses(503), route_class=StrictJSONRoute)
+
+_JOB_ID = {"job_id": "$response.body#/id"}
+_LINKS = {
+    "ReadJob": {"operationId": "read_job", "parameters": _JOB_ID, "description": "Follow the job (its `url`)."},
+    "CancelJob": {"operationId": "cancel_job", "parameters": _JOB_ID, "description": "Cancel it."},
+    "ReadJobVideo": {"operationId": "read_job_video", "parameters": _JOB_ID, "description": "A video job's film."},
+}
+"""OpenAPI links from a posted job to what can be done with it (clients and stateful tests follow them)."""
+_NOT_FOUND: dict[int | str, dict[str, Any]] = {
+    404: {"model": ErrorOut, "description": "No such job, or its result has expired."}
+}
+
+
+def job_url(job_id: uuid.UUID) -> str:
+    """Return the path of a job's resource."""
+    return f"/v1/jobs/{job_id}"
+
+
+def job_result(record: JobRecord) -> dict[str, Any] | None:
+    """Return the job's stored result, with the URL of the film it made (where this API serves it)."""
+    result = record.result
+    if result is not None and record.file_type is not None and isinstance(result.get("video"), dict):
+        result = {**result, "video": {**result["video"], "url": video_url(record.id)}}
+    return result
+
+
+def job_out(record: JobRecord) -> JobOut:
+    """Return the answer for a stored job."""
+    return JobOut.model_validate(
+        {
+            "id": record.id,
+            "kind": record.kind,
+            "status": record.status,
+            "url": job_url(record.id),
+            "progress": {"done": record.done, "total": record.total},
+            "attempts": record.attempts,
+            "created_at": record.created_at,
+            "started_at": record.started_at,
+            "finished_at": record.finished_at,
+            "expires_at": record.expires_at,
+            "result": job_result(record),
+            "error": record.error,
+        }
+    )
+
+
+@router.post(
+    "",
+    status_code=202,
+    response_model=JobOut,
+    summary="Start a job",
+    responses={
+        202: {"description": "Queued: follow `url` (also in `Location`).", "links": _LINKS},
+        **error_responses(404, 413, 422),
+        429: {"model": ErrorOut, "description": "The service holds as many unfinished jobs as it takes."},
+    },
+    operation_id="create_job",
+)
+async def create_job(
+    body: Annotated[JobIn, Body(openapi_examples=JOB_EXAMPLES)], services: ServicesDep, response: Response
+) -> JobOut:
+    """Check the request and queue the job; answer 202 with its URL (also in `Location`).
+
+    `kind` says what to do: `batch` (trials uploaded as JSON Lines or CSV, judged as
+    `causalplan batch`), `simulation` (POST /v1/simulations' body), `consensus` (participants
+    as JSON Lines, as `causalplan consensus`), `video` (a plan request: the robot carries the
+    plan out on film, served at `/v1/jobs/{id}/video`), `fit_estimation` (as `causalplan
+    estimate-fits`). What is wrong with the request (a model that cannot be read, a CSV
+    without its columns, an unknown object or fit, too many trials) is answered at once with
+    422 (404 for an unknown object) and nothing is queued; a batch's unreadable lines become
+    `invalid` trials in the result, as in the CLI.
+    """
+    kind = JobKind(body.kind)
+    request: dict[str, Any] = body.model_dump(mode="json", by_alias=True)  # stored as the API reads it
+
+    def prepare_and_store() -> JobRecord:
+        prepared = KINDS[kind].prepare(request, services)
+        total = int(prepared.get("count", 1))
+        return store.create_job(services.engine, kind.value, prepared, total, services.settings.max_queued_jobs)
+
+    record = await anyio.to_thread.run_sync(prepare_and_store)
+    response.headers["Location"] = job_url(record.id)
+    return job_out(record)
+
+
+@router.get(
+    "/{job_id}",
+    response_model=JobOut,
+    summary="A job's status, progress and result",
+    responses=_NOT_FOUND,
+    operation_id="read_job",
+)
+async def read_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
+    """Return the job: `status` (queued, running, succeeded, failed, cancelled), `progress`, then `result`."""
+    return job_out(await anyio.to_thread.run_sync(store.get_job, services.engine, job_id))
+
+
+@router.delete(
+    "/{job_id}",
+    response_model=JobOut,
+    summary="Cancel a job",
+    responses={**_NOT_FOUND, 409: {"model": ErrorOut, "description": "The job has finished already."}},
+    operation_id="cancel_job",
+)
+async def cancel_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
+    """Cancel a queued or running job (a running one stops at its next step); answer the cancelled job."""
+    keep = services.settings.job_result_seconds
+    return job_out(await anyio.to_thread.run_sync(store.cancel_job, services.engine, job_id, keep))
+
+
+@router.get(
+    "/{job_id}/video",
+    summary="The film a video job made (MP4 or GIF)",
+    response_class=Response,
+    responses={
+        200: {"content": {"video/mp4": {}, "image/gif": {}}, "description": "The film."},
+        404: {"model": ErrorOut, "description": "No such job, it has expired, or it has made no film (yet)."},
+    },
+    operation_id="read_job_video",
+)
+async def read_job_video(job_id: uuid.UUID, services: ServicesDep) -> Response:
+    """Return the film of a finished `video` job, from whichever replica is asked, until the job expires."""
+    found = await anyio.to_thread.run_sync(store.get_job_file, services.engine, job_id)
+    if found is None:
+        record = await anyio.to_thread.run_sync(store.get_job, services.engine, job_id)
+        raise FilmNotFoundError(
+            f"Job {job_id} ({record.kind}, {record.status}) has no film: only a video job that has succeeded has one.",
+            details={"job_id": str(job_id), "kind": record.kind, "status": record.status},
+        )
+    data, content_type = found
+    return Response(
+        data,
+        media_type=content_type,
+        headers={"Cache-Control": "private, max-age=3600", "X-Content-Type-Options": "nosniff"},
+    )

@@ -1,0 +1,143 @@
+"""Requests and answers of POST /v1/plans, /v1/transfers and /v1/simulations."""
+
+from __future__ import annotations
+
+import uuid
+from typing import Any, Literal
+
+from pydantic import ConfigDict, Field, model_validator
+
+from causalplan.planners.result import PlanStatus
+from causalplan.service.api.schemas.common import (
+    DiagnosticOut,
+    InputModel,
+    MappingDocument,
+    ModelDocument,
+    OutputModel,
+    PlanStepOut,
+)
+
+
+class _Solve(InputModel):
+    model: ModelDocument | None = Field(default=None, description="The model inline (or give model_id).")
+    model_id: uuid.UUID | None = Field(default=None, description="A model stored by POST /v1/models.")
+    planner: str = Field(
+        default="auto",
+        min_length=1,
+        max_length=64,
+        description="A planner name from GET /health ('planners'); 'auto' lets the service choose.",
+    )
+    time_limit: float | None = Field(
+        default=None,
+        gt=0,
+        allow_inf_nan=False,
+        description="Seconds the planner may run; at most the server's maximum (GET /health, 'limits').",
+    )
+    validate_plan: bool = Field(
+        default=False,
+        alias="validate",
+        description="Also check the plan with VAL on the readable PDDL (the answer's 'validated_by'); "
+        "a plan VAL rejects is an error, never an answer.",
+    )
+
+    @model_validator(mode="after")
+    def _one_model(self) -> _Solve:
+        if (self.model is None) == (self.model_id is None):
+            raise ValueError("give exactly one of 'model' (the model inline) and 'model_id' (a stored model)")
+        return self
+
+
+class PlanIn(_Solve):
+    """POST /v1/plans: plan a model, on its own object or (with ``mapping``) on another."""
+
+    mapping: MappingDocument | None = Field(default=None, description="A step-3 mapping: plan for that object.")
+    include_pddl: bool = Field(default=False, description="Also return the PDDL domain and problem.")
+
+
+class TransferIn(_Solve):
+    """POST /v1/transfers: try a model on a new object through a step-3 mapping."""
+
+    mapping: MappingDocument = Field(description="The step-3 mapping of the new object's parts.")
+
+
+class SimulationIn(PlanIn):
+    """POST /v1/simulations: what POST /v1/plans takes, and whether to draw the final assembly."""
+
+    picture: bool = Field(
+        default=True, description="Also return a PNG of the final assembly as a data URL (not with 'robot')."
+    )
+    robot: bool = Field(
+        default=False,
+        description="Have the Franka Panda carry out the plan: per step what it did ('robot' in each step), "
+        "and in the answer's 'robot' whether it could (else the reason robot_cannot_execute, its step and code).",
+    )
+    video: Literal["mp4", "gif"] | None = Field(
+        default=None,
+        description="With 'robot': also film it, as MP4 (H.264) or GIF; the answer's 'video' says where to "
+        "fetch the film (GET /v1/simulations/videos/{key}). Filming takes tens of seconds.",
+    )
+
+    @model_validator(mode="after")
+    def _video_needs_robot(self) -> SimulationIn:
+        if self.video is not None and not self.robot:
+            raise ValueError("'video' needs 'robot': true (the film is of the robot at work)")
+        return self
+
+
+class PddlOut(OutputModel):
+    domain: str
+    problem: str
+
+
+class PlanOut(OutputModel):
+    """A replayed plan (``causalplan plan --json``), and where the answer came from."""
+
+    model_config = ConfigDict(extra="allow")  # planners may add fields, e.g. success_probability
+
+    status: PlanStatus = Field(description="Every outcome a planner has, e.g. 'too_large' from the exact MDP.")
+    planner_used: str
+    object: str
+    plan: list[PlanStepOut] | None
+    plan_length: int | None
+    valid_under_model: bool
+    valid_under_true_mechanism: bool
+    unmet_requirements: list[str]
+    timing: dict[str, float]
+    validated_by: dict[str, str] | None = Field(
+        default=None,
+        description="Each validator's verdict on the plan, e.g. {'replay': 'valid', 'val': 'valid'} "
+        "(VAL only when the request asked for 'validate'); null without a plan.",
+    )
+    message: str
+    pddl: PddlOut | None = None
+    planner_requested: str = Field(description="The planner asked for ('auto' included).")
+    cached: bool = Field(description="True when an identical request was answered before.")
+    model_id: uuid.UUID | None = Field(description="The stored model planned (inline models are stored too).")
+    warnings: list[DiagnosticOut] = Field(description="Validation warnings of the model and mapping.")
+
+
+class ReasonOut(OutputModel):
+    code: str
+    severity: Literal["error", "warning"]
+    message: str
+    labels: list[str]
+
+
+class TransferOut(OutputModel):
+    """A transfer verdict (``causalplan transfer --json``), and the stored trial."""
+
+    model_config = ConfigDict(extra="allow")
+
+    verdict: Literal["transfers", "fails", "invalid", "undecided"]
+    training_object: str | None
+    test_object: str | None
+    generalization: str | None
+    decided_by: str
+    reasons: list[ReasonOut]
+    plan: list[PlanStepOut] | None
+    planning: dict[str, Any] | None
+    diagnostics: dict[str, Any]
+    planner_requested: str
+    cached: bool
+    trial_id: uuid.UUID
+    model_id: uuid.UUID

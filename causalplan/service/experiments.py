@@ -1,0 +1,230 @@
+"""Experiments for the research pages and the API: create, describe, results and exports.
+
+The pages and ``/v1/experiments`` call the same functions, so both show the same numbers.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from fastapi import Request, Response
+from sqlalchemy.orm import Session
+
+from causalplan.errors import InputFileError, UnknownObjectError
+from causalplan.objects.catalog import Catalog
+from causalplan.service.api.schemas.experiments import (
+    ExperimentIn,
+    ExperimentOut,
+    ParticipantOut,
+    RecruitmentIn,
+    RecruitmentOut,
+)
+from causalplan.service.exports import (
+    PARTICIPANT_COLUMNS,
+    TRIAL_COLUMNS,
+    experiment_dict,
+    participant_dict,
+    trial_dict,
+)
+from causalplan.service.responses import SafeJSONResponse, csv_bytes
+from causalplan.service.storage import arrivals
+from causalplan.service.storage import experiments as store
+from causalplan.service.storage.experiments import ParticipantJourney
+from causalplan.service.storage.records import ExperimentRecord, ParticipantRecord
+from causalplan.studies.analysis import Analysis, analyse
+from causalplan.studies.design import Design, read_design
+from causalplan.studies.recruitment import Recruitment, read_quotas, read_recruitment
+from causalplan.studies.results import Rate, transfer_rates
+from causalplan.studies.trials import ExportError, trial_rows
+
+
+def create(session: Session, catalog: Catalog, body: ExperimentIn) -> ExperimentRecord:
+    """Check a definition against the catalog and store the experiment (InvalidExperimentError lists problems)."""
+    options = body.model_dump(
+        include={"counterbalance_training", "counterbalance_tests", "show_verdict", "tutorial", "robot_verdict"}
+    )
+    name, design = read_design(body.name, [condition.model_dump() for condition in body.conditions], options, catalog)
+    return store.create_experiment(session, name, body.description.strip(), design)
+
+
+def experiment_out(record: ExperimentRecord, participants: int) -> ExperimentOut:
+    """Return the API view of an experiment."""
+    api = f"/v1/experiments/{record.id}"
+    return ExperimentOut.model_validate(
+        {
+            "id": record.id,
+            "created_at": record.created_at,
+            "name": record.name,
+            "description": record.description,
+            **Design.from_dict(record.design).as_dict(),  # the conditions and the options
+            "is_demo": record.is_demo,
+            "participants": participants,
+            "links": {
+                "page": f"/research/experiments/{record.id}",
+                "results": f"{api}/results",
+                "participants": f"{api}/participants",
+                "export_json": f"{api}/export?format=json",
+                "export_csv": f"{api}/export?format=csv",
+            },
+        }
+    )
+
+
+def participant_link(request: Request, participant: ParticipantRecord) -> str:
+    """Return the participant's link: this server's address and their code."""
+    return f"{request.base_url}p/{participant.code}"
+
+
+def progress(participant: ParticipantRecord, catalog: Catalog) -> str:
+    """Return how far a participant got, in words."""
+    try:
+        return ParticipantJourney.of(participant, catalog).progress()
+    except UnknownObjectError:  # the catalog lost one of the experiment's objects
+        return participant.stage
+
+
+def participant_out(participant: ParticipantRecord, catalog: Catalog, request: Request) -> ParticipantOut:
+    """Return the API view of a participant link: the record's own fields, and four worked out from it."""
+    worked_out = {
+        "url": participant_link(request, participant),
+        "progress": progress(participant, catalog),
+        "platform": participant.arrival.platform if participant.arrival is not None else None,
+        "exclusion_reason": "; ".join(item.reason for item in participant.exclusions) or None,
+    }
+    stored = {name: getattr(participant, name) for name in ParticipantOut.model_fields if name not in worked_out}
+    return ParticipantOut.model_validate({**stored, **worked_out})
+
+
+def results(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> dict[str, Any]:
+    """Return an experiment's participants, transfer rates and trials (what the results page shows)."""
+    participants = store.participants_of(session, experiment.id)
+    trials = store.trials_of(session, experiment.id)
+    rates: list[Rate] = transfer_rates(Design.from_dict(experiment.design), trials, catalog)
+    return {
+        "experiment": experiment_out(experiment, len(participants)),
+        "participants": [participant_out(participant, catalog, request) for participant in participants],
+        "rates": [rate.as_dict() for rate in rates],
+        "trials": [trial_dict(stored, catalog) for stored in trials],
+    }
+
+
+def export_data(
+    session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request, platform_ids: str = "plain"
+) -> dict[str, Any]:
+    """Return every raw record of an experiment as the JSON export holds them (``causalplan analyze`` reads it)."""
+    participants = [
+        participant_dict(
+            participant, progress(participant, catalog), participant_link(request, participant), platform_ids
+        )
+        for participant in store.participants_of(session, experiment.id)
+    ]
+    stored = store.trials_of(session, experiment.id)
+    rates = transfer_rates(Design.from_dict(experiment.design), stored, catalog)
+    return {
+        "exported_at": datetime.now(UTC).isoformat(),
+        "experiment": experiment_dict(experiment),
+        "rates": [rate.as_dict() for rate in rates],
+        "participants": participants,
+        "trials": [trial_dict(trial, catalog) for trial in stored],
+    }
+
+
+def export(
+    session: Session,
+    catalog: Catalog,
+    experiment: ExperimentRecord,
+    request: Request,
+    format: str,
+    table: str,
+    platform_ids: str = "plain",
+) -> Response:
+    """Return every raw record of an experiment as a JSON file, or one table as a CSV file.
+
+    ``platform_ids``: the crowd platforms' ids as stored (``plain``), ``hashed`` or ``omit``-ted.
+    """
+    data = export_data(session, catalog, experiment, request, platform_ids)
+    name = (
+        f"causalplan-experiment-{str(experiment.id)[:8]}-{datetime.fromisoformat(data['exported_at']):%Y%m%dT%H%M%SZ}"
+    )
+    if format == "json":
+        return SafeJSONResponse(data, headers={"Content-Disposition": f'attachment; filename="{name}.json"'})
+    body = (
+        csv_bytes(TRIAL_COLUMNS, data["trials"])
+        if table == "trials"
+        else csv_bytes(PARTICIPANT_COLUMNS, data["participants"])
+    )
+    return Response(
+        body,
+        media_type="text/csv; charset=utf-8",
+        headers={"Content-Disposition": f'attachment; filename="{name}-{table}.csv"'},
+    )
+
+
+def analysis_of(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> Analysis | str:
+    """Return the study's analysis (``causalplan analyze`` on its export), or why it cannot be made."""
+    data = export_data(session, catalog, experiment, request, platform_ids="omit")
+    try:
+        return analyse(trial_rows(data, catalog), catalog)
+    except (ExportError, UnknownObjectError) as exc:
+        return exc.message
+
+
+def crowd_size(session: Session, experiment: ExperimentRecord) -> int:
+    """Return how many of the experiment's participants have written a model (the crowd of its consensus)."""
+    return sum(
+        1 for participant in store.participants_of(session, experiment.id) if (participant.work or {}).get("model")
+    )
+
+
+def consensus_svg(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> bytes | str:
+    """Return the crowd's consensus graph as SVG (``causalplan consensus`` on the export), or why there is none.
+
+    The graph beside the first members' own models; an arrow's width is its rule's support.
+    """
+    from causalplan.consensus.build import NoCrowdError, build_consensus
+    from causalplan.consensus.drawing import draw_consensus
+    from causalplan.consensus.participants import participants_of_export
+
+    data = export_data(session, catalog, experiment, request, platform_ids="omit")
+    try:
+        consensus = build_consensus(participants_of_export(data, f"experiment {experiment.id}"), catalog)
+    except (NoCrowdError, InputFileError) as exc:
+        return exc.message
+    with tempfile.TemporaryDirectory() as folder:  # matplotlib writes the files; the SVG is read back
+        paths = draw_consensus(consensus, dict(consensus.models), Path(folder))
+        return next(path for path in paths if path.suffix == ".svg").read_bytes()
+
+
+def rates_of(session: Session, catalog: Catalog, experiment: ExperimentRecord) -> list[Rate]:
+    """Return an experiment's transfer rates per condition and test object."""
+    return transfer_rates(Design.from_dict(experiment.design), store.trials_of(session, experiment.id), catalog)
+
+
+def public_link(request: Request, experiment: ExperimentRecord) -> str:
+    """Return the experiment's public study link (Prolific or MTurk add their ids to it)."""
+    return f"{request.base_url}s/{experiment.id}"
+
+
+def recruitment_out(session: Session, experiment: ExperimentRecord, request: Request) -> RecruitmentOut:
+    """Return the recruiting settings with the public link and each condition's places."""
+    return RecruitmentOut.model_validate(
+        {
+            **Recruitment.from_dict(experiment.recruitment).as_dict(),
+            "public_link": public_link(request, experiment),
+            "places": [vars(place) for place in arrivals.places(session, experiment)],
+            "arrivals": arrivals.arrival_counts(session, experiment.id),
+        }
+    )
+
+
+def set_recruitment(session: Session, experiment: ExperimentRecord, body: RecruitmentIn) -> None:
+    """Check and store the recruiting settings and quotas (InvalidRequestError lists every problem)."""
+    settings = read_recruitment(body.model_dump(exclude={"quotas"}))
+    conditions = [condition.name for condition in Design.from_dict(experiment.design).conditions]
+    quotas = read_quotas(body.quotas, conditions)
+    experiment.recruitment = settings.as_dict()
+    store.save(session, experiment)
+    arrivals.set_quotas(session, experiment, quotas)

@@ -1,0 +1,109 @@
+"""The pictures the pages show, kept once drawn: causal graphs (matplotlib, here) and simulator pictures (workers)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from fastapi import Response
+
+from causalplan.causal.diagram import diagram_svg
+from causalplan.causal.model import CausalModel
+from causalplan.causal.render import DRAW_LOCK
+from causalplan.errors import CausalPlanError
+from causalplan.objects.model import AssemblyObject
+from causalplan.service.api.routes.models import SVG_SECURITY_HEADERS
+from causalplan.service.deps import Services
+from causalplan.service.pages import pictures
+from causalplan.service.pages.pictures import PictureCache
+from causalplan.studies.results import Rate, chart_svg
+
+logger = logging.getLogger(__name__)
+
+PICTURE_SECONDS = 20.0
+"""Longest a worker may take to draw an object's parts or a plan's result."""
+SVG_HEADERS = {**SVG_SECURITY_HEADERS, "X-Content-Type-Options": "nosniff"}
+
+
+def fresh_svg(svg: bytes) -> Response:
+    """Return a drawing made for this request (of data that changes) as an SVG response nobody keeps."""
+    return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
+
+
+_graphs = PictureCache(256)
+_part_pictures = PictureCache(512)
+_plan_pictures = PictureCache(256)
+
+
+def document_key(document: dict[str, Any]) -> str:
+    """Return a short hash of a model document (what its graph is cached under, and its URL's version)."""
+    text = json.dumps(document, sort_keys=True, ensure_ascii=False)
+    return hashlib.sha256(text.encode("utf-8", "replace")).hexdigest()[:16]
+
+
+def graph_svg(key: str, read: Callable[[], CausalModel | None]) -> bytes | None:
+    """Return the causal graph of the model ``read`` gives as the pages' SVG (None when it gives none).
+
+    Drawn once per ``key`` (see ``document_key``): a graph kept already needs no reading.
+    """
+
+    def draw() -> dict[str, bytes]:
+        model = read()
+        return {key: diagram_svg(model)} if model is not None else {}
+
+    return _graphs.get(key, draw)
+
+
+def rates_chart(rates: Sequence[Rate]) -> bytes:
+    """Return the bar chart of an experiment's transfer rates (SVG)."""
+    with DRAW_LOCK:  # one lock for every matplotlib drawing in the app
+        return chart_svg(rates)
+
+
+def _picture_key(services: Services, *names: str) -> str:
+    # The catalog's fingerprint first: a picture is of the catalog the server has now.
+    return json.dumps([services.catalog_key, *names])
+
+
+def part_picture(services: Services, obj: AssemblyObject, part_id: str) -> tuple[bytes, str]:
+    """Return the simulator's picture of one part (PNG), or a plain drawing (SVG) when it cannot draw now."""
+    folders = tuple(services.settings.catalog_folders)
+
+    def draw() -> dict[str, bytes]:
+        drawn = services.pool.run(pictures.part_pictures_job, (obj.id, folders), PICTURE_SECONDS)
+        return {_picture_key(services, obj.id, part): png for part, png in drawn.items()}
+
+    try:
+        png = _part_pictures.get(_picture_key(services, obj.id, part_id), draw)
+    except CausalPlanError as exc:  # busy, crashed, or no simulator: a drawing now, the picture next time
+        logger.info("no picture of %s.%s: %s", obj.id, part_id, exc.message)
+        png = None
+    if png is None:
+        return pictures.drawing(obj.part(part_id).name), "image/svg+xml"
+    return png, "image/png"
+
+
+def forget_plan_pictures() -> None:
+    """Forget every kept picture of a plan (the next request for one draws it again)."""
+    _plan_pictures.clear()
+
+
+def is_plan_picture_kept(services: Services, obj: AssemblyObject, fit_ids: tuple[str, ...]) -> bool:
+    """Return whether the picture of ``obj`` after the plan making ``fit_ids`` is drawn and kept already."""
+    return _plan_pictures.has(_picture_key(services, obj.id, *fit_ids))
+
+
+def plan_picture(services: Services, obj: AssemblyObject, fit_ids: tuple[str, ...]) -> bytes:
+    """Return the simulator's picture of the object after the plan that makes ``fit_ids`` (PNG)."""
+    folders = tuple(services.settings.catalog_folders)
+    key = _picture_key(services, obj.id, *fit_ids)
+
+    def draw() -> dict[str, bytes]:
+        return {key: services.pool.run(pictures.assembly_picture_job, (obj.id, fit_ids, folders), PICTURE_SECONDS)}
+
+    png = _plan_pictures.get(key, draw)
+    assert png is not None
+    return png

@@ -1,0 +1,102 @@
+"""'Watch the robot' on step 2: film the robot carrying out the plan as a job, and say how far it is.
+
+``POST /p/<code>/films`` finds the film's job (one per object, plan, format and size, shared by
+every participant while it is kept) or queues it, and answers at once; the page polls ``GET
+/p/<code>/films/<key>`` for the frames drawn and plays the film from ``/v1/jobs/<id>/video``
+once it is ready. The job, its progress and the film live in the database, so the replica that
+answers a poll, or serves the film, need not be the one filming (``service.jobs.video``).
+"""
+
+from __future__ import annotations
+
+import uuid
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Path
+
+from causalplan.service.api.routes.simulations import VIDEO_KEY
+from causalplan.service.api.schemas.experiments import FilmIn, FilmOut
+from causalplan.service.deps import ServicesDep
+from causalplan.service.errors import InvalidRequestError, NotFoundError
+from causalplan.service.films import FilmNotFoundError, film_key
+from causalplan.service.jobs.video import FILM_KEY, fits_film_request, video_url
+from causalplan.service.pages.journeys import JourneyDep
+from causalplan.service.pool.robot_jobs import CONTENT_TYPES
+from causalplan.service.storage import jobs as store
+from causalplan.service.storage.jobs import JobKind, JobStatus
+from causalplan.service.storage.records import JobRecord, utc_now
+
+router = APIRouter(prefix="/p/{code}/films", include_in_schema=False)
+
+FILM_FORMAT = "mp4"
+"""What the page plays: every browser's <video> plays H.264 MP4."""
+
+
+def _seconds(job: JobRecord) -> float:
+    began = store.aware(job.started_at or job.created_at)
+    ended = store.aware(job.finished_at) if job.finished_at is not None else utc_now()
+    return round(max(0.0, (ended - began).total_seconds()), 1)
+
+
+def _out(code: str, job: JobRecord) -> FilmOut:
+    result: dict[str, Any] = job.result or {}
+    film: dict[str, Any] = result.get("video") or {}
+    ready = job.status == JobStatus.SUCCEEDED and job.file_type is not None
+    error = None
+    if job.status == JobStatus.SUCCEEDED and not ready:
+        error = {"code": "no_video", "message": "The robot made no film of this plan."}
+    elif job.status not in store.UNFINISHED and not ready:
+        failed = job.error or {"code": "job_cancelled", "message": "The film was cancelled."}
+        error = {"code": str(failed["code"]), "message": str(failed["message"])}
+    key = job.id.hex
+    return FilmOut.model_validate(
+        {
+            "key": key,
+            "state": "filming" if job.status in store.UNFINISHED else "ready" if ready else "failed",
+            "frames": job.done if job.total > 1 else 0,  # 1 of 1: nothing drawn yet, the robot is planning
+            "expected_frames": job.total if job.total > 1 else None,
+            "seconds": _seconds(job),
+            "status_url": f"/p/{code}/films/{key}",
+            "video_url": video_url(job.id) if ready else None,
+            "content_type": film.get("content_type") or CONTENT_TYPES[FILM_FORMAT],
+            "bytes": int(film.get("bytes") or 0),
+            "robot": result.get("robot"),
+            "error": error,
+        }
+    )
+
+
+@router.post("", response_model=FilmOut)
+def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesDep) -> FilmOut:
+    """Start filming the robot making ``fits`` of one of the participant's training objects (kept once made)."""
+    obj = next((o for o in journey.training if o.id == body.object), None)
+    if obj is None:
+        raise NotFoundError(f"'{body.object}' is not one of your objects in this step.")
+    known = {fit.id for fit in obj.fits}
+    unknown = [fit for fit in body.fits if fit not in known]
+    if unknown:
+        raise InvalidRequestError(
+            f"The {obj.name} has no fit '{unknown[0]}'.", details={"fit": unknown[0], "fits": sorted(known)}
+        )
+    settings = services.settings
+    size = (settings.robot_video_width, settings.robot_video_height)
+    fits = tuple(body.fits)
+    key = film_key(services.catalog_key, obj.id, fits, FILM_FORMAT, size)
+    kind = JobKind.VIDEO.value
+    job = store.find_job(services.engine, kind, FILM_KEY, key)
+    if job is None:  # two participants asking at once may each start one: harmless, and rare
+        request = fits_film_request(obj.id, fits, FILM_FORMAT, key)
+        job = store.create_job(services.engine, kind, request, 1, settings.max_queued_jobs)
+    return _out(code, job)
+
+
+@router.get("/{key}", response_model=FilmOut)
+def film_status(
+    code: str, key: Annotated[str, Path(pattern=VIDEO_KEY)], journey: JourneyDep, services: ServicesDep
+) -> FilmOut:
+    """Return how far the film is: filming (frames drawn of those expected), ready (where it is) or failed (why)."""
+    del journey  # only participants may ask
+    job = store.get_job(services.engine, uuid.UUID(hex=key))
+    if job.kind != JobKind.VIDEO or FILM_KEY not in job.request:
+        raise FilmNotFoundError(f"No film is made under '{key}'.", details={"key": key})
+    return _out(code, job)

@@ -1,0 +1,107 @@
+"""The public study link, ``/s/<experiment>``: arrival from a crowd platform (or none), consent, and admission.
+
+The link is what a researcher puts on Prolific or in an MTurk external question. Arriving
+stores only the arrival (with the platform's ids); consenting admits the person to the open
+condition with the fewest participants and sends them to their own participant pages;
+declining ends politely, with the platform's no-consent code. The same platform id coming
+back finds its own arrival: consent again if undecided, their progress if admitted.
+"""
+
+from __future__ import annotations
+
+import uuid
+from typing import Any
+
+from fastapi import APIRouter, Request, Response
+
+from causalplan.service.deps import SessionDep
+from causalplan.service.errors import InvalidFormError
+from causalplan.service.pages.forms import read_form
+from causalplan.service.pages.templating import PageRoute, redirect, render
+from causalplan.service.storage import arrivals
+from causalplan.service.storage import experiments as store
+from causalplan.service.storage.records import ExperimentRecord
+from causalplan.studies import recruitment
+from causalplan.studies.recruitment import MTURK_FRAME_ORIGINS, PlatformVisit, Recruitment, finish, read_visit
+
+router = APIRouter(prefix="/s/{experiment_id}", route_class=PageRoute, include_in_schema=False)
+
+
+def _page(request: Request, template: str, platform: str, status_code: int = 200, **context: Any) -> Response:
+    framed_by = MTURK_FRAME_ORIGINS if platform == "mturk" else ()
+    return render(request, template, status_code=status_code, secret_url=True, framed_by=framed_by, **context)
+
+
+def _full(request: Request, platform: str) -> Response:
+    return _page(
+        request, "study_message.html", platform, kind="full", back=None, redirect_seconds=recruitment.REDIRECT_SECONDS
+    )
+
+
+@router.get("")
+def arrive(request: Request, experiment_id: uuid.UUID, session: SessionDep) -> Response:
+    experiment = store.get_experiment(session, experiment_id)
+    visit = read_visit(dict(request.query_params))
+    recruiting = Recruitment.from_dict(experiment.recruitment)
+    if visit.is_preview:  # MTurk's preview: show what the study is, store nothing
+        return _consent_page(request, experiment, visit, recruiting, None)
+    found = arrivals.find_arrival(session, experiment.id, visit)
+    if found is not None and found.participant is not None:
+        return redirect(f"/p/{found.participant.code}")  # they come back to their own progress
+    if found is not None and found.consented is False:
+        return _declined(request, found, recruiting)
+    if found is None and arrivals.is_full(session, experiment):
+        return _full(request, visit.platform)
+    return _consent_page(request, experiment, visit, recruiting, found or arrivals.arrive(session, experiment, visit))
+
+
+def _consent_page(
+    request: Request, experiment: ExperimentRecord, visit: PlatformVisit, recruiting: Recruitment, arrival: Any
+) -> Response:
+    """The consent page (``arrival`` None: MTurk's preview, which stores nothing and cannot be agreed to)."""
+    return _page(
+        request,
+        "consent.html",
+        visit.platform,
+        experiment_id=experiment.id,
+        name=experiment.name,
+        consent=recruiting,
+        arrival=arrival,
+    )
+
+
+def _declined(request: Request, arrival: Any, recruiting: Recruitment) -> Response:
+    back = finish(
+        arrival.platform, arrival.platform_session, arrival.submit_to, recruiting.no_consent_code, "no_consent"
+    )
+    return render(
+        request,
+        "study_message.html",
+        secret_url=True,
+        framed_by=MTURK_FRAME_ORIGINS if arrival.platform == "mturk" else (),
+        posts_to=(back.origin,) if back is not None and back.fields else (),
+        kind="declined",
+        back=back,
+        redirect_seconds=recruitment.REDIRECT_SECONDS,
+    )
+
+
+@router.post("/consent")
+async def consent(request: Request, experiment_id: uuid.UUID, session: SessionDep) -> Response:
+    experiment = store.get_experiment(session, experiment_id)
+    form = await read_form(request)
+    arrival = arrivals.arrival_by_code(session, experiment.id, form.text("arrival", "", max_length=64))
+    if arrival is None:
+        raise InvalidFormError("This consent form is out of date: please open the study link again.")
+    if arrival.participant is not None:  # a second click, or an old tab: they are in already
+        return redirect(f"/p/{arrival.participant.code}")
+    decision = form.text("decision", "", max_length=16)
+    if decision not in ("agree", "decline"):
+        raise InvalidFormError("Choose whether you agree to take part.", details={"field": "decision"})
+    if arrival.consented is False or decision == "decline":
+        arrivals.decline(session, arrival)
+        return _declined(request, arrival, Recruitment.from_dict(experiment.recruitment))
+    participant = arrivals.admit(session, experiment, arrival)
+    if participant is None:
+        return _full(request, arrival.platform)
+    return redirect(f"/p/{participant.code}")

@@ -1,0 +1,209 @@
+"""The public study link's records: arrivals, the places of each condition, consent, and exclusions.
+
+An arrival is admitted (on consent) to the open condition with the fewest places taken, and
+numbered within it, which picks its object orders from the Latin squares: conditions and
+orders stay balanced as people come. A place is taken by a compare-and-set update
+(``taken = n + 1 where taken = n``) in the transaction that stores the participant, so two
+arrivals, even on two replicas over PostgreSQL, never take the same place or one over the quota.
+"""
+
+from __future__ import annotations
+
+import uuid
+
+from sqlalchemy import func, select, update
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from causalplan.service.errors import StorageError
+from causalplan.service.storage import experiments as store
+from causalplan.service.storage.crud import storage_errors
+from causalplan.service.storage.records import (
+    ArrivalRecord,
+    ExclusionRecord,
+    ExperimentRecord,
+    ParticipantRecord,
+    StudyPlaceRecord,
+    utc_now,
+)
+from causalplan.studies.assignment import Place, choose
+from causalplan.studies.design import Condition, Design
+from causalplan.studies.recruitment import PlatformVisit
+
+MAX_CLAIM_ATTEMPTS = 50
+"""Tries to take a place while others take them at the same moment (each lost race means one was taken)."""
+
+
+def places(session: Session, experiment: ExperimentRecord) -> list[Place]:
+    """Return each condition's places, in the design's order (rows made on first use)."""
+    design = Design.from_dict(experiment.design)
+    query = select(StudyPlaceRecord).where(StudyPlaceRecord.experiment_id == experiment.id)
+    with storage_errors(session):
+        rows = {row.condition: row for row in session.scalars(query.execution_options(populate_existing=True))}
+        missing = [condition.name for condition in design.conditions if condition.name not in rows]
+        if missing:
+            counts = store.participants_per_condition(session, experiment.id)
+            # Links made before the public link count as taken places, so numbering goes on from them.
+            made = [StudyPlaceRecord(experiment_id=experiment.id, condition=n, taken=counts.get(n, 0)) for n in missing]
+            try:
+                session.add_all(made)
+                session.commit()
+            except IntegrityError:  # another arrival made them at the same moment: theirs are as good
+                session.rollback()
+            rows = {row.condition: row for row in session.scalars(query.execution_options(populate_existing=True))}
+    return [
+        Place(condition.name, rows[condition.name].taken, rows[condition.name].quota) for condition in design.conditions
+    ]
+
+
+def set_quotas(session: Session, experiment: ExperimentRecord, quotas: dict[str, int | None]) -> None:
+    """Store each condition's quota (None: no limit); places already taken stay taken."""
+    places(session, experiment)
+    with storage_errors(session):
+        for condition, quota in quotas.items():
+            session.execute(
+                update(StudyPlaceRecord)
+                .where(StudyPlaceRecord.experiment_id == experiment.id, StudyPlaceRecord.condition == condition)
+                .values(quota=quota)
+            )
+        session.commit()
+
+
+def take_place(session: Session, experiment_id: uuid.UUID, place: Place) -> bool:
+    """Take the next place of ``place``'s condition if nobody took one since ``place`` was read (no commit)."""
+    taken = session.execute(
+        update(StudyPlaceRecord)
+        .where(
+            StudyPlaceRecord.experiment_id == experiment_id,
+            StudyPlaceRecord.condition == place.condition,
+            StudyPlaceRecord.taken == place.taken,
+        )
+        .values(taken=place.taken + 1)
+    )
+    return bool(taken.rowcount == 1)  # type: ignore[attr-defined]  # a CursorResult for an UPDATE
+
+
+def claim_place(session: Session, experiment: ExperimentRecord) -> tuple[Condition, int] | None:
+    """Take a place (uncommitted, in the session's transaction): its condition and number; None when full."""
+    design = Design.from_dict(experiment.design)
+    for _ in range(MAX_CLAIM_ATTEMPTS):
+        place = choose(places(session, experiment))
+        if place is None:
+            return None
+        with storage_errors(session):
+            if take_place(session, experiment.id, place):
+                return design.condition(place.condition), place.taken
+            session.rollback()
+    raise StorageError("Too many people are starting the study at this moment; please reload the page.")
+
+
+def is_full(session: Session, experiment: ExperimentRecord) -> bool:
+    """Return whether every condition has reached its quota."""
+    return choose(places(session, experiment)) is None
+
+
+def find_arrival(session: Session, experiment_id: uuid.UUID, visit: PlatformVisit) -> ArrivalRecord | None:
+    """Return the earlier arrival of the same platform id on this experiment (None: first time, or no id)."""
+    if visit.participant is None:
+        return None
+    with storage_errors(session):
+        return session.scalars(
+            select(ArrivalRecord).where(
+                ArrivalRecord.experiment_id == experiment_id,
+                ArrivalRecord.platform == visit.platform,
+                ArrivalRecord.platform_id == visit.participant,
+            )
+        ).first()
+
+
+def arrive(session: Session, experiment: ExperimentRecord, visit: PlatformVisit) -> ArrivalRecord:
+    """Return this visit's arrival: the one stored for its platform id, or a new one (all that precedes consent)."""
+    found = find_arrival(session, experiment.id, visit)
+    if found is not None:
+        return found
+    record = ArrivalRecord(
+        id=uuid.uuid4(),
+        code=store.new_code(),
+        experiment_id=experiment.id,
+        created_at=utc_now(),
+        platform=visit.platform,
+        platform_id=visit.participant,
+        platform_study=visit.study,
+        platform_session=visit.session,
+        submit_to=visit.submit_to,
+    )
+    with storage_errors(session):
+        try:
+            session.add(record)
+            session.commit()
+        except IntegrityError:  # the same person opened the link twice at once: the first one counts
+            session.rollback()
+            found = find_arrival(session, experiment.id, visit)
+            if found is None:
+                raise
+            return found
+    return record
+
+
+def arrival_by_code(session: Session, experiment_id: uuid.UUID, code: str) -> ArrivalRecord | None:
+    """Return the arrival with the consent form's ``code`` on this experiment (None when it is not one)."""
+    if not store.CODE_PATTERN.fullmatch(code):
+        return None
+    with storage_errors(session):
+        return session.scalars(
+            select(ArrivalRecord).where(ArrivalRecord.code == code, ArrivalRecord.experiment_id == experiment_id)
+        ).first()
+
+
+def admit(session: Session, experiment: ExperimentRecord, arrival: ArrivalRecord) -> ParticipantRecord | None:
+    """Record consent and make the arrival a participant in the emptiest open condition; None when the study is full."""
+    if arrival.participant is not None:
+        return arrival.participant
+    claimed = claim_place(session, experiment)
+    if claimed is None:
+        return None
+    condition, ordinal = claimed
+    participant = store.participant_record(experiment, Design.from_dict(experiment.design), condition, ordinal)
+    participant.started_at = participant.created_at
+    with storage_errors(session):  # the place, the participant and the consent: all or nothing
+        session.add(participant)
+        session.flush()
+        arrival.consented = True
+        arrival.decided_at = participant.created_at
+        arrival.participant_id = participant.id
+        session.add(arrival)
+        session.commit()
+    return participant
+
+
+def decline(session: Session, arrival: ArrivalRecord) -> None:
+    """Record that the arrival declined consent (nothing else about them is stored)."""
+    if arrival.consented is not None:
+        return
+    arrival.consented = False
+    arrival.decided_at = utc_now()
+    store.save(session, arrival)
+
+
+def exclusion(participant: ParticipantRecord, reason: str, detail: str) -> ExclusionRecord:
+    """Return a new exclusion of ``participant`` (the caller stores it with the participant's change)."""
+    return ExclusionRecord(
+        id=uuid.uuid4(), participant_id=participant.id, reason=reason, detail=detail[:500], created_at=utc_now()
+    )
+
+
+def arrival_counts(session: Session, experiment_id: uuid.UUID) -> dict[str, int]:
+    """Return how many arrived on the public link, and how many of them consented, declined or have not decided."""
+    with storage_errors(session):
+        rows = session.execute(
+            select(ArrivalRecord.consented, func.count())
+            .where(ArrivalRecord.experiment_id == experiment_id)
+            .group_by(ArrivalRecord.consented)
+        ).all()
+    found = {consented: int(number) for consented, number in rows}
+    return {
+        "arrived": sum(found.values()),
+        "consented": found.get(True, 0),
+        "declined": found.get(False, 0),
+        "undecided": found.get(None, 0),
+    }

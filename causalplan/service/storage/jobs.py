@@ -1,0 +1,306 @@
+"""The ``jobs`` table: create, read, cancel, and the runner's claim, lease renewal and finish.
+
+Every change a runner makes is a conditional UPDATE (``WHERE lease_owner = me AND status =
+'running'``), so two replicas never both own a job: a claim succeeds for exactly one of them,
+and a runner whose lease was taken over (or whose job was cancelled) finds its writes refused
+and stops. That works the same on PostgreSQL and SQLite, with no lock held between statements.
+"""
+
+from __future__ import annotations
+
+import uuid
+from collections.abc import Sequence
+from datetime import UTC, datetime, timedelta
+from enum import StrEnum
+from typing import Any, cast
+
+from sqlalchemy import CursorResult, Engine, and_, delete, func, or_, select, update
+from sqlalchemy.orm import Session
+
+from causalplan.service.errors import JobFinishedError, JobNotFoundError, TooManyJobsError
+from causalplan.service.storage.crud import clean_json, storage_errors
+from causalplan.service.storage.records import JobRecord, utc_now
+
+MAX_ATTEMPTS = 3
+"""Runs of a job whose replica stopped before finishing it, before it is given up as failed."""
+FIRST_KINDS = ("video",)
+"""Kinds a runner takes before older jobs of other kinds: a person is usually watching the page for a film."""
+
+
+class JobKind(StrEnum):
+    """The kinds of job ``POST /v1/jobs`` takes."""
+
+    BATCH = "batch"
+    """Transfer trials uploaded as JSON Lines or CSV, judged as ``causalplan batch`` does."""
+    SIMULATION = "simulation"
+    """A plan run in the physics simulator, with the picture of the final assembly."""
+    CONSENSUS = "consensus"
+    """The crowd's consensus model of participants uploaded as JSON Lines, judged."""
+    VIDEO = "video"
+    """The robot carrying out a plan, filmed; the film is served from the job (``service.jobs.video``)."""
+    FIT_ESTIMATION = "fit_estimation"
+    """Each fit's success probability by noisy robot insertions, as ``causalplan estimate-fits``."""
+
+
+class JobStatus(StrEnum):
+    QUEUED = "queued"
+    RUNNING = "running"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
+
+
+UNFINISHED = (JobStatus.QUEUED, JobStatus.RUNNING)
+
+
+def _changed(result: object) -> bool:
+    return cast(CursorResult[Any], result).rowcount == 1
+
+
+def create_job(engine: Engine, kind: str, request: dict[str, Any], total: int, max_unfinished: int) -> JobRecord:
+    """Store a new queued job; TooManyJobsError when ``max_unfinished`` jobs are queued or running already."""
+    with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        unfinished = session.scalar(select(func.count()).select_from(JobRecord).where(JobRecord.status.in_(UNFINISHED)))
+        if (unfinished or 0) >= max_unfinished:
+            raise TooManyJobsError(
+                f"This service has {unfinished} unfinished jobs, its limit; try again when some have finished.", 30
+            )
+        record = JobRecord(
+            id=uuid.uuid4(),
+            kind=kind,
+            status=JobStatus.QUEUED,
+            request=clean_json(request, "the job's request"),
+            created_at=utc_now(),
+            attempts=0,
+            done=0,
+            total=total,
+        )
+        session.add(record)
+        session.commit()
+    return record
+
+
+def get_job(engine: Engine, job_id: uuid.UUID, now: datetime | None = None) -> JobRecord:
+    """Return the job; JobNotFoundError when there is none, or its result has expired."""
+    now = now or utc_now()
+    with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        record = session.get(JobRecord, job_id)
+    if record is None or (record.expires_at is not None and aware(record.expires_at) <= now):
+        raise JobNotFoundError(
+            f"There is no job {job_id}: it never existed, or it finished and its result has expired.",
+            details={"job_id": str(job_id)},
+        )
+    return record
+
+
+def find_job(engine: Engine, kind: str, field: str, value: str) -> JobRecord | None:
+    """Return the newest job of ``kind`` whose request has ``field`` == ``value`` and that is unfinished or
+    succeeded and not expired; None when there is none (a failed or cancelled one is not reused)."""
+    now = utc_now()
+    with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        return session.scalars(
+            select(JobRecord)
+            .where(
+                JobRecord.kind == kind,
+                JobRecord.request[field].as_string() == value,
+                JobRecord.status.in_((*UNFINISHED, JobStatus.SUCCEEDED)),
+                or_(JobRecord.expires_at.is_(None), JobRecord.expires_at > now),
+            )
+            .order_by(JobRecord.created_at.desc())
+            .limit(1)
+        ).first()
+
+
+def get_job_file(engine: Engine, job_id: uuid.UUID) -> tuple[bytes, str] | None:
+    """Return the file the job made (bytes, media type); None when it made none (yet).
+
+    JobNotFoundError when there is no such job, or it has expired.
+    """
+    get_job(engine, job_id)
+    with Session(engine) as session, storage_errors(session):
+        row = session.execute(
+            select(JobRecord.file_data, JobRecord.file_type).where(JobRecord.id == job_id)
+        ).one_or_none()
+    if row is None or row.file_data is None or row.file_type is None:
+        return None
+    return bytes(row.file_data), str(row.file_type)
+
+
+def count_unfinished(engine: Engine) -> dict[str, int]:
+    """Return how many jobs are queued and how many running, across all replicas."""
+    with Session(engine) as session, storage_errors(session):
+        rows = session.execute(
+            select(JobRecord.status, func.count()).where(JobRecord.status.in_(UNFINISHED)).group_by(JobRecord.status)
+        ).all()
+    counts = {str(status): int(count) for status, count in rows}
+    return {status.value: counts.get(status.value, 0) for status in UNFINISHED}
+
+
+def cancel_job(engine: Engine, job_id: uuid.UUID, keep_seconds: float) -> JobRecord:
+    """Cancel a queued or running job (its runner stops at its next progress report); return it.
+
+    JobFinishedError when the job has finished already (its result stays until it expires).
+    """
+    get_job(engine, job_id)
+    now = utc_now()
+    with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        changed = session.execute(
+            update(JobRecord)
+            .where(JobRecord.id == job_id, JobRecord.status.in_(UNFINISHED))
+            .values(
+                status=JobStatus.CANCELLED,
+                finished_at=now,
+                expires_at=now + timedelta(seconds=keep_seconds),
+                lease_owner=None,
+                lease_expires_at=None,
+            )
+        )
+        session.commit()
+    record = get_job(engine, job_id)
+    if not _changed(changed):
+        raise JobFinishedError(
+            f"Job {job_id} has finished ({record.status}); there is nothing to cancel.",
+            details={"job_id": str(job_id), "status": record.status},
+        )
+    return record
+
+
+def aware(value: datetime) -> datetime:
+    """Return a stored timestamp with its zone (SQLite hands them back without; they were written in UTC)."""
+    return value.replace(tzinfo=UTC) if value.tzinfo is None else value
+
+
+def claim_job(
+    engine: Engine, owner: str, lease_seconds: float, kinds: Sequence[str], keep_seconds: float = 86_400.0
+) -> JobRecord | None:
+    """Take the oldest queued job of ``kinds``, or a running one whose lease has lapsed; None when there is none.
+
+    Jobs of ``FIRST_KINDS`` (films) come before older jobs of other kinds.
+
+    Only ``kinds`` (what this replica can do): during an upgrade, an older replica leaves a new
+    kind to the newer ones. A job taken over for the ``MAX_ATTEMPTS``-th time is marked failed
+    instead of run again (and kept ``keep_seconds``, as a finished job).
+    """
+    now = utc_now()
+    claimable = and_(
+        JobRecord.kind.in_(list(kinds)),
+        or_(
+            JobRecord.status == JobStatus.QUEUED,
+            and_(JobRecord.status == JobStatus.RUNNING, JobRecord.lease_expires_at < now),
+        ),
+    )
+    with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        for job_id, attempts in session.execute(
+            select(JobRecord.id, JobRecord.attempts)
+            .where(claimable)
+            .order_by(JobRecord.kind.not_in(FIRST_KINDS), JobRecord.created_at)
+            .limit(10)
+        ).all():
+            if attempts >= MAX_ATTEMPTS:
+                session.execute(
+                    update(JobRecord)
+                    .where(JobRecord.id == job_id, claimable)
+                    .values(
+                        status=JobStatus.FAILED,
+                        lease_owner=None,
+                        finished_at=now,
+                        expires_at=now + timedelta(seconds=keep_seconds),
+                        error={
+                            "code": "job_abandoned",
+                            "message": f"The job was started {attempts} times and its server stopped each time.",
+                            "details": {"attempts": attempts},
+                        },
+                    )
+                )
+                session.commit()
+                continue
+            taken = session.execute(
+                update(JobRecord)
+                .where(JobRecord.id == job_id, claimable)
+                .values(
+                    status=JobStatus.RUNNING,
+                    lease_owner=owner,
+                    lease_expires_at=now + timedelta(seconds=lease_seconds),
+                    attempts=JobRecord.attempts + 1,
+                    started_at=now,
+                )
+            )
+            session.commit()
+            if _changed(taken):  # else another replica took it between the two statements
+                return session.get(JobRecord, job_id)
+    return None
+
+
+def _mine(job_id: uuid.UUID, owner: str) -> Any:
+    return and_(JobRecord.id == job_id, JobRecord.lease_owner == owner, JobRecord.status == JobStatus.RUNNING)
+
+
+def renew_lease(
+    engine: Engine, job_id: uuid.UUID, owner: str, lease_seconds: float, progress: tuple[int, int] | None = None
+) -> bool:
+    """Extend ``owner``'s lease (and store the progress); False when the job is no longer ``owner``'s."""
+    values: dict[str, Any] = {"lease_expires_at": utc_now() + timedelta(seconds=lease_seconds)}
+    if progress is not None:
+        values["done"], values["total"] = progress
+    with Session(engine) as session, storage_errors(session):
+        changed = session.execute(update(JobRecord).where(_mine(job_id, owner)).values(**values))
+        session.commit()
+    return _changed(changed)
+
+
+def finish_job(
+    engine: Engine,
+    job_id: uuid.UUID,
+    owner: str,
+    keep_seconds: float,
+    result: dict[str, Any] | None = None,
+    error: dict[str, Any] | None = None,
+    file: tuple[bytes, str] | None = None,
+) -> bool:
+    """Store ``owner``'s result (or error) and end the job; False when the job was no longer ``owner``'s.
+
+    ``file``: (bytes, media type) of a file the job made, kept with the job and expiring with it.
+    """
+    now = utc_now()
+    values: dict[str, Any] = {
+        "status": JobStatus.FAILED if error is not None else JobStatus.SUCCEEDED,
+        "finished_at": now,
+        "expires_at": now + timedelta(seconds=keep_seconds),
+        "lease_owner": None,
+        "lease_expires_at": None,
+        "result": clean_json(result, "the job's result") if result is not None else None,
+        "error": error,
+    }
+    if error is None:
+        values["done"] = JobRecord.total
+    if file is not None and error is None:
+        values["file_data"], values["file_type"] = file
+    with Session(engine) as session, storage_errors(session):
+        changed = session.execute(update(JobRecord).where(_mine(job_id, owner)).values(**values))
+        session.commit()
+    return _changed(changed)
+
+
+def release_job(engine: Engine, job_id: uuid.UUID, owner: str) -> None:
+    """Put ``owner``'s running job back in the queue (its server is stopping), not counting the attempt."""
+    with Session(engine) as session, storage_errors(session):
+        session.execute(
+            update(JobRecord)
+            .where(_mine(job_id, owner))
+            .values(
+                status=JobStatus.QUEUED,
+                lease_owner=None,
+                lease_expires_at=None,
+                attempts=JobRecord.attempts - 1,
+                done=0,
+            )
+        )
+        session.commit()
+
+
+def delete_expired(engine: Engine) -> int:
+    """Delete the jobs whose results have expired; return how many."""
+    with Session(engine) as session, storage_errors(session):
+        gone = session.execute(delete(JobRecord).where(JobRecord.expires_at <= utc_now()))
+        session.commit()
+    return cast(CursorResult[Any], gone).rowcount

@@ -1,0 +1,178 @@
+"""Limits every replica shares, kept in the database: wrong research tokens, and counts per fixed window.
+
+``FailedAttempts.check`` compares a token only while its client has fewer than ``max_failures``
+failures in the last ``window_seconds`` and all clients together fewer than ``max_total``;
+otherwise it raises ``TooManyAttemptsError`` (429, ``Retry-After``) without comparing, so a
+right guess during a lockout is refused too. Successes are not counted.
+
+``WindowCounter.admit`` counts one event of a client in the current fixed window and says
+whether the window still had room (the demo's start limit).
+
+Both live in tables (``failed_attempts``, ``window_counts``) rather than in process memory, so
+several ``causalplan serve`` replicas behind a load balancer hold one count: a guesser cannot
+multiply the limit by the number of replicas. Times are seconds since the epoch (every
+replica's clock reads the same). The tables stay small: rows that have left their window are
+deleted as new ones come, and a client at its limit adds no more rows.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any, cast
+
+from sqlalchemy import CursorResult, Engine, and_, delete, func, insert, select, text, update
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from causalplan.inputs import clean_text
+from causalplan.service.errors import TooManyAttemptsError
+from causalplan.service.storage.crud import storage_errors
+from causalplan.service.storage.records import MAX_CLIENT_ID_LENGTH, FailedAttemptRecord, WindowCountRecord
+
+_THROTTLE_LOCK_ID = 0x74687274
+"""PostgreSQL advisory lock held while one replica checks a token: guesses on many replicas queue up."""
+
+
+def _client_key(client: str) -> str:
+    return clean_text(client)[:MAX_CLIENT_ID_LENGTH]
+
+
+@contextmanager
+def _locked_session(engine: Engine, lock_id: int) -> Iterator[Session]:
+    """Yield a session in a transaction that holds ``lock_id`` on PostgreSQL until it ends.
+
+    On SQLite (one machine) the caller's thread lock is enough: SQLite is not for replicas.
+    """
+    with Session(engine) as session, storage_errors(session):
+        if engine.dialect.name == "postgresql":
+            session.execute(text("SELECT pg_advisory_xact_lock(:id)"), {"id": lock_id})
+        yield session
+        session.commit()
+
+
+class FailedAttempts:
+    """Recent failed attempts by client and in total, in a sliding window, stored in the database."""
+
+    def __init__(
+        self,
+        engine: Engine,
+        max_failures: int,
+        window_seconds: float,
+        max_total: int,
+        clock: Callable[[], float] = time.time,
+    ) -> None:
+        if min(max_failures, max_total) < 1 or window_seconds <= 0:
+            raise ValueError("max_failures, max_total and window_seconds must be positive")
+        self.engine = engine
+        self.max_failures = max_failures
+        self.max_total = max_total
+        self.window_seconds = window_seconds
+        self._clock = clock
+        self._lock = threading.Lock()
+
+    def _wait(self, session: Session, client: str | None, limit: int, now: float) -> int | None:
+        """Return the seconds until ``client``'s failures (all, for None) are under ``limit``; None if they are."""
+        since = now - self.window_seconds
+        recent = select(FailedAttemptRecord.at).where(FailedAttemptRecord.at > since)
+        if client is not None:
+            recent = recent.where(FailedAttemptRecord.client == client)
+        # The limit-th newest failure is the one that must leave the window before the next attempt.
+        times = session.scalars(recent.order_by(FailedAttemptRecord.at.desc()).limit(limit)).all()
+        if len(times) < limit:
+            return None
+        return max(1, math.ceil(times[-1] + self.window_seconds - now))
+
+    def check(self, client: str, is_correct: Callable[[], bool]) -> bool:
+        """Return ``is_correct()``, counting False as a failure of ``client``.
+
+        Raises ``TooManyAttemptsError`` instead, without calling ``is_correct``, while ``client``
+        or all clients together are at their limit in the window.
+        """
+        client = _client_key(client)
+        # The comparison runs under the locks, so concurrent guesses cannot overshoot the limits.
+        with self._lock, _locked_session(self.engine, _THROTTLE_LOCK_ID) as session:
+            now = self._clock()
+            wait = self._wait(session, client, self.max_failures, now)
+            if wait is not None:
+                raise TooManyAttemptsError(f"Too many wrong tokens from this address: try again in {wait} s.", wait)
+            wait = self._wait(session, None, self.max_total, now)
+            if wait is not None:
+                raise TooManyAttemptsError(f"Too many wrong tokens lately: try again in {wait} s.", wait)
+            if is_correct():
+                return True
+            session.execute(delete(FailedAttemptRecord).where(FailedAttemptRecord.at <= now - self.window_seconds))
+            session.add(FailedAttemptRecord(client=client, at=now))
+            return False
+
+    def __len__(self) -> int:
+        """Return how many clients have failures in the window."""
+        since = self._clock() - self.window_seconds
+        with Session(self.engine) as session, storage_errors(session):
+            clients = select(func.count(func.distinct(FailedAttemptRecord.client))).where(
+                FailedAttemptRecord.at > since
+            )
+            return session.scalar(clients) or 0
+
+
+class WindowCounter:
+    """Counts events of each client in fixed windows of ``window_seconds``, at most ``per_window`` each."""
+
+    def __init__(
+        self,
+        engine: Engine,
+        scope: str,
+        per_window: int,
+        window_seconds: float,
+        clock: Callable[[], float] = time.time,
+    ) -> None:
+        self.engine = engine
+        self.scope = scope
+        self.per_window = per_window
+        self.window_seconds = window_seconds
+        self._clock = clock
+
+    def admit(self, client: str) -> tuple[int, int] | None:
+        """Count one event of ``client``; None when admitted, else (events so far, seconds until the next window).
+
+        The count goes up by one only while it is under ``per_window``, in one statement, so
+        replicas counting at once never admit more than the limit.
+        """
+        client = _client_key(client)
+        now = self._clock()
+        window = math.floor(now / self.window_seconds)
+        ends_at = (window + 1) * self.window_seconds
+        key = and_(
+            WindowCountRecord.scope == self.scope,
+            WindowCountRecord.client == client,
+            WindowCountRecord.window == window,
+        )
+        with Session(self.engine) as session, storage_errors(session):
+            increment = session.execute(
+                update(WindowCountRecord)
+                .where(key, WindowCountRecord.count < self.per_window)
+                .values(count=WindowCountRecord.count + 1)
+            )
+            counted = cast(CursorResult[Any], increment).rowcount
+            if not counted:
+                existing = session.scalar(select(WindowCountRecord.count).where(key))
+                if existing is None:
+                    session.execute(delete(WindowCountRecord).where(WindowCountRecord.ends_at <= now))
+                    try:
+                        with session.begin_nested():
+                            session.execute(
+                                insert(WindowCountRecord).values(
+                                    scope=self.scope, client=client, window=window, count=1, ends_at=ends_at
+                                )
+                            )
+                    except IntegrityError:  # another replica counted this client's first event just now
+                        session.commit()
+                        return self.admit(client)
+                    counted = 1
+            session.commit()
+            if counted:
+                return None
+            return existing or self.per_window, max(1, math.ceil(ends_at - now))

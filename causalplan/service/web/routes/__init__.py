@@ -1,1 +1,0 @@
-"""The web routes: participant pages and their JSON, research pages, the experiment API, and assets."""
