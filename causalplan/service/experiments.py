@@ -22,13 +22,6 @@ from causalplan.service.api.schemas.experiments import (
     RecruitmentIn,
     RecruitmentOut,
 )
-from causalplan.service.exports import (
-    PARTICIPANT_COLUMNS,
-    TRIAL_COLUMNS,
-    experiment_dict,
-    participant_dict,
-    trial_dict,
-)
 from causalplan.service.responses import SafeJSONResponse, csv_bytes
 from causalplan.service.storage import arrivals
 from causalplan.service.storage import experiments as store
@@ -36,6 +29,13 @@ from causalplan.service.storage.experiments import ParticipantJourney
 from causalplan.service.storage.records import ExperimentRecord, ParticipantRecord
 from causalplan.studies.analysis import Analysis, analyse
 from causalplan.studies.design import Design, read_design
+from causalplan.studies.export import (
+    PARTICIPANT_COLUMNS,
+    TRIAL_COLUMNS,
+    experiment_dict,
+    participant_dict,
+    trial_dict,
+)
 from causalplan.studies.recruitment import Recruitment, read_quotas, read_recruitment
 from causalplan.studies.results import Rate, transfer_rates
 from causalplan.studies.trials import ExportError, trial_rows

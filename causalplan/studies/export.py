@@ -1,23 +1,152 @@
-"""An experiment's exports: its definition, each participant and each step-3 trial, as the JSON and CSV give them."""
+"""An experiment's export: its definition, each participant and each step-3 trial, as the JSON and CSV give them.
+
+``studies.trials`` and ``consensus.participants`` read it back. The records come from the
+service's storage; what is read of them is written out below as Protocols.
+"""
 
 from __future__ import annotations
 
+import uuid
+from collections.abc import Sequence
 from datetime import datetime
-from typing import Any
+from typing import Any, Protocol
 
 from causalplan.objects.catalog import Catalog
-from causalplan.service.storage.experiments import StoredTrial
-from causalplan.service.storage.records import ExperimentRecord, ParticipantRecord
 from causalplan.studies.journey import as_utc
 from causalplan.studies.recruitment import platform_id_view
 from causalplan.studies.results import generalization_of
+
+
+class ExportedExperiment(Protocol):
+    """What the export reads of a stored experiment."""
+
+    @property
+    def id(self) -> uuid.UUID: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def created_at(self) -> datetime: ...
+    @property
+    def design(self) -> dict[str, Any]: ...
+    @property
+    def is_demo(self) -> bool: ...
+
+
+class ExportedExclusion(Protocol):
+    """What the export reads of a participant's exclusion."""
+
+    @property
+    def reason(self) -> str: ...
+    @property
+    def detail(self) -> str: ...
+    @property
+    def created_at(self) -> datetime: ...
+
+
+class ExportedArrival(Protocol):
+    """What the export reads of a participant's arrival on the public link."""
+
+    @property
+    def platform(self) -> str: ...
+    @property
+    def platform_id(self) -> str | None: ...
+    @property
+    def platform_study(self) -> str | None: ...
+    @property
+    def platform_session(self) -> str | None: ...
+    @property
+    def decided_at(self) -> datetime | None: ...
+
+
+class ExportedParticipant(Protocol):
+    """What the export reads of a stored participant."""
+
+    @property
+    def id(self) -> uuid.UUID: ...
+    @property
+    def code(self) -> str: ...
+    @property
+    def experiment_id(self) -> uuid.UUID: ...
+    @property
+    def condition(self) -> str: ...
+    @property
+    def ordinal(self) -> int: ...
+    @property
+    def training_order(self) -> list[str]: ...
+    @property
+    def test_order(self) -> list[str]: ...
+    @property
+    def stage(self) -> str: ...
+    @property
+    def position(self) -> int: ...
+    @property
+    def work(self) -> dict[str, Any]: ...
+    @property
+    def model_id(self) -> uuid.UUID | None: ...
+    @property
+    def created_at(self) -> datetime: ...
+    @property
+    def started_at(self) -> datetime | None: ...
+    @property
+    def updated_at(self) -> datetime | None: ...
+    @property
+    def finished_at(self) -> datetime | None: ...
+    @property
+    def exclusions(self) -> Sequence[ExportedExclusion]: ...
+    @property
+    def arrival(self) -> ExportedArrival | None: ...
+
+
+class ExportedTrial(Protocol):
+    """What the export reads of a stored trial."""
+
+    @property
+    def id(self) -> uuid.UUID: ...
+    @property
+    def result(self) -> dict[str, Any]: ...
+    @property
+    def verdict(self) -> str: ...
+    @property
+    def decided_by(self) -> str: ...
+    @property
+    def model_id(self) -> uuid.UUID: ...
+    @property
+    def mapping(self) -> dict[str, Any]: ...
+    @property
+    def planner(self) -> str: ...
+    @property
+    def seconds(self) -> float: ...
+    @property
+    def created_at(self) -> datetime: ...
+
+
+class TrialLink(Protocol):
+    """Which test object a participant's trial was, and its place in their order (0 = first)."""
+
+    @property
+    def test_object(self) -> str: ...
+    @property
+    def position(self) -> int: ...
+
+
+class ExportedStepThreeTrial(Protocol):
+    """One step-3 trial with its participant and its place in their order."""
+
+    @property
+    def link(self) -> TrialLink: ...
+    @property
+    def participant(self) -> ExportedParticipant: ...
+    @property
+    def trial(self) -> ExportedTrial: ...
 
 
 def _iso(value: datetime | None) -> str | None:
     return value.isoformat() if value is not None else None
 
 
-def experiment_dict(experiment: ExperimentRecord) -> dict[str, Any]:
+def experiment_dict(experiment: ExportedExperiment) -> dict[str, Any]:
     """Return an experiment's definition as exported."""
     return {
         "id": str(experiment.id),
@@ -30,7 +159,7 @@ def experiment_dict(experiment: ExperimentRecord) -> dict[str, Any]:
 
 
 def participant_dict(
-    participant: ParticipantRecord, progress: str, link: str, platform_ids: str = "plain"
+    participant: ExportedParticipant, progress: str, link: str, platform_ids: str = "plain"
 ) -> dict[str, Any]:
     """Return one participant as exported: condition, orders, progress, times, exclusions, model and all saved work.
 
@@ -89,7 +218,7 @@ PLATFORM_FIELDS = (
 """Export column -> arrival field: Prolific's PID, STUDY_ID, SESSION_ID or MTurk's workerId, hitId, assignmentId."""
 
 
-def trial_dict(stored: StoredTrial, catalog: Catalog) -> dict[str, Any]:
+def trial_dict(stored: ExportedStepThreeTrial, catalog: Catalog) -> dict[str, Any]:
     """Return one step-3 trial as exported: who, which object, the model, the mapping, the verdict and why."""
     participant, trial = stored.participant, stored.trial
     result = trial.result or {}
