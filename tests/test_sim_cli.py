@@ -132,7 +132,7 @@ def test_an_unwritable_picture_is_a_clear_error(tmp_path: Path) -> None:
 
 
 def test_the_robot_builds_the_lamp_and_writes_its_motor_commands(tmp_path: Path) -> None:
-    from causalplan.sim.trajectory import read_trajectory
+    from causalplan.sim.robot.trajectory import read_trajectory
 
     commands = tmp_path / "trajectory.json"
     code, data = run_json("simulate", DESK_LAMP, "--robot", "--trajectory", commands)

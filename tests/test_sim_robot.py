@@ -11,12 +11,12 @@ from causalplan.errors import CatalogError
 from causalplan.objects.catalog import load_catalog
 from causalplan.sim import SimulationReport, simulate_plan
 from causalplan.sim.geometry import solids
-from causalplan.sim.grasps import grasp_of
-from causalplan.sim.panda import JOINT_NAMES
 from causalplan.sim.poses import difference
-from causalplan.sim.replay import replay
 from causalplan.sim.report import RenderMode, StepStatus
-from causalplan.sim.trajectory import SEGMENT_KINDS, read_trajectory
+from causalplan.sim.robot.grasps import grasp_of
+from causalplan.sim.robot.panda import JOINT_NAMES
+from causalplan.sim.robot.replay import replay
+from causalplan.sim.robot.trajectory import SEGMENT_KINDS, read_trajectory
 from tests.conftest import EXAMPLES, builtin_catalog
 from tests.sim_fixtures import CORRECT_PLANS, PEG_BOARD, TOY_CAR_PLAN, parsed_object, steps
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from causalplan.sim.panda import JOINT_NAMES
-from causalplan.sim.trajectory import Segment, Trajectory, TrajectoryInputError, read_trajectory
+from causalplan.sim.robot.panda import JOINT_NAMES
+from causalplan.sim.robot.trajectory import Segment, Trajectory, TrajectoryInputError, read_trajectory
 
 HOME = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]
 

@@ -11,7 +11,7 @@ if TYPE_CHECKING:
     from PIL import Image
 
     from causalplan.sim.poses import Pose
-    from causalplan.sim.trajectory import Trajectory
+    from causalplan.sim.robot.trajectory import Trajectory
 
 
 class RenderMode(StrEnum):
@@ -65,6 +65,14 @@ class Check:
             "unit": self.unit,
             "detail": self.detail,
         }
+
+
+@dataclass(frozen=True)
+class RobotFailure:
+    """Why the robot could not do a motion: the failure code and the check that says so."""
+
+    failure: Failure
+    check: Check
 
 
 @dataclass(frozen=True)

@@ -12,13 +12,13 @@ from collections.abc import Sequence
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.planners.result import PlanStep
-from causalplan.sim.executor import ROBOT_ROW_GAP, layout
 from causalplan.sim.geometry import solids
-from causalplan.sim.panda import FINGER_JOINTS, FINGER_OPEN, Panda
+from causalplan.sim.layout import ROBOT_ROW_GAP, layout
 from causalplan.sim.plan_steps import StepRequest, check_steps
 from causalplan.sim.poses import Pose
+from causalplan.sim.robot.panda import FINGER_JOINTS, FINGER_OPEN, Panda
+from causalplan.sim.robot.trajectory import Trajectory
 from causalplan.sim.scene import Scene
-from causalplan.sim.trajectory import Trajectory
 
 GRASP_REACH = 0.02
 """Metres from each finger within which a part counts as between the fingers."""

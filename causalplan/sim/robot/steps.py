@@ -15,8 +15,9 @@ from collections.abc import Callable
 from causalplan.objects.model import Part
 from causalplan.sim.motions import ENGAGEMENT, Motion
 from causalplan.sim.poses import Pose
-from causalplan.sim.robot import LIFT, LINE_STEP, SCREW_STEP, Robot, RobotFailure, line_poses
-from causalplan.sim.trajectory import Trajectory
+from causalplan.sim.report import RobotFailure
+from causalplan.sim.robot.robot import LIFT, LINE_STEP, SCREW_STEP, Robot, line_poses
+from causalplan.sim.robot.trajectory import Trajectory
 
 PUSH_DEPTH = 0.005
 """Metres of the approach, at its end, that are the push home (insert, clip, place) or the touch (ignite)."""

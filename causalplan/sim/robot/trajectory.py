@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from typing import Literal, cast
 
 from causalplan.errors import CausalPlanError
-from causalplan.sim.panda import JOINT_NAMES, ROBOT_NAME, Configuration
+from causalplan.sim.robot.panda import JOINT_NAMES, ROBOT_NAME, Configuration
 
 RATE_HZ = 50
 """Commands a second."""

@@ -20,13 +20,13 @@ from dataclasses import dataclass, field
 
 from causalplan.objects.model import Part
 from causalplan.sim.checks import PENETRATION_TOLERANCE_MM
-from causalplan.sim.grasps import FINGER_REACH, finger_gap, grasp_of
-from causalplan.sim.motion_planning import plan_path
-from causalplan.sim.panda import FINGER_JOINTS, FINGER_OPEN, HOME, Configuration, Contact, Panda
 from causalplan.sim.poses import Pose, about_axis, scale
-from causalplan.sim.report import Check, Failure
+from causalplan.sim.report import Check, Failure, RobotFailure
+from causalplan.sim.robot.grasps import FINGER_REACH, finger_gap, grasp_of
+from causalplan.sim.robot.motion_planning import plan_path
+from causalplan.sim.robot.panda import FINGER_JOINTS, FINGER_OPEN, HOME, Configuration, Contact, Panda
+from causalplan.sim.robot.trajectory import Gripper, Segment, Trajectory
 from causalplan.sim.scene import GROUND, Scene
-from causalplan.sim.trajectory import Gripper, Segment, Trajectory
 
 PREGRASP = 0.08
 """Metres the gripper stays back from a grasp before going straight in (and after letting go)."""
@@ -49,14 +49,6 @@ IK_SEEDS: tuple[Configuration, ...] = (
 )
 RANDOM_SEEDS = 12
 """Further starting configurations for the IK (drawn once, from a fixed seed) when the first ones fail."""
-
-
-@dataclass(frozen=True)
-class RobotFailure:
-    """Why the robot could not do a motion: the failure code and the check that says so."""
-
-    failure: Failure
-    check: Check
 
 
 @dataclass
