@@ -165,3 +165,25 @@ TOY_CAR_PLAN = steps(
     "place sticker chassis sticker_onto_chassis",
 )
 """The toy car (the tutorial object) built whole."""
+
+
+def goal_plan(obj: AssemblyObject) -> tuple[StepRequest, ...]:
+    """Return a plan making the first fit of each requirement of the mechanism, each after what holds its mate.
+
+    A fit whose fixed part is not the base comes after a fit that joins that part (the first
+    the catalog lists), so every object of the catalog gets a plan that produces its goal.
+    """
+    chosen: list[str] = []
+
+    def need(fit_id: str) -> None:
+        fit = obj.fit(fit_id)
+        if fit_id in chosen:
+            return
+        if fit.fixed_part != obj.base and all(obj.fit(made).moving_part != fit.fixed_part for made in chosen):
+            holder = next(f for f in obj.fits if f.moving_part == fit.fixed_part and f.primitive != "ignite")
+            need(holder.id)
+        chosen.append(fit_id)
+
+    for requirement in obj.mechanism:
+        need(requirement.any_of[0])
+    return tuple(StepRequest(f.primitive, f.moving_part, f.fixed_part, f.id) for f in map(obj.fit, chosen))

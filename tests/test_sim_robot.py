@@ -53,23 +53,25 @@ def test_lighting_brings_the_flame_to_the_wick_and_back_to_the_table() -> None:
 
 
 def test_the_trajectory_file_has_the_documented_shape() -> None:
-    trajectory = robot_run("flashlight").trajectory
+    trajectory = robot_run("flashlight").motor_commands
     assert trajectory is not None
     data = json.loads(json.dumps(trajectory.as_dict()))
-    assert data["robot"] == "franka_panda"
+    assert data["robot"] == "panda" and data["format"] == "causalplan-trajectory/2"
     assert data["joints"] == list(JOINT_NAMES)
-    assert data["rate_hz"] == 50
+    assert data["limits"]["position_max"][6] == 2.8973 and data["limits"]["safety_factor"] == 0.5
     assert {segment["kind"] for segment in data["segments"]} <= set(SEGMENT_KINDS)
     assert {segment["gripper"] for segment in data["segments"]} == {"open", "closed"}
     assert {segment["step"] for segment in data["segments"]} == {1, 2}
-    assert all(len(position) == 7 for segment in data["segments"] for position in segment["positions"])
+    point = data["points"][1]
+    assert {"time_from_start", "positions", "velocities", "accelerations", "gripper_width"} <= set(point)
+    assert all(len(point[key]) == 7 for key in ("positions", "velocities", "accelerations"))
 
 
 @pytest.mark.parametrize("object_id", ["desk_lamp", "candle"])
 def test_replaying_the_trajectory_file_in_a_fresh_scene_rebuilds_the_same_assembly(object_id: str) -> None:
     report = robot_run(object_id)
-    assert report.trajectory is not None
-    trajectory = read_trajectory(json.loads(json.dumps(report.trajectory.as_dict())))
+    assert report.motor_commands is not None
+    trajectory = read_trajectory(json.loads(json.dumps(report.motor_commands.as_dict())))
     replayed = replay(builtin_catalog().get(object_id), PLANS[object_id], trajectory)
     assert set(replayed) == set(report.placed)
     for part, pose in report.placed.items():
@@ -79,9 +81,9 @@ def test_replaying_the_trajectory_file_in_a_fresh_scene_rebuilds_the_same_assemb
 
 def test_the_same_plan_gives_the_same_trajectory() -> None:
     again = simulate_plan(builtin_catalog().get("flashlight"), PLANS["flashlight"], render=RenderMode.NONE, robot=True)
-    first = robot_run("flashlight").trajectory
-    assert first is not None and again.trajectory is not None
-    assert again.trajectory.as_dict() == first.as_dict()
+    first = robot_run("flashlight").motor_commands
+    assert first is not None and again.motor_commands is not None
+    assert again.motor_commands.as_dict() == first.as_dict()
 
 
 def test_a_part_out_of_the_arms_reach_fails_unreachable_at_step_1() -> None:

@@ -15,12 +15,12 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
-from causalplan.objects.model import AssemblyObject, Connector
+from causalplan.objects.model import AssemblyObject
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.result import PlanStep
 from causalplan.sim import checks
 from causalplan.sim.geometry import solids
-from causalplan.sim.layout import ROBOT_ROW_GAP, ROW_GAP, layout, step_connectors
+from causalplan.sim.layout import ROBOT_ROW_GAP, ROW_GAP, catalog_fit, layout, step_connectors
 from causalplan.sim.mechanism import Joint, evaluate, seat_error
 from causalplan.sim.motions import MOTIONS, approach, approach_path, approach_start
 from causalplan.sim.movers import Mover, PartsMoveThemselves, StepMove
@@ -39,6 +39,8 @@ from causalplan.sim.report import (
     StepStatus,
 )
 from causalplan.sim.robot.arm import Arm
+from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
+from causalplan.sim.robot.motors import drive_with_motors
 from causalplan.sim.robot.mover import PandaMovesThem
 from causalplan.sim.scene import GROUND, Scene
 from causalplan.sim.video import VIDEO_SIZE, VideoRecorder
@@ -58,16 +60,6 @@ class _Run:
 
     def name(self, part_or_ground: str) -> str:
         return "table" if part_or_ground == GROUND else self.obj.part(part_or_ground).name
-
-
-def _catalog_fit(obj: AssemblyObject, request: StepRequest, pair: tuple[Connector, Connector]) -> str | None:
-    """Return the catalog fit a step makes (given, or the one joining the same connectors)."""
-    if request.fit is not None:
-        return request.fit
-    for fit in obj.fits:
-        if fit.connectors() == ((request.moving, pair[0].id), (request.fixed, pair[1].id)):
-            return fit.id
-    return None
 
 
 def _settle(run: _Run, seconds: float) -> tuple[tuple[Check, Check], str | None]:
@@ -174,7 +166,7 @@ def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
         return step.fail(Failure.NO_CONTACT, contact)
     step.passed(contact)
 
-    fit_id = _catalog_fit(obj, request, pair)
+    fit_id = catalog_fit(obj, request, pair)
     joint = Joint(number, fit_id, request.moving, pair[0].id, request.fixed, pair[1].id, motion.touches_only)
     if not motion.touches_only:
         scene.set_dynamic(request.moving, True)
@@ -219,6 +211,8 @@ def simulate_plan(
     arm: bool = False,
     size: tuple[int, int] = DEFAULT_SIZE,
     robot: bool = False,
+    safety_factor: float = DEFAULT_SAFETY_FACTOR,
+    motors: bool = False,
     video: bool = False,
     video_size: tuple[int, int] = VIDEO_SIZE,
     on_frame: Callable[[int], None] | None = None,
@@ -228,9 +222,12 @@ def simulate_plan(
     Raises PlanInputError when a step does not belong to the object, SimulatorUnavailableError
     when PyBullet cannot start. ``render`` picks the pictures (none, the final assembly, or a
     frame per step too); ``arm`` adds the Panda's reachability per step; ``robot`` has the
-    Panda carry out every step (its motor commands are in the report's ``trajectory``), and
-    ``video`` films it doing so (the report's ``video`` frames, ``video_size`` pixels;
-    ``on_frame`` hears of every frame drawn).
+    Panda carry out every step (its planned waypoints are the report's ``trajectory``, its
+    motor commands, within the datasheet's limits times ``safety_factor``, its
+    ``motor_commands``); ``motors`` then plays them through the Panda's joint motors in a fresh
+    scene (the report's ``motors``); ``video`` films the robot (the report's ``video`` frames,
+    ``video_size`` pixels; ``on_frame`` hears of every frame drawn). Raises
+    LimitViolationError (``limit_violation``) when no motor commands keep within the limits.
     """
     obj = target.obj if isinstance(target, PlanningTask) else target
     requests = check_steps(steps, obj)
@@ -245,7 +242,7 @@ def simulate_plan(
         recorder = VideoRecorder(scene, design, obj.name, video_size, on_frame) if video else None
         mover: Mover
         if robot:
-            mover = PandaMovesThem(scene, observe=recorder.observe if recorder else None)
+            mover = PandaMovesThem(scene, recorder.observe if recorder else None, safety_factor)
         else:
             mover = PartsMoveThemselves(scene, Arm(scene) if arm else None)
         run = _Run(obj, scene, homes, {obj.base}, mover)
@@ -278,6 +275,12 @@ def simulate_plan(
             observer.finished(obj.name, _lit_parts(run, requirements), produces_goal, obj.goal)
         if pictures is not None:
             timing["render"] = pictures.seconds
+    commands = mover.commands if isinstance(mover, PandaMovesThem) else None
+    motor_run = None
+    if motors and commands is not None:
+        clock = time.perf_counter()
+        motor_run = drive_with_motors(obj, requests, commands)
+        timing["motors"] = time.perf_counter() - clock
     return SimulationReport(
         object_id=obj.id,
         object_name=obj.name,
@@ -294,6 +297,8 @@ def simulate_plan(
         frames=tuple(pictures.frames) if pictures else (),
         robot=robot,
         trajectory=mover.trajectory,
+        motor_commands=commands,
+        motors=motor_run,
         placed=mover.placed,
         video=tuple(recorder.frames) if recorder else (),
     )

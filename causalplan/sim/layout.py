@@ -35,6 +35,16 @@ def step_connectors(
     return pairs[0] if pairs else None
 
 
+def catalog_fit(obj: AssemblyObject, request: StepRequest, pair: tuple[Connector, Connector]) -> str | None:
+    """Return the catalog fit a step makes (given, or the one joining the same connectors)."""
+    if request.fit is not None:
+        return request.fit
+    for fit in obj.fits:
+        if fit.connectors() == ((request.moving, pair[0].id), (request.fixed, pair[1].id)):
+            return fit.id
+    return None
+
+
 def designed_poses(obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...]) -> dict[str, Pose]:
     """Return where the plan means each part it joins to end up: the base at the origin, the rest at their seats."""
     base = parts[obj.base]

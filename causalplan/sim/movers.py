@@ -22,7 +22,7 @@ from causalplan.sim.robot.arm import Arm, reach_step
 from causalplan.sim.scene import Scene
 
 if TYPE_CHECKING:
-    from causalplan.sim.robot.trajectory import Trajectory
+    from causalplan.sim.robot.trajectory import Waypoints
 
 
 @dataclass(frozen=True)
@@ -64,8 +64,8 @@ class Mover(Protocol):
         """Return what the mover did in step ``number`` (transit, grasp, ...), for the step's report."""
 
     @property
-    def trajectory(self) -> Trajectory | None:
-        """The motor commands of the run, when a robot moved the parts."""
+    def trajectory(self) -> Waypoints | None:
+        """The waypoints the robot planned, when a robot moved the parts."""
 
     @property
     def placed(self) -> dict[str, Pose]:
@@ -103,5 +103,5 @@ class PartsMoveThemselves:
         return ()
 
     @property
-    def trajectory(self) -> Trajectory | None:
+    def trajectory(self) -> Waypoints | None:
         return None

@@ -85,8 +85,8 @@ def robot_simulation(
     the file ``stop`` exists (the app cannot reach into the worker otherwise).
     """
     from causalplan.sim import RenderMode, simulate_plan
-    from causalplan.transfer.robot_verdict import robot_run
     from causalplan.sim.video import encode
+    from causalplan.transfer.robot_verdict import robot_run
 
     report = robot_run(obj, tuple(steps))
     if video is None:

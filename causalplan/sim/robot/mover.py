@@ -1,16 +1,24 @@
-"""The Panda moves the parts: the ``Mover`` (``sim.movers``) that has the robot fetch, drive and let go."""
+"""The Panda moves the parts: the ``Mover`` (``sim.movers``) that has the robot fetch, drive and let go.
+
+At the end of the run its planned waypoints are made into motor commands within the Panda's
+datasheet limits times ``safety_factor`` (``sim.robot.timing``).
+"""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from causalplan.sim.movers import StepMove
 from causalplan.sim.poses import Pose
 from causalplan.sim.report import Reach, RobotFailure
+from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR, PANDA
+from causalplan.sim.robot.panda import FINGER_OPEN, HOME
 from causalplan.sim.robot.robot import Robot
 from causalplan.sim.robot.steps import bring, drive, let_go, step_motions
-from causalplan.sim.robot.trajectory import Trajectory
+from causalplan.sim.robot.timing import time_parameterize
+from causalplan.sim.robot.trajectory import Trajectory, Waypoints
 from causalplan.sim.scene import Scene
 
 
@@ -20,7 +28,11 @@ class PandaMovesThem:
 
     scene: Scene
     observe: Callable[[], None] | None = None
+    safety_factor: float = DEFAULT_SAFETY_FACTOR
+    """The share of the datasheet's velocity, acceleration and jerk limits the motor commands use."""
     robot: Robot = field(init=False)
+    commands: Trajectory | None = None
+    """The motor commands, once the run is finished."""
 
     def __post_init__(self) -> None:
         self.robot = Robot(self.scene, observe=self.observe)
@@ -45,14 +57,20 @@ class PandaMovesThem:
         self.robot.step = steps
         if carried_out:
             self.robot.go_home()
-        return {"robot_ik": self.robot.panda.ik_seconds, "robot_planning": self.robot.planning_seconds}
+        started = time.perf_counter()
+        self.commands = time_parameterize(self.robot.waypoints, HOME, 2 * FINGER_OPEN, PANDA, self.safety_factor)
+        return {
+            "robot_ik": self.robot.panda.ik_seconds,
+            "robot_planning": self.robot.planning_seconds,
+            "robot_timing": time.perf_counter() - started,
+        }
 
     def motions(self, number: int) -> tuple[str, ...]:
-        return step_motions(self.robot.trajectory, number)
+        return step_motions(self.robot.waypoints, number)
 
     @property
-    def trajectory(self) -> Trajectory | None:
-        return self.robot.trajectory
+    def trajectory(self) -> Waypoints | None:
+        return self.robot.waypoints
 
     @property
     def placed(self) -> dict[str, Pose]:

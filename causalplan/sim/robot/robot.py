@@ -25,7 +25,7 @@ from causalplan.sim.report import Check, Failure, RobotFailure
 from causalplan.sim.robot.grasps import FINGER_REACH, finger_gap, grasp_of
 from causalplan.sim.robot.motion_planning import plan_path
 from causalplan.sim.robot.panda import FINGER_JOINTS, FINGER_OPEN, HOME, Configuration, Contact, Panda
-from causalplan.sim.robot.trajectory import Gripper, Segment, Trajectory
+from causalplan.sim.robot.trajectory import Gripper, Segment, Waypoints
 from causalplan.sim.scene import GROUND, Scene
 
 PREGRASP = 0.08
@@ -61,13 +61,13 @@ class Held:
 
 @dataclass
 class Robot:
-    """A Panda building in a scene, writing what it does into ``trajectory``.
+    """A Panda building in a scene, writing what it plans to do into ``waypoints``.
 
     ``observe`` is called after every commanded position (a video draws frames from it).
     """
 
     scene: Scene
-    trajectory: Trajectory = field(default_factory=Trajectory)
+    waypoints: Waypoints = field(default_factory=Waypoints)
     observe: Callable[[], None] | None = None
     panda: Panda = field(init=False)
     held: Held | None = None
@@ -127,9 +127,9 @@ class Robot:
     # --- writing commands --------------------------------------------------------------------
 
     def _command(self, kind: str, gripper: Gripper, positions: Sequence[Configuration]) -> None:
-        segment = Segment(self.step, kind, gripper)
-        self.trajectory.segments.append(segment)
         fingers = FINGER_OPEN if gripper == "open" else None
+        segment = Segment(self.step, kind, gripper, 2 * (self.panda.fingers if fingers is None else fingers))
+        self.waypoints.segments.append(segment)
         for position in positions:
             self.panda.set(position, fingers)
             self._place_held()
@@ -142,8 +142,8 @@ class Robot:
         start, end = self.panda.fingers, FINGER_OPEN if gripper == "open" else max(0.0, width / 2)
         if on is not None:
             end = 0.0
-        segment = Segment(self.step, kind, gripper)
-        self.trajectory.segments.append(segment)
+        segment = Segment(self.step, kind, gripper, 2 * end)
+        self.waypoints.segments.append(segment)
         for k in range(1, CLOSE_POSITIONS + 1):
             self.panda.set(self.panda.configuration, start + (end - start) * k / CLOSE_POSITIONS)
             segment.positions.append(self.panda.configuration)
@@ -151,6 +151,7 @@ class Robot:
                 self.observe()
             if on is not None and finger_gap(self.scene, self.panda.body, on) <= TOUCH:
                 break
+        segment.width = 2 * self.panda.fingers
 
     # --- motions -----------------------------------------------------------------------------
 
