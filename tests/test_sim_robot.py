@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from functools import cache
 
 import pytest
@@ -40,9 +41,19 @@ def test_the_robot_builds_every_paper_object_and_the_toy_car(object_id: str) -> 
 
 
 def test_a_screw_turns_the_wrist_and_regrasps_when_joint_7_runs_out() -> None:
-    motions = robot_run("desk_lamp").steps[0].motions
+    report = robot_run("desk_lamp")
+    motions = report.steps[0].motions
     assert "screw" in motions
     assert motions.count("grasp") >= 2  # two turns of the bulb are more than joint 7's range
+    commands = report.motor_commands
+    assert commands is not None
+    kinds = [segment.kind for segment in commands.segments]
+    regrasp = kinds.index("grasp", kinds.index("screw"))  # open, turn back, close: each a motion from rest
+    release, turn = commands.segments[regrasp - 2], commands.segments[regrasp - 1]
+    assert (release.kind, turn.kind) == ("release", "transit")
+    wrist = [point.positions[6] for point in commands.points[turn.first : turn.last + 1]]
+    assert abs(wrist[-1] - wrist[0]) == pytest.approx(math.pi, abs=1e-3)
+    assert len(wrist) > 20  # turned over many commands, not in one jump
 
 
 def test_lighting_brings_the_flame_to_the_wick_and_back_to_the_table() -> None:

@@ -275,7 +275,7 @@ def simulate_plan(
             observer.finished(obj.name, _lit_parts(run, requirements), produces_goal, obj.goal)
         if pictures is not None:
             timing["render"] = pictures.seconds
-    commands = mover.commands if isinstance(mover, PandaMovesThem) else None
+    commands = mover.commands
     motor_run = None
     if motors and commands is not None:
         clock = time.perf_counter()

@@ -22,7 +22,7 @@ from causalplan.sim.robot.arm import Arm, reach_step
 from causalplan.sim.scene import Scene
 
 if TYPE_CHECKING:
-    from causalplan.sim.robot.trajectory import Waypoints
+    from causalplan.sim.robot.trajectory import Trajectory, Waypoints
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,10 @@ class Mover(Protocol):
     def placed(self) -> dict[str, Pose]:
         """Where each part was let go, when a robot moved the parts."""
 
+    @property
+    def commands(self) -> Trajectory | None:
+        """The motor commands (the waypoints time-parameterized), once a robot's run is finished."""
+
 
 @dataclass
 class PartsMoveThemselves:
@@ -104,4 +108,8 @@ class PartsMoveThemselves:
 
     @property
     def trajectory(self) -> Waypoints | None:
+        return None
+
+    @property
+    def commands(self) -> Trajectory | None:
         return None
