@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 from causalplan.objects.catalog import parse_object
 from causalplan.objects.model import AssemblyObject
 from causalplan.sim import StepRequest
@@ -167,11 +169,13 @@ TOY_CAR_PLAN = steps(
 """The toy car (the tutorial object) built whole."""
 
 
-def goal_plan(obj: AssemblyObject) -> tuple[StepRequest, ...]:
-    """Return a plan making the first fit of each requirement of the mechanism, each after what holds its mate.
+def goal_plans(obj: AssemblyObject, most: int = 6) -> list[tuple[StepRequest, ...]]:
+    """Return up to ``most`` plans making the first fit of each requirement, each after what holds its mate.
 
-    A fit whose fixed part is not the base comes after a fit that joins that part (the first
-    the catalog lists), so every object of the catalog gets a plan that produces its goal.
+    A fit whose fixed part is not the base needs a fit that joins that part first (the first
+    the catalog lists). The plans are the orders of those fits in which every fixed part is
+    in the assembly when it is used, the requirements' order first: the robot may manage one
+    order and not another (its fingers may touch a part already in place).
     """
     chosen: list[str] = []
 
@@ -186,4 +190,15 @@ def goal_plan(obj: AssemblyObject) -> tuple[StepRequest, ...]:
 
     for requirement in obj.mechanism:
         need(requirement.any_of[0])
-    return tuple(StepRequest(f.primitive, f.moving_part, f.fixed_part, f.id) for f in map(obj.fit, chosen))
+    plans = []
+    for order in itertools.permutations(map(obj.fit, chosen)):
+        present = {obj.base}
+        for fit in order:
+            if fit.fixed_part not in present:
+                break
+            present.add(fit.moving_part)
+        else:
+            plans.append(tuple(StepRequest(f.primitive, f.moving_part, f.fixed_part, f.id) for f in order))
+        if len(plans) == most:
+            break
+    return plans
