@@ -221,6 +221,10 @@ class _Driver:
         self.scene.pb.removeConstraint(held.constraint, physicsClientId=self.scene.client)
         if regrasp:
             self.scene.set_dynamic(held.part, False)
+            # A body without mass still moves at the velocity it had (PyBullet moves it kinematically).
+            self.scene.pb.resetBaseVelocity(
+                self.scene.bodies[held.part], [0, 0, 0], [0, 0, 0], physicsClientId=self.scene.client
+            )
             return
         request = next((r for r in self.requests if r.moving == held.part), None)
         self._collide(held.part, True)
