@@ -7,7 +7,7 @@ import pytest
 from causalplan.objects.catalog import Catalog
 from causalplan.sim import RenderMode, SimulationReport, simulate_plan
 from causalplan.sim.checks import ALIGNMENT_TOLERANCE_MM, PENETRATION_TOLERANCE_MM, STABILITY_TOLERANCE_MM
-from causalplan.sim.report import Failure, StepStatus
+from causalplan.sim.outcomes import Failure, StepStatus
 from tests.sim_fixtures import CORRECT_PLANS, PEG_BOARD, WALL_SHELF, parsed_object, steps
 
 

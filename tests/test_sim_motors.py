@@ -9,8 +9,8 @@ import pytest
 
 from causalplan.objects.catalog import load_catalog
 from causalplan.sim import simulate_plan
+from causalplan.sim.outcomes import RenderMode
 from causalplan.sim.plan_steps import check_steps
-from causalplan.sim.report import RenderMode
 from causalplan.sim.robot.checker import violations
 from causalplan.sim.robot.motors import drive_with_motors
 from causalplan.sim.robot.trajectory import read_trajectory

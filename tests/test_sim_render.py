@@ -10,8 +10,8 @@ from PIL import Image
 
 from causalplan.objects.catalog import Catalog
 from causalplan.sim import RenderMode, SimulationReport, simulate_plan
+from causalplan.sim.outcomes import Picture
 from causalplan.sim.render import animation, strip
-from causalplan.sim.report import Picture
 from tests.sim_fixtures import CORRECT_PLANS, steps
 
 SIZE = (320, 240)

@@ -12,8 +12,8 @@ from causalplan.errors import CatalogError
 from causalplan.objects.catalog import load_catalog
 from causalplan.sim import SimulationReport, simulate_plan
 from causalplan.sim.geometry import solids
+from causalplan.sim.outcomes import RenderMode, StepStatus
 from causalplan.sim.poses import difference
-from causalplan.sim.report import RenderMode, StepStatus
 from causalplan.sim.robot.grasps import grasp_of
 from causalplan.sim.robot.panda import JOINT_NAMES
 from causalplan.sim.robot.replay import replay

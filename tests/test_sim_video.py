@@ -5,7 +5,7 @@ from __future__ import annotations
 import imageio.v3 as iio
 import pytest
 
-from causalplan.sim.report import Picture
+from causalplan.sim.outcomes import Picture
 from causalplan.sim.video import FRAMES_PER_SECOND, VideoError, encode
 
 RED = Picture(32, 24, bytes([200, 30, 30]) * 32 * 24)

@@ -12,8 +12,9 @@ are imported only when a simulation runs.
 """
 
 from causalplan.sim.executor import simulate_plan
+from causalplan.sim.outcomes import RenderMode
 from causalplan.sim.plan_steps import PlanInputError, StepRequest, read_plan_steps
-from causalplan.sim.report import RenderMode, SimulationReport
+from causalplan.sim.report import SimulationReport
 from causalplan.sim.scene import SimulatorUnavailableError
 
 __all__ = [

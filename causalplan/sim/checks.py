@@ -7,7 +7,7 @@ what "passed" meant.
 from __future__ import annotations
 
 from causalplan.objects.model import Connector
-from causalplan.sim.report import Check
+from causalplan.sim.outcomes import Check
 
 PENETRATION_TOLERANCE_MM = 1.0
 """Deepest overlap allowed between the moving part and anything else along its approach."""

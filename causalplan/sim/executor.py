@@ -25,19 +25,11 @@ from causalplan.sim.mechanism import Joint, evaluate, seat_error
 from causalplan.sim.motions import MOTIONS, approach, approach_path, approach_start
 from causalplan.sim.movers import Mover, PartsMoveThemselves, StepMove
 from causalplan.sim.observers import Observer, Pictures
+from causalplan.sim.outcomes import Check, Failure, Reach, RenderMode, RequirementCheck, StepReport, StepStatus
 from causalplan.sim.plan_steps import StepRequest, check_steps
 from causalplan.sim.poses import Pose, difference
 from causalplan.sim.render import DEFAULT_SIZE, Camera
-from causalplan.sim.report import (
-    Check,
-    Failure,
-    Reach,
-    RenderMode,
-    RequirementCheck,
-    SimulationReport,
-    StepReport,
-    StepStatus,
-)
+from causalplan.sim.report import SimulationReport
 from causalplan.sim.robot.arm import Arm
 from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
 from causalplan.sim.robot.motors import drive_with_motors

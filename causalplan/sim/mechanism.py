@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 from causalplan.objects.model import AssemblyObject, Fit
 from causalplan.sim.checks import ALIGNMENT_TOLERANCE_DEG, ALIGNMENT_TOLERANCE_MM
+from causalplan.sim.outcomes import RequirementCheck
 from causalplan.sim.poses import angle_between, distance, scale
-from causalplan.sim.report import RequirementCheck
 from causalplan.sim.scene import Scene
 
 

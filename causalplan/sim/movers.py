@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING, Protocol
 
 from causalplan.objects.model import Part
 from causalplan.sim.motions import Motion
+from causalplan.sim.outcomes import Reach, RobotFailure
 from causalplan.sim.poses import Pose
-from causalplan.sim.report import Reach, RobotFailure
 from causalplan.sim.robot.arm import Arm, reach_step
 from causalplan.sim.scene import Scene
 

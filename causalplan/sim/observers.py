@@ -12,8 +12,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
+from causalplan.sim.outcomes import Picture, RenderMode, StepReport
 from causalplan.sim.render import Camera, draw
-from causalplan.sim.report import Picture, RenderMode, StepReport
 from causalplan.sim.scene import Scene
 
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from causalplan.objects.model import Vector
-from causalplan.sim.report import Picture
+from causalplan.sim.outcomes import Picture
 from causalplan.sim.scene import Scene
 
 if TYPE_CHECKING:

@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 
 from causalplan.errors import CausalPlanError
 from causalplan.sim.geometry import Box
+from causalplan.sim.outcomes import Picture, StepReport
 from causalplan.sim.render import Camera, draw
-from causalplan.sim.report import Picture, StepReport
 from causalplan.sim.robot.trajectory import RATE_HZ
 from causalplan.sim.scene import Scene
 

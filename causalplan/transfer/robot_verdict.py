@@ -18,8 +18,9 @@ from causalplan.objects.model import AssemblyObject
 from causalplan.planners.fd import DEFAULT_TIME_LIMIT
 from causalplan.planners.result import PlanStep
 from causalplan.sim.executor import simulate_plan
+from causalplan.sim.outcomes import RenderMode
 from causalplan.sim.plan_steps import StepRequest, check_steps
-from causalplan.sim.report import RenderMode, SimulationReport
+from causalplan.sim.report import SimulationReport
 from causalplan.sim.video import VIDEO_FORMATS, VIDEO_SIZE, VideoError, encode
 from causalplan.transfer.verdict import Reason, TransferVerdict, Verdict, transfer_verdict
 

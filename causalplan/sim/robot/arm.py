@@ -13,8 +13,8 @@ import math
 from causalplan.objects.model import Vector
 from causalplan.sim.checks import REACH_TOLERANCE_MM
 from causalplan.sim.geometry import corners
+from causalplan.sim.outcomes import Reach
 from causalplan.sim.poses import Pose, about_axis
-from causalplan.sim.report import Reach
 from causalplan.sim.robot.panda import ARM_JOINTS, GRASP_LINK, HOME, Panda
 from causalplan.sim.scene import Scene
 

@@ -30,9 +30,9 @@ from causalplan.sim.geometry import solids
 from causalplan.sim.layout import ROBOT_ROW_GAP, catalog_fit, layout, step_connectors
 from causalplan.sim.mechanism import Joint, evaluate
 from causalplan.sim.motions import MOTIONS
+from causalplan.sim.outcomes import Failure, RequirementCheck
 from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.poses import Pose, distance
-from causalplan.sim.report import Failure, RequirementCheck
 from causalplan.sim.robot.panda import ARM_JOINTS, FINGER_JOINTS, Panda
 from causalplan.sim.robot.trajectory import Point, Trajectory
 from causalplan.sim.scene import TIME_STEP, Scene

@@ -11,8 +11,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from causalplan.sim.movers import StepMove
+from causalplan.sim.outcomes import Reach, RobotFailure
 from causalplan.sim.poses import Pose
-from causalplan.sim.report import Reach, RobotFailure
 from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR, PANDA
 from causalplan.sim.robot.panda import FINGER_OPEN, HOME
 from causalplan.sim.robot.robot import Robot

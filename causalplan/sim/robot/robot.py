@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 from causalplan.objects.model import Part
 from causalplan.sim.checks import PENETRATION_TOLERANCE_MM
+from causalplan.sim.outcomes import Check, Failure, RobotFailure
 from causalplan.sim.poses import Pose, about_axis, scale
-from causalplan.sim.report import Check, Failure, RobotFailure
 from causalplan.sim.robot.grasps import FINGER_REACH, finger_gap, grasp_of
 from causalplan.sim.robot.motion_planning import plan_path
 from causalplan.sim.robot.panda import FINGER_JOINTS, FINGER_OPEN, HOME, Configuration, Contact, Panda

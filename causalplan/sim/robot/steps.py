@@ -14,8 +14,8 @@ from collections.abc import Callable
 
 from causalplan.objects.model import Part
 from causalplan.sim.motions import ENGAGEMENT, Motion
+from causalplan.sim.outcomes import RobotFailure
 from causalplan.sim.poses import Pose
-from causalplan.sim.report import RobotFailure
 from causalplan.sim.robot.robot import LIFT, LINE_STEP, SCREW_STEP, Robot, line_poses
 from causalplan.sim.robot.trajectory import Waypoints
 
