@@ -36,7 +36,17 @@ from causalplan.service.jobs.runner import JobRunner
 from causalplan.service.pool.jobs import probe_job
 from causalplan.service.pool.pool import PlannerPool
 from causalplan.service.responses import SafeJSONResponse
-from causalplan.service.routes import health, jobs, models, objects, plans, research, simulations, transfers
+from causalplan.service.routes import (
+    explanations,
+    health,
+    jobs,
+    models,
+    objects,
+    plans,
+    research,
+    simulations,
+    transfers,
+)
 from causalplan.service.schemas.common import error_responses
 from causalplan.service.throttle import FailedAttempts
 from causalplan.service.web import routers as web_routers
@@ -343,7 +353,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_exception_handler(StarletteHTTPException, handle_http_error)
     app.add_middleware(UnexpectedErrorMiddleware)
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes, upload_bytes=settings.max_upload_bytes)
-    for module in (models, plans, simulations, transfers, jobs, objects, research, health):
+    for module in (models, plans, simulations, transfers, explanations, jobs, objects, research, health):
         app.include_router(module.router)
     for router in web_routers():  # the participant and research pages, and /v1/experiments
         app.include_router(router)
