@@ -102,7 +102,7 @@ def explain_step(task: PlanningTask, steps: tuple[PlanStep, ...], number: int) -
     assembled = {obj.base, *(s.args[0] for s in steps)}
     holding = active_nodes(task.functions_of(assembled), task.rules)
     node_labels = task.node_labels()
-    carried = [label for label in task.labelling.functions.get(part, ())]
+    carried = list(task.labelling.functions.get(part, ()))
     chains: list[tuple[str, tuple[Link, ...]]] = []
     unused: list[str] = []
     for label in carried:

@@ -153,15 +153,13 @@ def _blocker(obj: AssemblyObject, first: str, then: str) -> tuple[Fit, Fit, tupl
     return None
 
 
-def _blocked(obj: AssemblyObject, first: str, then: str) -> tuple[str, dict[str, object]] | None:
-    found = _blocker(obj, first, then)
-    if found is None:
-        return None
-    fit, other, (owner, connector) = found
+def _blocked_words(obj: AssemblyObject, blocker: tuple[Fit, Fit, tuple[str, str]]) -> tuple[str, dict[str, object]]:
+    """Return, in words and as data, how the first fit of ``blocker`` rules out the second."""
+    fit, other, (owner, connector) = blocker
     covers = "covers" if (owner, connector) in fit.blocks else "takes"
     words = (
-        f"then the {obj.part(first).name} {covers} the {connector} of the {obj.part(owner).name} and the "
-        f"{obj.part(then).name} cannot go in ({fit.id} rules out {other.id})"
+        f"then the {obj.part(fit.moving_part).name} {covers} the {connector} of the {obj.part(owner).name} and the "
+        f"{obj.part(other.moving_part).name} cannot go in ({fit.id} rules out {other.id})"
     )
     return words, {"fit": fit.id, "rules_out": other.id, "connector": f"{owner}.{connector}"}
 
@@ -201,16 +199,12 @@ def _answer_unsolvable(
         if found is not None:
             return "goal_unreachable", found[0], found[1], None
     if question.kind is Kind.ORDER:
-        first, then = question.parts
-        blocked = _blocked(obj, first, then)
-        if blocked is not None:
-            failure = None
-            if simulate:
-                fit, other, _ = _blocker(obj, first, then) or (None, None, None)
-                assert fit is not None and other is not None
-                failure = _simulated_failure(obj, (fit, other))
-            words = blocked[0] + (f"; in simulation the robot's step fails: {failure}" if failure else "")
-            return "blocked", words, blocked[1], failure
+        blocker = _blocker(obj, *question.parts)
+        if blocker is not None:
+            words, decided = _blocked_words(obj, blocker)
+            failure = _simulated_failure(obj, blocker[:2]) if simulate else None
+            words += f"; in simulation the robot's step fails: {failure}" if failure else ""
+            return "blocked", words, decided, failure
     return (
         "no_assembly_sequence",
         f"no order of connecting the {obj.name}'s parts does that and still produces {task.goal} under your model",
