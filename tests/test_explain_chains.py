@@ -40,3 +40,14 @@ def test_a_part_carrying_nothing_used_is_there_to_reach_another(catalog: Catalog
     assert [step.args[0] for step in plan.steps] == ["batteries", "head"]
     # The batteries carry 'provide electricity', which the model uses: a chain, not a detour.
     assert explain_step(task, plan.steps, 1).chains
+
+
+def test_a_step_that_only_opens_the_way_says_so(catalog: Catalog) -> None:
+    model = example_model("near/candle.yaml", catalog)
+    mapping = example_mapping("near/kerosene_lamp_mapping.yaml", catalog)
+    task = catalog_task(model, catalog, mapping)
+    plan = plan_task(task, "fd")
+    assert [step.args[0] for step in plan.steps] == ["burner", "wick", "lighter"]
+    why = explain_step(task, plan.steps, 1)
+    assert (why.chains, why.reached_by) == ((), (2,))
+    assert "it is needed only to reach a part that attaches to it: the wick (step 2)" in why.message
