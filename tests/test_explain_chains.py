@@ -32,7 +32,7 @@ def test_a_chain_climbs_through_an_intermediate_effect(catalog: Catalog) -> None
     assert [link.rule.index for link in chains["turn electricity into light"]] == [2]
 
 
-def test_a_part_carrying_nothing_used_is_there_to_reach_another(catalog: Catalog) -> None:
+def test_each_step_of_the_flashlight_plan_serves_a_rule(catalog: Catalog) -> None:
     model = example_model("paper/desk_lamp.yaml", catalog)
     mapping = example_mapping("paper/flashlight_mapping.yaml", catalog)
     task = catalog_task(model, catalog, mapping)
