@@ -74,6 +74,7 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/simulations",
         "/v1/simulations/videos/{key}",
         "/v1/transfers",
+        "/v1/explanations",
         "/v1/jobs",
         "/v1/jobs/{job_id}",
         "/v1/jobs/{job_id}/video",

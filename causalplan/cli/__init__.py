@@ -11,7 +11,7 @@ One module per family of commands; `common` holds what they share. A new command
 
 import click
 
-from causalplan.cli import comparison, crowd, fits, models, planning, serving, simulation, studies
+from causalplan.cli import comparison, crowd, explaining, fits, models, planning, serving, simulation, studies
 from causalplan.version import __version__
 
 
@@ -37,6 +37,7 @@ for command in (
     models.check,
     planning.plan,
     planning.transfer,
+    explaining.explain,
     models.compile_command,
     models.graph,
     comparison.compare,

@@ -129,6 +129,12 @@ def _print_verdict(verdict: TransferVerdict) -> None:
     help="Also have the Franka Panda carry out the plan: a transfer it cannot carry out fails with "
     "robot_cannot_execute (its step and code, e.g. unreachable, no_collision_free_path).",
 )
+@click.option(
+    "--repair",
+    is_flag=True,
+    help="When it fails: the smallest sets of edits (on the mapping or the model) that make it transfer, "
+    "each re-checked by a full verdict (for researchers: participants in the test phase never see them).",
+)
 @json_option
 @catalog_option
 def transfer(
@@ -138,6 +144,7 @@ def transfer(
     time_limit: float,
     val: bool,
     robot: bool,
+    repair: bool,
     as_json: bool,
     catalog: tuple[Path, ...],
 ) -> None:
@@ -165,10 +172,28 @@ def transfer(
             from causalplan.transfer.robot_verdict import robot_judged
 
             verdict = robot_judged(verdict, objects)
+        repairs = None
+        if repair and verdict.verdict.value == "fails":
+            from causalplan.explain.repair import search_repairs
+
+            assert loaded_model.model is not None and loaded_mapping.mapping is not None
+            repairs = search_repairs(
+                loaded_model.model,
+                loaded_mapping.mapping,
+                objects,
+                verdict,
+                planner=planner,
+                time_limit=time_limit,
+                val=val,
+            )
     if as_json:
-        print_json(verdict.as_dict())
+        print_json({**verdict.as_dict(), **({"repairs": repairs.as_dict()} if repairs is not None else {})})
     else:
         _print_verdict(verdict)
+        if repairs is not None:
+            from causalplan.cli.explaining import print_repairs
+
+            print_repairs(repairs, limit=5)
     exit_with(verdict.verdict.exit_code)
 
 

@@ -28,9 +28,15 @@ from causalplan.cli.common import (
     default=Path("out/analysis"),
     help="Folder for trials.csv, codebook.csv, analysis.json, rates.png/.svg.",
 )
+@click.option(
+    "--near-misses",
+    is_flag=True,
+    help="Also count, per condition, the failed transfers one or two edits would fix, and which edits "
+    "(a repair search per failed trial).",
+)
 @json_option
 @catalog_option
-def analyze(export: Path, out: Path, as_json: bool, catalog: tuple[Path, ...]) -> None:
+def analyze(export: Path, out: Path, near_misses: bool, as_json: bool, catalog: tuple[Path, ...]) -> None:
     """Analyse an experiment export (the research page's JSON export).
 
     Prints the transfer rate of every condition on every test object with its 95% Wilson
@@ -52,8 +58,15 @@ def analyze(export: Path, out: Path, as_json: bool, catalog: tuple[Path, ...]) -
         analysis = analyse(trial_rows(read_export(export), objects), objects)
     with writing(out, "write to"):
         written = write_outputs(analysis, out)
+    misses = None
+    if near_misses:
+        from causalplan.explain.near_misses import near_misses as count_near_misses
+
+        with exit_on_error():
+            misses = count_near_misses(read_export(export), objects)
     if as_json:
-        print_json({**analysis.as_dict(), "files": [str(path) for path in written]})
+        extra = {"near_misses": [counts.as_dict() for counts in misses]} if misses is not None else {}
+        print_json({**analysis.as_dict(), **extra, "files": [str(path) for path in written]})
         exit_with(EXIT_OK)
     console = make_console()
     table = Table(
@@ -83,6 +96,8 @@ def analyze(export: Path, out: Path, as_json: bool, catalog: tuple[Path, ...]) -
         if reasons:
             listed = ", ".join(f"{code} {count}" for code, count in reasons.items())
             console.print(f"Why models failed in {escape(condition)}: {listed}")
+    for counts in misses or []:
+        console.print(f"Near misses in {escape(counts.summary())}")
     console.print("[bold]Conclusions[/]")
     for conclusion in analysis.conclusions:
         console.print(f"  - {escape(conclusion)}")

@@ -23,6 +23,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from causalplan.objects.model import AssemblyObject, Fit
+from causalplan.pddl.constraints import NO_CONSTRAINTS, PlanConstraints
 from causalplan.pddl.task import PlanningTask
 from causalplan.pddl.writer import CompiledTask, assembly_action, problem_text, requirements_line
 
@@ -122,12 +123,17 @@ def canonical_pddl(task: PlanningTask) -> CompiledTask | None:
     sets = minimal_part_sets(task)
     if sets is None:
         return None
-    domain, problem = canonical_texts(task.obj, sets)
+    domain, problem = canonical_texts(task.obj, sets, task.constraints)
     return CompiledTask(domain, problem, {task.goal_key: "goal"})
 
 
-def canonical_texts(obj: AssemblyObject, sets: Iterable[Iterable[str]]) -> tuple[str, str]:
-    """Return the domain and problem whose goal holds once the assembly of ``obj`` contains one of ``sets``."""
+def canonical_texts(
+    obj: AssemblyObject, sets: Iterable[Iterable[str]], constraints: PlanConstraints = NO_CONSTRAINTS
+) -> tuple[str, str]:
+    """Return the domain and problem whose goal holds once the assembly of ``obj`` contains one of ``sets``.
+
+    ``constraints`` go into the problem as in the readable form (``writer.problem_text``).
+    """
     clauses = []
     for parts in sorted(sorted(group) for group in sets):
         body = " ".join(f"(in-assembly {part})" for part in parts)
@@ -149,4 +155,4 @@ def canonical_texts(obj: AssemblyObject, sets: Iterable[Iterable[str]]) -> tuple
         )
         + "\n"
     )
-    return domain, problem_text(obj, "goal", comments=False, static_facts=_fit_facts)
+    return domain, problem_text(obj, "goal", comments=False, static_facts=_fit_facts, constraints=constraints)

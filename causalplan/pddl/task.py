@@ -9,6 +9,7 @@ from causalplan.causal.labels import normalize_label
 from causalplan.causal.model import CausalModel, Labelling, node_labels
 from causalplan.causal.rules import Rule
 from causalplan.objects.model import AssemblyObject
+from causalplan.pddl.constraints import NO_CONSTRAINTS, PlanConstraints
 
 if TYPE_CHECKING:
     from causalplan.objects.catalog import Catalog
@@ -19,13 +20,15 @@ class PlanningTask:
     """What the planners solve: assemble ``obj`` so the model's goal node becomes true.
 
     ``labelling`` says which parts carry which functions: the model's own (step 1), or a
-    step-3 mapping when the model is tried on another object.
+    step-3 mapping when the model is tried on another object. ``constraints`` are a
+    question's (``causalplan explain``): what the plan must also do; none by default.
     """
 
     obj: AssemblyObject
     labelling: Labelling
     rules: tuple[Rule, ...]
     goal: str
+    constraints: PlanConstraints = NO_CONSTRAINTS
 
     @property
     def goal_key(self) -> str:

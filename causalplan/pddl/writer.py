@@ -13,6 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from causalplan.objects.model import AssemblyObject, Fit
+from causalplan.pddl.constraints import NO_CONSTRAINTS, PlanConstraints
 from causalplan.pddl.identifiers import comment, node_identifiers
 from causalplan.pddl.task import PlanningTask
 from causalplan.version import __version__
@@ -123,21 +124,28 @@ def problem_text(
     goal_comment: str | None = None,
     comments: bool = True,
     static_facts: Callable[[Fit], list[str]] = fit_facts,
+    constraints: PlanConstraints = NO_CONSTRAINTS,
 ) -> str:
     """Return the problem: the fits as objects, the starting assembly, the goal predicate ``goal``.
 
     ``static_facts`` writes what the domain's actions read of a fit, besides ``available`` and ``excludes``.
+    ``constraints`` (a question's: see ``constraints``) leave fits unavailable, add exclusions and goal facts.
     """
+    constraints.check(obj)
     init = [f"    (in-assembly {obj.base})"]
     for fit in obj.fits:
         if comments:
             init.append(f"    ;; {fit.id}: {comment(obj.step_text(fit))}")
-        facts = [f"(available {fit.id})", *static_facts(fit)]
-        facts += [f"(excludes {fit.id} {other})" for other in obj.excluded_fits(fit)]
+        facts = [f"(available {fit.id})"] if constraints.is_available(fit) else []
+        facts += static_facts(fit)
+        excluded = dict.fromkeys((*obj.excluded_fits(fit), *constraints.excluded_after(obj, fit)))
+        facts += [f"(excludes {fit.id} {other})" for other in excluded]
         init.append("    " + " ".join(facts))
     fits = [fit.id for fit in obj.fits]
     objects = f"  (:objects {_names(fits, '            ')} - fit)" if fits else "  (:objects)"
-    goal_line = f"  (:goal ({goal}))" + (f" ; {comment(goal_comment)}" if goal_comment and comments else "")
+    extra_goals = constraints.goal_facts()
+    goal_formula = f"(and ({goal}) {' '.join(extra_goals)})" if extra_goals else f"({goal})"
+    goal_line = f"  (:goal {goal_formula})" + (f" ; {comment(goal_comment)}" if goal_comment and comments else "")
     lines = [
         f"(define (problem {obj.id}-{goal})",
         f"  (:domain causalplan-{obj.id})",
@@ -153,7 +161,7 @@ def problem_text(
 
 def write_problem(task: PlanningTask, node_names: dict[str, str]) -> str:
     """Return the problem: the fits as objects, the starting assembly, the goal node."""
-    return problem_text(task.obj, node_names[task.goal_key], task.goal)
+    return problem_text(task.obj, node_names[task.goal_key], task.goal, constraints=task.constraints)
 
 
 def compile_task(task: PlanningTask) -> CompiledTask:

@@ -289,6 +289,12 @@ def plan_task(
         raise UnknownPlannerError(
             f"Unknown planner '{planner}'; choose one of: {', '.join(PLANNERS)}.", details={"planner": planner}
         )
+    if not task.constraints.is_empty and planner not in fd.CONFIGS:
+        # Only the PDDL route compiles a question's constraints; the MDP and UP would ignore them.
+        raise UnknownPlannerError(
+            f"A task with constraints is planned by {' or '.join(fd.CONFIGS)}, not '{planner}'.",
+            details={"planner": planner},
+        )
     asked = _Asked(include_pddl, validate_up, val)
     if planner == "auto":
         return _auto(task, time_limit, asked)

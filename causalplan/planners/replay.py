@@ -23,9 +23,9 @@ class AssemblyState:
     unavailable: set[str] = field(default_factory=set)
 
     @classmethod
-    def start(cls, obj: AssemblyObject) -> AssemblyState:
-        """Return the starting state: only the base part is in the assembly."""
-        return cls(in_assembly={obj.base})
+    def start(cls, obj: AssemblyObject, forbidden: frozenset[str] = frozenset()) -> AssemblyState:
+        """Return the starting state: only the base part is in the assembly; ``forbidden`` fits cannot be made."""
+        return cls(in_assembly={obj.base}, unavailable=set(forbidden))
 
     def problem_with(self, obj: AssemblyObject, fit: Fit) -> str | None:
         """Return why ``fit`` cannot be made now, or None when it can."""
@@ -62,9 +62,14 @@ class Replay:
 
 
 def replay(task: PlanningTask, actions: tuple[tuple[str, tuple[str, ...]], ...]) -> Replay:
-    """Apply ``actions`` (primitive, (moving, fixed, fit)) to the object and check the goals."""
+    """Apply ``actions`` (primitive, (moving, fixed, fit)) to the object and check the goals.
+
+    A task with constraints (a question's) also needs the plan to meet them: a plan that does
+    not counts as not valid under the model (the constraints are part of its goal).
+    """
     obj = task.obj
-    state = AssemblyState.start(obj)
+    constraints = task.constraints
+    state = AssemblyState.start(obj, constraints.forbidden_fits)
     fits = {fit.id: fit for fit in obj.fits}
     for number, (primitive, args) in enumerate(actions, start=1):
         fit = fits.get(args[2]) if len(args) == 3 else None
@@ -78,6 +83,8 @@ def replay(task: PlanningTask, actions: tuple[tuple[str, tuple[str, ...]], ...])
             return Replay(False, failure, False, False, unmet_requirements(obj, state.made))
         assert fit is not None
         state.make(obj, fit)
+        state.unavailable.update(constraints.excluded_after(obj, fit))
     functions = task.functions_of(frozenset(state.in_assembly))
     unmet = unmet_requirements(obj, state.made)
-    return Replay(True, None, goal_holds(functions, task.rules, task.goal_key), not unmet, unmet)
+    holds = goal_holds(functions, task.rules, task.goal_key) and not constraints.violations(obj, state.made)
+    return Replay(True, None, holds, not unmet, unmet)

@@ -29,6 +29,7 @@ from causalplan.objects.catalog import load_catalog
 from causalplan.service.answers import ResultCache, catalog_key
 from causalplan.service.api.routes import (
     experiments,
+    explanations,
     health,
     jobs,
     models,
@@ -353,7 +354,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_exception_handler(StarletteHTTPException, handle_http_error)
     app.add_middleware(UnexpectedErrorMiddleware)
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes, upload_bytes=settings.max_upload_bytes)
-    for module in (models, plans, simulations, transfers, jobs, objects, research, health, experiments):
+    for module in (models, plans, simulations, transfers, explanations, jobs, objects, research, health, experiments):
         app.include_router(module.router)
     for router in web_routers():  # the participant and research pages
         app.include_router(router)

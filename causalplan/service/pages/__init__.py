@@ -32,6 +32,7 @@ def routers() -> list[APIRouter]:
         ending,
         participant,
         participant_api,
+        participant_explain,
         research,
         robot_films,
         study_link,
@@ -46,6 +47,7 @@ def routers() -> list[APIRouter]:
         participant.router,
         ending.router,
         participant_api.router,
+        participant_explain.router,
         robot_films.router,
         research.router,
     ]

@@ -9,8 +9,12 @@ from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.api.schemas.plans import TransferIn, TransferOut
 from causalplan.service.deps import ClientIdsDep, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, invalid_input_error, model_for_request, read_mapping
+from causalplan.service.pool.explain_jobs import repair_job
 from causalplan.service.storage import crud
 from causalplan.transfer.verdict import invalid_verdict
+
+REPAIR_TIME_FACTOR = 10
+"""A repair search re-checks many edited models; most are decided without planning, the rest share cached solves."""
 
 router = APIRouter(
     prefix="/v1/transfers",
@@ -52,9 +56,15 @@ def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDe
         submission.record.id, mapping.document, planner, answer.data, answer.cached, answer.seconds, client
     )
     crud.save(services.engine, [*new_records, trial])
+    repairs = None
+    if body.repair and answer.data["verdict"] == "fails":
+        repair_args = (submission.model, mapping.mapping, planner, time_limit, tuple(services.settings.catalog_folders))
+        seconds = REPAIR_TIME_FACTOR * time_limit + services.settings.solve_grace_seconds
+        repairs = services.answers.pool.run(repair_job, (*repair_args, body.validate_plan), seconds)
     return TransferOut.model_validate(
         {
             **answer.data,
+            "repairs": repairs,
             "planner_requested": body.planner,
             "cached": answer.cached,
             "trial_id": trial.id,

@@ -16,6 +16,7 @@ from causalplan.service.api.schemas.common import (
     OutputModel,
     PlanStepOut,
 )
+from causalplan.service.api.schemas.repairs import RepairsOut
 
 
 class _Solve(InputModel):
@@ -58,6 +59,11 @@ class TransferIn(_Solve):
     """POST /v1/transfers: try a model on a new object through a step-3 mapping."""
 
     mapping: MappingDocument = Field(description="The step-3 mapping of the new object's parts.")
+    repair: bool = Field(
+        default=False,
+        description="When it fails: also the smallest sets of edits that make it transfer ('repairs'), "
+        "each re-checked by a full verdict. For researchers: participants never see them.",
+    )
 
 
 class SimulationIn(PlanIn):
@@ -141,3 +147,4 @@ class TransferOut(OutputModel):
     cached: bool
     trial_id: uuid.UUID
     model_id: uuid.UUID
+    repairs: RepairsOut | None = Field(default=None, description="Asked with 'repair' and the transfer fails.")

@@ -345,6 +345,82 @@
     return frame;
   }
 
+  // -- "Why?" beside each step, and a "Why not…?" box: the robot explains its plan -------------------
+
+  function explainUrl() {
+    return document.getElementById("show-plan").dataset.planUrl.replace(/\/plan$/, "/explain");
+  }
+
+  function answerBox(className) {
+    const box = document.createElement("p");
+    box.className = "explanation " + className;
+    box.setAttribute("aria-live", "polite");
+    return box;
+  }
+
+  function whyButton(plan, number) {
+    const wrapper = document.createElement("span");
+    const button = document.createElement("button");
+    button.type = "button";
+    button.className = "why";
+    button.textContent = "Why?";
+    const answer = answerBox("why-answer");
+    button.addEventListener("click", async function () {
+      button.disabled = true;
+      answer.textContent = "The robot is thinking…";
+      try {
+        answer.textContent = (await postJson(explainUrl(), { object: plan.object, why: String(number) })).answer;
+      } catch (error) {
+        answer.textContent = error.message;
+      } finally {
+        button.disabled = false;
+      }
+    });
+    wrapper.appendChild(button);
+    wrapper.appendChild(answer);
+    return wrapper;
+  }
+
+  function whyNotBox(plan) {
+    const form = document.createElement("form");
+    form.className = "why-not";
+    const label = document.createElement("label");
+    label.textContent = "Why not… ";
+    const input = document.createElement("input");
+    input.name = "why_not";
+    input.placeholder = "leave out step 2 · shade before light bulb · attach shade";
+    input.maxLength = 200;
+    label.appendChild(input);
+    const button = document.createElement("button");
+    button.type = "submit";
+    button.textContent = "Ask the robot";
+    const answer = answerBox("why-not-answer");
+    const alternative = document.createElement("ol");
+    alternative.className = "why-not-plan";
+    form.append(label, button, answer, alternative);
+    form.addEventListener("submit", async function (event) {
+      event.preventDefault();
+      event.stopPropagation();
+      button.disabled = true;
+      answer.textContent = "The robot is planning again…";
+      alternative.textContent = "";
+      try {
+        const data = await postJson(explainUrl(), { object: plan.object, why_not: input.value });
+        answer.textContent = data.answer;
+        data.alternative.forEach(function (step) {
+          const item = document.createElement("li");
+          item.textContent = step;
+          alternative.appendChild(item);
+        });
+      } catch (error) {
+        answer.textContent = error.message;
+      } finally {
+        button.disabled = false;
+      }
+    });
+    return form;
+  }
+
   const planButton = document.getElementById("show-plan");
   if (planButton && rules) {
     const section = document.getElementById("plan");
@@ -364,12 +440,14 @@
           block.appendChild(title);
           if (plan.steps.length) {
             const list = document.createElement("ol");
-            plan.steps.forEach(function (step) {
+            plan.steps.forEach(function (step, index) {
               const item = document.createElement("li");
-              item.textContent = step;
+              item.textContent = step + " ";
+              item.appendChild(whyButton(plan, index + 1));
               list.appendChild(item);
             });
             block.appendChild(list);
+            block.appendChild(whyNotBox(plan));
           } else {
             const none = document.createElement("p");
             none.textContent = plan.status === "solved"

@@ -1,0 +1,63 @@
+"""POST /v1/explanations: plan a model and explain the plan (why this step; why not another)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter
+
+from causalplan.errors import CausalPlanError
+from causalplan.explain.contrast import PlanUnavailableError
+from causalplan.explain.questions import QuestionError
+from causalplan.service.api.schemas.common import error_responses
+from causalplan.service.api.schemas.explanations import ExplanationIn, ExplanationOut
+from causalplan.service.deps import ClientIdsDep, ServicesDep
+from causalplan.service.documents import StrictJSONRoute, plan_inputs
+from causalplan.service.errors import InvalidRequestError
+from causalplan.service.pool.explain_jobs import explanation_job
+
+router = APIRouter(
+    prefix="/v1/explanations",
+    tags=["explanations"],
+    responses=error_responses(404, 429, 503, 504),
+    route_class=StrictJSONRoute,
+)
+
+ANSWERED_AS_INVALID = (QuestionError, PlanUnavailableError)
+"""Errors of the question (or of a model without a plan) that are the request's fault: 422 with their code."""
+
+
+@router.post("", response_model=ExplanationOut, summary="Explain a plan")
+def create_explanation(body: ExplanationIn, services: ServicesDep, client: ClientIdsDep) -> dict[str, Any]:
+    """Plan the model, then say why a step is there (`why`) and why not another plan (`why_not`).
+
+    The same JSON as `causalplan explain --json`, plus `model_id`. A why-not question is
+    answered by planning again with its constraint compiled into the PDDL; the alternative
+    plan is replayed (and checked by VAL with `validate`) like any plan. A question the plan
+    or the object cannot answer (a part it does not have: `unknown_part`; `invalid_question`,
+    `unknown_fit`, `unknown_step`) or a model without a plan (`no_plan_to_explain`) is a 422.
+    """
+    inputs = plan_inputs(body, services, client)
+    inputs.store(services)
+    args = (
+        inputs.model,
+        inputs.mapping,
+        inputs.planner,
+        inputs.time_limit,
+        tuple(services.settings.catalog_folders),
+        body.why,
+        body.why_not,
+        body.validate_plan,
+        body.simulate,
+    )
+    # Two plans (the plan, the alternative), so twice a plan's time, and the grace once.
+    seconds = 2 * inputs.time_limit + services.settings.solve_grace_seconds
+    try:
+        data: dict[str, Any] = services.answers.pool.run(explanation_job, args, seconds)
+    except CausalPlanError as exc:
+        if not isinstance(exc, ANSWERED_AS_INVALID):
+            raise
+        error = InvalidRequestError(exc.message, details=exc.details)
+        error.code = exc.code  # the question's own stable code, e.g. unknown_part
+        raise error from exc
+    return {**data, "model_id": inputs.submission.record.id}

@@ -1,0 +1,47 @@
+"""The jobs of explanations the service sends its planner workers: explain a plan, search repairs.
+
+Like ``pool.jobs``: run inside a worker process, plain values in, JSON-ready dicts out.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from causalplan.causal.model import CausalModel, Labelling
+from causalplan.explain.explanation import explain_plan
+from causalplan.explain.repair import search_repairs
+from causalplan.pddl.task import catalog_task
+from causalplan.service.pool.catalog import worker_catalog
+from causalplan.transfer.verdict import Verdict, evaluate_transfer
+
+
+def explanation_job(
+    model: CausalModel,
+    mapping: Labelling | None,
+    planner: str,
+    time_limit: float,
+    catalog_folders: tuple[Path, ...],
+    why: str | None,
+    why_not: str | None,
+    val: bool,
+    simulate: bool,
+) -> dict[str, object]:
+    """Return ``causalplan explain --json`` for the plan of ``model`` (on the mapping's object if given)."""
+    task = catalog_task(model, worker_catalog(catalog_folders), mapping)
+    return explain_plan(task, why, why_not, planner, time_limit, val, simulate).as_dict()
+
+
+def repair_job(
+    model: CausalModel,
+    mapping: Labelling,
+    planner: str,
+    time_limit: float,
+    catalog_folders: tuple[Path, ...],
+    val: bool,
+) -> dict[str, object] | None:
+    """Return the repairs of a failed transfer (``RepairSearch.as_dict()``), or None when it does not fail."""
+    catalog = worker_catalog(catalog_folders)
+    verdict = evaluate_transfer(model, mapping, catalog, planner, time_limit, val=val)
+    if verdict.verdict is not Verdict.FAILS:
+        return None
+    return search_repairs(model, mapping, catalog, verdict, planner=planner, time_limit=time_limit, val=val).as_dict()

@@ -1,0 +1,45 @@
+"""Step 2 in a real browser: a participant asks "Why?" of a step and "Why not…?" of the plan, and reads it."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+from playwright.sync_api import Page, expect
+
+from tests.test_web_browser import browser, new_link, page, playwright, saved, shoot  # noqa: F401 - fixtures
+from tests.web_flows import LAMP_RULES
+
+
+@pytest.mark.slow
+def test_why_and_why_not_beside_the_robots_plan(live_server: str, page: Page) -> None:  # noqa: F811
+    page.goto(new_link(live_server, tutorial=False))
+    expect(page).to_have_url(re.compile(r"/step1/1$"))
+    page.get_by_label("Functions of the base with cables (one per line)").fill("provide electricity")
+    page.get_by_label("Functions of the light bulb (one per line)").fill(
+        "turn electricity into light\nclose the circuit"
+    )
+    saved(page)
+    page.get_by_role("button", name="Save and continue").click()
+    expect(page).to_have_url(re.compile(r"/step2$"))
+    page.get_by_label("Your rules, one per line").fill(LAMP_RULES)
+    expect(page.locator("#problems")).to_have_class(re.compile(r"\bok\b"))
+    page.get_by_role("button", name="Show the robot's plan").click()
+    plan = page.locator("#plan-body")
+    # The first plan of a new server also starts its planner worker: give it time on a busy machine.
+    expect(plan).to_contain_text("Screw the light bulb into the base with cables.", timeout=60_000)
+
+    plan.get_by_role("button", name="Why?").first.click()
+    expect(plan.locator(".why-answer").first).to_contain_text(
+        "attaches the light bulb because the light bulb carries 'turn electricity into light'", timeout=30_000
+    )
+    plan.get_by_label("Why not…").fill("attach the shade")
+    plan.get_by_role("button", name="Ask the robot").click()
+    expect(plan.locator(".why-not-answer")).to_contain_text("does not need it for light", timeout=30_000)
+    expect(plan.locator(".why-not-plan li")).to_have_text(
+        ["Screw the light bulb into the base with cables.", "Clip the shade onto the base with cables."]
+    )
+    plan.get_by_label("Why not…").fill("attach the wick")
+    plan.get_by_role("button", name="Ask the robot").click()
+    expect(plan.locator(".why-not-answer")).to_contain_text("The desk lamp has no part 'the wick'", timeout=30_000)
+    shoot(page, "participant-2-why-not")
