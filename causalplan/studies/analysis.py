@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from causalplan.objects.catalog import Catalog
+from causalplan.studies.far_generalization import prediction_tests
 from causalplan.studies.misconceptions import Misconception, misconceptions
 from causalplan.studies.statistics import (
     ClusteredModel,
@@ -205,7 +206,7 @@ def analyse(rows: Sequence[TrialRow], catalog: Catalog) -> Analysis:
     included = [row for row in rows if not row.excluded]
     decided = [row for row in included if row.outcome is not None]
     spans = training_spans(included, catalog)
-    comparisons = _comparisons(decided, spans) if decided else []
+    comparisons = holm([*_comparisons(decided, spans), *prediction_tests(decided, catalog)]) if decided else []
     clustered = clustered_logistic(
         [row.outcome or 0 for row in decided],
         {

@@ -19,6 +19,7 @@ from causalplan.service.db.models import ExperimentRecord, ParticipantRecord
 from causalplan.service.responses import SafeJSONResponse, csv_bytes
 from causalplan.service.web import arrivals, store
 from causalplan.service.web.design import Design, read_design
+from causalplan.service.web.errors import InvalidExperimentError
 from causalplan.service.web.journey import Journey
 from causalplan.service.web.recruitment import Recruitment, read_quotas, read_recruitment
 from causalplan.service.web.results import (
@@ -32,6 +33,7 @@ from causalplan.service.web.results import (
 )
 from causalplan.service.web.schemas import ExperimentIn, ExperimentOut, ParticipantOut, RecruitmentIn, RecruitmentOut
 from causalplan.studies.analysis import Analysis, analyse
+from causalplan.studies.far_generalization import DesignError, template_conditions
 from causalplan.studies.trials import ExportError, trial_rows
 
 
@@ -40,7 +42,13 @@ def create(session: Session, catalog: Catalog, body: ExperimentIn) -> Experiment
     options = body.model_dump(
         include={"counterbalance_training", "counterbalance_tests", "show_verdict", "tutorial", "robot_verdict"}
     )
-    name, design = read_design(body.name, [condition.model_dump() for condition in body.conditions], options, catalog)
+    conditions = [condition.model_dump() for condition in body.conditions]
+    if body.template is not None:  # the paper's design: made from the catalog, or the given conditions checked
+        try:
+            conditions = template_conditions(body.template, catalog, conditions)
+        except DesignError as exc:
+            raise InvalidExperimentError(exc.message, details=exc.details) from None
+    name, design = read_design(body.name, conditions, options, catalog)
     return store.create_experiment(session, name, body.description.strip(), design)
 
 
