@@ -178,6 +178,8 @@ def _conclusion(comparison: Comparison) -> str:
     significant = comparison.p_holm < SIGNIFICANCE
     if comparison.alternative == "greater":
         verdict = "the prediction holds" if significant else "the prediction is not shown at this sample size"
+        if not significant and comparison.odds_ratio_interval[1] < 1:
+            verdict = "the opposite of the prediction: the first group transferred less"
     else:
         verdict = (
             "they differ, so models did not transfer equally to both"
