@@ -5,7 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
 
+from causalplan.cli import app
 from causalplan.consensus.paper_study import synthetic_export
 from causalplan.consensus.population import paper_population
 from causalplan.objects.catalog import Catalog, load_catalog
@@ -137,3 +139,17 @@ def test_the_api_and_the_research_form_create_the_papers_design(tmp_path: Path) 
         assert "near combustion B" in page.text
         new_form = client.get("/research/experiments/new", headers=AUTH).text
         assert "far-generalization experiment: near and far conditions" in new_form
+
+
+def test_the_commands_run_the_synthetic_study_and_analyse_it(tmp_path: Path) -> None:
+    runner = CliRunner(env={"FORCE_COLOR": None, "NO_COLOR": "1", "COLUMNS": "400"})
+    export = tmp_path / "study.json"
+    made = runner.invoke(
+        app, ["synthetic-study", "--n", "10", "--abstract", "1", "0", "--slip", "0.05", "0.7", "--out", str(export)]
+    )
+    assert made.exit_code == 0, made.output
+    assert "120 trials of 60 participants" in made.output
+    analysed = runner.invoke(app, ["analyze", str(export), "--out", str(tmp_path / "analysis")])
+    assert analysed.exit_code == 0, analysed.output
+    assert f"{PREDICTION_2}: " in analysed.output
+    assert "the opposite of the prediction" in analysed.output
