@@ -153,3 +153,14 @@ def test_the_commands_run_the_synthetic_study_and_analyse_it(tmp_path: Path) -> 
     assert analysed.exit_code == 0, analysed.output
     assert f"{PREDICTION_2}: " in analysed.output
     assert "the opposite of the prediction" in analysed.output
+
+
+def test_without_slips_general_words_transfer_everywhere_and_a_categorys_words_only_near() -> None:
+    conditions = far_generalization_conditions(CATALOG)
+    general = {span: {"abstract": 1.0, "slip": 0.0} for span in (ONE_CATEGORY, BOTH_CATEGORIES)}
+    trials = synthetic_export(paper_population(conditions, CATALOG, 2, 0, general), CATALOG)["trials"]
+    assert {trial["verdict"] for trial in trials} == {"transfers"}  # the roles cover every true mechanism
+    specific = {span: {"abstract": 0.0, "slip": 0.0} for span in (ONE_CATEGORY, BOTH_CATEGORIES)}
+    rows = trial_rows(synthetic_export(paper_population(conditions, CATALOG, 2, 0, specific), CATALOG), CATALOG)
+    assert {(row.generalization, row.verdict) for row in rows} == {("near", "transfers"), ("far", "fails")}
+    assert {code for row in rows if row.verdict == "fails" for code in row.reason_codes} == {"missing_function"}
