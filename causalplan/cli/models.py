@@ -200,7 +200,8 @@ def objects(
         console.print(fits)
         console.print("[bold]True mechanism:[/] " + escape(obj.mechanism_explanation))
         for requirement in obj.mechanism:
-            console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)})")
+            function = f"; function: {escape(requirement.function)}" if requirement.function else ""
+            console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)}{function})")
         return
     if as_json:
         print_json(
