@@ -94,12 +94,11 @@ def far_generalization_conditions(
     if len(categories) != PER_CONDITION:
         raise DesignError(f"The paper's design compares two categories, not {len(categories)}.")
     pools = object_pools(catalog, categories)
-    largest = min(len(pool) for pool in pools.values())
-    if not 1 <= sets <= min(largest, len(SET_NAMES)):
+    most = min(*(len(pool) for pool in pools.values()), len(SET_NAMES))
+    if not 1 <= sets <= most:
         raise DesignError(
-            f"The design can rotate the objects into 1 to {min(largest, len(SET_NAMES))} sets with this "
-            f"catalog, not {sets}.",
-            details={"errors": [f"sets must be between 1 and {min(largest, len(SET_NAMES))}"]},
+            f"The design can rotate the objects into 1 to {most} sets with this catalog, not {sets}.",
+            details={"errors": [f"sets must be between 1 and {most}"]},
         )
     conditions = []
     for number in range(sets):
