@@ -479,6 +479,10 @@ BUILTIN_CATEGORIES = {
     "flashlight": "electric",
     "candle": "combustion",
     "kerosene_lamp": "combustion",
+    "headlamp": "electric",
+    "solar_lantern": "electric",
+    "oil_lamp": "combustion",
+    "gas_lantern": "combustion",
     "toy_car": "mechanical",
 }
 

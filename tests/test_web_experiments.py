@@ -65,16 +65,20 @@ def test_definitions_and_link_requests_are_checked(storage_client: TestClient) -
     bad = storage_client.post(
         "/v1/experiments",
         headers=AUTH,
-        json={"name": "x", "conditions": [{"name": "near", "training": ["desk_lamp"], "tests": ["lantern"]}]},
+        json={"name": "x", "conditions": [{"name": "near", "training": ["desk_lamp"], "tests": ["torch"]}]},
     )
     error = error_of(bad, 422)
     assert error["code"] == "invalid_experiment"
     assert error["details"]["errors"] == [
-        "Condition 'near': there is no object 'lantern' in the catalog. Known objects: candle, desk_lamp, "
-        "flashlight, kerosene_lamp, toy_car."
+        "Condition 'near': there is no object 'torch' in the catalog. Known objects: candle, desk_lamp, "
+        "flashlight, gas_lantern, headlamp, kerosene_lamp, oil_lamp, solar_lantern, toy_car."
     ]
     shape = storage_client.post("/v1/experiments", headers=AUTH, json={"name": "x", "conditions": []})
-    assert error_of(shape, 422)["code"] == "invalid_request"
+    assert error_of(shape, 422)["details"]["errors"] == [
+        "The experiment has no condition; add at least one (e.g. 'near')."
+    ]
+    unknown = storage_client.post("/v1/experiments", headers=AUTH, json={"name": "x", "template": "near_only"})
+    assert error_of(unknown, 422)["code"] == "invalid_request"
     assert error_of(storage_client.post("/v1/experiments", json=NEAR_AND_FAR), 401)["code"] == "not_authenticated"
     created = experiment(storage_client)
     wrong = storage_client.post(

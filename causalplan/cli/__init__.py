@@ -11,7 +11,18 @@ One module per family of commands; `common` holds what they share. A new command
 
 import click
 
-from causalplan.cli import comparison, crowd, explaining, fits, models, planning, serving, simulation, studies
+from causalplan.cli import (
+    comparison,
+    crowd,
+    explaining,
+    fits,
+    models,
+    planning,
+    serving,
+    simulation,
+    studies,
+    synthetic,
+)
 from causalplan.version import __version__
 
 
@@ -52,6 +63,7 @@ for command in (
     crowd.consensus,
     crowd.population,
     crowd.crowd_curve,
+    synthetic.synthetic_study,
 ):
     app.add_command(command)
 

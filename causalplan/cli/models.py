@@ -30,7 +30,7 @@ from causalplan.cli.common import (
 )
 
 if TYPE_CHECKING:
-    pass
+    from causalplan.objects.model import AssemblyObject
 
 
 @click.command(short_help="Validate a model or mapping: what is wrong, where, how to fix it.")
@@ -115,22 +115,75 @@ def graph(model: Path, out: Path | None, as_json: bool, catalog: tuple[Path, ...
     exit_with(EXIT_OK if loaded.report.is_valid else EXIT_INVALID)
 
 
+def _write_reference_model(obj: AssemblyObject, out: Path | None, as_json: bool) -> None:
+    """Print the object's reference model, or write it and its mapping to ``out``."""
+    import yaml
+
+    from causalplan.objects.reference import reference_mapping, reference_model
+
+    model, mapping = reference_model(obj), reference_mapping(obj)
+    if out is None:
+        if as_json:
+            print_json({"model": model, "mapping": mapping})
+        else:
+            sys.stdout.write(f"# The reference model of the {obj.name}: its true mechanism as a causal model.\n")
+            sys.stdout.write(yaml.safe_dump(model, sort_keys=False, allow_unicode=True, width=100))
+        return
+    files = {out / f"{obj.id}.yaml": model, out / f"{obj.id}_mapping.yaml": mapping}
+    with writing(out):
+        out.mkdir(parents=True, exist_ok=True)
+        for path, document in files.items():
+            path.write_text(yaml.safe_dump(document, sort_keys=False, allow_unicode=True, width=100), encoding="utf-8")
+    if as_json:
+        print_json({"model": str(out / f"{obj.id}.yaml"), "mapping": str(out / f"{obj.id}_mapping.yaml")})
+    else:
+        say(f"Wrote {', '.join(str(path) for path in files)}")
+
+
 @click.command(short_help="List the catalog's objects, or show one in detail.")
 @click.argument("object_id", required=False, metavar="[OBJECT]")
+@click.option(
+    "--reference-model",
+    is_flag=True,
+    help="Give OBJECT's true mechanism as a causal model (the expert's gold standard) and its step-3 mapping.",
+)
+@click.option(
+    "--out", "-o", type=FILE, help="With --reference-model: the folder to write OBJECT.yaml and OBJECT_mapping.yaml to."
+)
 @json_option
 @catalog_option
-def objects(object_id: str | None, as_json: bool, catalog: tuple[Path, ...]) -> None:
-    """List the catalog's objects, or show one (OBJECT): parts, connectors, fits, true mechanism."""
+def objects(
+    object_id: str | None, reference_model: bool, out: Path | None, as_json: bool, catalog: tuple[Path, ...]
+) -> None:
+    """List the catalog's objects, or show one (OBJECT): parts, connectors, fits, true mechanism.
+
+    With --reference-model, print OBJECT's reference model (or write it with its mapping to
+    --out), ready for `check`, `plan`, `transfer` and `simulate`:
+
+    \b
+        causalplan objects headlamp --reference-model --out out/reference
+        causalplan simulate out/reference/headlamp.yaml --robot
+    """
     from dataclasses import asdict
 
     from rich.markup import escape
     from rich.table import Table
 
+    if (reference_model or out is not None) and object_id is None:
+        fail(
+            "missing_object",
+            "--reference-model and --out need an OBJECT: e.g. `causalplan objects candle --reference-model`.",
+        )
+    if out is not None and not reference_model:
+        fail("missing_option", "--out goes with --reference-model: add it, or leave --out out.")
     known = catalog_from(catalog)
     console = make_console()
     if object_id is not None:
         with exit_on_error():
             obj = known.get(object_id)
+        if reference_model:
+            _write_reference_model(obj, out, as_json)
+            return
         if as_json:
             print_json(asdict(obj))
             return
@@ -147,7 +200,8 @@ def objects(object_id: str | None, as_json: bool, catalog: tuple[Path, ...]) -> 
         console.print(fits)
         console.print("[bold]True mechanism:[/] " + escape(obj.mechanism_explanation))
         for requirement in obj.mechanism:
-            console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)})")
+            function = f"; function: {escape(requirement.function)}" if requirement.function else ""
+            console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)}{function})")
         return
     if as_json:
         print_json(

@@ -20,9 +20,12 @@ The same seed gives the same participants.
 from __future__ import annotations
 
 import random
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from causalplan.errors import CausalPlanError
+from causalplan.objects.catalog import Catalog
+from causalplan.studies.far_generalization import PaperCondition
 
 ERROR_KINDS = ("non_causal", "effect_as_cause", "uncaused_intermediate", "object_specific", "paraphrase", "missed_part")
 DEFAULT_RATES = {
@@ -245,4 +248,125 @@ def population(
     lines: list[dict[str, object]] = []
     for number in range(1, count + 1):
         lines.extend(participant(rng, scenario, chosen, settings, f"p{number:04d}"))
+    return lines
+
+
+# --- the paper's far-generalization design: two training objects, novel test objects -------------
+
+ROLES = ("supply", "flow", "start", "light")
+"""What the parts of a light source do, in the few roles every catalog object's mechanism has."""
+ROLE_PARTS: dict[str, dict[str, tuple[str, ...]]] = {
+    "desk_lamp": {
+        "supply": ("base_with_cables",),
+        "flow": ("base_with_cables",),
+        "start": ("base_with_cables",),
+        "light": ("light_bulb",),
+    },
+    "flashlight": {"supply": ("batteries",), "flow": ("head",), "start": ("head",), "light": ("head",)},
+    "headlamp": {"supply": ("batteries",), "flow": ("switch",), "start": ("switch",), "light": ("led",)},
+    "solar_lantern": {
+        "supply": ("solar_panel", "crank_handle"),
+        "flow": ("battery",),
+        "start": ("body",),
+        "light": ("led_lamp",),
+    },
+    "candle": {"supply": ("wax",), "flow": ("wick",), "start": ("match",), "light": ("wick",)},
+    "kerosene_lamp": {"supply": ("fuel_tank",), "flow": ("burner",), "start": ("lighter",), "light": ("wick",)},
+    "oil_lamp": {"supply": ("oil_bottle",), "flow": ("wick",), "start": ("match",), "light": ("wick",)},
+    "gas_lantern": {"supply": ("burner",), "flow": ("valve_knob",), "start": ("igniter",), "light": ("mantle",)},
+}
+"""Object -> role -> the parts that play it (several: any one will do, as in the object's mechanism)."""
+WORDS = {
+    "general": ("supply energy", "let the energy flow", "start the process", "turn energy into light"),
+    "electric": ("provide electricity", "close the circuit", "switch it on", "turn electricity into light"),
+    "combustion": ("provide fuel", "draw up the fuel", "light the fuel", "burn with a flame"),
+}
+"""The words for the roles: general ones fit every light source, a category's own fit only that category."""
+RELEASED = {"general": "energy is released", "electric": "electricity flows", "combustion": "the fuel burns"}
+
+
+def _paper_model(training: tuple[str, ...], vocabularies: list[str], category: dict[str, str]) -> dict[str, object]:
+    """Return a participant's one model of two training objects, each labelled in its vocabulary."""
+    functions: dict[str, list[str]] = {}
+    for object_id in training:
+        words = dict(zip(ROLES, WORDS[vocabularies[0] if len(vocabularies) == 1 else category[object_id]], strict=True))
+        for role, parts in ROLE_PARTS[object_id].items():
+            for part in parts:
+                functions.setdefault(f"{object_id}.{part}", []).append(words[role])
+    rules = []
+    for vocabulary in vocabularies:
+        supply, flow, start, light = WORDS[vocabulary]
+        rules.append(f"{supply} AND {flow} AND {start} CAUSES {RELEASED[vocabulary]}")
+        rules.append(f"{RELEASED[vocabulary]} AND {light} CAUSES light")
+    return {"object": "_and_".join(training), "goal": "light", "functions": functions, "rules": rules}
+
+
+def _paper_mapping(
+    test: str, vocabularies: list[str], category: str, slip: bool, rng: random.Random
+) -> dict[str, object]:
+    """Return a participant's step-3 mapping of a test object: their words on the parts they fit.
+
+    Words of another category do not fit: only the part that makes the light gets a label.
+    """
+    fitting = [v for v in vocabularies if v in ("general", category)]
+    mapped: dict[str, list[str]] = {}
+    for vocabulary in fitting or vocabularies[:1]:
+        for role, word in zip(ROLES, WORDS[vocabulary], strict=True):
+            if fitting or role == "light":
+                for part in ROLE_PARTS[test][role]:
+                    mapped.setdefault(part, []).append(word)
+    if slip and len(mapped) > 1:
+        del mapped[rng.choice(sorted(mapped))]
+    return {"object": test, "functions": mapped}
+
+
+def paper_population(
+    conditions: Sequence[PaperCondition],
+    catalog: Catalog,
+    per_condition: int,
+    seed: int,
+    knobs: Mapping[str, Mapping[str, float]],
+) -> list[dict[str, object]]:
+    """Return synthetic participants of the paper's design, one line per test object, reproducible from ``seed``.
+
+    ``knobs[span]`` (span: 'one category' or 'both categories') sets, for participants trained on
+    one category or on both, the chance of wording the model in general terms (``abstract``;
+    otherwise in the training categories' own words, which fit no object of another category)
+    and of leaving a part out in step 3 (``slip``). Each line carries the participant's
+    condition, training objects, the test object and its position, and the model and mapping.
+    """
+    named = sorted({o for c in conditions for o in (*c.training, *c.tests)})
+    unknown = [object_id for object_id in named if object_id not in ROLE_PARTS]
+    if unknown:
+        raise UnknownScenarioError(
+            f"There is no synthetic scenario for {', '.join(unknown)}; there is one for: {', '.join(ROLE_PARTS)}."
+        )
+    category = {object_id: catalog.get(object_id).category for object_id in named}
+    rng = random.Random(seed)
+    lines: list[dict[str, object]] = []
+    for condition in conditions:
+        trained = list(dict.fromkeys(category[o] for o in condition.training))
+        settings = knobs["both categories" if len(trained) > 1 else "one category"]
+        for number in range(per_condition):
+            person = f"{condition.name}-{number:03d}".replace(" ", "_")
+            abstract = rng.random() < settings["abstract"]
+            vocabularies = ["general"] if abstract else trained
+            model = _paper_model(condition.training, vocabularies, category)
+            order = condition.tests if number % 2 == 0 else condition.tests[::-1]  # both test orders, alternating
+            for position, test in enumerate(order, start=1):
+                slip = rng.random() < settings["slip"]
+                lines.append(
+                    {
+                        "id": f"{person}-{test}",
+                        "participant_id": person,
+                        "condition": condition.name,
+                        "training": list(condition.training),
+                        "test": test,
+                        "position": position,
+                        "abstract": abstract,
+                        "model": model,
+                        "mapping": _paper_mapping(test, vocabularies, category[test], slip, rng),
+                        "errors": ["missed_part"] if slip else [],
+                    }
+                )
     return lines

@@ -111,7 +111,7 @@ def build_object(schema: ObjectSchema) -> AssemblyObject:
             for p in schema.parts
         ),
         fits=fits,
-        mechanism=tuple(Requirement(tuple(r.any), r.says) for r in schema.mechanism.requires),
+        mechanism=tuple(Requirement(tuple(r.any), r.says, r.function) for r in schema.mechanism.requires),
         mechanism_explanation=schema.mechanism.explanation,
     )
 

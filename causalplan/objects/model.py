@@ -124,10 +124,14 @@ class Fit:
 
 @dataclass(frozen=True)
 class Requirement:
-    """One condition of the true mechanism: at least one of ``any_of`` fits has been made."""
+    """One condition of the true mechanism: at least one of ``any_of`` fits has been made.
+
+    ``function`` is what the part making it does, in an expert's words (None: not given).
+    """
 
     any_of: tuple[str, ...]
     says: str
+    function: str | None = None
 
 
 @dataclass(frozen=True)

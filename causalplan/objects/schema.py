@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from typing import Annotated, Literal, Self
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
@@ -170,6 +171,19 @@ class FitSchema(_Strict):
 class RequirementSchema(_Strict):
     any: list[str] = Field(min_length=1, description="Fit ids; any one of them satisfies the requirement.")
     says: str = Field(min_length=1, max_length=200, description="The requirement in words.")
+    function: str | None = Field(
+        default=None,
+        min_length=1,
+        max_length=80,
+        description="What the part making it does, as an expert labels it (the reference model's function).",
+    )
+
+    @field_validator("function")
+    @classmethod
+    def _no_rule_keywords(cls, value: str | None) -> str | None:
+        if value is not None and re.search(r"(?<!\S)(and|causes)(?!\S)", value, re.IGNORECASE):
+            raise ValueError("a function label cannot hold the rule keywords AND or CAUSES as words")
+        return value
 
 
 class MechanismSchema(_Strict):

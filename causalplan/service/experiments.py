@@ -29,6 +29,7 @@ from causalplan.service.storage.experiments import ParticipantJourney
 from causalplan.service.storage.records import ExperimentRecord, ParticipantRecord
 from causalplan.studies.analysis import Analysis, analyse
 from causalplan.studies.design import Design, read_design
+from causalplan.studies.errors import InvalidExperimentError
 from causalplan.studies.export import (
     PARTICIPANT_COLUMNS,
     TRIAL_COLUMNS,
@@ -36,6 +37,7 @@ from causalplan.studies.export import (
     participant_dict,
     trial_dict,
 )
+from causalplan.studies.far_generalization import DesignError, template_conditions
 from causalplan.studies.recruitment import Recruitment, read_quotas, read_recruitment
 from causalplan.studies.results import Rate, transfer_rates
 from causalplan.studies.trials import ExportError, trial_rows
@@ -46,7 +48,13 @@ def create(session: Session, catalog: Catalog, body: ExperimentIn) -> Experiment
     options = body.model_dump(
         include={"counterbalance_training", "counterbalance_tests", "show_verdict", "tutorial", "robot_verdict"}
     )
-    name, design = read_design(body.name, [condition.model_dump() for condition in body.conditions], options, catalog)
+    conditions = [condition.model_dump() for condition in body.conditions]
+    if body.template is not None:  # the paper's design: made from the catalog, or the given conditions checked
+        try:
+            conditions = template_conditions(body.template, catalog, conditions)
+        except DesignError as exc:
+            raise InvalidExperimentError(exc.message, details=exc.details) from None
+    name, design = read_design(body.name, conditions, options, catalog)
     return store.create_experiment(session, name, body.description.strip(), design)
 
 

@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from causalplan.objects.catalog import Catalog
+from causalplan.studies.far_generalization import prediction_tests
 from causalplan.studies.misconceptions import Misconception, misconceptions
 from causalplan.studies.statistics import (
     ClusteredModel,
@@ -177,6 +178,8 @@ def _conclusion(comparison: Comparison) -> str:
     significant = comparison.p_holm < SIGNIFICANCE
     if comparison.alternative == "greater":
         verdict = "the prediction holds" if significant else "the prediction is not shown at this sample size"
+        if not significant and comparison.odds_ratio_interval[1] < 1:
+            verdict = "the opposite of the prediction: the first group transferred less"
     else:
         verdict = (
             "they differ, so models did not transfer equally to both"
@@ -205,7 +208,7 @@ def analyse(rows: Sequence[TrialRow], catalog: Catalog) -> Analysis:
     included = [row for row in rows if not row.excluded]
     decided = [row for row in included if row.outcome is not None]
     spans = training_spans(included, catalog)
-    comparisons = _comparisons(decided, spans) if decided else []
+    comparisons = holm([*_comparisons(decided, spans), *prediction_tests(decided, catalog)]) if decided else []
     clustered = clustered_logistic(
         [row.outcome or 0 for row in decided],
         {

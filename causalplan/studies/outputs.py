@@ -72,8 +72,9 @@ def plot(analysis: Analysis, path: Path) -> None:
         cells = [cell for cell in analysis.cells if cell.condition == condition and cell.share.rate is not None]
         xs = [tests.index(cell.test_object) + shift for cell in cells]
         rates = [100 * (cell.share.rate or 0.0) for cell in cells]
-        below = [100 * ((cell.share.rate or 0.0) - (cell.share.low or 0.0)) for cell in cells]
-        above = [100 * ((cell.share.high or 0.0) - (cell.share.rate or 0.0)) for cell in cells]
+        # Wilson bounds can miss a rate of 0 or 1 by a rounding error; a bar is never negative.
+        below = [max(0.0, 100 * ((cell.share.rate or 0.0) - (cell.share.low or 0.0))) for cell in cells]
+        above = [max(0.0, 100 * ((cell.share.high or 0.0) - (cell.share.rate or 0.0))) for cell in cells]
         axes.errorbar(xs, rates, yerr=[below, above], fmt="o", capsize=4, label=condition)
         for x, rate, cell in zip(xs, rates, cells, strict=True):
             axes.annotate(

@@ -145,6 +145,7 @@ def _experiment_values(form: Form) -> dict[str, Any]:
         "show_verdict": form.flag("show_verdict"),
         "tutorial": form.flag("tutorial"),
         "robot_verdict": form.flag("robot_verdict"),
+        "template": form.text("template", "", max_length=50) or None,
     }
 
 
@@ -167,7 +168,7 @@ async def create_experiment(request: Request, _: ResearchPageDep, session: Sessi
             problems.append(f"Condition {number} ('{condition['name']}') has no training object.")
         if not condition["tests"]:
             problems.append(f"Condition {number} ('{condition['name']}') has no test object.")
-    if not values["conditions"]:
+    if not values["conditions"] and not values["template"]:
         problems.append("Fill in at least one condition: a name, a training object and a test object.")
     if problems:
         return _new_form(request, catalog, values, problems)

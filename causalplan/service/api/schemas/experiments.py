@@ -30,7 +30,12 @@ class ExperimentIn(InputModel):
 
     name: str = Field(min_length=1, max_length=200)
     description: str = Field(default="", max_length=2000)
-    conditions: list[ConditionIn] = Field(min_length=1, max_length=8)
+    conditions: list[ConditionIn] = Field(default_factory=list, max_length=8)
+    template: Literal["far_generalization"] | None = Field(
+        default=None,
+        description="'far_generalization': the paper's far-generalization experiment, made from the catalog; "
+        "given conditions are checked against the paper's design instead.",
+    )
     counterbalance_training: bool = Field(default=True, description="Order the training objects by a Latin square.")
     counterbalance_tests: bool = Field(default=True, description="Order the test objects by a Latin square.")
     show_verdict: bool = Field(default=True, description="Show participants whether their model transferred.")
