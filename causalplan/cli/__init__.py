@@ -11,7 +11,7 @@ One module per family of commands; `common` holds what they share. A new command
 
 import click
 
-from causalplan.cli import comparison, crowd, fits, models, planning, serving, simulation, studies
+from causalplan.cli import comparison, crowd, exports, fits, models, planning, serving, simulation, studies
 
 
 @click.group(
@@ -48,6 +48,7 @@ for command in (
     crowd.consensus,
     crowd.population,
     crowd.crowd_curve,
+    exports.export_rddl_command,
 ):
     app.add_command(command)
 

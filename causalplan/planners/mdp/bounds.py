@@ -1,0 +1,159 @@
+"""An admissible bound for the heuristic search: no policy does better than this from a state.
+
+Think of each fit's outcome as drawn in advance (it is attempted at most once: afterwards it
+is made or unusable). A part is *necessary* when the goal cannot hold without it even if every
+other usable fit succeeded (the dead-end test with that part kept out). Every successful run
+attaches every necessary part. A failed attempt makes its connectors unusable, so a part is
+tried at most once per connector of its own, and at best with that connector's most reliable
+usable fit: success needs, for each necessary part, one of these at most one-per-connector
+draws to succeed. Giving each (part, connector) one draw makes these events independent across
+parts, with probability ``q = 1 - prod(1 - max p)`` over the part's connectors. Hence:
+
+* ``P(success) <= prod q`` over the necessary parts not yet attached;
+* every run that touches a necessary part spends an attempt on it, and a run that gives up
+  early still ends at -1, so the value ``2 P - 1 - cost E[attempts]`` is at most that of the
+  best *sequential test* of those parts: test them one at a time, stop at the first failure,
+  or do not start (value -1). A part whose usable fits all go onto one part not yet attached
+  is tested after that part (an out-forest of precedences). Two carriers of which one is
+  needed (an OR of the rules: the goal fails without both) are one test, passed if either
+  is. The cheapest order of tests with forest precedences is found by merging the best ratio
+  ``(1 - q) / expected cost`` into its parent (Horn's rule, as in Garey 1973).
+
+The bound is exact at the goal (1) and at dead ends (-1), and exact whenever the remaining
+parts have one fit each and can be attached in the cheapest order, which is what lets the
+search skip the orders that do not matter.
+"""
+
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass
+
+from causalplan.planners.mdp.model import CompiledMdp
+
+
+@dataclass(frozen=True)
+class Bound:
+    """Upper bounds at a state: on the value, and on the success probability of any policy."""
+
+    value: float
+    success: float
+    necessary: int  # part bits of the necessary parts not yet attached (passed on to the children)
+    dead_end: bool
+    goal: bool
+
+
+GOAL = Bound(1.0, 1.0, 0, False, True)
+DEAD_END = Bound(-1.0, 0.0, 0, True, False)
+
+
+def _bits(mask: int) -> list[int]:
+    bits = []
+    while mask:
+        low = mask & -mask
+        bits.append(low)
+        mask ^= low
+    return bits
+
+
+def cheapest_test_cost(chances: dict[int, float], parent: dict[int, int]) -> float:
+    """Return the least expected number of tests that find a failure or pass them all.
+
+    ``chances`` maps each test to its pass probability; ``parent`` maps a test to the test
+    that must come before it (a forest). Tests run until one fails.
+    """
+    head = {node: node for node in chances}  # union-find: node -> head of its group
+
+    def find(node: int) -> int:
+        while head[node] != node:
+            head[node] = head[head[node]]
+            node = head[node]
+        return node
+
+    passing = dict(chances)
+    cost = {node: 1.0 for node in chances}
+    version = {node: 0 for node in chances}
+    scheduled: set[int] = set()
+    root_passing, root_cost = 1.0, 0.0
+    heap = [(-(1.0 - q), node, 0) for node, q in chances.items()]
+    heapq.heapify(heap)
+    while heap:
+        _, node, seen = heapq.heappop(heap)
+        if head[node] != node or version[node] != seen or node in scheduled:
+            continue
+        up = parent.get(node)
+        group = None if up is None else find(up)
+        if group is None or group in scheduled:  # nothing left before it: it goes next
+            root_cost += root_passing * cost[node]
+            root_passing *= passing[node]
+            scheduled.add(node)
+            continue
+        cost[group] += passing[group] * cost[node]
+        passing[group] *= passing[node]
+        head[node] = group
+        version[group] += 1
+        heapq.heappush(heap, (-(1.0 - passing[group]) / cost[group], group, version[group]))
+    return root_cost
+
+
+def _usable_fits(compiled: CompiledMdp, bit: int, unusable: int, reach: int) -> list[int]:
+    return [
+        index
+        for index in compiled.fits_of_part.get(bit, ())
+        if not unusable >> index & 1 and compiled.fixed[index] & reach
+    ]
+
+
+def _chance(compiled: CompiledMdp, bit: int, unusable: int, reach: int) -> float:
+    """Return the bound on the chance that the part ever joins: one draw per connector of its own."""
+    best_by_connector: dict[str, float] = {}
+    for index in _usable_fits(compiled, bit, unusable, reach):
+        connector = compiled.moving_connector[index]
+        best_by_connector[connector] = max(best_by_connector.get(connector, 0.0), compiled.probability[index])
+    failing = 1.0
+    for chance in best_by_connector.values():
+        failing *= 1.0 - chance
+    return 1.0 - failing
+
+
+def bound(compiled: CompiledMdp, parts: int, unusable: int, known_necessary: int, step_cost: float) -> Bound:
+    """Return the bounds at the state with ``parts`` assembled and ``unusable`` fits.
+
+    ``known_necessary`` are parts known to be necessary at a predecessor (still necessary
+    here, as fewer fits remain); only the others are tested.
+    """
+    if compiled.goal_holds(parts):
+        return GOAL
+    reach = compiled.reachable_parts(parts, unusable)
+    if not compiled.goal_holds(reach):
+        return DEAD_END
+    necessary = known_necessary & reach & ~parts
+    for bit in _bits(reach & ~parts & ~necessary):
+        if not compiled.goal_holds(compiled.reachable_parts(parts, unusable, without=bit)):
+            necessary |= bit
+    chances: dict[int, float] = {}
+    parent: dict[int, int] = {}
+    for bit in _bits(necessary):
+        chances[bit] = _chance(compiled, bit, unusable, reach)
+        holders = {compiled.fixed[index] for index in _usable_fits(compiled, bit, unusable, reach)}
+        if len(holders) == 1 and (holder := holders.pop()) & necessary:
+            parent[bit] = holder
+    # Pairs of carriers of which one is needed (an OR in the rules): one test that passes if either does.
+    carriers = [bit for bit in _bits(reach & ~parts & ~necessary) if bit in compiled.functions_of_part]
+    paired = 0
+    for position, first in enumerate(carriers):
+        for second in carriers[position + 1 :]:
+            if (first | second) & paired:
+                continue
+            if not compiled.goal_holds(compiled.reachable_parts(parts, unusable, without=first | second)):
+                miss = (1.0 - _chance(compiled, first, unusable, reach)) * (
+                    1.0 - _chance(compiled, second, unusable, reach)
+                )
+                chances[first] = 1.0 - miss
+                paired |= first | second
+                break
+    success = 1.0
+    for chance in chances.values():
+        success *= chance
+    value = max(-1.0, 2.0 * success - 1.0 - step_cost * cheapest_test_cost(chances, parent))
+    return Bound(value, success, necessary, False, False)
