@@ -116,6 +116,66 @@ def _chance(compiled: CompiledMdp, bit: int, unusable: int, reach: int) -> float
     return 1.0 - failing
 
 
+def _lost_without(compiled: CompiledMdp, parts: int, unusable: int, reach: int) -> dict[int, int]:
+    """Return, for each reachable part not attached, the parts that cannot join without it (itself included).
+
+    These are the parts it dominates in the graph of usable fits from the attached parts
+    (iterative dominator sets as bit masks, visited in breadth-first order), the same answer
+    as ``reachable_parts(..., without=part)`` for all parts at once.
+    """
+    order: list[int] = []
+    seen, frontier = parts, parts
+    while frontier:
+        new = 0
+        for holder in _bits(frontier):
+            for index in compiled.fits_onto_part.get(holder, ()):
+                moving = compiled.moving[index]
+                if not unusable >> index & 1 and not (seen | new) & moving:
+                    new |= moving
+                    order.append(moving)
+        seen |= new
+        frontier = new
+    dominators = {bit: reach for bit in order}
+    changed = True
+    while changed:
+        changed = False
+        for bit in order:
+            common = reach
+            for index in compiled.fits_of_part.get(bit, ()):
+                holder = compiled.fixed[index]
+                if not unusable >> index & 1 and holder & reach:
+                    common &= 0 if holder & parts else dominators[holder]
+            common |= bit
+            if common != dominators[bit]:
+                dominators[bit] = common
+                changed = True
+    lost = {bit: 0 for bit in order}
+    for bit, above in dominators.items():
+        for dominator in _bits(above):
+            lost[dominator] |= bit
+    return lost
+
+
+def _cutting_pairs(compiled: CompiledMdp) -> list[tuple[int, int]]:
+    """Return pairs of carriers, neither necessary at the start, without both of which the goal cannot hold."""
+    if compiled.cutting_pairs is None:
+        parts = compiled.base
+        reach = compiled.reachable_parts(parts, 0)
+        carriers = [
+            bit
+            for bit in _bits(reach & ~parts)
+            if bit in compiled.functions_of_part
+            and compiled.goal_holds(compiled.reachable_parts(parts, 0, without=bit))
+        ]
+        compiled.cutting_pairs = [
+            (first, second)
+            for position, first in enumerate(carriers)
+            for second in carriers[position + 1 :]
+            if not compiled.goal_holds(compiled.reachable_parts(parts, 0, without=first | second))
+        ]
+    return compiled.cutting_pairs
+
+
 def bound(compiled: CompiledMdp, parts: int, unusable: int, known_necessary: int, step_cost: float) -> Bound:
     """Return the bounds at the state with ``parts`` assembled and ``unusable`` fits.
 
@@ -128,9 +188,12 @@ def bound(compiled: CompiledMdp, parts: int, unusable: int, known_necessary: int
     if not compiled.goal_holds(reach):
         return DEAD_END
     necessary = known_necessary & reach & ~parts
-    for bit in _bits(reach & ~parts & ~necessary):
-        if not compiled.goal_holds(compiled.reachable_parts(parts, unusable, without=bit)):
-            necessary |= bit
+    candidates = reach & ~parts & ~necessary
+    if candidates:
+        lost = _lost_without(compiled, parts, unusable, reach)
+        for bit in _bits(candidates):
+            if not compiled.goal_holds(reach & ~lost[bit]):
+                necessary |= bit
     chances: dict[int, float] = {}
     parent: dict[int, int] = {}
     for bit in _bits(necessary):
@@ -138,20 +201,15 @@ def bound(compiled: CompiledMdp, parts: int, unusable: int, known_necessary: int
         holders = {compiled.fixed[index] for index in _usable_fits(compiled, bit, unusable, reach)}
         if len(holders) == 1 and (holder := holders.pop()) & necessary:
             parent[bit] = holder
-    # Pairs of carriers of which one is needed (an OR in the rules): one test that passes if either does.
-    carriers = [bit for bit in _bits(reach & ~parts & ~necessary) if bit in compiled.functions_of_part]
+    # Pairs of carriers of which one is needed (an OR in the rules): one test that passes if
+    # either does. Found once at the start; a pair that cuts the goal there cuts it everywhere.
     paired = 0
-    for position, first in enumerate(carriers):
-        for second in carriers[position + 1 :]:
-            if (first | second) & paired:
-                continue
-            if not compiled.goal_holds(compiled.reachable_parts(parts, unusable, without=first | second)):
-                miss = (1.0 - _chance(compiled, first, unusable, reach)) * (
-                    1.0 - _chance(compiled, second, unusable, reach)
-                )
-                chances[first] = 1.0 - miss
-                paired |= first | second
-                break
+    for first, second in _cutting_pairs(compiled):
+        if (first | second) & (parts | necessary | paired) or not (first | second) & reach:
+            continue
+        miss = (1.0 - _chance(compiled, first, unusable, reach)) * (1.0 - _chance(compiled, second, unusable, reach))
+        chances[first] = 1.0 - miss
+        paired |= first | second
     success = 1.0
     for chance in chances.values():
         success *= chance

@@ -78,7 +78,9 @@ class CompiledMdp:
     functions_of_part: dict[int, frozenset[str]]
     fits_of_part: dict[int, list[int]]  # part bit -> the fits that attach it
     moving_connector: list[str]  # each fit's connector on its moving part
+    fits_onto_part: dict[int, list[int]]  # part bit -> the fits that attach something to it
     goal_cache: dict[int, bool] = field(default_factory=dict)
+    cutting_pairs: list[tuple[int, int]] | None = None  # worked out once by ``bounds``
 
     def goal_holds(self, parts: int) -> bool:
         """Return whether the model's goal holds with ``parts`` assembled."""
@@ -95,21 +97,22 @@ class CompiledMdp:
     def reachable_parts(self, parts: int, unusable: int, without: int = 0) -> int:
         """Return the parts that could still join if every usable fit succeeded (relaxed).
 
-        ``without`` is a part bit kept out (to ask whether a part is necessary).
+        ``without`` is a part bit kept out (to ask whether a part is necessary). A worklist
+        over the fits leaving each newly reached part: every fit is looked at once.
         """
-        changed = True
-        while changed:
-            changed = False
-            for index, moving in enumerate(self.moving):
-                if (
-                    not unusable >> index & 1
-                    and parts & self.fixed[index]
-                    and not parts & moving
-                    and not moving & without
-                ):
-                    parts |= moving
-                    changed = True
-        return parts
+        reached, frontier = parts, parts
+        while frontier:
+            new = 0
+            while frontier:
+                low = frontier & -frontier
+                frontier ^= low
+                for index in self.fits_onto_part.get(low, ()):
+                    moving = self.moving[index]
+                    if not unusable >> index & 1 and not (reached | new | without) & moving:
+                        new |= moving
+            reached |= new
+            frontier = new
+        return reached
 
     def applicable(self, parts: int, unusable: int) -> list[int]:
         """Return the fits that can be attempted now, in index order."""
@@ -159,6 +162,10 @@ def compile_mdp(task: PlanningTask, fits: tuple[Fit, ...]) -> CompiledMdp:
         base=part_bit[obj.base],
         functions_of_part={bit: frozenset(keys) for bit, keys in functions.items()},
         moving_connector=[fit.moving_connector for fit in fits],
+        fits_onto_part={
+            bit: [index for index, fit in enumerate(fits) if part_bit[fit.fixed_part] == bit]
+            for bit in {part_bit[fit.fixed_part] for fit in fits}
+        },
         fits_of_part={
             bit: [index for index, fit in enumerate(fits) if part_bit[fit.moving_part] == bit]
             for bit in {part_bit[fit.moving_part] for fit in fits}
