@@ -212,10 +212,10 @@ def test_a_planner_timeout_is_an_answer_and_is_not_cached(client: TestClient) ->
 
 def test_the_exact_mdp_declining_a_tiny_time_limit_is_an_answer(client: TestClient) -> None:
     # It was a 500: 'too_large' was not among PlanOut's statuses.
-    body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp", "time_limit": 1e-9}
+    body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp-exact", "time_limit": 1e-9}
     response = client.post("/v1/plans", json=body)
     assert response.status_code == 200, response.text
-    assert response.json()["status"] == "too_large" and response.json()["planner_used"] == "mdp"
+    assert response.json()["status"] == "too_large" and response.json()["planner_used"] == "mdp-exact"
 
 
 def _post_raw(client: TestClient, body: bytes) -> Any:
