@@ -1,7 +1,9 @@
 """What the MDP optimises: the highest success probability, or the fewest expected attempts.
 
 ``probability`` (the default, as the paper) maximises the value ``2 P - 1 - cost E[attempts]``
-with a tiny step cost: the most reliable policy, ties broken by fewer attempts.
+with a step cost scaled to the task (``search.tie_breaking_step_cost``) so that it only breaks
+ties: the most reliable policy, to a relative precision of ``STEP_COST / 2``, then the fewest
+attempts.
 
 ``attempts`` asks for the fewest expected attempts among policies that succeed with at least
 a required probability. It is solved by Lagrangian relaxation: a larger step cost trades
@@ -21,8 +23,8 @@ from collections.abc import Callable
 from causalplan.errors import CausalPlanError
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.mdp.exact import solve_mdp
-from causalplan.planners.mdp.model import STEP_COST, MdpSolution, Objective, Optimality
-from causalplan.planners.mdp.search import solve_mdp_search
+from causalplan.planners.mdp.model import MdpSolution, Objective, Optimality
+from causalplan.planners.mdp.search import solve_mdp_search, tie_breaking_step_cost
 from causalplan.planners.result import PlanStatus
 
 Solver = Callable[[PlanningTask, float, float], MdpSolution]
@@ -81,7 +83,8 @@ def solve_for(
     """Solve the task's MDP for ``objective`` with the heuristic search (or the exact solver)."""
     solve: Solver = solve_mdp if exact else solve_mdp_search
     deadline = time.monotonic() + time_limit
-    reliable = solve(task, time_limit, STEP_COST)
+    step_cost = tie_breaking_step_cost(task)
+    reliable = solve(task, max(0.0, deadline - time.monotonic()), step_cost)
     if objective is Objective.PROBABILITY:
         return reliable
     assert required_success is not None
@@ -100,7 +103,7 @@ def solve_for(
             + (" (a lower bound: the limit came first)." if reliable.optimality is Optimality.BOUNDED else "."),
         )
     best = reliable
-    low, high = math.log(STEP_COST), math.log(MAX_STEP_COST)
+    low, high = math.log(step_cost), math.log(MAX_STEP_COST)
     for _ in range(BISECTIONS):
         remaining = deadline - time.monotonic()
         if remaining <= 0:

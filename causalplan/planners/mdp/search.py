@@ -36,6 +36,7 @@ from causalplan.planners.result import PlanStatus
 
 MAX_NODES = 1_000_000
 SEARCH_SHARE = 0.9
+MIN_SUCCESS_SCALE = 1e-9
 TIE = 1e-12
 """A new best attempt must beat the old by more than this (the exact solver's rule: first index wins ties)."""
 
@@ -170,6 +171,20 @@ def _default_success(compiled: CompiledMdp, state: State, step_cost: float) -> f
     return chance if compiled.goal_holds(compiled.parts_of((made, failed))[0]) else 0.0
 
 
+def tie_breaking_step_cost(task: PlanningTask) -> float:
+    """Return a step cost that only breaks ties between policies of (nearly) equal success probability.
+
+    A fixed step cost outweighs the goal's reward where success is unlikely, and the value's
+    optimum would then rush into a dead end. Scaled by a lower bound on the best success
+    probability (the default policy's all-success path) over the number of relevant fits, all
+    attempts together cost at most ``STEP_COST`` times that probability, so a policy is only
+    preferred to a more reliable one when it is less reliable by under ``STEP_COST / 2`` of it.
+    """
+    compiled = compile_mdp(task, relevant_fits(task))
+    reachable = _default_success(compiled, (0, 0), STEP_COST)
+    return STEP_COST * max(reachable, MIN_SUCCESS_SCALE) / max(1, len(compiled.fits))
+
+
 def _evaluate(
     search: _Search, root: _Node, deadline: float
 ) -> tuple[float, float, dict[State, int], dict[State, float]]:
@@ -268,6 +283,10 @@ def _solution(search: _Search, root: _Node, optimality: Optimality, time_limit: 
             fits=fits,
         )
     success, attempts, table, successes = _evaluate(search, root, deadline)
+    if optimality is Optimality.BOUNDED:
+        fallback = _default_success(compiled, (0, 0), step_cost)
+        if fallback > success:  # the default policy alone is provably better than what was bounded
+            success, table, successes = fallback, {}, {}
     message = ""
     draft = MdpSolution(PlanStatus.SOLVED, fits=fits, policy_table=table)
     actions = _all_success_path(compiled, draft, step_cost)
