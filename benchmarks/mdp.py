@@ -2,14 +2,15 @@
 
     python benchmarks/mdp.py [--sizes 4,8,...] [--seed 0] [--limit 30] [--exact-limit 10]
 
-Both MDP solvers run as the planners do (``objective.solve_for``: the most reliable policy, the
-step cost only breaking ties). For each synthetic object, with random fit probabilities in
-[0.7, 1], it prints the parts and fits that matter to the model, then for the heuristic
-search (at the planner's default time limit) its status, states expanded, wall time, its success probability with the bound gap when
-the limit came first; for the exact solver (where it runs) its states and time; and Fast
-Downward's optimal planner (fd-opt) on the same task, timed in the same run, as the reference.
-Ratios are heuristic against exact (states, time) and heuristic against fd-opt (time). It ends
-with the largest number of relevant parts solved to proved optimality, and with bounds.
+Both MDP solvers run as the planners do (``objective.solve_for``: the most reliable policy,
+the step cost only breaking ties). For each synthetic object, with random fit probabilities
+in [0.7, 1], it prints the parts and fits that matter to the model; for the heuristic search
+(at the planner's default time limit) its status, states expanded, wall time, and success
+probability with its bounds when the limit came first; for the exact solver (where it runs)
+its states and time; and Fast Downward's optimal planner (fd-opt) on the same task, timed in
+the same run, as the reference. Ratios are exact against heuristic (states, time) and
+heuristic against fd-opt (time). It ends with the largest number of relevant parts solved to
+proved optimality, and with bounds.
 """
 
 from __future__ import annotations
