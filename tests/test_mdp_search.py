@@ -13,6 +13,7 @@ from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners.mdp import Optimality, solve_mdp, solve_mdp_search
 from causalplan.planners.mdp.bounds import bound, cheapest_test_cost
 from causalplan.planners.mdp.model import STEP_COST, compile_mdp, relevant_fits
+from causalplan.planners.mdp.objective import solve_for
 from causalplan.planners.result import PlanStatus
 from tests.conftest import example_mapping, example_model
 from tests.test_pipeline import PAPER_PLANS
@@ -112,3 +113,25 @@ def test_an_unreachable_goal_is_unsolvable(catalog: Catalog) -> None:
     mapping = example_mapping("paper/failed_flashlight_mapping.yaml", catalog)
     solution = solve_mdp_search(build_task(model, catalog.get(mapping.object_id), mapping))
     assert solution.status is PlanStatus.UNSOLVABLE and solution.success_probability == 0.0
+
+
+@pytest.mark.parametrize(("parts", "seed"), [(8, 0), (12, 1), (16, 2)])
+def test_as_planned_both_solvers_agree_with_the_tie_breaking_step_cost(parts: int, seed: int) -> None:
+    task = _with_probabilities(synthetic_task(parts, seed), seed)
+    exact, heuristic = solve_for(task, 60.0, exact=True), solve_for(task, 60.0)
+    assert exact.success_probability is not None and heuristic.success_probability is not None
+    assert abs(exact.success_probability - heuristic.success_probability) < 1e-9
+    assert exact.actions == heuristic.actions
+
+
+def test_the_most_reliable_policy_is_not_traded_for_fewer_attempts_when_success_is_unlikely() -> None:
+    # Every fit succeeds with 0.3, so success is unlikely: a fixed step cost of 0.001 an attempt
+    # outweighs it, and the value's optimum rushes into a dead end; the tie-breaking cost does not.
+    base = synthetic_task(16, 0)
+    fits = tuple(dataclasses.replace(fit, probability=0.3) for fit in base.obj.fits)
+    task = dataclasses.replace(base, obj=dataclasses.replace(base.obj, fits=fits))
+    assert solve_mdp_search(task).success_probability == solve_mdp(task).success_probability == 0.0
+    solution = solve_for(task, 60.0)
+    assert solution.status is PlanStatus.SOLVED and solution.success_probability is not None
+    assert solution.success_probability > 0.0
+    assert solution.success_probability == pytest.approx(solve_for(task, 60.0, exact=True).success_probability)
