@@ -54,7 +54,7 @@ class _Node:
         self.success = estimate.success  # upper bound on the success probability of any policy
         self.necessary = estimate.necessary
         self.solved = estimate.goal or estimate.dead_end
-        self.action = -1
+        self.action = -1  # position in ``children`` of the best attempt
         self.children: list[tuple[int, _Node, _Node]] | None = None  # (fit, success, failure)
 
 
@@ -103,7 +103,6 @@ class _Search:
         """Set the node's best attempt and bounds from its children; label it solved when exact."""
         assert node.children is not None
         best_value, best_success, best = -2.0, 0.0, -1
-        solved = True
         for position, (index, success, failure) in enumerate(node.children):
             p = self.c.probability[index]
             q = -self.step_cost + p * success.value + (1 - p) * failure.value
