@@ -16,7 +16,9 @@ parts, with probability ``q = 1 - prod(1 - max p)`` over the part's connectors. 
   or do not start (value -1). A part whose usable fits all go onto one part not yet attached
   is tested after that part (an out-forest of precedences). Two carriers of which one is
   needed (an OR of the rules: the goal fails without both) are one test, passed if either
-  is. The cheapest order of tests with forest precedences is found by merging the best ratio
+  is. A route onto a holder that must join first also needs that holder (and its own single
+  holder, and so on) to join: their chances multiply the route's, as long as no other test
+  draws on the same holders. The cheapest order of tests with forest precedences is found by merging the best ratio
   ``(1 - q) / expected cost`` into its parent (Horn's rule, as in Garey 1973).
 
 The bound is exact at the goal (1) and at dead ends (-1), and exact whenever the remaining
@@ -116,6 +118,42 @@ def _chance(compiled: CompiledMdp, bit: int, unusable: int, reach: int) -> float
     return 1.0 - failing
 
 
+def _chained_chance(compiled: CompiledMdp, bit: int, settled: int, unusable: int, reach: int) -> tuple[float, int]:
+    """Return a part's chance bound with each route's holder chain counted, and the chain's parts.
+
+    A route onto a holder that is not ``settled`` (attached, or counted as necessary) needs
+    that holder to join first: its chance, and its own holder's while it has only one.
+    Per connector of the part one draw serves every route; the holders' chances are of
+    increasing events, so a union of them is bounded by one minus the product of the misses
+    (Harris-FKG).
+    """
+    routes: dict[str, list[tuple[float, float]]] = {}
+    chain = 0
+    for index in _usable_fits(compiled, bit, unusable, reach):
+        factor, holder, walked = 1.0, compiled.fixed[index], 0
+        while not holder & (settled | walked):
+            walked |= holder
+            factor *= _chance(compiled, holder, unusable, reach)
+            holders = {compiled.fixed[above] for above in _usable_fits(compiled, holder, unusable, reach)}
+            if len(holders) != 1:
+                break
+            holder = holders.pop()
+        chain |= walked
+        routes.setdefault(compiled.moving_connector[index], []).append((compiled.probability[index], factor))
+    failing = 1.0
+    for options in routes.values():
+        # One draw W serves the connector: it succeeds when W < the best p among the routes
+        # whose holders joined, so P <= sum over p's layers of P(some route that good is open).
+        options.sort(reverse=True)
+        chance, closed = 0.0, 1.0
+        for position, (probability, open_chance) in enumerate(options):
+            closed *= 1.0 - open_chance
+            below = options[position + 1][0] if position + 1 < len(options) else 0.0
+            chance += (probability - below) * (1.0 - closed)
+        failing *= 1.0 - chance
+    return 1.0 - failing, chain
+
+
 def _lost_without(compiled: CompiledMdp, parts: int, unusable: int, reach: int) -> dict[int, int]:
     """Return, for each reachable part not attached, the parts that cannot join without it (itself included).
 
@@ -194,15 +232,14 @@ def bound(compiled: CompiledMdp, parts: int, unusable: int, known_necessary: int
         for bit in _bits(candidates):
             if not compiled.goal_holds(reach & ~lost[bit]):
                 necessary |= bit
-    chances: dict[int, float] = {}
     parent: dict[int, int] = {}
     for bit in _bits(necessary):
-        chances[bit] = _chance(compiled, bit, unusable, reach)
         holders = {compiled.fixed[index] for index in _usable_fits(compiled, bit, unusable, reach)}
         if len(holders) == 1 and (holder := holders.pop()) & necessary:
             parent[bit] = holder
     # Pairs of carriers of which one is needed (an OR in the rules): one test that passes if
     # either does. Found once at the start; a pair that cuts the goal there cuts it everywhere.
+    chances: dict[int, float] = {}
     paired = 0
     for first, second in _cutting_pairs(compiled):
         if (first | second) & (parts | necessary | paired) or not (first | second) & reach:
@@ -210,6 +247,19 @@ def bound(compiled: CompiledMdp, parts: int, unusable: int, known_necessary: int
         miss = (1.0 - _chance(compiled, first, unusable, reach)) * (1.0 - _chance(compiled, second, unusable, reach))
         chances[first] = 1.0 - miss
         paired |= first | second
+    # A necessary part's routes through holders that must join first count those holders'
+    # chances, up to the first holder another test draws on too (the tests stay independent:
+    # a second walk stops earlier, so it only keeps holders no one else claimed).
+    chained = {bit: _chained_chance(compiled, bit, parts | necessary, unusable, reach) for bit in _bits(necessary)}
+    shared = paired
+    claimed = 0
+    for _, chain in chained.values():
+        shared |= claimed & chain
+        claimed |= chain
+    for bit, (chance, chain) in chained.items():
+        if chain & shared:  # walk again, stopping before the holders others draw on too
+            chance = _chained_chance(compiled, bit, parts | necessary | shared, unusable, reach)[0]
+        chances[bit] = chance
     success = 1.0
     for chance in chances.values():
         success *= chance
