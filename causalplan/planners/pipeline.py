@@ -235,6 +235,8 @@ def _run(task: PlanningTask, planner: str, time_limit: float, asked: _Asked) -> 
             + "."
         )
     )
+    if outcome.message:  # what the planner says about its answer, e.g. an anytime MDP's bounds
+        message = f"{outcome.message} {message}".strip()
     return PlanResult(
         PlanStatus.SOLVED,
         planner,
