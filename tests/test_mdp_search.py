@@ -14,6 +14,7 @@ from causalplan.planners.mdp import Optimality, solve_mdp, solve_mdp_search
 from causalplan.planners.mdp.bounds import bound, cheapest_test_cost
 from causalplan.planners.mdp.model import STEP_COST, compile_mdp, relevant_fits
 from causalplan.planners.mdp.objective import solve_for
+from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanStatus
 from tests.conftest import example_mapping, example_model
 from tests.test_pipeline import PAPER_PLANS
@@ -135,3 +136,14 @@ def test_the_most_reliable_policy_is_not_traded_for_fewer_attempts_when_success_
     assert solution.status is PlanStatus.SOLVED and solution.success_probability is not None
     assert solution.success_probability > 0.0
     assert solution.success_probability == pytest.approx(solve_for(task, 60.0, exact=True).success_probability)
+
+
+def test_an_anytime_plan_says_so_in_its_json() -> None:
+    task = _with_probabilities(synthetic_task(120, 0), 120)
+    data = plan_task(task, "mdp", 2.0).as_dict()
+    assert data["status"] == "solved" and data["optimality"] == "bounded" and data["objective"] == "probability"
+    low, high = data["success_probability_bounds"]  # type: ignore[misc]
+    assert 0.0 <= low <= high <= 1.0 and data["bound_gap"] == pytest.approx(
+        high - low, abs=2e-6
+    )  # each rounded to 6 places
+    assert data["expected_actions"] is None and "no policy does better" in str(data["message"])
