@@ -1,12 +1,16 @@
-"""How far the exact MDP scales: relevant parts 4 -> 16 and beyond, until it says too_large.
+"""The MDP at scale: heuristic search (LAO*, planner ``mdp``) against the exact solver and fd-opt.
 
-    python benchmarks/mdp.py [--sizes 4,6,...] [--seed 0] [--limit 10]
+    python benchmarks/mdp.py [--sizes 4,8,...] [--seed 0] [--limit 30] [--exact-limit 10]
 
-For each synthetic object it prints the parts that matter to the model (the MDP's restricted
-search), the states it solved, its wall time, and the ratio against Fast Downward's optimal
-planner (fd-opt) on the same task, timed in the same run. Each size runs twice: with every
-fit certain (p = 1, where both must find plans of the same length) and with random fit
-probabilities in [0.7, 1] (where only the MDP accounts for risk).
+Both MDP solvers run as the planners do (``objective.solve_for``: the most reliable policy,
+the step cost only breaking ties). For each synthetic object, with random fit probabilities
+in [0.7, 1], it prints the parts and fits that matter to the model; for the heuristic search
+(at the planner's default time limit) its status, states expanded, wall time, and success
+probability with its bounds when the limit came first; for the exact solver (where it runs)
+its states and time; and Fast Downward's optimal planner (fd-opt) on the same task, timed in
+the same run, as the reference. Ratios are exact against heuristic (states, time) and
+heuristic against fd-opt (time). It ends with the largest number of relevant parts solved to
+proved optimality, and with bounds.
 """
 
 from __future__ import annotations
@@ -14,8 +18,9 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import random
-import statistics
 import time
+from collections.abc import Callable
+from typing import TypeVar
 
 from rich.console import Console
 from rich.table import Table
@@ -23,94 +28,100 @@ from rich.table import Table
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners import fd
-from causalplan.planners.mdp import relevant_fits, solve_mdp
+from causalplan.planners.fd.solve import DEFAULT_TIME_LIMIT
+from causalplan.planners.mdp import Optimality, relevant_fits
+from causalplan.planners.mdp.objective import solve_for
 from causalplan.planners.pipeline import plan_task
-from causalplan.planners.result import PlanResult
+from causalplan.planners.result import PlanResult, PlanStatus
+
+T = TypeVar("T")
 
 
-def with_probabilities(task: PlanningTask, seed: int, certain: bool) -> PlanningTask:
-    """Return the task with every fit certain, or with random probabilities in [0.7, 1]."""
+def with_probabilities(task: PlanningTask, seed: int) -> PlanningTask:
+    """Return the task with random fit probabilities in [0.7, 1]."""
     rng = random.Random(seed)
-    fits = tuple(
-        dataclasses.replace(fit, probability=1.0 if certain else round(rng.uniform(0.7, 1.0), 2))
-        for fit in task.obj.fits
-    )
+    fits = tuple(dataclasses.replace(fit, probability=round(rng.uniform(0.7, 1.0), 2)) for fit in task.obj.fits)
     return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
 
 
 def fresh_plan(task: PlanningTask, planner: str) -> PlanResult:
     """Plan without Fast Downward's answer cache, so every timed run is a real solve."""
     fd.clear_solve_cache()
-    return plan_task(task, planner, 60.0)
+    return plan_task(task, planner, 60.0, val=False)
 
 
-def timed(function, repeat: int):  # type: ignore[no-untyped-def]
-    """Return the last result of ``function()`` and the median wall time of ``repeat`` calls."""
-    times, result = [], None
-    for _ in range(repeat):
-        started = time.perf_counter()
-        result = function()
-        times.append(time.perf_counter() - started)
-    return result, statistics.median(times)
+def timed(function: Callable[[], T]) -> tuple[T, float]:
+    """Return ``function()`` and its wall time."""
+    started = time.perf_counter()
+    result = function()
+    return result, time.perf_counter() - started
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--sizes", default="4,6,8,10,12,16,20,24,28,32,40")
+    parser.add_argument("--sizes", default="4,8,12,16,20,24,28,40,80,120,200,280")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--limit", type=float, default=10.0, help="the MDP's time limit, seconds")
-    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--limit", type=float, default=DEFAULT_TIME_LIMIT, help="the heuristic MDP's time limit")
+    parser.add_argument("--exact-limit", type=float, default=10.0, help="the exact MDP's time limit")
     args = parser.parse_args()
-    console = Console(width=160)
+    console = Console(width=200)
     table = Table(
         "parts",
         "relevant parts/fits",
-        "fits p",
-        "status",
-        "states",
-        "MDP",
-        "fd-opt",
-        "MDP/fd-opt",
-        "length MDP/fd-opt",
-        "P(success) MDP/fd-opt",
-        title=f"Exact MDP scaling (synthetic objects, seed {args.seed}, medians of {args.repeat})",
+        "mdp status",
+        "expanded",
+        "mdp time",
+        "P(success) [bounds]",
+        "mdp-exact",
+        "exact states",
+        "exact time",
+        "states exact/mdp",
+        "time exact/mdp",
+        "fd-opt time",
+        "mdp/fd-opt time",
+        title=f"MDP at scale: fits p in [0.7, 1] (synthetic objects, seed {args.seed}; "
+        f"mdp limit {args.limit:g} s, exact {args.exact_limit:g} s)",
     )
-    first_too_large: int | None = None
-    largest_solved = 0
+    largest_optimal = largest_bounded = 0
     for size in (int(item) for item in args.sizes.split(",")):
-        base = synthetic_task(size, args.seed)
-        fits = relevant_fits(base)
-        parts = {part for fit in fits for part in (fit.moving_part, fit.fixed_part)}
-        for certain in (True, False):
-            task = with_probabilities(base, args.seed + size, certain)
-            solution, mdp_seconds = timed(lambda task=task: solve_mdp(task, args.limit), args.repeat)
-            optimal, fd_seconds = timed(lambda task=task: fresh_plan(task, "fd-opt"), 1 if not certain else args.repeat)
-            status = solution.status.value
-            if status == "solved":
-                largest_solved = max(largest_solved, len(parts))
-            elif status == "too_large" and first_too_large is None:
-                first_too_large = len(parts)
-            mdp_probability = "-" if solution.success_probability is None else f"{solution.success_probability:.3f}"
-            fd_probability = "-" if optimal.success_probability is None else f"{optimal.success_probability:.3f}"
-            mdp_length = len(solution.actions) if solution.actions else "-"
-            fd_length = len(optimal.steps) if optimal.has_plan else "-"
-            table.add_row(
-                str(size),
-                f"{len(parts)} / {len(fits)}",
-                "1" if certain else "0.7-1",
-                status,
-                f"{solution.states:,}",
-                f"{mdp_seconds * 1000:.1f} ms",
-                f"{fd_seconds * 1000:.1f} ms",
-                f"{mdp_seconds / fd_seconds:.2f}x",
-                f"{mdp_length} / {fd_length}",
-                f"{mdp_probability} / {fd_probability}",
-            )
+        task = with_probabilities(synthetic_task(size, args.seed), args.seed + size)
+        fits = relevant_fits(task)
+        parts = len({part for fit in fits for part in (fit.moving_part, fit.fixed_part)})
+        heuristic, heuristic_seconds = timed(lambda task=task: solve_for(task, args.limit))  # type: ignore[misc]
+        exact, exact_seconds = timed(lambda task=task: solve_for(task, args.exact_limit, exact=True))  # type: ignore[misc]
+        optimal, fd_seconds = timed(lambda task=task: fresh_plan(task, "fd-opt"))  # type: ignore[misc]
+        probability = "-"
+        if heuristic.status is PlanStatus.SOLVED and heuristic.success_probability is not None:
+            probability = f"{heuristic.success_probability:.4g}"
+            if heuristic.optimality is Optimality.BOUNDED:
+                probability += f" [{heuristic.success_probability:.4g}, {heuristic.success_upper:.4g}]"
+                largest_bounded = max(largest_bounded, parts)
+            else:
+                largest_optimal = max(largest_optimal, parts)
+        exact_ran = exact.status is PlanStatus.SOLVED
+        if exact_ran and heuristic.optimality is Optimality.OPTIMAL:
+            assert exact.success_probability is not None and heuristic.success_probability is not None
+            assert abs(exact.success_probability - heuristic.success_probability) < 1e-9
+        table.add_row(
+            str(size),
+            f"{parts} / {len(fits)}",
+            f"{heuristic.status.value} ({heuristic.optimality.value})",
+            f"{heuristic.states:,}",
+            f"{heuristic_seconds:.2f} s",
+            probability,
+            exact.status.value,
+            f"{exact.states:,}",
+            f"{exact_seconds:.2f} s",
+            f"{exact.states / max(1, heuristic.states):.1f}x" if exact_ran else "-",
+            f"{exact_seconds / heuristic_seconds:.2f}x" if exact_ran else "-",
+            f"{fd_seconds * 1000:.0f} ms" + ("" if optimal.has_plan else f" ({optimal.status.value})"),
+            f"{heuristic_seconds / fd_seconds:.1f}x",
+        )
     console.print(table)
     console.print(
-        f"Largest number of relevant parts solved exactly: {largest_solved} (target: at least 16); "
-        f"first too_large at {first_too_large if first_too_large is not None else 'none of these sizes'} "
-        "relevant parts."
+        f"Largest number of relevant parts solved to proved optimality by mdp: {largest_optimal}; "
+        f"largest answered with bounds (anytime) within the limit: {largest_bounded or 'none'} "
+        "(goal: 80 relevant parts solved)."
     )
 
 

@@ -328,7 +328,7 @@ def test_plan_fd_opt() -> None:
 def test_plan_unknown_planner_is_exit_2_with_the_choices() -> None:
     result = run("plan", DESK_LAMP, "--planner", "nope")
     assert result.exit_code == 2
-    assert "Unknown planner 'nope'; choose one of: auto, fd, fd-opt, mdp, up:fast-downward" in result.stderr
+    assert "Unknown planner 'nope'; choose one of: auto, fd, fd-opt, mdp, mdp-exact, up:fast-downward" in result.stderr
     assert_no_traceback(result)
 
 

@@ -140,7 +140,7 @@ def test_warnings_come_with_the_plan(client: TestClient) -> None:
 
 
 def test_invalid_models_and_mappings_are_422_with_the_cli_codes(client: TestClient) -> None:
-    error = error_of(client.post("/v1/plans", json={"model": {**DESK_LAMP, "object": "lamp"}}), 422)
+    error = error_of(client.post("/v1/plans", json={"model": {**DESK_LAMP, "object": "desk_lam"}}), 422)
     assert error["code"] == "invalid_model"
     assert [d["code"] for d in error["details"]["model"]["errors"]] == ["unknown_object"]
     assert error["details"]["model"]["errors"][0]["hint"] == "Did you mean 'desk_lamp'?"
@@ -212,10 +212,10 @@ def test_a_planner_timeout_is_an_answer_and_is_not_cached(client: TestClient) ->
 
 def test_the_exact_mdp_declining_a_tiny_time_limit_is_an_answer(client: TestClient) -> None:
     # It was a 500: 'too_large' was not among PlanOut's statuses.
-    body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp", "time_limit": 1e-9}
+    body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp-exact", "time_limit": 1e-9}
     response = client.post("/v1/plans", json=body)
     assert response.status_code == 200, response.text
-    assert response.json()["status"] == "too_large" and response.json()["planner_used"] == "mdp"
+    assert response.json()["status"] == "too_large" and response.json()["planner_used"] == "mdp-exact"
 
 
 def _post_raw(client: TestClient, body: bytes) -> Any:

@@ -15,6 +15,7 @@ from causalplan.cli import (
     comparison,
     crowd,
     explaining,
+    exports,
     fits,
     models,
     planning,
@@ -64,6 +65,7 @@ for command in (
     crowd.population,
     crowd.crowd_curve,
     synthetic.synthetic_study,
+    exports.export_rddl_command,
 ):
     app.add_command(command)
 

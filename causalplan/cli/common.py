@@ -36,8 +36,9 @@ planner_option = click.option(
     "--planner",
     "-p",
     default="auto",
-    help="auto: Fast Downward, or the exact MDP when a fit may fail or FD fails. Also fd (LAMA, fast), "
-    "fd-opt (shortest plan), mdp (most reliable plan), up:<engine>. `causalplan planners` lists them.",
+    help="auto: Fast Downward when every fit that matters is certain, else the MDP (each falls back to the "
+    "other). Also fd (LAMA, fast), fd-opt (shortest plan), mdp (most reliable plan, heuristic search), "
+    "mdp-exact (the same over every state), up:<engine>. `causalplan planners` lists them.",
 )
 time_limit_option = click.option(
     "--time-limit",
@@ -223,10 +224,13 @@ def print_plan(result: PlanResult) -> None:
     replayed = dim(f"{len(result.steps)} step(s) by {result.planner_used}, replayed: goal holds under the model;")
     say(f"{replayed} the real object works: {mark(result.valid_under_true_mechanism)}")
     if result.success_probability is not None and result.success_probability < 1.0:
-        say(
-            f"Success probability {result.success_probability:.4f} (some fits may fail); expected attempts "
-            f"{result.expected_actions:.2f}."
-        )
+        attempts = "unknown" if result.expected_actions is None else f"{result.expected_actions:.2f}"
+        say(f"Success probability {result.success_probability:.4f} (some fits may fail); expected attempts {attempts}.")
+    if result.mdp is not None:
+        solved = "the highest success probability"
+        if result.mdp.get("objective") == "attempts":
+            solved = f"the fewest expected attempts for success probability {result.mdp.get('required_success')}"
+        say(dim(f"Solved for {solved}; {result.mdp.get('optimality')}."))
     checked = ", ".join(f"{name} {verdict}" for name, verdict in result.validated_by.items() if name != "replay")
     if checked:
         say(dim(f"Checked by {checked}."))

@@ -44,7 +44,7 @@ def _int_list(text: str, what: str) -> list[int]:
 @click.option(
     "--planners",
     "planners_option",
-    default="fd,fd-opt,mdp,up:fast-downward",
+    default="fd,fd-opt,mdp,mdp-exact,up:fast-downward",
     help="Comma-separated planners (see `causalplan planners`).",
 )
 @click.option("--synthetic", help="Also synthetic objects of these sizes, e.g. 10,40,80.")

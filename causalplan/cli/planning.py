@@ -50,6 +50,18 @@ if TYPE_CHECKING:
     type=FILE,
     help="Fit probabilities to use instead of the catalog's (the --out file of `causalplan estimate-fits`).",
 )
+@click.option(
+    "--objective",
+    type=click.Choice(["probability", "attempts"]),
+    default="probability",
+    help="What the MDP planners optimise: the highest success probability, or the fewest expected "
+    "attempts that reach --required-success.",
+)
+@click.option(
+    "--required-success",
+    type=click.FloatRange(0.0, 1.0, min_open=True),
+    help="The success probability the 'attempts' objective must reach.",
+)
 @json_option
 @catalog_option
 def plan(
@@ -61,6 +73,8 @@ def plan(
     up_validate: bool,
     val: bool,
     catalog_overlay: Path | None,
+    objective: str,
+    required_success: float | None,
     as_json: bool,
     catalog: tuple[Path, ...],
 ) -> None:
@@ -91,6 +105,8 @@ def plan(
             include_pddl=pddl_out is not None,
             validate_up=up_validate,
             val=val,
+            objective=objective,
+            required_success=required_success,
         )
     if pddl_out is not None and result.pddl is not None:
         write_pddl(pddl_out, result.pddl["domain"], result.pddl["problem"])

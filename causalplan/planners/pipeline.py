@@ -1,10 +1,12 @@
 """The planning pipeline: choose a planner, search, check the plan, and say what came of it.
 
 Planners (a plain registry, ``SEARCHES``): ``fd`` and ``fd-opt`` run Fast Downward on our PDDL
-with derived predicates; ``mdp`` solves the paper's probabilistic MDP exactly; ``up:<engine>``
-solves the axiom-free unified-planning formulation with that engine; ``auto`` (the default)
-runs FD and falls back to the MDP when a fit in play may fail (FD's plans are blind to risk)
-or when FD ends with an error, a timeout or is unavailable. Every plan, whatever its route, is
+with derived predicates; ``mdp`` solves the paper's probabilistic MDP by heuristic search
+(improved LAO*) and ``mdp-exact`` over every reachable state, to the same optimum;
+``up:<engine>`` solves the axiom-free unified-planning formulation with that engine; ``auto``
+(the default) runs FD when every fit that matters is certain, the MDP otherwise (FD's plans are
+blind to risk), and falls back to the other when the first ends with an error, a timeout or
+is unavailable. Every plan, whatever its route, is
 replayed on the object before it is returned, and checked by VAL on the readable PDDL when
 asked (``val=True``).
 """
@@ -30,12 +32,22 @@ UP_ENGINES = ("fast-downward", "fast-downward-opt", "pyperplan", "pyperplan-opt"
 """unified-planning engines installed with causalplan (``up-*`` packages)."""
 
 Actions = tuple[tuple[str, tuple[str, ...]], ...]
-Search = Callable[[PlanningTask, float, dict[str, float]], SearchOutcome]
-"""A planner: the task, its time limit and a dict for stage times in; its outcome out."""
+
+
+@dataclass(frozen=True)
+class Objective:
+    """What the MDP planners optimise (classical planners ignore it): see ``mdp.objective``."""
+
+    name: str = "probability"
+    required_success: float | None = None
+
+
+Search = Callable[[PlanningTask, float, dict[str, float], Objective], SearchOutcome]
+"""A planner: the task, its time limit, a dict for stage times and the objective in; its outcome out."""
 
 
 def _fd_search(
-    config: fd.SearchConfig, task: PlanningTask, time_limit: float, timing: dict[str, float]
+    config: fd.SearchConfig, task: PlanningTask, time_limit: float, timing: dict[str, float], _: Objective
 ) -> SearchOutcome:
     started = time.perf_counter()
     # FD solves the label-free canonical form: equal problems give identical runs and plans,
@@ -47,15 +59,21 @@ def _fd_search(
     return replace(outcome, actions=plan_actions(outcome.actions)) if canonical is not None else outcome
 
 
-def _mdp_search(task: PlanningTask, time_limit: float, timing: dict[str, float]) -> SearchOutcome:
-    from causalplan.planners.mdp import search_outcome, solve_mdp
+def _mdp_search(
+    exact: bool, task: PlanningTask, time_limit: float, timing: dict[str, float], objective: Objective
+) -> SearchOutcome:
+    from causalplan.planners.mdp import search_outcome
+    from causalplan.planners.mdp.objective import check_objective, solve_for
 
     started = time.perf_counter()
-    solution = solve_mdp(task, time_limit)
+    chosen = check_objective(objective.name, objective.required_success)
+    solution = solve_for(task, time_limit, chosen, objective.required_success, exact=exact)
     return search_outcome(solution, time.perf_counter() - started)
 
 
-def _up_search(engine: str, task: PlanningTask, time_limit: float, timing: dict[str, float]) -> SearchOutcome:
+def _up_search(
+    engine: str, task: PlanningTask, time_limit: float, timing: dict[str, float], _: Objective
+) -> SearchOutcome:
     from causalplan.planners.up_problem import solve_with_up
 
     return solve_with_up(task, engine, time_limit)
@@ -63,7 +81,8 @@ def _up_search(engine: str, task: PlanningTask, time_limit: float, timing: dict[
 
 SEARCHES: dict[str, Search] = {
     **{name: partial(_fd_search, config) for name, config in fd.CONFIGS.items()},
-    "mdp": _mdp_search,
+    "mdp": partial(_mdp_search, False),
+    "mdp-exact": partial(_mdp_search, True),
     **{f"up:{engine}": partial(_up_search, engine) for engine in UP_ENGINES},
 }
 """Every planner by name (``auto`` is not one: it chooses among them)."""
@@ -72,9 +91,11 @@ PLANNERS: tuple[str, ...] = ("auto", *SEARCHES)
 """Every planner name ``plan_task`` accepts."""
 
 DESCRIPTIONS: dict[str, str] = {
-    "auto": "Fast Downward; the MDP when a fit may fail or FD fails (the default)",
+    "auto": "Fast Downward when every fit that matters is certain, else the MDP (the default)",
     **{name: config.description for name, config in fd.CONFIGS.items()},
-    "mdp": "the paper's probabilistic MDP, solved exactly (most reliable plan)",
+    "mdp": "the paper's probabilistic MDP by heuristic search (improved LAO*): the optimal policy, "
+    "or the best so far with bounds at the time limit",
+    "mdp-exact": "the same MDP solved over every reachable state: the reference; too_large on big tasks",
     **{f"up:{engine}": f"unified-planning engine '{engine}' on the axiom-free formulation" for engine in UP_ENGINES},
 }
 
@@ -121,7 +142,7 @@ def _failure_message(status: PlanStatus, task: PlanningTask, time_limit: float) 
         "under the model.",
         PlanStatus.TIMEOUT: f"The planner did not finish within {time_limit:g} s.",
         PlanStatus.OUT_OF_MEMORY: "The planner ran out of memory.",
-        PlanStatus.TOO_LARGE: "The task is too large for the exact MDP.",
+        PlanStatus.TOO_LARGE: "The task is too large for the exact MDP (mdp-exact); try mdp.",
     }.get(status, "The planner failed.")
 
 
@@ -132,6 +153,7 @@ class _Asked:
     include_pddl: bool
     validate_up: bool
     val: bool
+    objective: Objective = Objective()
 
 
 def _validations(
@@ -183,13 +205,14 @@ def _run(task: PlanningTask, planner: str, time_limit: float, asked: _Asked) -> 
             f"produce '{task.goal}': no part carries some function the rules need.",
             probability=0.0,
         )
-    outcome = SEARCHES[planner](task, time_limit, timing)
+    outcome = SEARCHES[planner](task, time_limit, timing, asked.objective)
     timing.update(outcome.timing)
     timing.pop("total", None)
     if outcome.status is not PlanStatus.SOLVED:
-        return without_plan(
+        failed = without_plan(
             outcome.status, planner, outcome.message or _failure_message(outcome.status, task, time_limit)
         )
+        return replace(failed, mdp=_mdp_figures(outcome))
     replay_started = time.perf_counter()
     checked = replay(task, outcome.actions)
     timing["replay"] = time.perf_counter() - replay_started
@@ -212,6 +235,8 @@ def _run(task: PlanningTask, planner: str, time_limit: float, asked: _Asked) -> 
             + "."
         )
     )
+    if outcome.message:  # what the planner says about its answer, e.g. an anytime MDP's bounds
+        message = f"{outcome.message} {message}".strip()
     return PlanResult(
         PlanStatus.SOLVED,
         planner,
@@ -224,12 +249,32 @@ def _run(task: PlanningTask, planner: str, time_limit: float, asked: _Asked) -> 
         message,
         pddl,
         probability,
-        outcome.expected_actions if outcome.expected_actions is not None else float(len(steps)),
+        outcome.expected_actions
+        if outcome.expected_actions is not None or outcome.optimality == "bounded"
+        else float(len(steps)),
         outcome.policy,
         None,
         validated_by["up"] == "valid" if "up" in validated_by else None,
         validated_by,
+        _mdp_figures(outcome),
     )
+
+
+def _mdp_figures(outcome: SearchOutcome) -> dict[str, object] | None:
+    """Return what the MDP says beyond a plan: the objective solved, what is proved, the bounds."""
+    if outcome.objective is None:
+        return None
+    figures: dict[str, object] = {
+        "objective": outcome.objective,
+        "required_success": outcome.required_success,
+        "optimality": outcome.optimality,
+        "states": outcome.states,
+    }
+    if outcome.success_bounds is not None:
+        low, high = outcome.success_bounds
+        figures["success_probability_bounds"] = [round(low, 6), round(high, 6)]
+        figures["bound_gap"] = round(high - low, 6)
+    return figures
 
 
 def _with_fallback(result: PlanResult, reason: str, started: float, first: PlanResult | None = None) -> PlanResult:
@@ -277,13 +322,17 @@ def plan_task(
     include_pddl: bool = False,
     validate_up: bool = False,
     val: bool = False,
+    objective: str = "probability",
+    required_success: float | None = None,
 ) -> PlanResult:
     """Return a replayed plan for ``task`` (or the status saying why there is none).
 
     ``val`` also checks the plan with VAL on the readable PDDL (one derived clause per rule);
     a plan VAL rejects raises ``PlanRejectedError`` with VAL's words. ``validate_up`` also
     checks it with unified-planning's sequential plan validator (always done for ``up:``
-    planners). ``validated_by`` in the result has each validator's verdict.
+    planners). ``validated_by`` in the result has each validator's verdict. ``objective``
+    (``probability`` or ``attempts`` with ``required_success``) is what the MDP planners
+    optimise; ``ObjectiveError`` (``invalid_objective``) says what is wrong with it.
     """
     if planner not in PLANNERS:
         raise UnknownPlannerError(
@@ -295,7 +344,11 @@ def plan_task(
             f"A task with constraints is planned by {' or '.join(fd.CONFIGS)}, not '{planner}'.",
             details={"planner": planner},
         )
-    asked = _Asked(include_pddl, validate_up, val)
+    if objective != "probability" or required_success is not None:
+        from causalplan.planners.mdp.objective import check_objective
+
+        check_objective(objective, required_success)
+    asked = _Asked(include_pddl, validate_up, val, Objective(objective, required_success))
     if planner == "auto":
         return _auto(task, time_limit, asked)
     return _run(task, planner, time_limit, asked)

@@ -46,6 +46,11 @@ class SearchOutcome:
     success_probability: float | None = None  # set by planners that reason about risk (the MDP)
     expected_actions: float | None = None
     policy: tuple[dict[str, object], ...] = ()
+    objective: str | None = None  # the MDP's: "probability" or "attempts"
+    optimality: str | None = None  # the MDP's: "optimal" (proved) or "bounded" (the limit came first)
+    success_bounds: tuple[float, float] | None = None  # lower and upper bound on the success probability
+    required_success: float | None = None
+    states: int | None = None  # states the MDP solver stored
 
 
 @dataclass(frozen=True)
@@ -69,6 +74,8 @@ class PlanResult:
     validated_by_up: bool | None = None
     validated_by: dict[str, str] = field(default_factory=dict)
     """Each validator's verdict on the plan: replay always, ``val`` and ``up`` when asked."""
+    mdp: dict[str, object] | None = None
+    """The MDP's own figures: objective, optimality, success bounds and their gap, states."""
 
     @property
     def has_plan(self) -> bool:
@@ -93,6 +100,8 @@ class PlanResult:
             "timing": {stage: round(seconds, 6) for stage, seconds in self.timing.items()},
             "message": self.message,
         }
+        if self.mdp is not None:
+            result.update(self.mdp)
         if self.policy:
             result["policy"] = list(self.policy)
         if self.pddl is not None:
