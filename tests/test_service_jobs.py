@@ -121,6 +121,43 @@ def test_a_csv_without_its_columns_or_with_a_broken_cell_is_refused_at_once(jobs
     assert error_of(broken, 422)["details"] == {"row": 2, "column": "mapping"}
 
 
+def test_a_line_with_a_number_too_long_to_read_is_one_invalid_trial(jobs_client: TestClient) -> None:
+    good = first_trials(1)
+    too_long = good.rstrip("\n")[:-1] + ', "seed": ' + "7" * 5000 + "}\n"
+    job = finished(jobs_client, start(jobs_client, {"kind": "batch", "trials": good + too_long, "simulate": False}))
+    rows = job["result"]["results"]
+    assert [row["verdict"] for row in rows][1] == "invalid" and rows[1]["reasons"] == "unreadable_trial"
+    crowd = finished(
+        jobs_client, start(jobs_client, {"kind": "consensus", "trials": good + too_long, "simulate": False})
+    )
+    assert crowd["status"] == "succeeded", crowd["error"]
+
+
+def test_a_csv_cell_with_a_number_too_long_is_refused_naming_its_row(jobs_client: TestClient) -> None:
+    text = as_csv(first_trials(1)).rstrip("\r\n") + "\n" + 'b,{},"{""seed"": ' + "7" * 5000 + '}"\n'
+    refused = jobs_client.post("/v1/jobs", json={"kind": "batch", "trials": text, "format": "csv"})
+    assert error_of(refused, 422)["details"] == {"row": 3, "column": "mapping"}
+
+
+def test_a_csv_with_bare_carriage_returns_and_a_byte_order_mark_keeps_its_ids(jobs_client: TestClient) -> None:
+    lines = first_trials(2)
+    ids = [json.loads(line)["id"] for line in lines.splitlines()]
+    text = "\ufeff" + as_csv(lines).replace("\r\n", "\r")
+    job = finished(
+        jobs_client, start(jobs_client, {"kind": "batch", "trials": text, "format": "csv", "simulate": False})
+    )
+    assert [row["id"] for row in job["result"]["results"]] == ids
+
+
+def test_trials_that_share_an_id_are_refused_naming_it(jobs_client: TestClient) -> None:
+    line = first_trials(1)
+    trial_id = json.loads(line)["id"]
+    refused = jobs_client.post("/v1/jobs", json={"kind": "batch", "trials": line + line})
+    assert error_of(refused, 422)["details"] == {"duplicate_ids": {trial_id: [1, 2]}}
+    refused = jobs_client.post("/v1/jobs", json={"kind": "batch", "trials": as_csv(line + line), "format": "csv"})
+    assert error_of(refused, 422)["details"] == {"duplicate_ids": {trial_id: [2, 3]}}
+
+
 def test_unreadable_lines_are_invalid_trials_as_in_the_cli(jobs_client: TestClient) -> None:
     lines = first_trials(1) + "not json\n"
     job = finished(jobs_client, start(jobs_client, {"kind": "batch", "trials": lines, "simulate": False}))

@@ -9,19 +9,18 @@ own (``video``, ``fit_estimation``).
 
 from __future__ import annotations
 
-import csv
-import io
-import json
 import tempfile
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from causalplan.errors import InputFileError
 from causalplan.service.errors import InvalidRequestError, LimitExceededError
 from causalplan.service.jobs.fit_estimation import prepare_fit_estimation, run_fit_estimation_job
 from causalplan.service.jobs.video import prepare_video, run_video_job
 from causalplan.service.jobs.work import Kind, Progress, in_pool
 from causalplan.service.pool import jobs as worker_jobs
+from causalplan.transfer import batch
 from causalplan.transfer.batch import Trial, TrialResult, read_trials, run_batch
 
 if TYPE_CHECKING:
@@ -31,7 +30,6 @@ CHUNK_SIZE = 20
 """Trials a planner worker judges per call: small enough for steady progress and a prompt cancel."""
 CONSENSUS_GRACE_SECONDS = 60.0
 """A consensus job's worker may take this long beyond its trials' time limits (building, aligning)."""
-CSV_FIELDS = ("id", "model", "mapping")
 
 
 class JobKind(StrEnum):
@@ -53,32 +51,11 @@ class JobKind(StrEnum):
 
 
 def csv_to_json_lines(text: str) -> str:
-    """Return a CSV upload (columns id, model, mapping; model and mapping cells hold JSON) as JSON Lines.
-
-    A row whose cell is not JSON keeps the text, so the batch reader reports that line's problem.
-    """
-    reader = csv.DictReader(io.StringIO(text))
-    missing = [name for name in ("model", "mapping") if name not in (reader.fieldnames or [])]
-    if missing:
-        raise InvalidRequestError(
-            f"The CSV upload has no column {' and no column '.join(repr(name) for name in missing)}; "
-            f"its first line must name the columns {', '.join(CSV_FIELDS)}.",
-            details={"columns": list(reader.fieldnames or [])},
-        )
-    lines = []
-    for number, row in enumerate(reader, start=2):
-        entry: dict[str, object] = {"id": row.get("id") or f"row-{number}"}
-        for name in ("model", "mapping"):
-            cell = row.get(name) or ""
-            try:
-                entry[name] = json.loads(cell)
-            except json.JSONDecodeError as exc:
-                raise InvalidRequestError(
-                    f"Row {number} of the CSV upload: the {name} cell is not JSON ({exc.msg}, column {exc.colno}).",
-                    details={"row": number, "column": name},
-                ) from None
-        lines.append(json.dumps(entry))
-    return "\n".join(lines)
+    """Return a CSV upload as JSON Lines (``transfer.batch.csv_to_json_lines``); its problems are 422s."""
+    try:
+        return batch.csv_to_json_lines(text)
+    except InputFileError as exc:
+        raise InvalidRequestError(exc.message, details=exc.details) from None
 
 
 def read_uploaded_trials(text: str, limit: int) -> list[Trial]:
@@ -87,6 +64,10 @@ def read_uploaded_trials(text: str, limit: int) -> list[Trial]:
         path = Path(folder) / "trials.jsonl"
         path.write_text(text, encoding="utf-8", errors="surrogatepass")
         trials = list(read_trials(path))
+    try:
+        batch.refuse_duplicate_trial_ids(trials)
+    except InputFileError as exc:
+        raise InvalidRequestError(exc.message, details=exc.details) from None
     if len(trials) > limit:
         raise LimitExceededError(
             "too_many_trials",
