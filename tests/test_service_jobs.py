@@ -158,6 +158,24 @@ def test_trials_that_share_an_id_are_refused_naming_it(jobs_client: TestClient) 
     assert error_of(refused, 422)["details"] == {"duplicate_ids": {trial_id: [2, 3]}}
 
 
+@pytest.mark.parametrize(
+    ("body", "field"),
+    [
+        ({"kind": "batch", "trials": "x", "simulate": "false"}, "simulate"),
+        ({"kind": "batch", "trials": "x", "time_limit": 1e-6}, "time_limit"),
+        ({"kind": "consensus", "trials": "x", "min_support": "0.5"}, "min_support"),
+        ({"kind": "fit_estimation", "object": "flashlight", "trials": "5"}, "trials"),
+        ({"kind": "fit_estimation", "object": "flashlight", "noise_mm": True}, "noise_mm"),
+    ],
+)
+def test_job_numbers_and_booleans_are_not_coerced_nor_below_their_minimum(
+    jobs_client: TestClient, body: dict[str, Any], field: str
+) -> None:
+    error = error_of(jobs_client.post("/v1/jobs", json=body), 422)
+    assert error["code"] == "invalid_request"
+    assert [problem["location"] for problem in error["details"]["errors"]] == [f"{body['kind']} > {field}"]
+
+
 def test_unreadable_lines_are_invalid_trials_as_in_the_cli(jobs_client: TestClient) -> None:
     lines = first_trials(1) + "not json\n"
     job = finished(jobs_client, start(jobs_client, {"kind": "batch", "trials": lines, "simulate": False}))

@@ -9,6 +9,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from causalplan.planners import pipeline
+from causalplan.planners.result import MIN_TIME_LIMIT
 from tests.service_fixtures import (
     DESK_LAMP,
     FLASHLIGHT_MAPPING,
@@ -210,12 +211,25 @@ def test_a_planner_timeout_is_an_answer_and_is_not_cached(client: TestClient) ->
     assert services_of(client).cache.stats()["entries"] >= 1
 
 
-def test_the_exact_mdp_declining_a_tiny_time_limit_is_an_answer(client: TestClient) -> None:
-    # It was a 500: 'too_large' was not among PlanOut's statuses.
-    body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp", "time_limit": 1e-9}
+def test_a_time_limit_below_the_minimum_is_refused_and_the_mdp_out_of_time_is_a_timeout(client: TestClient) -> None:
+    for tiny in (1e-6, 5e-324):
+        body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp", "time_limit": tiny}
+        error = error_of(client.post("/v1/plans", json=body), 422)
+        assert error["details"]["errors"][0]["location"] == "time_limit"
+        assert str(MIN_TIME_LIMIT) in error["details"]["errors"][0]["message"]
+    body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp", "time_limit": MIN_TIME_LIMIT}
     response = client.post("/v1/plans", json=body)
     assert response.status_code == 200, response.text
-    assert response.json()["status"] == "too_large" and response.json()["planner_used"] == "mdp"
+    assert response.json()["status"] in ("solved", "timeout")  # a millisecond: never 'too_large'
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("time_limit", True), ("time_limit", "5"), ("validate", "true"), ("validate", 1), ("include_pddl", "yes")],
+)
+def test_numbers_and_booleans_are_not_coerced_from_other_types(client: TestClient, field: str, value: object) -> None:
+    error = error_of(client.post("/v1/plans", json={"model": DESK_LAMP, field: value}), 422)
+    assert error["code"] == "invalid_request" and error["details"]["errors"][0]["location"] == field
 
 
 def _post_raw(client: TestClient, body: bytes) -> Any:

@@ -20,8 +20,8 @@ comes from the person's causal model.
   gives the exact optimal values. The search is restricted soundly to the fits that matter:
   parts carrying a function the model uses, and the parts needed to connect them to the base;
   attaching anything else can only take connectors away.
-* **Limits.** Beyond ``MAX_RELEVANT_FITS`` relevant fits, or ``MAX_STATES`` states, or the time
-  limit, the planner stops at once with status ``too_large``; it never hangs.
+* **Limits.** Beyond ``MAX_RELEVANT_FITS`` relevant fits or ``MAX_STATES`` states the planner
+  stops at once with status ``too_large``, and at the time limit with ``timeout``; it never hangs.
 
 It returns the policy, the plan the policy follows when every attempt succeeds, the success
 probability of the policy (closed loop: after a failure it takes the best remaining route)
@@ -48,7 +48,11 @@ State = tuple[int, int]
 
 
 class _TooLarge(Exception):
-    """Raised inside the search when the state budget or the time limit is exhausted."""
+    """Raised inside the search when the state budget is exhausted."""
+
+
+class _OutOfTime(Exception):
+    """Raised inside the search when the time limit has passed."""
 
 
 def relevant_fits(task: PlanningTask) -> tuple[Fit, ...]:
@@ -150,8 +154,10 @@ class _Solver:
         known = self.values.get(state)
         if known is not None:
             return known
-        if len(self.values) >= MAX_STATES or time.monotonic() > self.deadline:
+        if len(self.values) >= MAX_STATES:
             raise _TooLarge
+        if time.monotonic() > self.deadline:
+            raise _OutOfTime
         if self.goal_holds(parts):
             result = _Value(1.0, 1.0, 0.0, -1)
         elif not self.goal_holds(self.reachable_parts(parts, unusable)):
@@ -229,7 +235,7 @@ def _policy_entries(solver: _Solver, start: State) -> tuple[dict[str, object], .
 
 
 def solve_mdp(task: PlanningTask, time_limit: float = 10.0) -> MdpSolution:
-    """Solve the task's MDP exactly; ``too_large`` (quickly) when it is beyond the limits."""
+    """Solve the task's MDP exactly; ``too_large`` (quickly) beyond its size limits, ``timeout`` at ``time_limit``."""
     fits = relevant_fits(task)
     if len(fits) > MAX_RELEVANT_FITS:
         return MdpSolution(
@@ -241,12 +247,17 @@ def solve_mdp(task: PlanningTask, time_limit: float = 10.0) -> MdpSolution:
     start: State = (0, 0)
     try:
         root = solver.solve(start, solver.c.base, 0)
+    except _OutOfTime:
+        message = (
+            f"The exact MDP did not finish within {time_limit:g} s "
+            f"({len(solver.values):,} states solved over {len(fits)} relevant fits)."
+        )
+        return MdpSolution(PlanStatus.TIMEOUT, states=len(solver.values), relevant_fits=len(fits), message=message)
     except (_TooLarge, RecursionError) as exc:
         message = (
             "The MDP's plans are too long to solve exactly."
             if isinstance(exc, RecursionError)
-            else f"The exact MDP over {len(fits)} relevant fits passed {len(solver.values):,} "
-            f"states or {time_limit:g} s; it was stopped."
+            else f"The exact MDP over {len(fits)} relevant fits passed {len(solver.values):,} states; it was stopped."
         )
         return MdpSolution(PlanStatus.TOO_LARGE, states=len(solver.values), relevant_fits=len(fits), message=message)
     if root.success == 0.0:
