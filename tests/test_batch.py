@@ -22,7 +22,6 @@ from causalplan.transfer.batch import (
     csv_to_json_lines,
     evaluate_trial,
     read_trials,
-    refuse_duplicate_trial_ids,
     run_batch,
 )
 from causalplan.transfer.verdict import Verdict, clear_caches
@@ -248,11 +247,3 @@ def test_csv_rows_that_share_an_id_are_named_with_their_rows() -> None:
         csv_to_json_lines(spreadsheet([ROWS[0], ["b", "{}", "{}"], ROWS[0]]))
     assert raised.value.details == {"duplicate_ids": {"a": [2, 4]}}
     assert "'a' (rows 2, 4)" in raised.value.message
-
-
-def test_trials_that_share_an_id_are_named_with_their_lines() -> None:
-    trials = list(read_trials(TRIALS))
-    refuse_duplicate_trial_ids(trials)  # the example's ids are all different
-    with pytest.raises(InputFileError) as raised:
-        refuse_duplicate_trial_ids([trials[0], trials[1], trials[0]])
-    assert raised.value.details == {"duplicate_ids": {trials[0].id: [1, 1]}}

@@ -25,7 +25,7 @@ from causalplan.consensus.population import population
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.db.models import JobRecord, utc_now
 from causalplan.service.jobs import store
-from causalplan.service.jobs.kinds import KINDS, csv_to_json_lines
+from causalplan.service.jobs.kinds import KINDS, csv_to_json_lines, judge_trials, read_uploaded_trials
 from causalplan.service.jobs.store import MAX_ATTEMPTS
 from causalplan.transfer.batch import read_trials, run_batch
 from tests.service_fixtures import (
@@ -149,13 +149,20 @@ def test_a_csv_with_bare_carriage_returns_and_a_byte_order_mark_keeps_its_ids(jo
     assert [row["id"] for row in job["result"]["results"]] == ids
 
 
-def test_trials_that_share_an_id_are_refused_naming_it(jobs_client: TestClient) -> None:
+def test_csv_rows_that_share_an_id_are_refused_naming_it(jobs_client: TestClient) -> None:
     line = first_trials(1)
     trial_id = json.loads(line)["id"]
-    refused = jobs_client.post("/v1/jobs", json={"kind": "batch", "trials": line + line})
-    assert error_of(refused, 422)["details"] == {"duplicate_ids": {trial_id: [1, 2]}}
     refused = jobs_client.post("/v1/jobs", json={"kind": "batch", "trials": as_csv(line + line), "format": "csv"})
     assert error_of(refused, 422)["details"] == {"duplicate_ids": {trial_id: [2, 3]}}
+
+
+def test_a_batch_job_checks_plans_with_val_by_default_as_the_cli_does(jobs_client: TestClient) -> None:
+    services = services_of(jobs_client)
+    lines = first_trials(1)
+    assert KINDS["batch"].prepare({"kind": "batch", "trials": lines}, services)["validate"] is True
+    assert KINDS["batch"].prepare({"kind": "batch", "trials": lines, "validate": False}, services)["validate"] is False
+    (checked,) = judge_trials(read_uploaded_trials(lines, 1), "auto", 30.0, False, (), val=True)
+    assert checked.verdict.plan is not None and checked.verdict.plan.validated_by["val"] == "valid"
 
 
 @pytest.mark.parametrize(

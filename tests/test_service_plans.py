@@ -275,9 +275,9 @@ def test_a_trailing_slash_on_an_api_path_is_a_404_that_names_the_path(client: Te
     assert client.get("/v1/objects").status_code == 200
 
 
-def test_validate_asks_val_and_the_answer_says_so(client: TestClient) -> None:
-    plain = client.post("/v1/plans", json={"model": DESK_LAMP})
-    checked = client.post("/v1/plans", json={"model": DESK_LAMP, "validate": True})
+def test_val_checks_the_plan_by_default_as_in_the_cli_and_validate_false_skips_it(client: TestClient) -> None:
+    checked = client.post("/v1/plans", json={"model": DESK_LAMP})
+    plain = client.post("/v1/plans", json={"model": DESK_LAMP, "validate": False})
     assert plain.status_code == checked.status_code == 200, checked.text
-    assert plain.json()["validated_by"] == {"replay": "valid"}
-    assert checked.json()["validated_by"] == {"replay": "valid", "val": "valid"}
+    assert checked.json()["validated_by"] == {"replay": "valid", "val": "valid"}  # `causalplan plan --json`'s
+    assert plain.json()["validated_by"] == {"replay": "valid"}  # `causalplan plan --no-val --json`'s

@@ -237,7 +237,7 @@ def csv_to_json_lines(text: str) -> str:
         for name in TRIAL_FIELDS:
             entry[name] = _json_cell(row.get(name) or "", number, name)
         lines.append(json.dumps(entry))
-    refuse_shared_ids(rows_of, "rows")
+    _refuse_shared_ids(rows_of)
     return "\n".join(lines)
 
 
@@ -253,30 +253,27 @@ def _json_cell(cell: str, row: int, column: str) -> object:
     raise InputFileError(f"Row {row} of the CSV: the {column} cell {why}.", details={"row": row, "column": column})
 
 
-def refuse_shared_ids(places_of: dict[str, list[int]], unit: str) -> None:
-    """Raise InputFileError naming every id that more than one trial has, with its ``unit`` (rows, lines).
+def _refuse_shared_ids(rows_of: dict[str, list[int]]) -> None:
+    """Raise InputFileError naming every id that more than one row has, with its rows.
 
     Results are matched to trials by id: two trials with one id cannot be told apart afterwards.
     """
-    shared = {trial_id: places for trial_id, places in places_of.items() if len(places) > 1}
+    shared = {trial_id: rows for trial_id, rows in rows_of.items() if len(rows) > 1}
     if not shared:
         return
+
+    def listed(places: list[int]) -> str:
+        more = f" and {len(places) - 5} more" if len(places) > 5 else ""
+        return ", ".join(map(str, places[:5])) + more
+
     first = list(shared.items())[:5]
-    named = "; ".join(f"{trial_id!r} ({unit} {', '.join(map(str, places))})" for trial_id, places in first)
+    named = "; ".join(f"{trial_id!r} (rows {listed(rows)})" for trial_id, rows in first)
     more = f" and {len(shared) - 5} more" if len(shared) > 5 else ""
     raise InputFileError(
         f"{len(shared)} trial id(s) are used more than once: {named}{more}. Give each trial its own id "
         "(or none: it is then named after its place).",
-        details={"duplicate_ids": {trial_id: places for trial_id, places in list(shared.items())[:100]}},
+        details={"duplicate_ids": {trial_id: rows[:100] for trial_id, rows in list(shared.items())[:100]}},
     )
-
-
-def refuse_duplicate_trial_ids(trials: Iterable[Trial]) -> None:
-    """Raise InputFileError naming the ids that several trials share, with their lines (or entries)."""
-    places_of: dict[str, list[int]] = {}
-    for index, trial in enumerate(trials, start=1):
-        places_of.setdefault(trial.id, []).append(trial.line if trial.line is not None else index)
-    refuse_shared_ids(places_of, "lines")
 
 
 def _unreadable_verdict(problem: str, line: int | None) -> TransferVerdict:

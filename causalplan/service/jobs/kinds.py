@@ -64,10 +64,6 @@ def read_uploaded_trials(text: str, limit: int) -> list[Trial]:
         path = Path(folder) / "trials.jsonl"
         path.write_text(text, encoding="utf-8", errors="surrogatepass")
         trials = list(read_trials(path))
-    try:
-        batch.refuse_duplicate_trial_ids(trials)
-    except InputFileError as exc:
-        raise InvalidRequestError(exc.message, details=exc.details) from None
     if len(trials) > limit:
         raise LimitExceededError(
             "too_many_trials",
@@ -95,14 +91,15 @@ def prepare_batch(request: dict[str, Any], services: Services) -> dict[str, Any]
         "planner": resolve_planner(request.get("planner", "auto")),
         "time_limit": resolve_time_limit(request.get("time_limit"), services.settings),
         "simulate": bool(request.get("simulate", True)),
+        "validate": bool(request.get("validate", True)),
     }
 
 
 def judge_trials(
-    trials: list[Trial], planner: str, time_limit: float, simulate: bool, folders: tuple[Path, ...]
+    trials: list[Trial], planner: str, time_limit: float, simulate: bool, folders: tuple[Path, ...], val: bool = False
 ) -> list[TrialResult]:
-    """Return the results of a chunk of trials (what a planner worker runs)."""
-    return run_batch(trials, worker_jobs.worker_catalog(folders), planner, time_limit, simulate)
+    """Return the results of a chunk of trials (what a planner worker runs); ``val``: VAL checks each plan."""
+    return run_batch(trials, worker_jobs.worker_catalog(folders), planner, time_limit, simulate, val=val)
 
 
 def _summary(results: list[TrialResult]) -> dict[str, Any]:
@@ -116,6 +113,7 @@ def run_batch_job(request: dict[str, Any], services: Services, progress: Progres
     settings = services.settings
     trials = read_uploaded_trials(request["trials"], settings.max_job_trials)
     planner, time_limit, simulate = request["planner"], float(request["time_limit"]), bool(request["simulate"])
+    val = bool(request.get("validate", False))  # jobs stored before VAL was asked for ran without it
     total = len(trials)
     progress(0, total)
     if settings.dask_scheduler is not None:
@@ -131,7 +129,7 @@ def run_batch_job(request: dict[str, Any], services: Services, progress: Progres
         ordered = run_batch_on_cluster(
             trials,
             services.catalog,
-            JudgeOptions(planner, time_limit, simulate),
+            JudgeOptions(planner, time_limit, simulate, val),
             address=settings.dask_scheduler,
             on_chunk=on_chunk,
         )
@@ -141,7 +139,7 @@ def run_batch_job(request: dict[str, Any], services: Services, progress: Progres
     for start in range(0, total, CHUNK_SIZE):
         chunk = trials[start : start + CHUNK_SIZE]
         timeout = len(chunk) * (time_limit + settings.solve_grace_seconds)
-        results.extend(in_pool(services, judge_trials, (chunk, planner, time_limit, simulate, folders), timeout))
+        results.extend(in_pool(services, judge_trials, (chunk, planner, time_limit, simulate, folders, val), timeout))
         progress(len(results), total)
     return _summary(results)
 

@@ -43,6 +43,12 @@ class BatchJobIn(InputModel):
     planner: str = _PLANNER
     time_limit: StrictFloat | None = _TIME_LIMIT
     simulate: StrictBool = _SIMULATE
+    validate_plan: StrictBool = Field(
+        default=True,
+        alias="validate",
+        description="Check each distinct plan with VAL, as `causalplan batch` does by default (a trial whose plan "
+        "VAL rejects is undecided); false: the replay alone.",
+    )
 
 
 class SimulationJobIn(SimulationIn):

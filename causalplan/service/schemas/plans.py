@@ -35,10 +35,10 @@ class _Solve(InputModel):
         "(GET /health, 'limits').",
     )
     validate_plan: StrictBool = Field(
-        default=False,
+        default=True,
         alias="validate",
-        description="Also check the plan with VAL on the readable PDDL (the answer's 'validated_by'); "
-        "a plan VAL rejects is an error, never an answer.",
+        description="Check the plan with VAL on the readable PDDL too (the answer's 'validated_by'), as the CLI "
+        "does by default; a plan VAL rejects is an error, never an answer. false: the replay alone.",
     )
 
     @model_validator(mode="after")
