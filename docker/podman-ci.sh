@@ -7,8 +7,9 @@
 #    localhost/bookworm-py (kept between runs; CAUSALPLAN_REBUILD_BASE=1 makes it again);
 # 2. the service and tests images of docker/Dockerfile on that base (BASE build argument), and
 #    the load balancer's (docker/nginx), whose configuration nginx checks;
-# 3. the tests container: the README's test command inside it (PostgreSQL and Chromium are
-#    Debian's, installed in the image);
+# 3. the tests container: README command 2, read from the README (docker/readme-command.sh), run
+#    as written in a copy of the repository on the bare base (python3 and venv only): the command
+#    installs Chromium itself, and PostgreSQL comes from a wheel;
 # 4. the service container's smoke test (docker/smoke.py: health, one plan, one transfer).
 #
 # podman's settings for these machines, and the base image: docker/podman-common.sh.
@@ -31,12 +32,13 @@ stage "check the load balancer's configuration"
 # nginx resolves its upstream when it reads the file: name compose's `service` for the check.
 "${podman[@]}" run --rm "${limits[@]}" --add-host service:127.0.0.1 localhost/causalplan-nginx nginx -t -q
 
-stage "tests container: the README's test command"
+readme_command=$(bash docker/readme-command.sh 2)
+stage "tests container: README command 2 on the bare base: $readme_command"
 # --init: an init process as PID 1 adopts and reaps orphans (PostgreSQL's server, killed
 # planners); without it the test process is PID 1, and the tests that check that a search left
 # no child behind find those orphans. Chromium wants more shared memory than the default 64 MB.
 "${podman[@]}" run --rm --init --shm-size=1g --network=host "${limits[@]}" "${volumes[@]}" "${environment[@]}" \
-    -e CI=true localhost/causalplan-tests
+    -e CI=true -e DEBIAN_FRONTEND=noninteractive localhost/causalplan-tests bash -c "$readme_command"
 
 stage "service container: smoke test"
 port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')

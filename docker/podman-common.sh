@@ -9,8 +9,8 @@
 podman=(podman --runtime runc)
 # shellcheck disable=SC2034  # used by the scripts that source this file
 limits=(--ulimit nofile=4096:4096 --ulimit nproc=4096:4096)
-volumes=()  # the host's CA bundle and pip configuration, for builds and containers alike
-for file in /etc/ssl/certs/ca-certificates.crt /etc/pip.conf /etc/xdg/pip "${PIP_FIND_LINKS:-}"; do
+volumes=()  # the host's CA bundle, pip configuration and the package folders it names, for builds and containers alike
+for file in /etc/ssl/certs/ca-certificates.crt /etc/pip.conf /etc/xdg/pip "${PIP_FIND_LINKS:-}" /opt/pypi /opt/pypi-more; do
     if [ -n "$file" ] && [ -e "$file" ]; then volumes+=(-v "$file:$file:ro"); fi
 done
 environment=()  # pip's settings from the environment, for the tests container's pip

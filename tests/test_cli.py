@@ -653,3 +653,13 @@ def test_planners_lists_every_planner_and_says_whether_val_can_run() -> None:
     assert result.exit_code == 0
     assert "fd-opt" in result.stdout and "up:pyperplan" in result.stdout
     assert "VAL, which checks every plan (--no-val skips it): yes" in result.stdout
+
+
+def test_check_and_plan_exit_2_naming_the_line_of_a_number_too_long_to_read(tmp_path: Path) -> None:
+    model = tmp_path / "model.yaml"
+    model.write_text((EXAMPLES / "paper" / "desk_lamp.yaml").read_text() + f"\nextra: {'9' * 5000}\n")
+    line = model.read_text().count("\n")
+    for command in ("check", "plan"):
+        result = run(command, model)
+        assert result.exit_code == 2, result.output
+        assert f"error[number_too_long] {model}, line {line}" in result.output

@@ -104,3 +104,21 @@ def test_a_research_page_model_is_read_as_the_model_file_of_its_first_training_o
         "functions": {"light_bulb": ["glow"]},
         "rules": ["glow CAUSES light"],
     }
+
+
+def test_a_line_with_a_number_too_long_to_read_is_left_out_with_its_reason(tmp_path: Path) -> None:
+    path = write_lines(
+        tmp_path / "t.jsonl", [{"id": "ann", "model": MODEL}, '{"id": "bob", "model": ' + "7" * 5000 + "}"]
+    )
+    people = read_participants(path)
+    assert [(p.id, p.problems) for p in people] == [
+        ("ann", []),
+        ("line 2", ["line 2 holds a number of 5,000 digits (at most 4,300 can be read)"]),
+    ]
+
+
+def test_a_list_file_with_a_number_too_long_is_an_input_error_naming_its_line(tmp_path: Path) -> None:
+    path = tmp_path / "crowd.json"
+    path.write_text('[\n  {"id": "ann", "model": ' + "7" * 5000 + "}\n]\n")
+    with pytest.raises(InputFileError, match=r"\(line 2\).*5,000 digits"):
+        read_participants(path)

@@ -334,3 +334,27 @@ def test_keys_repeated_in_different_mappings_are_fine() -> None:
     data, _, problems = parse_text('{"a": {"x": 1}, "b": {"x": 2}}', "m.json")
     assert problems == []
     assert data == {"a": {"x": 1}, "b": {"x": 2}}
+
+
+# --- numbers too long to read ---------------------------------------------------------------------
+
+TOO_LONG = "7" * 5000
+"""More digits than Python reads from text (4,300): int() raises a bare ValueError."""
+
+
+def test_a_yaml_integer_too_long_to_read_is_refused_with_its_line() -> None:
+    data, _, problems = parse_text(f"object: desk_lamp\nfunctions: {{}}\ngoal: {TOO_LONG}\n", "model.yaml")
+    assert data is None
+    assert [(p.code, p.location.line) for p in problems] == [("number_too_long", 3)]
+    assert "5,000 digits" in problems[0].message and "4,300" in problems[0].message
+
+
+def test_a_json_integer_too_long_to_read_is_refused_with_its_line() -> None:
+    data, _, problems = parse_text(f'{{\n  "object": "desk_lamp",\n  "goal": -{TOO_LONG}\n}}\n', "model.json")
+    assert data is None
+    assert [(p.code, p.location.line) for p in problems] == [("number_too_long", 3)]
+
+
+def test_a_long_number_in_quotes_or_a_float_is_read() -> None:
+    data, _, problems = parse_text(f'object: "{TOO_LONG}"\nweight: 1.5e+300\n', "model.yaml")
+    assert problems == [] and data == {"object": TOO_LONG, "weight": 1.5e300}

@@ -150,9 +150,15 @@ def test_too_many_relevant_fits_is_declined_at_once() -> None:
     assert time.monotonic() - started < 1.0
 
 
-def test_a_state_space_beyond_the_budget_stops_at_the_time_limit() -> None:
+def test_a_state_space_beyond_the_budget_stops_at_the_time_limit_as_a_timeout() -> None:
     task = synthetic_task(32, 0)
     started = time.monotonic()
     solution = solve_mdp(task, time_limit=0.5)
-    assert solution.status is PlanStatus.TOO_LARGE
+    assert solution.status is PlanStatus.TIMEOUT and "did not finish within 0.5 s" in solution.message
     assert time.monotonic() - started < 5.0
+
+
+def test_a_time_limit_that_passes_before_the_first_state_is_a_timeout_not_too_large(catalog: Catalog) -> None:
+    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp"))
+    for time_limit in (1e-6, 5e-324):
+        assert solve_mdp(task, time_limit=time_limit).status is PlanStatus.TIMEOUT

@@ -56,8 +56,12 @@ def plain_answer(catalog: Catalog, body: dict[str, Any]) -> dict[str, Any]:
         mapping = read.mapping
     target = catalog.get((mapping or loaded.model.labelling).object_id)
     task = build_task(loaded.model, target, mapping)
-    result = plan_task(task, body.get("planner", "auto"), body.get("time_limit", TIME_LIMIT), include_pddl=True)
-    return result.as_dict()
+    planner, time_limit, val = (
+        body.get("planner", "auto"),
+        body.get("time_limit", TIME_LIMIT),
+        body.get("validate", True),
+    )
+    return plan_task(task, planner, time_limit, include_pddl=True, val=val).as_dict()
 
 
 def answer_of(response: dict[str, Any]) -> dict[str, Any]:

@@ -23,7 +23,7 @@ from sqlalchemy.orm import Session
 
 from causalplan.consensus.population import population
 from causalplan.objects.catalog import load_catalog
-from causalplan.service.jobs.kinds import KINDS, csv_to_json_lines
+from causalplan.service.jobs.kinds import KINDS, csv_to_json_lines, judge_trials, read_uploaded_trials
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.jobs import MAX_ATTEMPTS
 from causalplan.service.storage.records import JobRecord, utc_now
@@ -119,6 +119,68 @@ def test_a_csv_without_its_columns_or_with_a_broken_cell_is_refused_at_once(jobs
         "/v1/jobs", json={"kind": "batch", "trials": 'id,model,mapping\n1,{"a": 1},{oops\n', "format": "csv"}
     )
     assert error_of(broken, 422)["details"] == {"row": 2, "column": "mapping"}
+
+
+def test_a_line_with_a_number_too_long_to_read_is_one_invalid_trial(jobs_client: TestClient) -> None:
+    good = first_trials(1)
+    too_long = good.rstrip("\n")[:-1] + ', "seed": ' + "7" * 5000 + "}\n"
+    job = finished(jobs_client, start(jobs_client, {"kind": "batch", "trials": good + too_long, "simulate": False}))
+    rows = job["result"]["results"]
+    assert [row["verdict"] for row in rows][1] == "invalid" and rows[1]["reasons"] == "unreadable_trial"
+    crowd = finished(
+        jobs_client, start(jobs_client, {"kind": "consensus", "trials": good + too_long, "simulate": False})
+    )
+    assert crowd["status"] == "succeeded", crowd["error"]
+
+
+def test_a_csv_cell_with_a_number_too_long_is_refused_naming_its_row(jobs_client: TestClient) -> None:
+    text = as_csv(first_trials(1)).rstrip("\r\n") + "\n" + 'b,{},"{""seed"": ' + "7" * 5000 + '}"\n'
+    refused = jobs_client.post("/v1/jobs", json={"kind": "batch", "trials": text, "format": "csv"})
+    assert error_of(refused, 422)["details"] == {"row": 3, "column": "mapping"}
+
+
+def test_a_csv_with_bare_carriage_returns_and_a_byte_order_mark_keeps_its_ids(jobs_client: TestClient) -> None:
+    lines = first_trials(2)
+    ids = [json.loads(line)["id"] for line in lines.splitlines()]
+    text = "\ufeff" + as_csv(lines).replace("\r\n", "\r")
+    job = finished(
+        jobs_client, start(jobs_client, {"kind": "batch", "trials": text, "format": "csv", "simulate": False})
+    )
+    assert [row["id"] for row in job["result"]["results"]] == ids
+
+
+def test_csv_rows_that_share_an_id_are_refused_naming_it(jobs_client: TestClient) -> None:
+    line = first_trials(1)
+    trial_id = json.loads(line)["id"]
+    refused = jobs_client.post("/v1/jobs", json={"kind": "batch", "trials": as_csv(line + line), "format": "csv"})
+    assert error_of(refused, 422)["details"] == {"duplicate_ids": {trial_id: [2, 3]}}
+
+
+def test_a_batch_job_checks_plans_with_val_by_default_as_the_cli_does(jobs_client: TestClient) -> None:
+    services = services_of(jobs_client)
+    lines = first_trials(1)
+    assert KINDS["batch"].prepare({"kind": "batch", "trials": lines}, services)["validate"] is True
+    assert KINDS["batch"].prepare({"kind": "batch", "trials": lines, "validate": False}, services)["validate"] is False
+    (checked,) = judge_trials(read_uploaded_trials(lines, 1), "auto", 30.0, False, (), val=True)
+    assert checked.verdict.plan is not None and checked.verdict.plan.validated_by["val"] == "valid"
+
+
+@pytest.mark.parametrize(
+    ("body", "field"),
+    [
+        ({"kind": "batch", "trials": "x", "simulate": "false"}, "simulate"),
+        ({"kind": "batch", "trials": "x", "time_limit": 1e-6}, "time_limit"),
+        ({"kind": "consensus", "trials": "x", "min_support": "0.5"}, "min_support"),
+        ({"kind": "fit_estimation", "object": "flashlight", "trials": "5"}, "trials"),
+        ({"kind": "fit_estimation", "object": "flashlight", "noise_mm": True}, "noise_mm"),
+    ],
+)
+def test_job_numbers_and_booleans_are_not_coerced_nor_below_their_minimum(
+    jobs_client: TestClient, body: dict[str, Any], field: str
+) -> None:
+    error = error_of(jobs_client.post("/v1/jobs", json=body), 422)
+    assert error["code"] == "invalid_request"
+    assert [problem["location"] for problem in error["details"]["errors"]] == [f"{body['kind']} > {field}"]
 
 
 def test_unreadable_lines_are_invalid_trials_as_in_the_cli(jobs_client: TestClient) -> None:

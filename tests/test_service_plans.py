@@ -9,6 +9,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from causalplan.planners import pipeline
+from causalplan.planners.result import MIN_TIME_LIMIT
 from tests.service_fixtures import (
     DESK_LAMP,
     FLASHLIGHT_MAPPING,
@@ -210,12 +211,33 @@ def test_a_planner_timeout_is_an_answer_and_is_not_cached(client: TestClient) ->
     assert services_of(client).cache.stats()["entries"] >= 1
 
 
-def test_the_exact_mdp_declining_a_tiny_time_limit_is_an_answer(client: TestClient) -> None:
-    # It was a 500: 'too_large' was not among PlanOut's statuses.
-    body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp-exact", "time_limit": 1e-9}
+def test_the_exact_mdp_at_the_smallest_time_limit_is_an_answer(client: TestClient) -> None:
+    # It was a 500 once: a status the exact MDP gives was not among PlanOut's statuses.
+    body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp-exact", "time_limit": MIN_TIME_LIMIT}
     response = client.post("/v1/plans", json=body)
     assert response.status_code == 200, response.text
-    assert response.json()["status"] == "too_large" and response.json()["planner_used"] == "mdp-exact"
+    assert response.json()["status"] in ("solved", "timeout") and response.json()["planner_used"] == "mdp-exact"
+
+
+def test_a_time_limit_below_the_minimum_is_refused_and_the_mdp_out_of_time_is_a_timeout(client: TestClient) -> None:
+    for tiny in (1e-6, 5e-324):
+        body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp", "time_limit": tiny}
+        error = error_of(client.post("/v1/plans", json=body), 422)
+        assert error["details"]["errors"][0]["location"] == "time_limit"
+        assert str(MIN_TIME_LIMIT) in error["details"]["errors"][0]["message"]
+    body = {"model": with_unique_effect(DESK_LAMP), "planner": "mdp", "time_limit": MIN_TIME_LIMIT}
+    response = client.post("/v1/plans", json=body)
+    assert response.status_code == 200, response.text
+    assert response.json()["status"] in ("solved", "timeout")  # a millisecond: never 'too_large'
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("time_limit", True), ("time_limit", "5"), ("validate", "true"), ("validate", 1), ("include_pddl", "yes")],
+)
+def test_numbers_and_booleans_are_not_coerced_from_other_types(client: TestClient, field: str, value: object) -> None:
+    error = error_of(client.post("/v1/plans", json={"model": DESK_LAMP, field: value}), 422)
+    assert error["code"] == "invalid_request" and error["details"]["errors"][0]["location"] == field
 
 
 def _post_raw(client: TestClient, body: bytes) -> Any:
@@ -261,9 +283,9 @@ def test_a_trailing_slash_on_an_api_path_is_a_404_that_names_the_path(client: Te
     assert client.get("/v1/objects").status_code == 200
 
 
-def test_validate_asks_val_and_the_answer_says_so(client: TestClient) -> None:
-    plain = client.post("/v1/plans", json={"model": DESK_LAMP})
-    checked = client.post("/v1/plans", json={"model": DESK_LAMP, "validate": True})
+def test_val_checks_the_plan_by_default_as_in_the_cli_and_validate_false_skips_it(client: TestClient) -> None:
+    checked = client.post("/v1/plans", json={"model": DESK_LAMP})
+    plain = client.post("/v1/plans", json={"model": DESK_LAMP, "validate": False})
     assert plain.status_code == checked.status_code == 200, checked.text
-    assert plain.json()["validated_by"] == {"replay": "valid"}
-    assert checked.json()["validated_by"] == {"replay": "valid", "val": "valid"}
+    assert checked.json()["validated_by"] == {"replay": "valid", "val": "valid"}  # `causalplan plan --json`'s
+    assert plain.json()["validated_by"] == {"replay": "valid"}  # `causalplan plan --no-val --json`'s

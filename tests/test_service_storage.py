@@ -280,8 +280,10 @@ def test_a_server_that_takes_the_connection_but_never_answers_is_given_up_on(mon
 
 
 @contextmanager
-def forwarded_later(target: tuple[str, int], after: float) -> Iterator[int]:
+def forwarded_later(target: tuple[str, int] | str, after: float) -> Iterator[int]:
     """Yield a free port that, from ``after`` seconds on, forwards every connection to ``target``.
+
+    ``target``: a (host, port), or the path of a Unix socket (the wheel's server listens on one only).
 
     A database server that comes up while a replica is already starting.
     """
@@ -305,7 +307,11 @@ def forwarded_later(target: tuple[str, int], after: float) -> Iterator[int]:
                     accepted, _ = listener.accept()
                 except TimeoutError:
                     continue
-                upstream = socket.create_connection(target)
+                if isinstance(target, str):
+                    upstream = socket.socket(socket.AF_UNIX)
+                    upstream.connect(target)
+                else:
+                    upstream = socket.create_connection(target)
                 for ends in ((accepted, upstream), (upstream, accepted)):
                     threading.Thread(target=pipe, args=ends, daemon=True).start()
 
@@ -323,8 +329,13 @@ def test_a_replica_that_starts_before_its_database_waits_for_it(
 ) -> None:
     with postgres_database(postgres_admin_url) as url:
         server = make_url(url)
-        with forwarded_later((str(server.host), int(server.port or 5432)), after=1.0) as port:
-            engine = create_database_engine(server.set(host="127.0.0.1", port=port).render_as_string(False))
+        socket_folder = server.query.get("host")  # a server on a Unix socket only: ?host=FOLDER
+        target: tuple[str, int] | str = (str(server.host), int(server.port or 5432))
+        if isinstance(socket_folder, str):
+            target = f"{socket_folder}/.s.PGSQL.{server.port or 5432}"
+        with forwarded_later(target, after=1.0) as port:
+            forwarded = server.set(host="127.0.0.1", port=port).difference_update_query(["host"])
+            engine = create_database_engine(forwarded.render_as_string(False))
             try:
                 with caplog.at_level(logging.WARNING, logger="causalplan.service.storage.migrate"):
                     assert upgrade(engine, wait_seconds=30) == head_revision()

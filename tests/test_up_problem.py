@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -13,13 +14,14 @@ from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject, Connector, Fit, Part, Requirement
 from causalplan.pddl.task import PlanningTask, build_task
-from causalplan.planners.pipeline import UP_ENGINES, plan_task
+from causalplan.planners.pipeline import UP_ENGINES, plan_task, planner_availability
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanStatus
 from causalplan.planners.up_problem import (
     build_up_problem,
     engine_problem,
     goal_structure,
+    missing_program,
     solve_with_up,
     status_of_up_result,
     validate_with_up,
@@ -207,6 +209,9 @@ def test_engine_failures_are_outcomes_not_exceptions(catalog: Catalog) -> None:
 @pytest.mark.parametrize("engine", UP_ENGINES)
 def test_every_installed_engine_solves_a_task_with_a_disjunctive_goal(engine: str) -> None:
     # Synthetic tasks have an OR in their goal; pyperplan gets it compiled away by UP itself.
+    missing = missing_program(engine)
+    if missing is not None:  # ENHSP runs Java, which no wheel ships: it is then reported unavailable
+        pytest.skip(missing)
     task = synthetic_task(8, seed=1)
     outcome = solve_with_up(task, engine, 60)
     assert outcome.status is PlanStatus.SOLVED, outcome.message
@@ -218,6 +223,19 @@ def test_engine_availability_is_reported() -> None:
     assert engine_problem("tamer") is None
     problem = engine_problem("no-such-engine")
     assert problem is not None and "no-such-engine" in problem
+
+
+def test_enhsp_without_java_is_unavailable_saying_why_and_its_plan_is_an_error_saying_so(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.setenv("PATH", str(tmp_path))  # an empty folder: no 'java' on PATH
+    availability = planner_availability()
+    for engine in ("enhsp", "enhsp-opt"):
+        why = availability[f"up:{engine}"]
+        assert why is not None and "'java'" in why and "not on PATH" in why
+    assert availability["up:tamer"] is None  # a pure-Python engine needs nothing from PATH
+    outcome = solve_with_up(synthetic_task(4, seed=0), "enhsp", 30)
+    assert outcome.status is PlanStatus.ERROR and outcome.message == availability["up:enhsp"]
 
 
 def test_a_synthetic_plan_through_up_replays_and_validates() -> None:

@@ -1,4 +1,7 @@
-"""The participant and research pages in a real browser: Playwright drives Debian's Chromium headless.
+"""The participant and research pages in a real browser: Playwright drives the OS's Chromium headless.
+
+Chromium is the one thing the tests take from the OS: README command 2 installs Debian's
+``chromium`` when it is missing; ``CAUSALPLAN_TEST_CHROMIUM`` names another binary.
 
 Against a real uvicorn server on a free loopback port (``live_server``). Each step's page is
 saved as a screenshot under ``out/screenshots/`` (git ignores ``out/``) to look at.
@@ -7,7 +10,9 @@ saved as a screenshot under ``out/screenshots/`` (git ignores ``out/``) to look 
 from __future__ import annotations
 
 import json
+import os
 import re
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -21,7 +26,9 @@ from tests.web_flows import LAMP_RULES, TUTORIAL_ANSWERS, TUTORIAL_RULES, experi
 
 ROOT = Path(__file__).resolve().parent.parent
 SCREENSHOTS = ROOT / "out" / "screenshots"
-CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_VARIABLE = "CAUSALPLAN_TEST_CHROMIUM"
+CHROMIUM_NAMES = ("chromium", "chromium-browser")
+"""Debian's name for the binary, and Ubuntu's."""
 CHROMIUM_ARGS = [
     "--no-sandbox",
     "--disable-gpu",
@@ -33,6 +40,25 @@ CHROMIUM_ARGS = [
 LAPTOP: ViewportSize = {"width": 1366, "height": 900}
 
 
+def chromium_executable() -> str:
+    """Return the Chromium binary to drive: the variable's, else the first of ``CHROMIUM_NAMES`` on PATH.
+
+    Playwright's own browser download is never used (it cannot be fetched here); without a
+    Chromium the tests fail saying how to get one, rather than at a path that is not there.
+    """
+    named = os.environ.get(CHROMIUM_VARIABLE)
+    if named:
+        return named
+    for name in CHROMIUM_NAMES:
+        found = shutil.which(name)
+        if found:
+            return found
+    pytest.fail(
+        f"No Chromium on PATH (looked for {', '.join(CHROMIUM_NAMES)}): README command 2 installs Debian's "
+        f"'chromium' when it is missing (apt-get install chromium), or set {CHROMIUM_VARIABLE} to a binary."
+    )
+
+
 @pytest.fixture(scope="module")
 def playwright() -> Iterator[Playwright]:
     with sync_playwright() as running:
@@ -41,7 +67,7 @@ def playwright() -> Iterator[Playwright]:
 
 @pytest.fixture(scope="module")
 def browser(playwright: Playwright) -> Iterator[Browser]:
-    launched = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+    launched = playwright.chromium.launch(executable_path=chromium_executable(), args=CHROMIUM_ARGS)
     yield launched
     launched.close()
 

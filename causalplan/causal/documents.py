@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import re
+import sys
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -31,8 +33,63 @@ class DuplicateKeyError(ValueError):
         self.index = index
 
 
+class NumberTooLongError(ValueError):
+    """An integer has more digits than Python reads from text (``sys.get_int_max_str_digits``, 4,300).
+
+    ``line`` (1-based) is where it stands, when known. Python's own ValueError would otherwise
+    escape every reader as a traceback: no document here needs such a number.
+    """
+
+    def __init__(self, digits: int, line: int | None = None) -> None:
+        self.digits = digits
+        self.line = line
+        where = f" at line {line}" if line is not None else ""
+        super().__init__(f"a number of {digits:,} digits{where} (at most {max_integer_digits():,} can be read)")
+
+
+def max_integer_digits() -> int:
+    """Return how many digits an integer read from text may have (Python's limit; 0 there means none)."""
+    return sys.get_int_max_str_digits() or sys.maxsize
+
+
+def read_integer(digits: str) -> int:
+    """``json``'s ``parse_int``: the integer, or NumberTooLongError (no line yet) beyond Python's limit."""
+    try:
+        return int(digits)
+    except ValueError:
+        raise NumberTooLongError(len(digits.lstrip("-"))) from None
+
+
+def load_json(text: str) -> object:
+    """Return the JSON value in ``text``, refusing a key named twice and a number too long to read.
+
+    DuplicateKeyError and NumberTooLongError (with its line) say which; json.JSONDecodeError the rest.
+    """
+    try:
+        return json.loads(text, object_pairs_hook=refuse_duplicate_keys, parse_int=read_integer)
+    except NumberTooLongError as exc:
+        raise located_long_number(text, exc) from None
+
+
+def located_long_number(text: str, exc: NumberTooLongError) -> NumberTooLongError:
+    """Return ``exc`` with the line of the first run of that many digits in ``text``, when found."""
+    found = re.search(rf"\d{{{exc.digits}}}", text)
+    if found is None:
+        return exc
+    return NumberTooLongError(exc.digits, text.count("\n", 0, found.start()) + 1)
+
+
 class _UniqueKeyLoader(SAFE_LOADER):  # type: ignore[misc, valid-type]
-    """The safe loader, refusing a mapping that names a key twice (PyYAML keeps the last one)."""
+    """The safe loader, refusing a mapping that names a key twice (PyYAML keeps the last one), and
+    an integer too long to read (NumberTooLongError with its line, not PyYAML's bare ValueError)."""
+
+    def construct_long_checked_int(self, node: yaml.ScalarNode) -> int:
+        try:
+            value: int = self.construct_yaml_int(node)
+        except ValueError:
+            digits = sum(character.isdigit() for character in str(node.value))
+            raise NumberTooLongError(digits, node.start_mark.line + 1) from None
+        return value
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[object, object]:
         seen: set[object] = set()
@@ -49,6 +106,9 @@ class _UniqueKeyLoader(SAFE_LOADER):  # type: ignore[misc, valid-type]
             seen.add(key)
         mapping: dict[object, object] = super().construct_mapping(node, deep=deep)
         return mapping
+
+
+_UniqueKeyLoader.add_constructor("tag:yaml.org,2002:int", _UniqueKeyLoader.construct_long_checked_int)
 
 
 def load_yaml_refusing_duplicates(text: str) -> object:
@@ -81,9 +141,21 @@ def located_duplicate_key(text: str, exc: DuplicateKeyError) -> DuplicateKeyErro
     except DuplicateKeyError as located:
         if located.key == exc.key:
             return located
-    except (yaml.YAMLError, RecursionError):
+    except (yaml.YAMLError, RecursionError, NumberTooLongError):
         pass
     return exc
+
+
+def _long_number(file_name: str | None, exc: NumberTooLongError) -> tuple[object, SourceMap, list[Diagnostic]]:
+    return _unreadable(
+        file_name,
+        error(
+            "number_too_long",
+            f"The document holds a number of {exc.digits:,} digits; at most {max_integer_digits():,} can be read.",
+            Location(file=file_name, line=exc.line),
+            "No model, mapping or trial needs such a number: remove it, or write it in quotes.",
+        ),
+    )
 
 
 def _duplicate_key(file_name: str | None, exc: DuplicateKeyError) -> tuple[object, SourceMap, list[Diagnostic]]:
@@ -179,9 +251,11 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
     text = text.removeprefix("\ufeff")
     if _looks_like_json(text, file_name):
         try:
-            data = json.loads(text, object_pairs_hook=refuse_duplicate_keys)
+            data = load_json(text)
         except DuplicateKeyError as exc:
             return _duplicate_key(file_name, located_duplicate_key(text, exc))
+        except NumberTooLongError as exc:
+            return _long_number(file_name, exc)
         except RecursionError:
             return _too_deep(file_name)
         except json.JSONDecodeError as exc:
@@ -200,6 +274,8 @@ def parse_text(text: str, file_name: str | None = None) -> tuple[object, SourceM
         data = load_yaml_refusing_duplicates(text)
     except DuplicateKeyError as exc:
         return _duplicate_key(file_name, exc)
+    except NumberTooLongError as exc:
+        return _long_number(file_name, exc)
     except RecursionError:
         return _too_deep(file_name)
     except yaml.YAMLError as exc:

@@ -14,7 +14,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from causalplan.causal.documents import read_document
+from causalplan.causal.documents import NumberTooLongError, read_document, read_integer
 from causalplan.errors import InputFileError
 
 
@@ -35,7 +35,8 @@ def read_participants(path: Path) -> list[Participant]:
         return _group(_json_lines(path))
     data, _source, problems = read_document(path)
     if problems:
-        raise InputFileError(f"{path} could not be read: {problems[0].message}")
+        line = problems[0].location.line
+        raise InputFileError(f"{path} could not be read{f' (line {line})' if line else ''}: {problems[0].message}")
     if isinstance(data, dict) and "participants" in data:
         return _from_export(data, path)
     if not isinstance(data, list):
@@ -57,7 +58,9 @@ def _json_lines(path: Path) -> list[tuple[str, object]]:
             continue
         where = f"line {number}"
         try:
-            entries.append((where, json.loads(raw.decode("utf-8-sig"))))
+            entries.append((where, json.loads(raw.decode("utf-8-sig"), parse_int=read_integer)))
+        except NumberTooLongError as exc:
+            entries.append((where, _Unreadable(f"{where} holds {exc}")))
         except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
             entries.append((where, _Unreadable(f"{where} is not a JSON object ({type(exc).__name__})")))
     return entries

@@ -5,6 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import StrEnum
 
+MIN_TIME_LIMIT = 0.001
+"""The shortest time limit a request may give (seconds). A millisecond still lets the exact MDP
+solve a small object and a known answer come back; below it a limit is a mistake (1e-6, or a
+denormal such as 5e-324) and is refused where it is given. The CLI's flag asks for 0.1 at least:
+it always starts a planner."""
+
 
 class PlanStatus(StrEnum):
     """The closed set of planner outcomes; fallbacks and exit codes key on these, never on text."""

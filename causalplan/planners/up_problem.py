@@ -11,6 +11,7 @@ unified-planning is slow to import, so it is imported inside the functions that 
 
 from __future__ import annotations
 
+import shutil
 import time
 import warnings
 from collections.abc import Callable, Mapping
@@ -231,8 +232,24 @@ def compile_for_engine(problem: Problem, engine: str) -> tuple[Problem, list[Cal
     return problem, map_backs
 
 
+ENGINE_PROGRAMS = {"enhsp": ("java", "a Java runtime, e.g. Debian's default-jre-headless")}
+"""Programs an engine runs that no wheel ships (by the engine's name before any ``-opt``), and where to get them."""
+
+
+def missing_program(engine: str) -> str | None:
+    """Return why ``engine`` cannot run when a program it needs is not on PATH (UP loads it all the same)."""
+    needed = ENGINE_PROGRAMS.get(engine.removesuffix("-opt"))
+    if needed is None or shutil.which(needed[0]) is not None:
+        return None
+    program, source = needed
+    return f"'{engine}' runs '{program}', which is not on PATH: install {source}."
+
+
 def engine_problem(engine: str) -> str | None:
-    """Return None when the UP engine is installed and loads, else why it cannot be used."""
+    """Return None when the UP engine is installed, loads and has what it runs, else why it cannot be used."""
+    missing = missing_program(engine)
+    if missing is not None:
+        return missing
     try:
         _quiet_environment()
         from unified_planning.shortcuts import get_environment
@@ -262,6 +279,9 @@ def solve_with_up(
     """
     started = time.perf_counter()
     timing: dict[str, float] = {}
+    missing = missing_program(engine)
+    if missing is not None:  # else the engine's failure to start reads as "no plan"
+        return SearchOutcome(PlanStatus.ERROR, timing={"total": 0.0}, message=missing)
     try:
         _quiet_environment()
         from unified_planning.shortcuts import OneshotPlanner

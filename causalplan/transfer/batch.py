@@ -16,6 +16,8 @@ answers are cached, and a plan's simulation is cached too, so the verdicts are e
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import time
 from collections.abc import Callable, Iterable, Iterator
@@ -23,7 +25,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from causalplan.causal.diagnostics import Location, Report, Severity, error
-from causalplan.causal.documents import SourceMap, read_document
+from causalplan.causal.documents import NumberTooLongError, SourceMap, read_document, read_integer
+from causalplan.errors import InputFileError
 from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.planners.val import PlanRejectedError, ValidatorError
@@ -31,6 +34,8 @@ from causalplan.transfer.verdict import Reason, TransferVerdict, Verdict, transf
 
 TRIAL_FIELDS = ("model", "mapping")
 """The fields every trial must have (``id`` is optional)."""
+CSV_FIELDS = ("id", *TRIAL_FIELDS)
+"""The columns of a CSV of trials (``id`` may be empty or absent)."""
 
 
 @dataclass(frozen=True)
@@ -176,9 +181,11 @@ def _parse_line(raw: bytes) -> tuple[object, str | None]:
     if not text.strip():
         return _BLANK, None
     try:
-        return json.loads(text), None
+        return json.loads(text, parse_int=read_integer), None
     except json.JSONDecodeError as exc:
         return None, f"it is not JSON ({exc.msg}, column {exc.colno})"
+    except NumberTooLongError as exc:
+        return None, f"it holds {exc}"
     except RecursionError:
         return None, "it is nested too deeply"
 
@@ -195,6 +202,78 @@ def _trial(entry: object, default_id: str, where: str, line: int | None) -> Tria
         lacks = " and no ".join(f"'{name}'" for name in missing)
         return _unreadable_trial(trial_id, line, f"{where} could not be read: it has no {lacks}.")
     return Trial(trial_id, entry["model"], entry["mapping"], line)
+
+
+def csv_to_json_lines(text: str) -> str:
+    """Return a CSV of trials (columns id, model, mapping; model and mapping cells hold JSON) as JSON Lines.
+
+    Read as a spreadsheet writes it: with a byte-order mark or not, lines ending in CR LF, LF or a
+    bare CR (old Mac and Excel files). A row without an id gets ``row-N`` (N its row, the header
+    being row 1). InputFileError names the row and column of a cell that is not JSON (or holds a
+    number too long to read), the missing columns, or the rows that share an id.
+    """
+    # newline="": the csv module splits the lines itself, whichever ending they have (its docs' rule).
+    reader = csv.DictReader(io.StringIO(text.removeprefix("\ufeff"), newline=""))
+    try:
+        columns = list(reader.fieldnames or [])
+        rows = list(reader)
+    except csv.Error as exc:
+        raise InputFileError(
+            f"The CSV could not be read at line {reader.line_num}: {exc}.", details={"line": reader.line_num}
+        ) from None
+    missing = [name for name in TRIAL_FIELDS if name not in columns]
+    if missing:
+        raise InputFileError(
+            f"The CSV has no column {' and no column '.join(repr(name) for name in missing)}; "
+            f"its first line must name the columns {', '.join(CSV_FIELDS)}.",
+            details={"columns": columns},
+        )
+    lines: list[str] = []
+    rows_of: dict[str, list[int]] = {}
+    for number, row in enumerate(rows, start=2):
+        trial_id = row.get("id") or f"row-{number}"
+        rows_of.setdefault(trial_id, []).append(number)
+        entry: dict[str, object] = {"id": trial_id}
+        for name in TRIAL_FIELDS:
+            entry[name] = _json_cell(row.get(name) or "", number, name)
+        lines.append(json.dumps(entry))
+    _refuse_shared_ids(rows_of)
+    return "\n".join(lines)
+
+
+def _json_cell(cell: str, row: int, column: str) -> object:
+    try:
+        return json.loads(cell, parse_int=read_integer)
+    except json.JSONDecodeError as exc:
+        why = f"is not JSON ({exc.msg}, column {exc.colno})"
+    except NumberTooLongError as exc:
+        why = f"holds {exc}"
+    except RecursionError:
+        why = "is nested too deeply"
+    raise InputFileError(f"Row {row} of the CSV: the {column} cell {why}.", details={"row": row, "column": column})
+
+
+def _refuse_shared_ids(rows_of: dict[str, list[int]]) -> None:
+    """Raise InputFileError naming every id that more than one row has, with its rows.
+
+    Results are matched to trials by id: two trials with one id cannot be told apart afterwards.
+    """
+    shared = {trial_id: rows for trial_id, rows in rows_of.items() if len(rows) > 1}
+    if not shared:
+        return
+
+    def listed(places: list[int]) -> str:
+        more = f" and {len(places) - 5} more" if len(places) > 5 else ""
+        return ", ".join(map(str, places[:5])) + more
+
+    first = list(shared.items())[:5]
+    named = "; ".join(f"{trial_id!r} (rows {listed(rows)})" for trial_id, rows in first)
+    more = f" and {len(shared) - 5} more" if len(shared) > 5 else ""
+    raise InputFileError(
+        f"{len(shared)} trial id(s) are used more than once: {named}{more}. Give each trial its own id "
+        "(or none: it is then named after its place).",
+        details={"duplicate_ids": {trial_id: rows[:100] for trial_id, rows in list(shared.items())[:100]}},
+    )
 
 
 def _unreadable_verdict(problem: str, line: int | None) -> TransferVerdict:

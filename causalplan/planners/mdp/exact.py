@@ -2,8 +2,8 @@
 
 Every attempt adds a fit to the made or failed ones, so the reachable state graph is acyclic
 and one memoised backward pass (value iteration in topological order) gives the exact optimal
-values. Beyond ``MAX_RELEVANT_FITS`` relevant fits, or ``MAX_STATES`` states, or the time
-limit, it stops at once with status ``too_large``; it never hangs. The heuristic search
+values. Beyond ``MAX_RELEVANT_FITS`` relevant fits or ``MAX_STATES`` states it stops at once
+with status ``too_large``, and at the time limit with ``timeout``; it never hangs. The heuristic search
 (``search.py``) finds the same optimum from the start state over far fewer states; this
 solver is the reference it is tested against.
 """
@@ -30,7 +30,11 @@ MAX_STATES = 600_000
 
 
 class _TooLarge(Exception):
-    """Raised inside the search when the state budget or the time limit is exhausted."""
+    """Raised inside the search when the state budget is exhausted."""
+
+
+class _OutOfTime(Exception):
+    """Raised inside the search when the time limit has passed."""
 
 
 @dataclass(frozen=True)
@@ -53,8 +57,10 @@ class _Solver:
         known = self.values.get(state)
         if known is not None:
             return known
-        if len(self.values) >= MAX_STATES or time.monotonic() > self.deadline:
+        if len(self.values) >= MAX_STATES:
             raise _TooLarge
+        if time.monotonic() > self.deadline:
+            raise _OutOfTime
         if self.c.goal_holds(parts):
             result = _Value(1.0, 1.0, 0.0, -1)
         elif not self.c.goal_holds(self.c.reachable_parts(parts, unusable)):
@@ -90,7 +96,7 @@ class _Solver:
 
 
 def solve_mdp(task: PlanningTask, time_limit: float = 10.0, step_cost: float = STEP_COST) -> MdpSolution:
-    """Solve the task's MDP exactly; ``too_large`` (quickly) when it is beyond the limits."""
+    """Solve the task's MDP exactly; ``too_large`` (quickly) beyond its size limits, ``timeout`` at ``time_limit``."""
     fits = relevant_fits(task)
     if len(fits) > MAX_RELEVANT_FITS:
         return MdpSolution(
@@ -102,12 +108,17 @@ def solve_mdp(task: PlanningTask, time_limit: float = 10.0, step_cost: float = S
     start: State = (0, 0)
     try:
         root = solver.solve(start, solver.c.base, 0)
+    except _OutOfTime:
+        message = (
+            f"The exact MDP did not finish within {time_limit:g} s "
+            f"({len(solver.values):,} states solved over {len(fits)} relevant fits)."
+        )
+        return MdpSolution(PlanStatus.TIMEOUT, states=len(solver.values), relevant_fits=len(fits), message=message)
     except (_TooLarge, RecursionError) as exc:
         message = (
             "The MDP's plans are too long to solve exactly."
             if isinstance(exc, RecursionError)
-            else f"The exact MDP over {len(fits)} relevant fits passed {len(solver.values):,} "
-            f"states or {time_limit:g} s; it was stopped."
+            else f"The exact MDP over {len(fits)} relevant fits passed {len(solver.values):,} states; it was stopped."
         )
         return MdpSolution(PlanStatus.TOO_LARGE, states=len(solver.values), relevant_fits=len(fits), message=message)
     if root.success == 0.0:

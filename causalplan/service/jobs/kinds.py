@@ -9,13 +9,11 @@ own (``video``, ``fit_estimation``).
 
 from __future__ import annotations
 
-import csv
-import io
-import json
 import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from causalplan.errors import InputFileError
 from causalplan.limits import LimitExceededError
 from causalplan.service.errors import InvalidRequestError
 from causalplan.service.jobs.fit_estimation import prepare_fit_estimation, run_fit_estimation_job
@@ -24,6 +22,7 @@ from causalplan.service.jobs.work import Kind, Progress, in_pool
 from causalplan.service.pool import jobs as worker_jobs
 from causalplan.service.pool.catalog import worker_catalog
 from causalplan.service.storage.jobs import JobKind
+from causalplan.transfer import batch
 from causalplan.transfer.batch import Trial, TrialResult, read_trials, run_batch
 
 if TYPE_CHECKING:
@@ -33,39 +32,17 @@ CHUNK_SIZE = 20
 """Trials a planner worker judges per call: small enough for steady progress and a prompt cancel."""
 CONSENSUS_GRACE_SECONDS = 60.0
 """A consensus job's worker may take this long beyond its trials' time limits (building, aligning)."""
-CSV_FIELDS = ("id", "model", "mapping")
 
 
 # -- batch --------------------------------------------------------------------------------------
 
 
 def csv_to_json_lines(text: str) -> str:
-    """Return a CSV upload (columns id, model, mapping; model and mapping cells hold JSON) as JSON Lines.
-
-    A row whose cell is not JSON keeps the text, so the batch reader reports that line's problem.
-    """
-    reader = csv.DictReader(io.StringIO(text))
-    missing = [name for name in ("model", "mapping") if name not in (reader.fieldnames or [])]
-    if missing:
-        raise InvalidRequestError(
-            f"The CSV upload has no column {' and no column '.join(repr(name) for name in missing)}; "
-            f"its first line must name the columns {', '.join(CSV_FIELDS)}.",
-            details={"columns": list(reader.fieldnames or [])},
-        )
-    lines = []
-    for number, row in enumerate(reader, start=2):
-        entry: dict[str, object] = {"id": row.get("id") or f"row-{number}"}
-        for name in ("model", "mapping"):
-            cell = row.get(name) or ""
-            try:
-                entry[name] = json.loads(cell)
-            except json.JSONDecodeError as exc:
-                raise InvalidRequestError(
-                    f"Row {number} of the CSV upload: the {name} cell is not JSON ({exc.msg}, column {exc.colno}).",
-                    details={"row": number, "column": name},
-                ) from None
-        lines.append(json.dumps(entry))
-    return "\n".join(lines)
+    """Return a CSV upload as JSON Lines (``transfer.batch.csv_to_json_lines``); its problems are 422s."""
+    try:
+        return batch.csv_to_json_lines(text)
+    except InputFileError as exc:
+        raise InvalidRequestError(exc.message, details=exc.details) from None
 
 
 def read_uploaded_trials(text: str, limit: int) -> list[Trial]:
@@ -101,14 +78,15 @@ def prepare_batch(request: dict[str, Any], services: Services) -> dict[str, Any]
         "planner": resolve_planner(request.get("planner", "auto")),
         "time_limit": resolve_time_limit(request.get("time_limit"), services.settings),
         "simulate": bool(request.get("simulate", True)),
+        "validate": bool(request.get("validate", True)),
     }
 
 
 def judge_trials(
-    trials: list[Trial], planner: str, time_limit: float, simulate: bool, folders: tuple[Path, ...]
+    trials: list[Trial], planner: str, time_limit: float, simulate: bool, folders: tuple[Path, ...], val: bool = False
 ) -> list[TrialResult]:
-    """Return the results of a chunk of trials (what a planner worker runs)."""
-    return run_batch(trials, worker_catalog(folders), planner, time_limit, simulate)
+    """Return the results of a chunk of trials (what a planner worker runs); ``val``: VAL checks each plan."""
+    return run_batch(trials, worker_catalog(folders), planner, time_limit, simulate, val=val)
 
 
 def _summary(results: list[TrialResult]) -> dict[str, Any]:
@@ -122,6 +100,7 @@ def run_batch_job(request: dict[str, Any], services: Services, progress: Progres
     settings = services.settings
     trials = read_uploaded_trials(request["trials"], settings.max_job_trials)
     planner, time_limit, simulate = request["planner"], float(request["time_limit"]), bool(request["simulate"])
+    val = bool(request.get("validate", False))  # jobs stored before VAL was asked for ran without it
     total = len(trials)
     progress(0, total)
     if settings.dask_scheduler is not None:
@@ -137,7 +116,7 @@ def run_batch_job(request: dict[str, Any], services: Services, progress: Progres
         ordered = run_batch_on_cluster(
             trials,
             services.catalog,
-            JudgeOptions(planner, time_limit, simulate),
+            JudgeOptions(planner, time_limit, simulate, val),
             address=settings.dask_scheduler,
             on_chunk=on_chunk,
         )
@@ -147,7 +126,7 @@ def run_batch_job(request: dict[str, Any], services: Services, progress: Progres
     for start in range(0, total, CHUNK_SIZE):
         chunk = trials[start : start + CHUNK_SIZE]
         timeout = len(chunk) * (time_limit + settings.solve_grace_seconds)
-        results.extend(in_pool(services, judge_trials, (chunk, planner, time_limit, simulate, folders), timeout))
+        results.extend(in_pool(services, judge_trials, (chunk, planner, time_limit, simulate, folders, val), timeout))
         progress(len(results), total)
     return _summary(results)
 

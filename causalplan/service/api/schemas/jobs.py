@@ -6,8 +6,9 @@ from __future__ import annotations
 import uuid
 from typing import Annotated, Any, Literal
 
-from pydantic import Field
+from pydantic import Field, StrictBool, StrictFloat, StrictInt
 
+from causalplan.planners.result import MIN_TIME_LIMIT
 from causalplan.service.api.schemas.common import (
     ErrorDetailOut,
     InputModel,
@@ -19,7 +20,12 @@ from causalplan.service.api.schemas.plans import SimulationIn, _Solve
 from causalplan.service.storage.jobs import JobKind, JobStatus
 
 _PLANNER = Field(default="auto", min_length=1, max_length=64, description="A planner name from GET /health.")
-_TIME_LIMIT = Field(default=None, gt=0, allow_inf_nan=False, description="Seconds per trial's solve.")
+_TIME_LIMIT = Field(
+    default=None,
+    ge=MIN_TIME_LIMIT,
+    allow_inf_nan=False,
+    description=f"Seconds per trial's solve (at least {MIN_TIME_LIMIT:g}).",
+)
 _SIMULATE = Field(default=True, description="Check each plan in the physics simulator (as `causalplan transfer`).")
 
 
@@ -34,8 +40,14 @@ class BatchJobIn(InputModel):
     )
     format: Literal["jsonl", "csv"] = Field(default="jsonl", description="How `trials` is written.")
     planner: str = _PLANNER
-    time_limit: float | None = _TIME_LIMIT
-    simulate: bool = _SIMULATE
+    time_limit: StrictFloat | None = _TIME_LIMIT
+    simulate: StrictBool = _SIMULATE
+    validate_plan: StrictBool = Field(
+        default=True,
+        alias="validate",
+        description="Check each distinct plan with VAL, as `causalplan batch` does by default (a trial whose plan "
+        "VAL rejects is undecided); false: the replay alone.",
+    )
 
 
 class SimulationJobIn(SimulationIn):
@@ -53,12 +65,12 @@ class ConsensusJobIn(InputModel):
         description='JSON Lines, one {"id", "model", "mapping"} a line (the mapping may be absent; lines '
         "with the same id are one person mapping several objects).",
     )
-    min_support: float = Field(
+    min_support: StrictFloat = Field(
         default=0.5, ge=0, le=1, description="Share of the crowd a rule needs to enter the consensus."
     )
     planner: str = _PLANNER
-    time_limit: float | None = _TIME_LIMIT
-    simulate: bool = _SIMULATE
+    time_limit: StrictFloat | None = _TIME_LIMIT
+    simulate: StrictBool = _SIMULATE
 
 
 class VideoPlanIn(_Solve):
@@ -90,23 +102,23 @@ class FitEstimationJobIn(InputModel):
 
     kind: Literal["fit_estimation"]
     object: str = Field(min_length=1, max_length=200, description="A catalog object id (GET /v1/objects).")
-    trials: int = Field(
+    trials: StrictInt = Field(
         default=200,
         ge=1,
         le=100_000,
         description="Noisy insertions per fit; trials times fits at most the server's max_job_trials.",
     )
-    seed: int = Field(
+    seed: StrictInt = Field(
         default=0, ge=-(2**63), le=2**63 - 1, description="Seed of the grasp noise: the same seed, the same numbers."
     )
-    noise_mm: float = Field(
+    noise_mm: StrictFloat = Field(
         default=1.0,
         ge=0,
         le=20,
         allow_inf_nan=False,
         description="Standard deviation of where the part sits in the gripper, per axis (millimetres).",
     )
-    noise_deg: float = Field(
+    noise_deg: StrictFloat = Field(
         default=1.0,
         ge=0,
         le=30,

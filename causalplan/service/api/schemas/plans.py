@@ -5,9 +5,9 @@ from __future__ import annotations
 import uuid
 from typing import Any, Literal
 
-from pydantic import ConfigDict, Field, model_validator
+from pydantic import ConfigDict, Field, StrictBool, StrictFloat, model_validator
 
-from causalplan.planners.result import PlanStatus
+from causalplan.planners.result import MIN_TIME_LIMIT, PlanStatus
 from causalplan.service.api.schemas.common import (
     DiagnosticOut,
     InputModel,
@@ -28,17 +28,18 @@ class _Solve(InputModel):
         max_length=64,
         description="A planner name from GET /health ('planners'); 'auto' lets the service choose.",
     )
-    time_limit: float | None = Field(
+    time_limit: StrictFloat | None = Field(
         default=None,
-        gt=0,
+        ge=MIN_TIME_LIMIT,
         allow_inf_nan=False,
-        description="Seconds the planner may run; at most the server's maximum (GET /health, 'limits').",
+        description=f"Seconds the planner may run: at least {MIN_TIME_LIMIT:g}, at most the server's maximum "
+        "(GET /health, 'limits').",
     )
-    validate_plan: bool = Field(
-        default=False,
+    validate_plan: StrictBool = Field(
+        default=True,
         alias="validate",
-        description="Also check the plan with VAL on the readable PDDL (the answer's 'validated_by'); "
-        "a plan VAL rejects is an error, never an answer.",
+        description="Check the plan with VAL on the readable PDDL too (the answer's 'validated_by'), as the CLI "
+        "does by default; a plan VAL rejects is an error, never an answer. false: the replay alone.",
     )
 
     @model_validator(mode="after")
@@ -52,7 +53,7 @@ class PlanIn(_Solve):
     """POST /v1/plans: plan a model, on its own object or (with ``mapping``) on another."""
 
     mapping: MappingDocument | None = Field(default=None, description="A step-3 mapping: plan for that object.")
-    include_pddl: bool = Field(default=False, description="Also return the PDDL domain and problem.")
+    include_pddl: StrictBool = Field(default=False, description="Also return the PDDL domain and problem.")
 
 
 class TransferIn(_Solve):
@@ -69,10 +70,10 @@ class TransferIn(_Solve):
 class SimulationIn(PlanIn):
     """POST /v1/simulations: what POST /v1/plans takes, and whether to draw the final assembly."""
 
-    picture: bool = Field(
+    picture: StrictBool = Field(
         default=True, description="Also return a PNG of the final assembly as a data URL (not with 'robot')."
     )
-    robot: bool = Field(
+    robot: StrictBool = Field(
         default=False,
         description="Have the Franka Panda carry out the plan: per step what it did ('robot' in each step), "
         "and in the answer's 'robot' whether it could (else the reason robot_cannot_execute, its step and code).",
