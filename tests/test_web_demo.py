@@ -40,9 +40,15 @@ def test_each_client_has_its_own_starts_per_window(tmp_path: Path) -> None:
 
 
 def test_no_limit_when_the_setting_is_zero(tmp_path: Path) -> None:
-    starts = DemoStarts(migrated_engine(tmp_path), 0)
+    engine, clock = migrated_engine(tmp_path), Clock(10 * WINDOW_SECONDS + 15)
+    unlimited = DemoStarts(engine, 0, clock)
     for _ in range(100):
-        starts.admit("a")
+        unlimited.admit("a")
+    limited = DemoStarts(engine, 2, clock)  # the same database: the unlimited starts were never counted
+    limited.admit("a")
+    limited.admit("a")
+    with pytest.raises(TooManyDemoStartsError):
+        limited.admit("a")
 
 
 def test_try_refuses_a_client_past_its_starts_this_minute(tmp_path: Path) -> None:
