@@ -137,7 +137,8 @@ def test_a_worker_killed_mid_batch_loses_nothing_and_counts_nothing_twice(
     assert killed
 
 
-def test_an_unreachable_scheduler_is_a_clear_error(catalog: Catalog) -> None:
+def test_an_unreachable_scheduler_is_a_clear_error(catalog: Catalog, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("causalplan.transfer.cluster.CONNECT_TIMEOUT", "1s")  # Dask retries until then
     with pytest.raises(ClusterError, match=r"Cannot reach the Dask scheduler at tcp://127\.0\.0\.1:9"):
         run_batch_on_cluster([], catalog, address="tcp://127.0.0.1:9")
 

@@ -1,24 +1,38 @@
-"""Runs every planner on every task, each run in its own process with a time and memory limit (``processes``).
+"""Runs every planner on every task, each run in a process of its own with a time and memory limit.
 
-A run that crashes, is killed at its limit or prints nonsense becomes a row with that status;
-it never stops the comparison.
+Each run is forked from a warm parent: multiprocessing's fork server, which has preloaded the
+worker module (``worker``: the planners, FD's translator, the MDP), so a run starts with
+nothing left to import and no state of an earlier run; ``pebble`` starts it, waits for its
+record and kills it at its limit. A run that crashes, is killed at its limit or runs out of
+memory becomes a row with that status; it never stops the comparison. Plans are checked by
+replay inside the run and by VAL here in the parent (each distinct plan of a task once),
+outside the timed part.
 """
 
 from __future__ import annotations
 
-import json
+import multiprocessing
 import statistics
-import sys
 from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass
+from multiprocessing.context import ForkServerContext
+from pathlib import Path
 
-from causalplan.comparison.tasks import ComparisonTask
-from causalplan.comparison.worker import RECORD_FILE
+from pebble import ProcessExpired, concurrent
+
+from causalplan.comparison import worker
+from causalplan.comparison.tasks import ComparisonTask, build
+from causalplan.pddl.task import PlanningTask
+from causalplan.pddl.writer import compile_task
 from causalplan.planners import processes
+from causalplan.planners.val import ValVerdict, validate
 
 GRACE_SECONDS = 20.0
-"""Time a worker gets beyond the planner's limit: its imports, the replay and UP's validator."""
+"""Time a run gets beyond the planner's limit: its replay, and for ``up:`` planners loading unified-planning."""
+
+PRELOADED = ("__main__", "causalplan.comparison.worker")
+"""What the fork server imports once for every run (``__main__`` too, or each run would import it again)."""
 
 
 @dataclass(frozen=True)
@@ -42,34 +56,85 @@ class RunRecord:
         return asdict(self)
 
 
-def run_once(
-    task: ComparisonTask, planner: str, time_limit: float, memory_mb: int, val: bool = False
-) -> dict[str, object]:
-    """Run one planner on one task in a fresh worker process; return its raw record."""
-    request = json.dumps({"task": task.spec, "planner": planner, "time_limit": time_limit, "val": val})
-    command = [sys.executable, "-m", "causalplan.comparison.worker"]
-    with processes.private_folder("causalplan-compare-") as folder:
-        run = processes.run_limited(
-            command, folder=folder, time_limit=time_limit + GRACE_SECONDS, memory_mb=memory_mb, stdin=request.encode()
-        )
+def fork_server(planners: Iterable[str] = ()) -> ForkServerContext:
+    """Return the fork server's context, set to preload what runs of ``planners`` import.
+
+    The preload counts only when the server starts (with this process's first run); it is
+    what makes runs start warm, never what makes them right.
+    """
+    context = multiprocessing.get_context("forkserver")
+    modules = [*PRELOADED]
+    if any(planner.startswith("up:") for planner in planners):
+        modules.append("causalplan.planners.up_problem")
+    context.set_forkserver_preload(modules)
+    return context
+
+
+def _failed(folder: Path, exc: BaseException) -> dict[str, object]:
+    """Return the record of a run whose process raised ``exc`` or died (its output's last line says why)."""
+    if isinstance(exc, MemoryError):
+        return {"status": "out_of_memory", "message": "the worker failed: MemoryError"}
+    if isinstance(exc, ProcessExpired):
         try:
-            record = json.loads((folder / RECORD_FILE).read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError):
-            record = None
-    if run.timed_out:
-        return {"status": "timeout", "message": f"killed after {time_limit + GRACE_SECONDS:g} s"}
-    if not isinstance(record, dict):
-        tail = run.output.strip().splitlines()[-1:] or [f"exit code {run.returncode}"]
+            output = (folder / worker.OUTPUT_FILE).read_text(encoding="utf-8", errors="replace")
+        except OSError:
+            output = ""
+        tail = output.strip().splitlines()[-1:] or [f"exit code {exc.exitcode}"]
         status = "out_of_memory" if "MemoryError" in tail[0] else "error"
         return {"status": status, "message": f"the worker failed: {tail[0]}"}
+    return {"status": "error", "message": f"the worker failed: {type(exc).__name__}: {exc}"}
+
+
+def _run(
+    task: PlanningTask, planner: str, time_limit: float, memory_mb: int, context: ForkServerContext
+) -> dict[str, object]:
+    """Run one planner on one task in a new process forked from the fork server; return its raw record."""
+    limit = time_limit + GRACE_SECONDS
+    # pebble 5.2 reads the keyword "context"; its type stub names it "mp_context", which it ignores.
+    start = concurrent.process(timeout=limit, context=context, name=f"compare {planner}")  # type: ignore[call-overload]
+    in_a_process = start(worker.run)
+    with processes.private_folder("causalplan-compare-") as folder:
+        future = in_a_process(task, planner, time_limit, memory_mb, folder)
+        try:
+            record: dict[str, object] = future.result()
+        except TimeoutError:
+            return {"status": "timeout", "message": f"killed after {limit:g} s"}
+        except BaseException as exc:  # noqa: BLE001 - whatever ended the run is its row's message
+            return _failed(folder, exc)
     return record
 
 
-def _is_valid(record: dict[str, object]) -> bool:
-    """Return whether every check of a solved run passed: replay, UP's validator, and VAL if it ran."""
+def _checked_by_val(task: PlanningTask, record: dict[str, object]) -> dict[str, object]:
+    """Return ``record`` with VAL's verdict on its plan (VAL runs once per distinct plan of a task)."""
+    actions = record.get("actions")
     verdicts = record.get("validated_by")
-    checked = all(verdict == "valid" for verdict in verdicts.values()) if isinstance(verdicts, dict) else True
-    return bool(record.get("valid_under_model")) and record.get("validated_by_up") is not False and checked
+    if not isinstance(actions, list) or not isinstance(verdicts, dict):
+        return record
+    readable = compile_task(task)  # the person's rules as written: one derived clause per rule
+    report = validate(readable.domain, readable.problem, [(action, tuple(args)) for action, args in actions])
+    message = record.get("message") or ("" if report.verdict is ValVerdict.VALID else report.words)
+    return {**record, "validated_by": {**verdicts, "val": report.verdict.value}, "message": message}
+
+
+def _record(
+    task: PlanningTask, planner: str, time_limit: float, memory_mb: int, val: bool, context: ForkServerContext
+) -> dict[str, object]:
+    record = _run(task, planner, time_limit, memory_mb, context)
+    return _checked_by_val(task, record) if val else record
+
+
+def run_once(
+    task: ComparisonTask, planner: str, time_limit: float, memory_mb: int, val: bool = False
+) -> dict[str, object]:
+    """Run one planner on one task in a process of its own; return its raw record (``val``: VAL checks the plan)."""
+    return _record(build(task.spec), planner, time_limit, memory_mb, val, fork_server([planner]))
+
+
+def _is_valid(record: dict[str, object]) -> bool:
+    """Return whether every check of a solved run passed: replay, VAL if it ran, UP's validator for ``up:`` runs."""
+    verdicts = record.get("validated_by")
+    checked = all(verdict == "valid" for verdict in verdicts.values()) if isinstance(verdicts, dict) else False
+    return bool(record.get("valid_under_model")) and checked
 
 
 def _summary(task: ComparisonTask, planner: str, records: list[dict[str, object]]) -> RunRecord:
@@ -111,12 +176,14 @@ def compare(
 
     ``val`` has VAL check every plan too (outside the timed part of each run).
     """
+    context = fork_server(planners)
     rows: list[RunRecord] = []
     for task in tasks:
+        built = build(task.spec)
         for planner in planners:
             records: list[dict[str, object]] = []
             for _ in range(repeat):
-                records.append(run_once(task, planner, time_limit, memory_mb, val))
+                records.append(_record(built, planner, time_limit, memory_mb, val, context))
                 if progress is not None:
                     progress(f"{planner} on {task.name}")
             rows.append(_summary(task, planner, records))
@@ -124,5 +191,5 @@ def compare(
 
 
 def total_runs(tasks: Iterable[ComparisonTask], planners: list[str], repeat: int) -> int:
-    """Return how many worker processes a comparison starts."""
+    """Return how many runs (each a process of its own) a comparison makes."""
     return len(list(tasks)) * len(planners) * repeat
