@@ -17,6 +17,8 @@ from causalplan.sim.fit_estimates import estimate_fits
 from causalplan.transfer.cluster import ClusterError, map_on_cluster
 from tests.conftest import builtin_catalog
 
+pytestmark = pytest.mark.slow  # each command starts a Dask cluster
+
 runner = CliRunner(env={"FORCE_COLOR": None, "NO_COLOR": "1", "COLUMNS": "200"})
 NO_ERRORS_BUT_A_MINORITY = [
     "--rate-non-causal",

@@ -164,6 +164,7 @@ def test_a_missing_planner_binary_is_reported_and_planning_still_answers(
         assert body["status"] == "error" and "no-such-downward" in body["message"]
 
 
+@pytest.mark.slow
 def test_a_full_queue_with_a_waiting_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     settings = settings_for(f"sqlite:///{tmp_path}/db.sqlite3", planning_workers=1, queue_size=1)
     with running_client(settings) as client:

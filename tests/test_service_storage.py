@@ -127,6 +127,7 @@ def _count(engine: Any, participant: str) -> tuple[int, int]:
     return models or 0, trials or 0
 
 
+@pytest.mark.slow
 def test_the_sqlite_log_stays_bounded_after_many_writes(tmp_path: Path) -> None:
     """SQLite checkpoints by itself, and journal_size_limit truncates the log after a burst of writes."""
     url = sqlite_url(tmp_path)
@@ -146,6 +147,7 @@ def test_the_sqlite_log_stays_bounded_after_many_writes(tmp_path: Path) -> None:
             assert connection.exec_driver_sql("PRAGMA wal_autocheckpoint").scalar() > 0
 
 
+@pytest.mark.slow
 def test_health_says_degraded_when_free_space_is_below_the_minimum(tmp_path: Path) -> None:
     settings = settings_for(sqlite_url(tmp_path), planning_workers=1, min_free_disk_mb=10**12)  # more than any disk
     with running_client(settings) as client:
@@ -233,6 +235,7 @@ def test_a_models_document_and_report_are_stored_cleaned_when_read_and_when_repe
         assert "\\u0000" not in json.dumps(stored)  # no NUL in the document or the report
 
 
+@pytest.mark.slow
 def test_an_unreachable_database_is_503_and_health_says_so(postgres_admin_url: str) -> None:
     import psycopg
     from sqlalchemy.engine import make_url
