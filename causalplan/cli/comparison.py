@@ -84,11 +84,12 @@ def compare(
     from causalplan.comparison import report
     from causalplan.comparison import tasks as comparison_tasks
     from causalplan.comparison.runner import compare as run_comparison
-    from causalplan.comparison.runner import total_runs
+    from causalplan.comparison.runner import fork_server, total_runs
 
     chosen = [name.strip() for name in planners_option.split(",") if name.strip()]
     for name in chosen:
         check_planner(name)
+    fork_server(chosen)  # started now, it preloads the planners while the tasks are read
     with exit_on_error():
         sizes = _int_list(synthetic, "--synthetic") if synthetic else []
         if tasks:

@@ -2,11 +2,12 @@
 
 Each run is forked from a warm parent: multiprocessing's fork server, which has preloaded the
 worker module (``worker``: the planners, FD's translator, the MDP), so a run starts with
-nothing left to import and no state of an earlier run; ``pebble`` starts it, waits for its
-record and kills it at its limit. A run that crashes, is killed at its limit or runs out of
-memory becomes a row with that status; it never stops the comparison. Plans are checked by
-replay inside the run and by VAL here in the parent (each distinct plan of a task once),
-outside the timed part.
+nothing left to import and no state of an earlier run; it sends its record through a pipe and
+is killed at its limit (by hand: ``pebble``'s wait for a finished process cost each run
+several times what the paper's tasks take to plan). A run that crashes, is killed at its
+limit or runs out of memory becomes a row with that status; it never stops the comparison.
+Plans are checked by replay inside the run and by VAL here in the parent (each distinct plan
+of a task once), outside the timed part.
 """
 
 from __future__ import annotations
@@ -16,10 +17,9 @@ import statistics
 from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass
+from multiprocessing import forkserver
 from multiprocessing.context import ForkServerContext
 from pathlib import Path
-
-from pebble import ProcessExpired, concurrent
 
 from causalplan.comparison import worker
 from causalplan.comparison.tasks import ComparisonTask, build
@@ -31,8 +31,15 @@ from causalplan.planners.val import ValVerdict, validate
 GRACE_SECONDS = 20.0
 """Time a run gets beyond the planner's limit: its replay, and for ``up:`` planners loading unified-planning."""
 
-PRELOADED = ("__main__", "causalplan.comparison.worker")
-"""What the fork server imports once for every run (``__main__`` too, or each run would import it again)."""
+PRELOADED = (
+    "__main__",
+    "causalplan.comparison.worker",
+    "causalplan.planners.pipeline",
+    "causalplan.planners.mdp",
+    "fast_downward.translate.main",
+)
+"""What the fork server imports once for every run: the planners, FD's translator (it runs in the
+run's process), and ``__main__`` (or each run would import it again)."""
 
 
 @dataclass(frozen=True)
@@ -67,22 +74,19 @@ def fork_server(planners: Iterable[str] = ()) -> ForkServerContext:
     if any(planner.startswith("up:") for planner in planners):
         modules.append("causalplan.planners.up_problem")
     context.set_forkserver_preload(modules)
+    forkserver.ensure_running()  # it preloads while this process goes on (with the first run, it would wait)
     return context
 
 
-def _failed(folder: Path, exc: BaseException) -> dict[str, object]:
-    """Return the record of a run whose process raised ``exc`` or died (its output's last line says why)."""
-    if isinstance(exc, MemoryError):
-        return {"status": "out_of_memory", "message": "the worker failed: MemoryError"}
-    if isinstance(exc, ProcessExpired):
-        try:
-            output = (folder / worker.OUTPUT_FILE).read_text(encoding="utf-8", errors="replace")
-        except OSError:
-            output = ""
-        tail = output.strip().splitlines()[-1:] or [f"exit code {exc.exitcode}"]
-        status = "out_of_memory" if "MemoryError" in tail[0] else "error"
-        return {"status": status, "message": f"the worker failed: {tail[0]}"}
-    return {"status": "error", "message": f"the worker failed: {type(exc).__name__}: {exc}"}
+def _died(folder: Path, exitcode: int | None) -> dict[str, object]:
+    """Return the record of a run whose process ended without a record (its output's last line says why)."""
+    try:
+        output = (folder / worker.OUTPUT_FILE).read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        output = ""
+    tail = output.strip().splitlines()[-1:] or [f"exit code {exitcode}"]
+    status = "out_of_memory" if "MemoryError" in tail[0] else "error"
+    return {"status": status, "message": f"the worker failed: {tail[0]}"}
 
 
 def _run(
@@ -90,17 +94,25 @@ def _run(
 ) -> dict[str, object]:
     """Run one planner on one task in a new process forked from the fork server; return its raw record."""
     limit = time_limit + GRACE_SECONDS
-    # pebble 5.2 reads the keyword "context"; its type stub names it "mp_context", which it ignores.
-    start = concurrent.process(timeout=limit, context=context, name=f"compare {planner}")  # type: ignore[call-overload]
-    in_a_process = start(worker.run)
     with processes.private_folder("causalplan-compare-") as folder:
-        future = in_a_process(task, planner, time_limit, memory_mb, folder)
+        answers, answer = context.Pipe(duplex=False)
+        process = context.Process(
+            target=worker.serve, args=(answer, task, planner, time_limit, memory_mb, folder), daemon=True
+        )
+        process.start()
+        answer.close()  # the run holds the only sending end: its death ends the wait below
         try:
-            record: dict[str, object] = future.result()
-        except TimeoutError:
-            return {"status": "timeout", "message": f"killed after {limit:g} s"}
-        except BaseException as exc:  # noqa: BLE001 - whatever ended the run is its row's message
-            return _failed(folder, exc)
+            if not answers.poll(limit):
+                return {"status": "timeout", "message": f"killed after {limit:g} s"}
+            record: dict[str, object] = answers.recv()
+        except EOFError:
+            process.join()
+            return _died(folder, process.exitcode)
+        finally:
+            if process.is_alive():
+                process.kill()
+            process.join()
+            answers.close()
     return record
 
 

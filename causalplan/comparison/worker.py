@@ -1,10 +1,11 @@
 """One comparison run, in a process of its own forked from a warm parent (see ``runner``).
 
-Everything a run needs is imported here, at module level, so the fork server that preloads
-this module hands every run a process where no import is left to do: the clock times the
-planner, not Python. The run limits its own memory, plans, and returns its record; checks
-that need no planner libraries (VAL) are left to the parent, which runs each distinct plan
-once. unified-planning's validator runs only for ``up:`` planners, whose run has it loaded.
+The fork server preloads the planners (``runner.PRELOADED``), so a run forked from it has no
+import left to do: the clock times the planner, not Python. This module itself stays light
+(the parent imports it to name ``serve``). The run limits its own memory, plans, and sends its
+record; checks that need no planner libraries (VAL) are left to the parent, which runs each
+distinct plan once. unified-planning's validator runs only for ``up:`` planners, whose run has
+it loaded.
 """
 
 from __future__ import annotations
@@ -12,16 +13,15 @@ from __future__ import annotations
 import os
 import resource
 import time
+from multiprocessing.connection import Connection
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-# Imported for their side effect: the fork server loads them once, so no run imports them.
-import fast_downward.translate.main  # noqa: F401 - FD's translator runs in the run's process
-
-import causalplan.planners.mdp  # noqa: F401 - the MDP planner is imported when first used
 from causalplan.errors import CausalPlanError
-from causalplan.pddl.task import PlanningTask
 from causalplan.planners import processes
-from causalplan.planners.pipeline import plan_task
+
+if TYPE_CHECKING:
+    from causalplan.pddl.task import PlanningTask
 
 OUTPUT_FILE = "output.log"
 """Where a run's stdout and stderr go, in its folder (what planners print would garble the progress bar)."""
@@ -42,6 +42,8 @@ def _output_to(folder: Path) -> None:
 
 def run(task: PlanningTask, planner: str, time_limit: float, memory_mb: int, folder: Path) -> dict[str, object]:
     """Return the record of one planner run on ``task`` (in this process; ``folder`` is its own)."""
+    from causalplan.planners.pipeline import plan_task  # preloaded by the fork server: no import is left here
+
     _output_to(folder)
     os.chdir(folder)
     _limit_memory(memory_mb)
@@ -67,3 +69,21 @@ def run(task: PlanningTask, planner: str, time_limit: float, memory_mb: int, fol
         "actions": [[step.action, [*step.args, step.fit]] for step in result.steps] if result.has_plan else None,
         "message": result.message,
     }
+
+
+def serve(
+    answer: Connection, task: PlanningTask, planner: str, time_limit: float, memory_mb: int, folder: Path
+) -> None:
+    """Run one planner run (``run``) in this process and send its record through ``answer``.
+
+    An exception becomes an error record, so the parent learns what went wrong; a process that
+    dies sends nothing, and the parent reports its exit code.
+    """
+    try:
+        record = run(task, planner, time_limit, memory_mb, folder)
+    except MemoryError:
+        record = {"status": "out_of_memory", "message": "the worker failed: MemoryError"}
+    except Exception as exc:  # noqa: BLE001 - whatever ended the run is its row's message
+        record = {"status": "error", "message": f"the worker failed: {type(exc).__name__}: {exc}"}
+    answer.send(record)
+    answer.close()
