@@ -55,6 +55,7 @@ def test_compare_writes_table_csv_json_and_plot(tmp_path: Path, monkeypatch: pyt
     assert (tmp_path / "compare.png").read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
 def test_every_plan_of_a_comparison_is_checked_by_replay_and_val_and_up_plans_by_up_too() -> None:
     record = run_once(tasks.synthetic(6), "fd", time_limit=30.0, memory_mb=4096, val=True)
     assert record["validated_by"] == {"replay": "valid", "val": "valid"}
@@ -63,6 +64,7 @@ def test_every_plan_of_a_comparison_is_checked_by_replay_and_val_and_up_plans_by
     assert record["validated_by"] == {"replay": "valid", "up": "valid"}
 
 
+@pytest.mark.slow
 def test_a_planner_that_runs_out_of_time_is_a_row_not_a_crash() -> None:
     task = tasks.synthetic(80)
     rows = compare([task], ["fd-opt", "fd"], time_limit=1.0, memory_mb=4096, repeat=1)

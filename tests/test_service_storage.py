@@ -69,6 +69,7 @@ def test_migrations_build_exactly_the_models_schema(database_url: str) -> None:
         engine.dispose()
 
 
+@pytest.mark.slow
 def test_a_sqlite_file_and_its_folder_are_created_on_first_start(tmp_path: Any) -> None:
     path = tmp_path / "new" / "folder" / "causalplan.sqlite3"
     with running_client(settings_for(f"sqlite:///{path}", planning_workers=1)) as client:
@@ -270,6 +271,7 @@ def test_a_database_that_cannot_be_reached_at_start_is_a_clear_error(caplog: pyt
         create_database_engine("not a url")
 
 
+@pytest.mark.slow
 def test_a_server_that_takes_the_connection_but_never_answers_is_given_up_on(monkeypatch: pytest.MonkeyPatch) -> None:
     from causalplan.service.db import session
 
@@ -321,6 +323,7 @@ def forwarded_later(target: tuple[str, int], after: float) -> Iterator[int]:
         server.join()
 
 
+@pytest.mark.slow
 def test_a_replica_that_starts_before_its_database_waits_for_it(
     postgres_admin_url: str, caplog: pytest.LogCaptureFixture
 ) -> None:
@@ -337,6 +340,7 @@ def test_a_replica_that_starts_before_its_database_waits_for_it(
     assert any("database not up yet" in record.getMessage() for record in caplog.records)
 
 
+@pytest.mark.slow
 def test_health_says_degraded_when_the_database_takes_no_writes(postgres_admin_url: str) -> None:
     import psycopg
 

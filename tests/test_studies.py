@@ -122,6 +122,7 @@ def _paper_trial(model: str, mapping: str, participant: str, catalog: Catalog) -
     }
 
 
+@pytest.mark.slow
 def test_the_command_analyses_the_papers_two_participants(tmp_path: Path, catalog: Catalog) -> None:
     export = {
         "trials": [
