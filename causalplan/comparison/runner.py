@@ -1,7 +1,7 @@
 """Runs every planner on every task, each run in a process of its own with a time and memory limit.
 
 Each run is forked from a warm parent: multiprocessing's fork server, which has preloaded the
-worker module (``worker``: the planners, FD's translator, the MDP), so a run starts with
+planners, FD's translator and the MDP (``PRELOADED``), so a run (``worker``) starts with
 nothing left to import and no state of an earlier run; it sends its record through a pipe and
 is killed at its limit (by hand: ``pebble``'s wait for a finished process cost each run
 several times what the paper's tasks take to plan). A run that crashes, is killed at its
@@ -66,7 +66,7 @@ class RunRecord:
 def fork_server(planners: Iterable[str] = ()) -> ForkServerContext:
     """Return the fork server's context, set to preload what runs of ``planners`` import.
 
-    The preload counts only when the server starts (with this process's first run); it is
+    The server starts at this process's first call and the preload counts only then; it is
     what makes runs start warm, never what makes them right.
     """
     context = multiprocessing.get_context("forkserver")
