@@ -204,6 +204,7 @@ def test_one_schema_translates_to_the_per_primitive_task_but_for_operator_names(
     capsys.readouterr()  # the translator's log
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("config", sorted(fd.CONFIGS))
 def test_plans_of_one_schema_are_those_of_the_per_primitive_form(config: str, user_catalog: Catalog) -> None:
     tasks = _tasks_to_compare(user_catalog)

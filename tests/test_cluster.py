@@ -84,6 +84,7 @@ def test_another_batch_file_is_read_by_the_client_and_cut_into_trials(tmp_path: 
         file_chunks(listing, 0)
 
 
+@pytest.mark.slow
 def test_the_batch_commands_way_gives_the_rows_and_json_of_the_local_batch(catalog: Catalog) -> None:
     local = [result.written() for result in run_batch(list(read_trials(TRIALS)), catalog, simulate=False)]
     seen: list[int] = []
@@ -94,6 +95,7 @@ def test_the_batch_commands_way_gives_the_rows_and_json_of_the_local_batch(catal
     assert sorted(seen) == sorted([8] * 5 + [2])
 
 
+@pytest.mark.slow
 def test_a_local_cluster_gives_the_verdicts_of_the_local_batch(catalog: Catalog) -> None:
     trials = list(read_trials(TRIALS))
     local = run_batch(trials, catalog, simulate=False)
@@ -105,6 +107,7 @@ def test_a_local_cluster_gives_the_verdicts_of_the_local_batch(catalog: Catalog)
     assert sum(seen) == len(trials)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("way", ["run_batch_on_cluster", "write_batch_on_cluster"])
 def test_a_worker_killed_mid_batch_loses_nothing_and_counts_nothing_twice(
     catalog: Catalog, way: str, tmp_path: Path
@@ -137,11 +140,13 @@ def test_a_worker_killed_mid_batch_loses_nothing_and_counts_nothing_twice(
     assert killed
 
 
-def test_an_unreachable_scheduler_is_a_clear_error(catalog: Catalog) -> None:
+def test_an_unreachable_scheduler_is_a_clear_error(catalog: Catalog, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("causalplan.transfer.cluster.CONNECT_TIMEOUT", "1s")  # Dask retries until then
     with pytest.raises(ClusterError, match=r"Cannot reach the Dask scheduler at tcp://127\.0\.0\.1:9"):
         run_batch_on_cluster([], catalog, address="tcp://127.0.0.1:9")
 
 
+@pytest.mark.slow
 def test_the_batch_command_on_two_local_workers_writes_what_a_local_run_writes(tmp_path: Path) -> None:
     from click.testing import CliRunner
 
@@ -183,6 +188,7 @@ def test_cluster_and_workers_together_are_refused(tmp_path: Path) -> None:
     assert "not both" in result.output
 
 
+@pytest.mark.slow
 def test_two_local_clusters_at_once_start_without_a_port_warning(recwarn: pytest.WarningsRecorder) -> None:
     first, first_cluster = connect(None, 1)
     second, second_cluster = connect(None, 1)

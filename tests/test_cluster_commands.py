@@ -17,6 +17,8 @@ from causalplan.sim.fit_estimates import estimate_fits
 from causalplan.transfer.cluster import ClusterError, map_on_cluster
 from tests.conftest import builtin_catalog
 
+pytestmark = pytest.mark.slow  # each command starts a Dask cluster
+
 runner = CliRunner(env={"FORCE_COLOR": None, "NO_COLOR": "1", "COLUMNS": "200"})
 NO_ERRORS_BUT_A_MINORITY = [
     "--rate-non-causal",
@@ -146,7 +148,10 @@ def test_a_chunk_size_without_a_cluster_is_refused() -> None:
     assert "--chunk-size sizes the tasks of a cluster: give --cluster or --workers too." in result.output
 
 
-def test_an_unreachable_scheduler_is_a_clear_error_of_the_command(tmp_path: Path) -> None:
+def test_an_unreachable_scheduler_is_a_clear_error_of_the_command(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr("causalplan.transfer.cluster.CONNECT_TIMEOUT", "1s")  # Dask retries until then
     crowd = _population(tmp_path / "crowd.jsonl", 2, "flashlight")
     result = runner.invoke(
         app, ["consensus", str(crowd), "--no-simulate", "--cluster", "tcp://127.0.0.1:9", "--out", str(tmp_path)]

@@ -6,6 +6,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from causalplan.planners import processes
 
 
@@ -22,6 +24,7 @@ def test_a_run_gets_its_input_a_private_folder_as_cwd_and_its_output_captured() 
     assert not folder.exists()
 
 
+@pytest.mark.slow
 def test_the_deadline_kills_the_whole_process_group(tmp_path: Path) -> None:
     pid_file = tmp_path / "grandchild"
     code = (

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import imageio.v3 as iio
 import numpy as np
+import pytest
 
 from causalplan.inputs import load_mapping, load_model
 from causalplan.objects.catalog import load_catalog
@@ -11,6 +12,8 @@ from causalplan.transfer.robot_verdict import ROBOT_CANNOT_EXECUTE, robot_transf
 from causalplan.transfer.verdict import Verdict, transfer_verdict
 from tests.conftest import EXAMPLES, builtin_catalog
 from tests.sim_fixtures import PEG_BOARD, parsed_object, steps
+
+pytestmark = pytest.mark.slow  # the Panda carries out and films plans
 
 ROBOT = EXAMPLES / "robot"
 

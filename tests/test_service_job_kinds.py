@@ -67,6 +67,7 @@ def film(kinds_client: TestClient) -> dict[str, Any]:
     return job
 
 
+@pytest.mark.slow
 def test_a_video_job_films_the_robot_and_serves_the_film(kinds_client: TestClient, film: dict[str, Any]) -> None:
     result = film["result"]
     assert result["planning"]["status"] == "solved"
@@ -86,6 +87,7 @@ def test_another_replica_serves_the_film_from_the_database(kinds_database: str, 
         assert other.get(film["url"]).json()["result"]["video"]["url"] == film["result"]["video"]["url"]
 
 
+@pytest.mark.slow
 def test_a_participants_film_asked_of_one_replica_is_followed_and_served_by_another(tmp_path: Path) -> None:
     url = sqlite_url(tmp_path)
     answering = settings_for(url, planning_workers=1, job_runners=0, **SMALL)  # this one cannot film
@@ -114,6 +116,7 @@ def test_a_job_without_a_film_says_so(kinds_client: TestClient) -> None:
     assert error_of(kinds_client.get(f"/v1/jobs/{uuid.uuid4()}/video"), 404)["code"] == "job_not_found"
 
 
+@pytest.mark.slow
 def test_a_gif_video_job_is_served_as_a_gif(tmp_path: Path) -> None:
     settings = settings_for(sqlite_url(tmp_path), planning_workers=1, job_poll_seconds=0.05, **SMALL)
     with running_client(settings) as client:
@@ -137,6 +140,7 @@ def test_a_wrong_film_request_is_refused_and_nothing_is_queued(tmp_path: Path) -
         assert store.count_unfinished(services_of(client).engine) == {"queued": 0, "running": 0}
 
 
+@pytest.mark.slow
 def test_cancelling_a_film_stops_the_filming_in_its_worker(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
     caplog.set_level(logging.INFO, logger="causalplan.service.jobs.video")
     settings = settings_for(sqlite_url(tmp_path), planning_workers=1, job_poll_seconds=0.05, **SMALL)
@@ -172,6 +176,7 @@ def cli_estimates(*args: str) -> dict[str, Any]:
     return data
 
 
+@pytest.mark.slow
 def test_a_fit_estimation_gives_the_numbers_of_the_cli(kinds_client: TestClient) -> None:
     body = {"kind": "fit_estimation", "object": "flashlight", "trials": 30, "seed": 7, "noise_mm": 1.5}
     job = finished(kinds_client, start(kinds_client, body), 300.0)
@@ -188,6 +193,7 @@ def test_a_fit_estimation_gives_the_numbers_of_the_cli(kinds_client: TestClient)
     assert result["overlay"]["estimated_by"].startswith("causalplan estimate-fits flashlight --trials 30 --seed 7")
 
 
+@pytest.mark.slow
 def test_a_fit_estimation_on_a_dask_cluster_gives_the_numbers_of_the_cli(tmp_path: Path) -> None:
     with LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None, silence_logs=logging.ERROR) as cluster:
         settings = settings_for(
@@ -237,6 +243,7 @@ def test_a_wrong_fit_estimation_is_refused_and_nothing_is_queued(tmp_path: Path)
 # -- /health and the documented examples --------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_health_counts_the_jobs_of_every_replica_and_this_ones_runners(tmp_path: Path) -> None:
     url = sqlite_url(tmp_path)
     with running_client(settings_for(url, planning_workers=1, job_runners=0)) as client:
@@ -257,6 +264,7 @@ def test_health_counts_the_jobs_of_every_replica_and_this_ones_runners(tmp_path:
         wait_until(lambda: client.get("/health").json()["jobs"]["queued"] == 0, 60.0)  # this replica took them
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", list(JOB_EXAMPLES))
 def test_each_documented_example_is_a_job_that_succeeds(kinds_client: TestClient, kind: str) -> None:
     example = JOB_EXAMPLES[kind]["value"]

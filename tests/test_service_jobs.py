@@ -218,6 +218,7 @@ def test_an_invalid_model_is_refused_before_any_job_is_queued(jobs_client: TestC
     assert error_of(refused, 422)["code"] == "invalid_model"
 
 
+@pytest.mark.slow
 def test_a_consensus_job_gives_the_report_of_the_cli(jobs_client: TestClient) -> None:
     crowd = "\n".join(json.dumps(line) for line in population("desk_lamp", 6, 1, tests=("flashlight",)))
     job = finished(jobs_client, start(jobs_client, {"kind": "consensus", "trials": crowd, "simulate": False}))
@@ -267,6 +268,7 @@ def test_an_unknown_kind_is_refused(jobs_client: TestClient) -> None:
     assert jobs_client.post("/v1/jobs", json={"kind": "robot_video"}).status_code == 422
 
 
+@pytest.mark.slow
 def test_a_finished_job_expires(tmp_path: Path) -> None:
     settings = settings_for(sqlite_url(tmp_path), planning_workers=1, job_poll_seconds=0.05, job_result_seconds=1.0)
     with running_client(settings) as client:

@@ -68,6 +68,7 @@ def post_in_background(client: TestClient, body: dict[str, Any]) -> tuple[thread
     return thread, responses
 
 
+@pytest.mark.slow
 def test_a_full_queue_is_429_with_retry_after(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
     pool = services_of(one_worker).pool
     answered = {"model": with_unique_effect(DESK_LAMP)}
@@ -147,6 +148,7 @@ def test_a_worker_out_of_memory_is_503_and_keeps_serving(
     assert one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}).status_code == 200
 
 
+@pytest.mark.slow
 def test_a_missing_planner_binary_is_reported_and_planning_still_answers(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -164,6 +166,7 @@ def test_a_missing_planner_binary_is_reported_and_planning_still_answers(
         assert body["status"] == "error" and "no-such-downward" in body["message"]
 
 
+@pytest.mark.slow
 def test_a_full_queue_with_a_waiting_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     settings = settings_for(f"sqlite:///{tmp_path}/db.sqlite3", planning_workers=1, queue_size=1)
     with running_client(settings) as client:
@@ -273,6 +276,7 @@ def test_the_worker_that_finished_last_takes_the_next_job(two_workers: PlannerPo
     assert len(two_workers.worker_pids()) == 2 and pids[0] in two_workers.worker_pids()  # both are there
 
 
+@pytest.mark.slow
 def test_a_killed_worker_leaves_no_temp_folders_behind() -> None:
     with bare_pool(1) as pool:
         first, search = pool.run(temp_folders, (), 30)
@@ -313,6 +317,7 @@ def test_closing_a_pool_removes_its_workers_temp_folders() -> None:
     assert not any(folder.exists() for folder in folders)
 
 
+@pytest.mark.slow
 def test_a_killed_worker_takes_its_own_sessions_children_with_it(tmp_path: Path) -> None:
     pid_file = tmp_path / "child.pid"
     with bare_pool(1) as pool, pytest.raises(PlanningTimeoutError):

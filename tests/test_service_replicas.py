@@ -40,6 +40,8 @@ from tests.service_fixtures import (
 )
 from tests.web_flows import FLASHLIGHT_CHOICES, LAMP_FUNCTIONS, LAMP_RULES, experiment, links
 
+pytestmark = pytest.mark.slow  # several service replicas over one database
+
 CAUSALPLAN = str(Path(sys.executable).parent / "causalplan")
 MAX_FAILURES = 3
 LOAD_REQUESTS = 40

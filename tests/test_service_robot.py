@@ -13,6 +13,8 @@ from causalplan.service.films import FilmStore
 from tests.conftest import EXAMPLES
 from tests.service_fixtures import DESK_LAMP, error_of, running_client, settings_for, sqlite_url
 
+pytestmark = pytest.mark.slow  # the Panda films its plans through the service
+
 SMALL = {"robot_video_width": 96, "robot_video_height": 72}
 """A small film keeps the tests quick; the robot's run is the same at any size."""
 

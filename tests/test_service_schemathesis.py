@@ -8,6 +8,7 @@ from __future__ import annotations
 from typing import Any
 
 import httpx
+import pytest
 import schemathesis
 from hypothesis import HealthCheck, Phase, settings
 from schemathesis.checks import (
@@ -19,6 +20,8 @@ from schemathesis.checks import (
 
 from causalplan.service.main import create_app
 from tests.service_fixtures import AUTH, settings_for
+
+pytestmark = pytest.mark.slow  # schemathesis sends thousands of generated requests
 
 # The document of the app the server runs (building an app starts nothing: no workers, no database).
 OPENAPI = create_app(settings_for("sqlite://")).openapi()

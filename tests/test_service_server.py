@@ -68,6 +68,7 @@ def serve(tmp_path: Path, *options: str) -> tuple[subprocess.Popen[str], str]:
     pytest.fail(f"the server did not answer within {START_SECONDS} s: {process.communicate()[0]}")
 
 
+@pytest.mark.slow
 def test_the_real_server_plans_stores_and_stops_cleanly(tmp_path: Path) -> None:
     process, base = serve(tmp_path, "--workers", "2")
     try:
@@ -98,6 +99,7 @@ def test_the_real_server_plans_stores_and_stops_cleanly(tmp_path: Path) -> None:
     assert (tmp_path / "data" / "causalplan" / "causalplan.sqlite3").exists()
 
 
+@pytest.mark.slow
 def test_the_access_log_can_be_turned_off(tmp_path: Path) -> None:
     process, base = serve(tmp_path, "--workers", "1", "--no-access-log")
     try:
@@ -111,6 +113,7 @@ def test_the_access_log_can_be_turned_off(tmp_path: Path) -> None:
     assert "POST /v1/plans" not in output and "/v1/nothing" not in output
 
 
+@pytest.mark.slow
 def test_bad_settings_are_a_clear_error_not_a_traceback(tmp_path: Path) -> None:
     command = [sys.executable, "-m", "causalplan.cli", "serve", "--database-url", "mysql://nobody@127.0.0.1:1/x"]
     result = subprocess.run(command, capture_output=True, text=True, timeout=60)
@@ -141,6 +144,7 @@ def _exchange(connection: socket.socket, request: bytes) -> bytes:
     return head + b"\r\n\r\n" + body
 
 
+@pytest.mark.slow
 def test_a_bug_is_a_500_and_the_kept_alive_connection_still_serves(tmp_path: Path) -> None:
     import uvicorn
 

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import base64
 
+import pytest
 from fastapi.testclient import TestClient
 
 from tests.service_fixtures import DESK_LAMP, FLASHLIGHT_MAPPING, error_of, with_unique_effect
 
 
+@pytest.mark.slow
 def test_a_model_is_planned_simulated_and_drawn(client: TestClient) -> None:
     response = client.post("/v1/simulations", json={"model": with_unique_effect(DESK_LAMP)})
     assert response.status_code == 200, response.text

@@ -69,6 +69,7 @@ def test_migrations_build_exactly_the_models_schema(database_url: str) -> None:
         engine.dispose()
 
 
+@pytest.mark.slow
 def test_a_sqlite_file_and_its_folder_are_created_on_first_start(tmp_path: Any) -> None:
     path = tmp_path / "new" / "folder" / "causalplan.sqlite3"
     with running_client(settings_for(f"sqlite:///{path}", planning_workers=1)) as client:
@@ -127,6 +128,7 @@ def _count(engine: Any, participant: str) -> tuple[int, int]:
     return models or 0, trials or 0
 
 
+@pytest.mark.slow
 def test_the_sqlite_log_stays_bounded_after_many_writes(tmp_path: Path) -> None:
     """SQLite checkpoints by itself, and journal_size_limit truncates the log after a burst of writes."""
     url = sqlite_url(tmp_path)
@@ -146,6 +148,7 @@ def test_the_sqlite_log_stays_bounded_after_many_writes(tmp_path: Path) -> None:
             assert connection.exec_driver_sql("PRAGMA wal_autocheckpoint").scalar() > 0
 
 
+@pytest.mark.slow
 def test_health_says_degraded_when_free_space_is_below_the_minimum(tmp_path: Path) -> None:
     settings = settings_for(sqlite_url(tmp_path), planning_workers=1, min_free_disk_mb=10**12)  # more than any disk
     with running_client(settings) as client:
@@ -233,6 +236,7 @@ def test_a_models_document_and_report_are_stored_cleaned_when_read_and_when_repe
         assert "\\u0000" not in json.dumps(stored)  # no NUL in the document or the report
 
 
+@pytest.mark.slow
 def test_an_unreachable_database_is_503_and_health_says_so(postgres_admin_url: str) -> None:
     import psycopg
     from sqlalchemy.engine import make_url
@@ -267,6 +271,7 @@ def test_a_database_that_cannot_be_reached_at_start_is_a_clear_error(caplog: pyt
         create_database_engine("not a url")
 
 
+@pytest.mark.slow
 def test_a_server_that_takes_the_connection_but_never_answers_is_given_up_on(monkeypatch: pytest.MonkeyPatch) -> None:
     from causalplan.service.storage import session
 
@@ -324,6 +329,7 @@ def forwarded_later(target: tuple[str, int] | str, after: float) -> Iterator[int
         server.join()
 
 
+@pytest.mark.slow
 def test_a_replica_that_starts_before_its_database_waits_for_it(
     postgres_admin_url: str, caplog: pytest.LogCaptureFixture
 ) -> None:
@@ -345,6 +351,7 @@ def test_a_replica_that_starts_before_its_database_waits_for_it(
     assert any("database not up yet" in record.getMessage() for record in caplog.records)
 
 
+@pytest.mark.slow
 def test_health_says_degraded_when_the_database_takes_no_writes(postgres_admin_url: str) -> None:
     import psycopg
 

@@ -333,6 +333,7 @@ def test_without_a_token_configured_nothing_is_counted(tmp_path: Path) -> None:
         assert len(services_of(client).failed_attempts) == 0
 
 
+@pytest.mark.slow
 def test_a_new_forwarded_address_per_request_does_not_reset_the_count(tmp_path: Path) -> None:
     # Through uvicorn, as `causalplan serve` runs it, from 127.0.0.1: which uvicorn itself trusted
     # by default, so each request was counted against the address its header made up.

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+import pytest
 from click.testing import CliRunner, Result
 
 from causalplan.cli import app
@@ -80,6 +81,7 @@ def test_the_output_of_plan_json_is_a_plan_file(tmp_path: Path) -> None:
     assert code == 0 and data["produces_goal"]
 
 
+@pytest.mark.slow
 def test_frames_and_a_gif(tmp_path: Path) -> None:
     frames, gif = tmp_path / "frames", tmp_path / "steps.gif"
     result = run("simulate", DESK_LAMP, "--frames", frames, "--gif", gif)
@@ -180,6 +182,7 @@ def test_video_and_trajectory_need_the_robot_and_a_known_format(tmp_path: Path) 
     assert both.exit_code == 2 and "not both" in both.stderr
 
 
+@pytest.mark.slow
 def test_estimate_fits_reports_each_fit_with_its_interval_and_failures(tmp_path: Path) -> None:
     overlay = tmp_path / "overlay.yaml"
     code, data = run_json("estimate-fits", "desk_lamp", "--trials", 50, "--seed", 3, "--out", overlay)

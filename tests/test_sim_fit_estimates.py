@@ -21,6 +21,7 @@ def desk_lamp_estimates(seed: int = 0) -> dict[str, FitEstimate]:
     return {estimate.fit: estimate for estimate in estimate_fits(lamp, trials=200, seed=seed)}
 
 
+@pytest.mark.slow
 def test_under_the_same_noise_the_tight_e27_thread_is_less_likely_than_the_shades_clip() -> None:
     estimates = desk_lamp_estimates()
     thread, clip = estimates["bulb_into_socket"], estimates["shade_onto_ring"]
@@ -29,6 +30,7 @@ def test_under_the_same_noise_the_tight_e27_thread_is_less_likely_than_the_shade
     assert thread.failures["misaligned"] > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("object_id", PAPER_OBJECTS)
 def test_without_noise_every_fit_of_the_paper_objects_always_works(object_id: str) -> None:
     for estimate in estimate_fits(builtin_catalog().get(object_id), trials=5, noise_mm=0.0, noise_deg=0.0):
@@ -36,6 +38,7 @@ def test_without_noise_every_fit_of_the_paper_objects_always_works(object_id: st
         assert estimate.failures == {}
 
 
+@pytest.mark.slow
 def test_the_same_seed_gives_the_same_numbers_and_another_seed_others() -> None:
     lamp = builtin_catalog().get("desk_lamp")
     fit = lamp.fit("bulb_into_socket")

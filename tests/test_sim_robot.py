@@ -21,6 +21,8 @@ from causalplan.sim.robot.trajectory import SEGMENT_KINDS, read_trajectory
 from tests.conftest import EXAMPLES, builtin_catalog
 from tests.sim_fixtures import CORRECT_PLANS, PEG_BOARD, TOY_CAR_PLAN, parsed_object, steps
 
+pytestmark = pytest.mark.slow  # the Panda plans and carries out whole assemblies
+
 PLANS = {**CORRECT_PLANS, "toy_car": TOY_CAR_PLAN}
 
 

@@ -70,6 +70,7 @@ def synthetic_export(per_condition: int, seed: int) -> dict[str, Any]:
     return {"experiment": {"name": "synthetic"}, "participants": [], "trials": trials}
 
 
+@pytest.mark.slow
 def test_a_known_effect_is_found_in_the_right_direction_and_covered_by_the_intervals(catalog: Catalog) -> None:
     analysis = analyse(trial_rows(synthetic_export(80, seed=7), catalog), catalog)
     near = next(c for c in analysis.comparisons if c.name.startswith("near: same-category"))
@@ -121,6 +122,7 @@ def _paper_trial(model: str, mapping: str, participant: str, catalog: Catalog) -
     }
 
 
+@pytest.mark.slow
 def test_the_command_analyses_the_papers_two_participants(tmp_path: Path, catalog: Catalog) -> None:
     export = {
         "trials": [

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import unicodedata
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -480,6 +481,7 @@ def arbitrary_documents(draw: st.DrawFn) -> dict[str, object]:
     return document
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(arbitrary_documents())
 def test_validate_never_raises_on_arbitrary_input(document: dict[str, object]) -> None:
@@ -520,6 +522,7 @@ def valid_models(draw: st.DrawFn) -> dict[str, object]:
     return {"object": object_id, "goal": "light", "functions": carried, "rules": rules}
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(valid_models())
 def test_model_valid_by_construction_has_no_errors(document: dict[str, object]) -> None:

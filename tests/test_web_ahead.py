@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import threading
 
+import pytest
 from fastapi.testclient import TestClient
 
 from causalplan.causal.graph import goal_holds
@@ -36,6 +37,7 @@ def test_the_model_of_a_part_set_needs_exactly_those_parts() -> None:
     assert not any(goal_holds(functions - {key}, model.rules, model.goal_key) for key in functions)
 
 
+@pytest.mark.slow
 def test_drawn_ahead_the_participants_plan_picture_is_kept_before_they_ask(client: TestClient) -> None:
     services = services_of(client)
     lamp = services.catalog.get("desk_lamp")

@@ -5,6 +5,7 @@ from __future__ import annotations
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
+import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy.orm import Session
 
@@ -40,6 +41,7 @@ def test_a_cookie_names_its_session_and_is_signed() -> None:
     assert session_cookie("secret", now=1000.0) != cookie  # each sign-in is its own session
 
 
+@pytest.mark.slow
 def test_signing_out_revokes_the_old_cookie_in_every_server_process(tmp_path: Path) -> None:
     url = f"sqlite:///{tmp_path}/auth.sqlite3"
     with (

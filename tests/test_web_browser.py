@@ -24,6 +24,8 @@ from playwright.sync_api import Browser, Page, Playwright, ViewportSize, expect,
 from tests.service_fixtures import AUTH, RESEARCH_TOKEN, serving, settings_for, sqlite_url
 from tests.web_flows import LAMP_RULES, TUTORIAL_ANSWERS, TUTORIAL_RULES, experiment, links
 
+pytestmark = pytest.mark.slow  # a real Chromium drives the pages
+
 ROOT = Path(__file__).resolve().parent.parent
 SCREENSHOTS = ROOT / "out" / "screenshots"
 CHROMIUM_VARIABLE = "CAUSALPLAN_TEST_CHROMIUM"

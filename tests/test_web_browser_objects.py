@@ -15,7 +15,7 @@ import pytest
 from playwright.sync_api import Browser, Page, expect, sync_playwright
 
 from causalplan.objects.catalog import load_catalog
-from tests.test_web_browser import CHROMIUM, CHROMIUM_ARGS, LAPTOP
+from tests.test_web_browser import CHROMIUM_ARGS, LAPTOP, chromium_executable
 from tests.web_flows import experiment, links
 
 DOCS = Path(__file__).resolve().parent.parent / "docs" / "objects"
@@ -28,7 +28,7 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Browser]:
     with sync_playwright() as running:
-        launched = running.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        launched = running.chromium.launch(executable_path=chromium_executable(), args=CHROMIUM_ARGS)
         yield launched
         launched.close()
 

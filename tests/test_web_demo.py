@@ -40,11 +40,18 @@ def test_each_client_has_its_own_starts_per_window(tmp_path: Path) -> None:
 
 
 def test_no_limit_when_the_setting_is_zero(tmp_path: Path) -> None:
-    starts = DemoStarts(migrated_engine(tmp_path), 0)
+    engine, clock = migrated_engine(tmp_path), Clock(10 * WINDOW_SECONDS + 15)
+    unlimited = DemoStarts(engine, 0, clock)
     for _ in range(100):
-        starts.admit("a")
+        unlimited.admit("a")
+    limited = DemoStarts(engine, 2, clock)  # the same database: the unlimited starts were never counted
+    limited.admit("a")
+    limited.admit("a")
+    with pytest.raises(TooManyDemoStartsError):
+        limited.admit("a")
 
 
+@pytest.mark.slow
 def test_try_refuses_a_client_past_its_starts_this_minute(tmp_path: Path) -> None:
     settings = settings_for(f"sqlite:///{tmp_path}/try.sqlite3", planning_workers=1, demo_starts_per_minute=3)
     with running_client(settings) as client:
@@ -65,6 +72,7 @@ def counts(session: Session) -> tuple[int, int, int]:
     )
 
 
+@pytest.mark.slow
 def test_the_purge_takes_old_demo_participants_with_their_work_and_nothing_else(tmp_path: Path) -> None:
     with running_client(settings_for(f"sqlite:///{tmp_path}/purge.sqlite3", planning_workers=1)) as client:
         (study,) = links(client, experiment(client)["id"])
@@ -87,6 +95,7 @@ def test_the_purge_takes_old_demo_participants_with_their_work_and_nothing_else(
         assert client.get(f"/p/{demo_code}", follow_redirects=False).status_code == 404
 
 
+@pytest.mark.slow
 def test_the_purge_runs_when_the_service_starts(tmp_path: Path) -> None:
     url = f"sqlite:///{tmp_path}/start.sqlite3"
     with running_client(settings_for(url, planning_workers=1)) as client:
@@ -97,6 +106,7 @@ def test_the_purge_runs_when_the_service_starts(tmp_path: Path) -> None:
             assert counts(session)[0] == 0
 
 
+@pytest.mark.slow
 def test_the_purge_runs_four_times_per_retention_period_and_at_least_hourly(tmp_path: Path) -> None:
     with running_client(settings_for(f"sqlite:///{tmp_path}/every.sqlite3", planning_workers=1)) as client:
         services = services_of(client)

@@ -9,6 +9,7 @@ import uuid
 from pathlib import Path
 from typing import Any
 
+import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import func, inspect, select
 from sqlalchemy.orm import Session
@@ -154,6 +155,7 @@ def test_results_and_exports_hold_every_trial_with_its_model_mapping_and_reasons
     assert linked == 2
 
 
+@pytest.mark.slow
 def test_the_research_pages_need_the_token_as_a_cookie_or_a_bearer(storage_client: TestClient) -> None:
     storage_client.cookies.clear()
     away = storage_client.get("/research/experiments/new", follow_redirects=False)
@@ -200,6 +202,7 @@ def test_the_research_pages_need_the_token_as_a_cookie_or_a_bearer(storage_clien
     assert storage_client.get("/research", follow_redirects=False).status_code == 303
 
 
+@pytest.mark.slow
 def test_without_a_token_the_research_pages_and_api_are_off(tmp_path: Path) -> None:
     settings = settings_for(f"sqlite:///{tmp_path / 'off.sqlite3'}", research_token=None, planning_workers=1)
     with running_client(settings) as client:

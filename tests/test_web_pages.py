@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 
+import pytest
 from fastapi.testclient import TestClient
 
 from tests.service_fixtures import error_of
@@ -133,6 +134,7 @@ def test_an_invalid_model_is_checked_as_typed_and_cannot_be_submitted(client: Te
     assert "electricity flow CAUSES light</textarea>" in client.get(f"/p/{code}/step2").text  # kept for fixing
 
 
+@pytest.mark.slow
 def test_the_robot_plan_is_shown_with_the_simulator_picture(client: TestClient) -> None:
     code = new_participant(client)
     post(client, f"/p/{code}/step1/1", LAMP_FUNCTIONS)

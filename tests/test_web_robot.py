@@ -11,6 +11,8 @@ from tests.conftest import EXAMPLES
 from tests.service_fixtures import AUTH, error_of, running_client, settings_for, sqlite_url, wait_until
 from tests.web_flows import experiment, links, new_participant, post, through_step2
 
+pytestmark = pytest.mark.slow  # the Panda films a participant's plan
+
 
 @pytest.fixture(scope="module")
 def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:

@@ -8,6 +8,7 @@ import uuid
 from pathlib import Path
 from typing import Any
 
+import pytest
 from click.testing import CliRunner
 from fastapi.testclient import TestClient
 from sqlalchemy import func, select
@@ -163,6 +164,7 @@ def test_a_too_fast_finish_is_flagged_and_the_export_hides_or_hashes_platform_id
     assert omitted["platform_participant_id"] is None and omitted["platform_session_id"] is None
 
 
+@pytest.mark.slow
 def test_the_analyze_command_reads_the_export_of_a_real_run_and_skips_the_excluded(
     client: TestClient, tmp_path: Path
 ) -> None:

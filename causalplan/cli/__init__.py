@@ -6,29 +6,43 @@ progress bars) is loaded only by the commands that draw them. Exit codes: 0 succ
 plan / no transfer, 2 invalid input, 3 the planner could not decide.
 
 One module per family of commands; `common` holds what they share. A new command is a
-`click.command` in its family's module (or a new one), registered below.
+`click.command` in its family's module (or a new one), registered below by its name and
+``module:attribute``; its module is imported only when the command runs (``lazy``).
 """
 
 import click
 
-from causalplan.cli import (
-    comparison,
-    crowd,
-    explaining,
-    exports,
-    fits,
-    models,
-    planning,
-    serving,
-    simulation,
-    studies,
-    synthetic,
-)
-from causalplan.version import __version__
+from causalplan.cli.lazy import LazyGroup
+
+COMMANDS = {
+    "check": "models:check",
+    "plan": "planning:plan",
+    "transfer": "planning:transfer",
+    "explain": "explaining:explain",
+    "compile": "models:compile_command",
+    "graph": "models:graph",
+    "compare": "comparison:compare",
+    "batch": "comparison:batch",
+    "planners": "planning:planners",
+    "serve": "serving:serve",
+    "simulate": "simulation:simulate",
+    "check-trajectory": "simulation:check_trajectory",
+    "estimate-fits": "fits:estimate_fits_command",
+    "objects": "models:objects",
+    "analyze": "studies:analyze",
+    "consensus": "crowd:consensus",
+    "population": "crowd:population",
+    "crowd-curve": "crowd:crowd_curve",
+    "synthetic-study": "synthetic:synthetic_study",
+    "export-rddl": "exports:export_rddl_command",
+}
+"""Every command: its name, and where it lives under ``causalplan.cli``."""
 
 
 @click.group(
     name="causalplan",
+    cls=LazyGroup,
+    lazy_commands=COMMANDS,
     context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 110, "show_default": True},
     epilog="Exit codes: 0 done, 1 no plan or no transfer, 2 invalid input, 3 the planner could not decide. "
     "Run `causalplan COMMAND --help` for a command's options.",
@@ -43,31 +57,6 @@ def app() -> None:
 
     Start with: causalplan plan examples/paper/desk_lamp.yaml
     """
-
-
-for command in (
-    models.check,
-    planning.plan,
-    planning.transfer,
-    explaining.explain,
-    models.compile_command,
-    models.graph,
-    comparison.compare,
-    comparison.batch,
-    planning.planners,
-    serving.serve,
-    simulation.simulate,
-    simulation.check_trajectory,
-    fits.estimate_fits_command,
-    models.objects,
-    studies.analyze,
-    crowd.consensus,
-    crowd.population,
-    crowd.crowd_curve,
-    synthetic.synthetic_study,
-    exports.export_rddl_command,
-):
-    app.add_command(command)
 
 
 def main() -> None:

@@ -72,8 +72,10 @@ def compare(
     TASKS are model files, or task files (YAML with model:, mapping:, catalog:); the default is
     the paper's examples (found under the current folder's examples/). Prints a table (status,
     plan length, time, success probability, valid), and writes CSV, JSON and a plot of time
-    against the number of parts. A planner that fails is a row. Every plan is checked by
-    replay, unified-planning's validator and (unless --no-val) VAL, outside the timed part.
+    against the number of parts. A planner that fails is a row. Each run starts warm, from a
+    fork server that has imported the planners. Every plan is checked by replay and (unless
+    --no-val) VAL, those of up: planners also by unified-planning's validator, outside the
+    timed part.
 
     Example: causalplan compare --planners fd,mdp --synthetic 10,40 --out out/compare
     """
@@ -82,11 +84,12 @@ def compare(
     from causalplan.comparison import report
     from causalplan.comparison import tasks as comparison_tasks
     from causalplan.comparison.runner import compare as run_comparison
-    from causalplan.comparison.runner import total_runs
+    from causalplan.comparison.runner import fork_server, total_runs
 
     chosen = [name.strip() for name in planners_option.split(",") if name.strip()]
     for name in chosen:
         check_planner(name)
+    fork_server(chosen)  # started now, it preloads the planners while the tasks are read
     with exit_on_error():
         sizes = _int_list(synthetic, "--synthetic") if synthetic else []
         if tasks:
@@ -96,6 +99,7 @@ def compare(
         selected += [comparison_tasks.synthetic(size) for size in sizes]
     make_folder(out)
     console = make_console()
+    report.load_plotting()
     with progress_bar() as progress:
         bar = progress.add_task("comparing", total=total_runs(selected, chosen, repeat))
 

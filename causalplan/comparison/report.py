@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import csv
+import importlib
 import json
+import threading
 from pathlib import Path
 
 from causalplan.comparison.runner import RunRecord
@@ -44,6 +46,16 @@ def write_json(rows: list[RunRecord], path: Path, settings: dict[str, object]) -
     path.write_text(
         json.dumps({"settings": settings, "runs": [row.as_dict() for row in rows]}, indent=2) + "\n", encoding="utf-8"
     )
+
+
+def load_plotting() -> threading.Thread:
+    """Start importing matplotlib in a thread and return it: the plot then need not wait for the import.
+
+    Meant to run beside the runs, while this process only waits for their records.
+    """
+    loading = threading.Thread(target=importlib.import_module, args=("matplotlib.figure",), daemon=True)
+    loading.start()
+    return loading
 
 
 def plot(rows: list[RunRecord], path: Path, time_limit: float) -> None:

@@ -1,24 +1,45 @@
-"""Runs every planner on every task, each run in its own process with a time and memory limit (``processes``).
+"""Runs every planner on every task, each run in a process of its own with a time and memory limit.
 
-A run that crashes, is killed at its limit or prints nonsense becomes a row with that status;
-it never stops the comparison.
+Each run is forked from a warm parent: multiprocessing's fork server, which has preloaded the
+planners, FD's translator and the MDP (``PRELOADED``), so a run (``worker``) starts with
+nothing left to import and no state of an earlier run; it sends its record through a pipe and
+is killed at its limit (by hand: ``pebble``'s wait for a finished process cost each run
+several times what the paper's tasks take to plan). A run that crashes, is killed at its
+limit or runs out of memory becomes a row with that status; it never stops the comparison.
+Plans are checked by replay inside the run and by VAL here in the parent (each distinct plan
+of a task once), outside the timed part.
 """
 
 from __future__ import annotations
 
-import json
+import multiprocessing
 import statistics
-import sys
 from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass
+from multiprocessing import forkserver
+from multiprocessing.context import ForkServerContext
+from pathlib import Path
 
-from causalplan.comparison.tasks import ComparisonTask
-from causalplan.comparison.worker import RECORD_FILE
+from causalplan.comparison import worker
+from causalplan.comparison.tasks import ComparisonTask, build
+from causalplan.pddl.task import PlanningTask
+from causalplan.pddl.writer import compile_task
 from causalplan.planners import processes
+from causalplan.planners.val import ValVerdict, validate
 
 GRACE_SECONDS = 20.0
-"""Time a worker gets beyond the planner's limit: its imports, the replay and UP's validator."""
+"""Time a run gets beyond the planner's limit: its replay, and for ``up:`` planners loading unified-planning."""
+
+PRELOADED = (
+    "__main__",
+    "causalplan.comparison.worker",
+    "causalplan.planners.pipeline",
+    "causalplan.planners.mdp",
+    "fast_downward.translate.main",
+)
+"""What the fork server imports once for every run: the planners, FD's translator (it runs in the
+run's process), and ``__main__`` (or each run would import it again)."""
 
 
 @dataclass(frozen=True)
@@ -42,34 +63,90 @@ class RunRecord:
         return asdict(self)
 
 
-def run_once(
-    task: ComparisonTask, planner: str, time_limit: float, memory_mb: int, val: bool = False
+def fork_server(planners: Iterable[str] = ()) -> ForkServerContext:
+    """Return the fork server's context, set to preload what runs of ``planners`` import.
+
+    The server starts at this process's first call and the preload counts only then; it is
+    what makes runs start warm, never what makes them right.
+    """
+    context = multiprocessing.get_context("forkserver")
+    modules = [*PRELOADED]
+    if any(planner.startswith("up:") for planner in planners):
+        modules.append("causalplan.planners.up_problem")
+    context.set_forkserver_preload(modules)
+    forkserver.ensure_running()  # it preloads while this process goes on (with the first run, it would wait)
+    return context
+
+
+def _died(folder: Path, exitcode: int | None) -> dict[str, object]:
+    """Return the record of a run whose process ended without a record (its output's last line says why)."""
+    try:
+        output = (folder / worker.OUTPUT_FILE).read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        output = ""
+    tail = output.strip().splitlines()[-1:] or [f"exit code {exitcode}"]
+    status = "out_of_memory" if "MemoryError" in tail[0] else "error"
+    return {"status": status, "message": f"the worker failed: {tail[0]}"}
+
+
+def _run(
+    task: PlanningTask, planner: str, time_limit: float, memory_mb: int, context: ForkServerContext
 ) -> dict[str, object]:
-    """Run one planner on one task in a fresh worker process; return its raw record."""
-    request = json.dumps({"task": task.spec, "planner": planner, "time_limit": time_limit, "val": val})
-    command = [sys.executable, "-m", "causalplan.comparison.worker"]
+    """Run one planner on one task in a new process forked from the fork server; return its raw record."""
+    limit = time_limit + GRACE_SECONDS
     with processes.private_folder("causalplan-compare-") as folder:
-        run = processes.run_limited(
-            command, folder=folder, time_limit=time_limit + GRACE_SECONDS, memory_mb=memory_mb, stdin=request.encode()
+        answers, answer = context.Pipe(duplex=False)
+        process = context.Process(
+            target=worker.serve, args=(answer, task, planner, time_limit, memory_mb, folder), daemon=True
         )
+        process.start()
+        answer.close()  # the run holds the only sending end: its death ends the wait below
         try:
-            record = json.loads((folder / RECORD_FILE).read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError):
-            record = None
-    if run.timed_out:
-        return {"status": "timeout", "message": f"killed after {time_limit + GRACE_SECONDS:g} s"}
-    if not isinstance(record, dict):
-        tail = run.output.strip().splitlines()[-1:] or [f"exit code {run.returncode}"]
-        status = "out_of_memory" if "MemoryError" in tail[0] else "error"
-        return {"status": status, "message": f"the worker failed: {tail[0]}"}
+            if not answers.poll(limit):
+                return {"status": "timeout", "message": f"killed after {limit:g} s"}
+            record: dict[str, object] = answers.recv()
+        except EOFError:
+            process.join()
+            return _died(folder, process.exitcode)
+        finally:
+            if process.is_alive():
+                process.kill()
+            process.join()
+            answers.close()
     return record
 
 
-def _is_valid(record: dict[str, object]) -> bool:
-    """Return whether every check of a solved run passed: replay, UP's validator, and VAL if it ran."""
+def _checked_by_val(task: PlanningTask, record: dict[str, object]) -> dict[str, object]:
+    """Return ``record`` with VAL's verdict on its plan (VAL runs once per distinct plan of a task)."""
+    actions = record.get("actions")
     verdicts = record.get("validated_by")
-    checked = all(verdict == "valid" for verdict in verdicts.values()) if isinstance(verdicts, dict) else True
-    return bool(record.get("valid_under_model")) and record.get("validated_by_up") is not False and checked
+    if not isinstance(actions, list) or not isinstance(verdicts, dict):
+        return record
+    readable = compile_task(task)  # the person's rules as written: one derived clause per rule
+    report = validate(readable.domain, readable.problem, [(action, tuple(args)) for action, args in actions])
+    message = record.get("message") or ("" if report.verdict is ValVerdict.VALID else report.words)
+    return {**record, "validated_by": {**verdicts, "val": report.verdict.value}, "message": message}
+
+
+def _record(
+    task: PlanningTask, planner: str, time_limit: float, memory_mb: int, val: bool, context: ForkServerContext
+) -> dict[str, object]:
+    record = _run(task, planner, time_limit, memory_mb, context)
+    return _checked_by_val(task, record) if val else record
+
+
+def run_once(
+    task: ComparisonTask, planner: str, time_limit: float, memory_mb: int, val: bool = False
+) -> dict[str, object]:
+    """Run one planner on one task in a process of its own; return its raw record (``val``: VAL checks the plan)."""
+    return _record(build(task.spec), planner, time_limit, memory_mb, val, fork_server([planner]))
+
+
+def _is_valid(record: dict[str, object]) -> bool:
+    """Return whether every check of a solved run passed: replay, VAL if it ran, UP's validator for ``up:`` runs."""
+    verdicts = record.get("validated_by")
+    checked = all(verdict == "valid" for verdict in verdicts.values()) if isinstance(verdicts, dict) else False
+    return bool(record.get("valid_under_model")) and checked
 
 
 def _summary(task: ComparisonTask, planner: str, records: list[dict[str, object]]) -> RunRecord:
@@ -111,12 +188,14 @@ def compare(
 
     ``val`` has VAL check every plan too (outside the timed part of each run).
     """
+    context = fork_server(planners)
     rows: list[RunRecord] = []
     for task in tasks:
+        built = build(task.spec)
         for planner in planners:
             records: list[dict[str, object]] = []
             for _ in range(repeat):
-                records.append(run_once(task, planner, time_limit, memory_mb, val))
+                records.append(_record(built, planner, time_limit, memory_mb, val, context))
                 if progress is not None:
                     progress(f"{planner} on {task.name}")
             rows.append(_summary(task, planner, records))
@@ -124,5 +203,5 @@ def compare(
 
 
 def total_runs(tasks: Iterable[ComparisonTask], planners: list[str], repeat: int) -> int:
-    """Return how many worker processes a comparison starts."""
+    """Return how many runs (each a process of its own) a comparison makes."""
     return len(list(tasks)) * len(planners) * repeat

@@ -1,55 +1,62 @@
-"""One comparison run in its own process: ``python -m causalplan.comparison.worker`` (JSON in, a file out).
+"""One comparison run, in a process of its own forked from a warm parent (see ``runner``).
 
-It reads its request from stdin, rebuilds the task, imports the planner's libraries *before*
-the clock starts (so the time is the planner's, not Python's imports), plans, then validates
-the plan with unified-planning's plan validator and, when asked, VAL, outside the timed
-section. The record goes to ``RECORD_FILE`` in its working directory (stdout is left to
-whatever the planners print).
+The fork server preloads the planners (``runner.PRELOADED``), so a run forked from it has no
+import left to do: the clock times the planner, not Python. This module itself stays light
+(the parent imports it to name ``serve``). The run limits its own memory, plans, and sends its
+record; checks that need no planner libraries (VAL) are left to the parent, which runs each
+distinct plan once. unified-planning's validator runs only for ``up:`` planners, whose run has
+it loaded.
 """
 
 from __future__ import annotations
 
-import json
-import sys
+import os
+import resource
 import time
+from multiprocessing.connection import Connection
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from causalplan.errors import CausalPlanError
+from causalplan.planners import processes
 
-RECORD_FILE = "record.json"
+if TYPE_CHECKING:
+    from causalplan.pddl.task import PlanningTask
+
+OUTPUT_FILE = "output.log"
+"""Where a run's stdout and stderr go, in its folder (what planners print would garble the progress bar)."""
 
 
-def run(request: dict[str, object]) -> dict[str, object]:
-    """Return the record of one planner run on one task."""
-    from causalplan.comparison.tasks import build
-    from causalplan.planners.pipeline import plan_task
+def _limit_memory(megabytes: int) -> None:
+    limit = processes.memory_limit(megabytes)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 
-    planner = str(request["planner"])
-    time_limit = float(str(request["time_limit"]))
-    task = build(request["task"])  # type: ignore[arg-type]
+
+def _output_to(folder: Path) -> None:
+    """Send this process's stdout and stderr (file descriptors 1 and 2) to ``OUTPUT_FILE`` in ``folder``."""
+    descriptor = os.open(folder / OUTPUT_FILE, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    os.dup2(descriptor, 1)
+    os.dup2(descriptor, 2)
+    os.close(descriptor)
+
+
+def run(task: PlanningTask, planner: str, time_limit: float, memory_mb: int, folder: Path) -> dict[str, object]:
+    """Return the record of one planner run on ``task`` (in this process; ``folder`` is its own)."""
+    from causalplan.planners.pipeline import plan_task  # preloaded by the fork server: no import is left here
+
+    _output_to(folder)
+    os.chdir(folder)
+    _limit_memory(memory_mb)
     if planner.startswith("up:"):
-        from causalplan.planners.up_problem import engine_problem
+        from causalplan.planners.up_problem import engine_problem  # only up: runs pay for unified-planning
 
         engine_problem(planner.removeprefix("up:"))  # imports and loads the engine, untimed
-    started = time.perf_counter()
-    result = plan_task(task, planner, time_limit)
-    seconds = time.perf_counter() - started
-    validated = None
-    validated_by: dict[str, str] | None = None
-    message = result.message
-    if result.has_plan:
-        from causalplan.pddl.writer import compile_task
-        from causalplan.planners import val
-        from causalplan.planners.up_problem import validate_with_up
-
-        actions = tuple((step.action, (*step.args, step.fit)) for step in result.steps)
-        validated = validate_with_up(task, actions)
-        validated_by = {**result.validated_by, "up": "valid" if validated else "invalid"}
-        if request.get("val"):
-            readable = compile_task(task)
-            report = val.validate(readable.domain, readable.problem, actions)
-            validated_by["val"] = report.verdict.value
-            message = message or report.words
+    try:
+        started = time.perf_counter()
+        result = plan_task(task, planner, time_limit)
+        seconds = time.perf_counter() - started
+    except CausalPlanError as exc:
+        return {"status": "error", "message": f"{exc.code}: {exc.message}"}
     return {
         "status": result.status.value,
         "planner_used": result.planner_used,
@@ -58,21 +65,25 @@ def run(request: dict[str, object]) -> dict[str, object]:
         "success_probability": result.success_probability,
         "valid_under_model": result.valid_under_model,
         "valid_under_true_mechanism": result.valid_under_true_mechanism,
-        "validated_by_up": validated,
-        "validated_by": validated_by,
-        "message": message,
+        "validated_by": dict(result.validated_by) if result.has_plan else None,
+        "actions": [[step.action, [*step.args, step.fit]] for step in result.steps] if result.has_plan else None,
+        "message": result.message,
     }
 
 
-def main() -> None:
-    """Read one request from stdin, write its record to ``RECORD_FILE``."""
-    request = json.loads(sys.stdin.read())
+def serve(
+    answer: Connection, task: PlanningTask, planner: str, time_limit: float, memory_mb: int, folder: Path
+) -> None:
+    """Run one planner run (``run``) in this process and send its record through ``answer``.
+
+    An exception becomes an error record, so the parent learns what went wrong; a process that
+    dies sends nothing, and the parent reports its exit code.
+    """
     try:
-        record = run(request)
-    except CausalPlanError as exc:
-        record = {"status": "error", "message": f"{exc.code}: {exc.message}"}
-    Path(RECORD_FILE).write_text(json.dumps(record), encoding="utf-8")
-
-
-if __name__ == "__main__":
-    main()
+        record = run(task, planner, time_limit, memory_mb, folder)
+    except MemoryError:
+        record = {"status": "out_of_memory", "message": "the worker failed: MemoryError"}
+    except Exception as exc:  # noqa: BLE001 - whatever ended the run is its row's message
+        record = {"status": "error", "message": f"the worker failed: {type(exc).__name__}: {exc}"}
+    answer.send(record)
+    answer.close()
