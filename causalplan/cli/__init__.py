@@ -13,6 +13,7 @@ One module per family of commands; `common` holds what they share. A new command
 import click
 
 from causalplan.cli.lazy import LazyGroup
+from causalplan.version import __version__
 
 COMMANDS = {
     "check": "models:check",
