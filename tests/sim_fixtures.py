@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 from causalplan.objects.catalog import parse_object
 from causalplan.objects.model import AssemblyObject
 from causalplan.sim import StepRequest
@@ -165,3 +167,38 @@ TOY_CAR_PLAN = steps(
     "place sticker chassis sticker_onto_chassis",
 )
 """The toy car (the tutorial object) built whole."""
+
+
+def goal_plans(obj: AssemblyObject, most: int = 6) -> list[tuple[StepRequest, ...]]:
+    """Return up to ``most`` plans making the first fit of each requirement, each after what holds its mate.
+
+    A fit whose fixed part is not the base needs a fit that joins that part first (the first
+    the catalog lists). The plans are the orders of those fits in which every fixed part is
+    in the assembly when it is used, the requirements' order first: the robot may manage one
+    order and not another (its fingers may touch a part already in place).
+    """
+    chosen: list[str] = []
+
+    def need(fit_id: str) -> None:
+        fit = obj.fit(fit_id)
+        if fit_id in chosen:
+            return
+        if fit.fixed_part != obj.base and all(obj.fit(made).moving_part != fit.fixed_part for made in chosen):
+            holder = next(f for f in obj.fits if f.moving_part == fit.fixed_part and f.primitive != "ignite")
+            need(holder.id)
+        chosen.append(fit_id)
+
+    for requirement in obj.mechanism:
+        need(requirement.any_of[0])
+    plans = []
+    for order in itertools.permutations(map(obj.fit, chosen)):
+        present = {obj.base}
+        for fit in order:
+            if fit.fixed_part not in present:
+                break
+            present.add(fit.moving_part)
+        else:
+            plans.append(tuple(StepRequest(f.primitive, f.moving_part, f.fixed_part, f.id) for f in order))
+        if len(plans) == most:
+            break
+    return plans

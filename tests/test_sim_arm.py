@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from causalplan.objects.catalog import Catalog
 from causalplan.sim import RenderMode, simulate_plan
-from causalplan.sim.arm import Arm
 from causalplan.sim.checks import REACH_TOLERANCE_MM
 from causalplan.sim.geometry import solids
+from causalplan.sim.robot.arm import Arm
 from causalplan.sim.scene import Scene
 from tests.sim_fixtures import CORRECT_PLANS
 

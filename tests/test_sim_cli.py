@@ -132,23 +132,27 @@ def test_an_unwritable_picture_is_a_clear_error(tmp_path: Path) -> None:
 
 
 def test_the_robot_builds_the_lamp_and_writes_its_motor_commands(tmp_path: Path) -> None:
-    from causalplan.sim.trajectory import read_trajectory
+    from causalplan.sim.robot.trajectory import read_trajectory
 
     commands = tmp_path / "trajectory.json"
     code, data = run_json("simulate", DESK_LAMP, "--robot", "--trajectory", commands)
     assert code == 0 and data["produces_goal"]
     assert data["steps"][0]["robot"][:5] == ["transit", "grasp", "carry", "approach", "screw"]
-    assert data["robot"]["rate_hz"] == 50 and data["robot"]["seconds"] > 1
+    assert data["robot"]["seconds"] > data["robot"]["unconstrained_seconds"] > 1
+    assert data["robot"]["motors"]["produces_goal"] and data["robot"]["motors"]["failure"] is None
+    assert data["robot"]["motors"]["tracking"]["max_end_effector_error_mm"] >= 0
     assert data["files"] == [str(commands)]
     trajectory = read_trajectory(json.loads(commands.read_text()))
-    assert trajectory.seconds == data["robot"]["seconds"]
+    assert round(trajectory.seconds, 2) == data["robot"]["seconds"]
+    checked = run("check-trajectory", commands)
+    assert checked.exit_code == 0 and "within the panda's limits" in checked.stdout
 
 
 def test_the_robot_report_says_what_the_robot_did_per_step() -> None:
     result = run("simulate", DESK_LAMP, "--robot")
     assert result.exit_code == 0
     assert "robot: transit, grasp, carry, approach, screw, release" in result.stdout
-    assert "The robot moved for" in result.stdout
+    assert "The robot moves for" in result.stdout and "Driven by its motors: produces light" in result.stdout
 
 
 def test_a_part_out_of_reach_fails_the_step_with_unreachable() -> None:
@@ -167,6 +171,8 @@ def test_a_seat_walled_in_fails_the_step_with_no_collision_free_path() -> None:
 
 def test_video_and_trajectory_need_the_robot_and_a_known_format(tmp_path: Path) -> None:
     no_robot = run("simulate", DESK_LAMP, "--video", tmp_path / "lamp.mp4")
+    assert no_robot.exit_code == 2 and "need --robot" in no_robot.stderr
+    no_robot = run("simulate", DESK_LAMP, "--ros2-bag", tmp_path / "bag")
     assert no_robot.exit_code == 2 and "need --robot" in no_robot.stderr
     avi = run("simulate", DESK_LAMP, "--robot", "--video", tmp_path / "lamp.avi")
     assert avi.exit_code == 2 and "writes .mp4 or .gif, not '.avi'" in avi.stderr
@@ -199,3 +205,29 @@ def test_a_wrong_overlay_is_invalid_input(tmp_path: Path) -> None:
     overlay.write_text("objects: {desk_lamp: {bulb_into_socket: {probability: 2}}}")
     result = run("plan", DESK_LAMP, "--catalog-overlay", overlay)
     assert result.exit_code == 2 and "probability 2 is not in (0, 1]" in result.stderr
+
+
+def test_check_trajectory_refuses_an_over_fast_file_naming_the_joint_and_the_ratio(tmp_path: Path) -> None:
+    home = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]
+    points = [
+        {"time_from_start": k * 0.01, "positions": [*home[:6], home[6] + 0.0522 * k]} for k in range(5)
+    ]  # joint 7 at 5.22 rad/s: twice its limit
+    fast = tmp_path / "fast.json"
+    fast.write_text(json.dumps({"joints": [f"panda_joint{i}" for i in range(1, 8)], "points": points}))
+    result = run("check-trajectory", fast)
+    assert result.exit_code == 2
+    assert "panda_joint7 velocity" in result.stdout and "2.00x its limit 2.61" in result.stdout
+    code, data = run_json("check-trajectory", fast, "--robot", "panda")
+    assert code == 2 and not data["within_limits"]
+    velocity = [v for v in data["violations"] if v["quantity"] == "velocity"]
+    assert velocity[0]["joint"] == "panda_joint7" and velocity[0]["ratio"] == 2.0 and velocity[0]["time"] == 0.005
+
+
+def test_check_trajectory_says_what_is_wrong_with_a_bad_file(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"robot": "franka_panda", "joints": [], "rate_hz": 50, "segments": []}))
+    result = run("check-trajectory", bad)
+    assert result.exit_code == 2 and "invalid_trajectory" in result.stderr and "first format" in result.stderr
+    bad.write_text(json.dumps({"joints": [], "points": [{"time_from_start": 0, "positions": []}]}))
+    unknown = run("check-trajectory", bad, "--robot", "ur5")
+    assert unknown.exit_code == 2 and "unknown_robot" in unknown.stderr

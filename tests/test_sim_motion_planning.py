@@ -6,7 +6,7 @@ import itertools
 
 import pytest
 
-from causalplan.sim.motion_planning import CHECK_STEP, densify, plan_path
+from causalplan.sim.robot.motion_planning import CHECK_STEP, densify, plan_path
 
 LOWER, UPPER = (-3.0,) * 7, (3.0,) * 7
 START = (-1.0, 0.0, 0.0, -1.5, 0.0, 1.5, 0.0)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 
 from causalplan.sim.geometry import solids
-from causalplan.sim.panda import HOME, IK_POSITION_TOLERANCE, Panda
 from causalplan.sim.poses import Pose, about_axis, difference
+from causalplan.sim.robot.panda import HOME, IK_POSITION_TOLERANCE, Panda
 from causalplan.sim.scene import Scene
 from tests.conftest import builtin_catalog
 

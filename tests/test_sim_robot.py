@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from functools import cache
 
 import pytest
@@ -11,12 +12,12 @@ from causalplan.errors import CatalogError
 from causalplan.objects.catalog import load_catalog
 from causalplan.sim import SimulationReport, simulate_plan
 from causalplan.sim.geometry import solids
-from causalplan.sim.grasps import grasp_of
-from causalplan.sim.panda import JOINT_NAMES
 from causalplan.sim.poses import difference
-from causalplan.sim.replay import replay
 from causalplan.sim.report import RenderMode, StepStatus
-from causalplan.sim.trajectory import SEGMENT_KINDS, read_trajectory
+from causalplan.sim.robot.grasps import grasp_of
+from causalplan.sim.robot.panda import JOINT_NAMES
+from causalplan.sim.robot.replay import replay
+from causalplan.sim.robot.trajectory import SEGMENT_KINDS, read_trajectory
 from tests.conftest import EXAMPLES, builtin_catalog
 from tests.sim_fixtures import CORRECT_PLANS, PEG_BOARD, TOY_CAR_PLAN, parsed_object, steps
 
@@ -40,9 +41,19 @@ def test_the_robot_builds_every_paper_object_and_the_toy_car(object_id: str) -> 
 
 
 def test_a_screw_turns_the_wrist_and_regrasps_when_joint_7_runs_out() -> None:
-    motions = robot_run("desk_lamp").steps[0].motions
+    report = robot_run("desk_lamp")
+    motions = report.steps[0].motions
     assert "screw" in motions
     assert motions.count("grasp") >= 2  # two turns of the bulb are more than joint 7's range
+    commands = report.motor_commands
+    assert commands is not None
+    kinds = [segment.kind for segment in commands.segments]
+    regrasp = kinds.index("grasp", kinds.index("screw"))  # open, turn back, close: each a motion from rest
+    release, turn = commands.segments[regrasp - 2], commands.segments[regrasp - 1]
+    assert (release.kind, turn.kind) == ("release", "transit")
+    wrist = [point.positions[6] for point in commands.points[turn.first : turn.last + 1]]
+    assert abs(wrist[-1] - wrist[0]) == pytest.approx(math.pi, abs=1e-3)
+    assert len(wrist) > 20  # turned over many commands, not in one jump
 
 
 def test_lighting_brings_the_flame_to_the_wick_and_back_to_the_table() -> None:
@@ -53,23 +64,25 @@ def test_lighting_brings_the_flame_to_the_wick_and_back_to_the_table() -> None:
 
 
 def test_the_trajectory_file_has_the_documented_shape() -> None:
-    trajectory = robot_run("flashlight").trajectory
+    trajectory = robot_run("flashlight").motor_commands
     assert trajectory is not None
     data = json.loads(json.dumps(trajectory.as_dict()))
-    assert data["robot"] == "franka_panda"
+    assert data["robot"] == "panda" and data["format"] == "causalplan-trajectory/2"
     assert data["joints"] == list(JOINT_NAMES)
-    assert data["rate_hz"] == 50
+    assert data["limits"]["position_max"][6] == 2.8973 and data["limits"]["safety_factor"] == 0.5
     assert {segment["kind"] for segment in data["segments"]} <= set(SEGMENT_KINDS)
     assert {segment["gripper"] for segment in data["segments"]} == {"open", "closed"}
     assert {segment["step"] for segment in data["segments"]} == {1, 2}
-    assert all(len(position) == 7 for segment in data["segments"] for position in segment["positions"])
+    point = data["points"][1]
+    assert {"time_from_start", "positions", "velocities", "accelerations", "gripper_width"} <= set(point)
+    assert all(len(point[key]) == 7 for key in ("positions", "velocities", "accelerations"))
 
 
 @pytest.mark.parametrize("object_id", ["desk_lamp", "candle"])
 def test_replaying_the_trajectory_file_in_a_fresh_scene_rebuilds_the_same_assembly(object_id: str) -> None:
     report = robot_run(object_id)
-    assert report.trajectory is not None
-    trajectory = read_trajectory(json.loads(json.dumps(report.trajectory.as_dict())))
+    assert report.motor_commands is not None
+    trajectory = read_trajectory(json.loads(json.dumps(report.motor_commands.as_dict())))
     replayed = replay(builtin_catalog().get(object_id), PLANS[object_id], trajectory)
     assert set(replayed) == set(report.placed)
     for part, pose in report.placed.items():
@@ -79,9 +92,9 @@ def test_replaying_the_trajectory_file_in_a_fresh_scene_rebuilds_the_same_assemb
 
 def test_the_same_plan_gives_the_same_trajectory() -> None:
     again = simulate_plan(builtin_catalog().get("flashlight"), PLANS["flashlight"], render=RenderMode.NONE, robot=True)
-    first = robot_run("flashlight").trajectory
-    assert first is not None and again.trajectory is not None
-    assert again.trajectory.as_dict() == first.as_dict()
+    first = robot_run("flashlight").motor_commands
+    assert first is not None and again.motor_commands is not None
+    assert again.motor_commands.as_dict() == first.as_dict()
 
 
 def test_a_part_out_of_the_arms_reach_fails_unreachable_at_step_1() -> None:

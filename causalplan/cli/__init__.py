@@ -44,6 +44,7 @@ for command in (
     planning.planners,
     serving.serve,
     simulation.simulate,
+    simulation.check_trajectory,
     fits.estimate_fits_command,
     models.objects,
     studies.analyze,

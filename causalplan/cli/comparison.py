@@ -215,7 +215,7 @@ def batch(
     make_folder(out)
     judge = None
     if robot:
-        from causalplan.sim.robot_verdict import robot_judged
+        from causalplan.transfer.robot_verdict import robot_judged
 
         judge = robot_judged
     started = time.perf_counter()

@@ -162,7 +162,7 @@ def transfer(
     with exit_on_error():
         verdict = transfer_verdict(loaded_model, loaded_mapping, objects, planner, time_limit, val=val)
         if robot:
-            from causalplan.sim.robot_verdict import robot_judged
+            from causalplan.transfer.robot_verdict import robot_judged
 
             verdict = robot_judged(verdict, objects)
     if as_json:

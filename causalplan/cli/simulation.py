@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import click
 
 from causalplan.cli.common import (
+    EXIT_INVALID,
     EXIT_NO_PLAN,
     EXIT_OK,
     EXIT_UNDECIDED,
@@ -30,6 +31,7 @@ from causalplan.cli.common import (
 
 if TYPE_CHECKING:
     from causalplan.sim import SimulationReport
+    from causalplan.sim.robot.checker import Violation
 
 
 def _print_simulation(report: SimulationReport) -> None:
@@ -55,8 +57,18 @@ def _print_simulation(report: SimulationReport) -> None:
     for requirement in report.requirements:
         say(f"  {mark(requirement.met)} {requirement.says}: {requirement.detail}")
     say(f"Produces {report.goal}: {mark(report.produces_goal)}")
-    if report.trajectory is not None:
-        say(f"The robot moved for {report.trajectory.seconds:.1f} s ({len(report.trajectory.segments)} motions).")
+    commands = report.motor_commands
+    if commands is not None:
+        say(
+            f"The robot moves for {commands.seconds:.1f} s ({len(commands.segments)} motions, "
+            f"within {commands.safety_factor:g} x the {commands.limits.model}'s limits)."
+        )
+    if report.motors is not None:
+        run = report.motors
+        tracked = f"tracking within {run.joint_error:.4f} rad, {run.gripper_error_mm:.1f} mm at the gripper"
+        outcome = "" if run.failure is None else f"; {run.failure.value} at step {run.step}: {run.message}"
+        goal = f"produces {report.goal}" if run.produces_goal else f"no {report.goal}"
+        say(f"Driven by its motors: {goal}, {tracked}{outcome}.")
 
 
 @click.command(short_help="Check a plan in a headless physics simulation, and draw it.")
@@ -84,6 +96,25 @@ def _print_simulation(report: SimulationReport) -> None:
     type=FILE,
     help="With --robot: write the motor commands (time-stamped joint positions and gripper commands) as JSON.",
 )
+@click.option(
+    "--safety-factor",
+    type=click.FloatRange(0.0, 1.0, min_open=True),
+    default=None,
+    help="With --robot: the share of the Panda's datasheet velocity, acceleration and jerk limits its motor "
+    "commands use  [default: sim.robot.limits.DEFAULT_SAFETY_FACTOR, 0.5]",
+)
+@click.option(
+    "--motors/--no-motors",
+    default=True,
+    help="With --robot: also play the motor commands through the Panda's joint motors in physics, and report "
+    "the tracking error and slip (limit_violation, tracking_error, grasp_slipped).",
+)
+@click.option("--ros2-bag", type=FILE, help="With --robot: write the motor commands as a ROS 2 bag in this new folder.")
+@click.option(
+    "--joint-trajectory",
+    type=FILE,
+    help="With --robot: write the arm's control_msgs/action/FollowJointTrajectory goal as YAML.",
+)
 @click.option("--video", type=FILE, help="With --robot: film the robot at work, as V.mp4 or V.gif.")
 @json_option
 @catalog_option
@@ -97,6 +128,10 @@ def simulate(
     arm: bool,
     robot: bool,
     trajectory: Path | None,
+    safety_factor: float | None,
+    motors: bool,
+    ros2_bag: Path | None,
+    joint_trajectory: Path | None,
     video: Path | None,
     as_json: bool,
     catalog: tuple[Path, ...],
@@ -114,15 +149,24 @@ def simulate(
 
     \b
         causalplan simulate examples/paper/desk_lamp.yaml --robot --video lamp.mp4 --trajectory t.json
+        causalplan simulate examples/paper/desk_lamp.yaml --robot --ros2-bag lamp_bag --joint-trajectory goal.yaml
+
+    The motor commands keep within the Panda's datasheet limits times --safety-factor; driven by
+    its motors (--motors, the default) the run also reports the tracking error and slip.
     """
     from causalplan.planners.pipeline import plan_task
     from causalplan.sim import RenderMode, read_plan_steps, simulate_plan
     from causalplan.sim.render import animation, strip
+    from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
 
     if arm and robot:
         fail("invalid_option", "Use --robot (the Panda does the work) or --arm (it only checks its reach), not both.")
-    if (trajectory or video) and not robot:
-        fail("invalid_option", "--trajectory and --video need --robot (the robot's motions are what they record).")
+    if (trajectory or video or ros2_bag or joint_trajectory) and not robot:
+        fail(
+            "invalid_option",
+            "--trajectory, --ros2-bag, --joint-trajectory and --video need --robot (the robot's motions are what "
+            "they record).",
+        )
     if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
         fail("invalid_option", f"--video writes .mp4 or .gif, not '{video.suffix or video.name}'.")
     objects = catalog_from(catalog)
@@ -147,8 +191,11 @@ def simulate(
                     print_plan(result)
                 exit_with(EXIT_NO_PLAN if result.status.is_final() else EXIT_UNDECIDED)
             steps = read_plan_steps([step.as_dict() for step in result.steps], target)
+        factor, motors = safety_factor or DEFAULT_SAFETY_FACTOR, motors and robot
         if video is None:
-            report = simulate_plan(target, steps, render=render, arm=arm, robot=robot)
+            report = simulate_plan(
+                target, steps, render=render, arm=arm, robot=robot, safety_factor=factor, motors=motors
+            )
         else:
             with progress_bar() as progress:
                 filming = progress.add_task("filming the robot", total=None)
@@ -156,7 +203,17 @@ def simulate(
                 def drawn(frames: int) -> None:
                     progress.update(filming, description=f"filming the robot: {frames} frames")
 
-                report = simulate_plan(target, steps, render=render, arm=arm, robot=True, video=True, on_frame=drawn)
+                report = simulate_plan(
+                    target,
+                    steps,
+                    render=render,
+                    arm=arm,
+                    robot=True,
+                    video=True,
+                    on_frame=drawn,
+                    safety_factor=factor,
+                    motors=motors,
+                )
     written: list[str] = []
     try:
         if png is not None and report.picture is not None:
@@ -171,9 +228,20 @@ def simulate(
         if gif is not None:
             gif.write_bytes(animation(report.frames))
             written.append(str(gif))
-        if trajectory is not None and report.trajectory is not None:
-            trajectory.write_text(json.dumps(report.trajectory.as_dict()), encoding="utf-8")
+        if trajectory is not None and report.motor_commands is not None:
+            trajectory.write_text(json.dumps(report.motor_commands.as_dict()), encoding="utf-8")
             written.append(str(trajectory))
+        if joint_trajectory is not None and report.motor_commands is not None:
+            from causalplan.sim.robot.ros import follow_joint_trajectory_goal
+
+            joint_trajectory.write_text(follow_joint_trajectory_goal(report.motor_commands), encoding="utf-8")
+            written.append(str(joint_trajectory))
+        if ros2_bag is not None and report.motor_commands is not None:
+            from causalplan.sim.robot.ros import write_bag
+
+            with exit_on_error():
+                write_bag(report.motor_commands, ros2_bag)
+            written.append(str(ros2_bag))
         if video is not None:
             from causalplan.sim.video import encode
 
@@ -188,3 +256,62 @@ def simulate(
         for path in written:
             say(f"Wrote {path}")
     exit_with(EXIT_OK if report.passed else EXIT_NO_PLAN)
+
+
+@click.command("check-trajectory", short_help="Check a robot trajectory file against the robot's limits.")
+@click.argument("file", type=FILE)
+@click.option(
+    "--robot", "model", default=None, help="The robot model whose limits apply (default: the file's, else panda)."
+)
+@json_option
+def check_trajectory(file: Path, model: str | None, as_json: bool) -> None:
+    """Check FILE's motor commands against the robot's datasheet limits, independently of who wrote them.
+
+    Velocity, acceleration and jerk are recomputed from the positions and times by finite
+    differences (the velocities a file claims are not trusted); each value beyond a limit is
+    reported with its joint, time and ratio to the limit. FILE is a trajectory JSON (the one
+    `simulate --robot --trajectory` writes, or yours: 'joints' and 'points' with
+    'time_from_start' and 'positions'). Exit 0 within the limits, 2 when not (or invalid input).
+    """
+    from causalplan.sim.robot.checker import violations
+    from causalplan.sim.robot.trajectory import read_trajectory
+
+    try:
+        data = json.loads(file.read_text(encoding="utf-8"))
+    except OSError as exc:
+        fail("input_file_error", f"Cannot read the trajectory file {file}: {exc.strerror}.")
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        fail("invalid_trajectory", f"{file} is not JSON: {exc}.")
+    with exit_on_error():
+        trajectory = read_trajectory(data, model)
+    found = violations(trajectory)
+    if as_json:
+        print_json(
+            {
+                "file": str(file),
+                "robot": trajectory.limits.model,
+                "points": len(trajectory.points),
+                "seconds": round(trajectory.seconds, 4),
+                "within_limits": not found,
+                "violations": [violation.as_dict() for violation in found],
+            }
+        )
+    else:
+        _print_violations(file, trajectory.limits.model, len(trajectory.points), found)
+    exit_with(EXIT_OK if not found else EXIT_INVALID)
+
+
+def _print_violations(file: Path, model: str, points: int, found: list[Violation]) -> None:
+    """Say whether the file keeps within the limits; else the worst value of each joint and quantity."""
+    if not found:
+        say(mark(True) + f" {file}: {points} points within the {model}'s limits.")
+        return
+    say(mark(False) + f" {file}: {len(found)} values beyond the {model}'s limits.")
+    worst: dict[tuple[str, str], Violation] = {}
+    for violation in found:
+        key = (violation.joint, violation.quantity)
+        if key not in worst or violation.ratio > worst[key].ratio:
+            worst[key] = violation
+    for violation in sorted(worst.values(), key=lambda v: -v.ratio):
+        count = sum(1 for v in found if (v.joint, v.quantity) == (violation.joint, violation.quantity))
+        say("   " + violation.text() + dim(f" (worst of {count})"))

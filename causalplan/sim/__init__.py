@@ -4,9 +4,10 @@
 geometry, moves each part along its connector's axis into place (screwing, inserting,
 placing, igniting), checks every step (connectors fit, the path is clear, the weld is
 aligned, nothing falls), lets the assembly settle, evaluates the object's true mechanism on
-what was built, and can render a PNG, one frame per step, or a GIF. With ``robot=True``
-the Franka Panda does the work (``sim.robot``: OMPL paths, IK lines, regrasps), its motor
-commands come back as a trajectory, and it can be filmed (``sim.video``). pybullet and numpy
+what was built, and can render a PNG, one frame per step, or a GIF. Who moves the parts is
+a ``Mover`` (``sim.movers``): the parts themselves, or with ``robot=True`` the Franka Panda
+(``sim.robot``: OMPL paths, IK lines, regrasps), whose motor commands come back as a
+trajectory; pictures and the robot's film are observers (``sim.observers``, ``sim.video``). pybullet and numpy
 are imported only when a simulation runs.
 """
 

@@ -15,21 +15,22 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
-from causalplan.objects.model import AssemblyObject, Connector
+from causalplan.objects.model import AssemblyObject
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.result import PlanStep
 from causalplan.sim import checks
-from causalplan.sim.arm import Arm, reach_step
-from causalplan.sim.geometry import Box, Solid, bounding_box, corners, mating_pose, solids
+from causalplan.sim.geometry import solids
+from causalplan.sim.layout import ROBOT_ROW_GAP, ROW_GAP, catalog_fit, layout, step_connectors
 from causalplan.sim.mechanism import Joint, evaluate, seat_error
 from causalplan.sim.motions import MOTIONS, approach, approach_path, approach_start
+from causalplan.sim.movers import Mover, PartsMoveThemselves, StepMove
+from causalplan.sim.observers import Observer, Pictures
 from causalplan.sim.plan_steps import StepRequest, check_steps
 from causalplan.sim.poses import Pose, difference
-from causalplan.sim.render import DEFAULT_SIZE, Camera, draw
+from causalplan.sim.render import DEFAULT_SIZE, Camera
 from causalplan.sim.report import (
     Check,
     Failure,
-    Picture,
     Reach,
     RenderMode,
     RequirementCheck,
@@ -37,15 +38,12 @@ from causalplan.sim.report import (
     StepReport,
     StepStatus,
 )
-from causalplan.sim.robot import Robot
-from causalplan.sim.robot_steps import bring, drive, let_go, step_motions
+from causalplan.sim.robot.arm import Arm
+from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
+from causalplan.sim.robot.motors import drive_with_motors
+from causalplan.sim.robot.mover import PandaMovesThem
 from causalplan.sim.scene import GROUND, Scene
 from causalplan.sim.video import VIDEO_SIZE, VideoRecorder
-
-ROW_GAP = 0.04
-"""Metres between parts waiting on the table, and between them and the assembly."""
-ROBOT_ROW_GAP = 0.12
-"""The same when the robot fetches them: room for its hand (21 cm across) between the parts."""
 
 
 @dataclass
@@ -56,36 +54,12 @@ class _Run:
     scene: Scene
     homes: dict[str, Pose]
     assembled: set[str]
+    mover: Mover
     joints: list[Joint] = field(default_factory=list)
     attached_at: dict[str, int] = field(default_factory=dict)
-    arm: Arm | None = None
-    robot: Robot | None = None
 
     def name(self, part_or_ground: str) -> str:
         return "table" if part_or_ground == GROUND else self.obj.part(part_or_ground).name
-
-
-def _connectors(obj: AssemblyObject, request: StepRequest, joints: list[Joint]) -> tuple[Connector, Connector] | None:
-    """Return the connectors a step joins: its fit's, or a free pair with the same spec."""
-    moving, fixed = obj.part(request.moving), obj.part(request.fixed)
-    by_id = {(part.id, connector.id): connector for part in obj.parts for connector in part.connectors}
-    if request.fit is not None:
-        fit = obj.fit(request.fit)
-        return by_id[(fit.moving_part, fit.moving_connector)], by_id[(fit.fixed_part, fit.fixed_connector)]
-    taken = {(joint.fixed, joint.fixed_connector) for joint in joints if not joint.touch_only}
-    pairs = [(m, f) for m in moving.connectors for f in fixed.connectors if m.spec == f.spec]
-    pairs.sort(key=lambda pair: (fixed.id, pair[1].id) in taken)
-    return pairs[0] if pairs else None
-
-
-def _catalog_fit(obj: AssemblyObject, request: StepRequest, pair: tuple[Connector, Connector]) -> str | None:
-    """Return the catalog fit a step makes (given, or the one joining the same connectors)."""
-    if request.fit is not None:
-        return request.fit
-    for fit in obj.fits:
-        if fit.connectors() == ((request.moving, pair[0].id), (request.fixed, pair[1].id)):
-            return fit.id
-    return None
 
 
 def _settle(run: _Run, seconds: float) -> tuple[tuple[Check, Check], str | None]:
@@ -144,11 +118,11 @@ class _StepChecks:
 
 def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
     """Execute one step and return its report (the scene is left as the step left it)."""
-    obj, scene, step = run.obj, run.scene, _StepChecks(run, number, request)
+    obj, scene, step, mover = run.obj, run.scene, _StepChecks(run, number, request), run.mover
     motion = MOTIONS[request.action]
     moving_name, fixed_name = run.name(request.moving), run.name(request.fixed)
 
-    pair = _connectors(obj, request, run.joints)
+    pair = step_connectors(obj, request, run.joints)
     if pair is None:
         detail = (
             f"no connector of the {moving_name} ({_specs(obj, request.moving)}) fits one of the {fixed_name} "
@@ -171,20 +145,17 @@ def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
     scene.place(request.moving, path(0.0))
     direction = fixed_pose.turn(fixed_frame.axis)
     start = approach_start(scene.bounds([request.moving]), scene.bounds(run.assembled), direction)
-    if run.arm is not None:
-        step.reach = reach_step(run.arm, scene, request.moving, (path(start), path(0.0)))
-    robot = run.robot
-    if robot is not None:
-        robot.step = number
-        scene.place(request.moving, run.homes[request.moving])
-        failed = bring(robot, request.moving, obj.part(request.moving), motion, path, start, request.fixed)
-        if failed is not None:
-            return step.fail(failed.failure, failed.check)
+    move = StepMove(
+        number, request.moving, obj.part(request.moving), motion, path, start, request.fixed, run.homes[request.moving]
+    )
+    step.reach = mover.reach(move)
+    failed = mover.bring(move)
+    if failed is not None:
+        return step.fail(failed.failure, failed.check)
     went = approach(scene, request.moving, path, start)
-    if robot is not None:
-        failed = drive(robot, motion, path, start, went.stopped, moving_name, request.fixed)
-        if failed is not None:
-            return step.fail(failed.failure, failed.check)
+    failed = mover.drive(move, went.stopped)
+    if failed is not None:
+        return step.fail(failed.failure, failed.check)
     if went.hit is not None and went.hit != request.fixed:
         blocked = checks.path_check(went.hit_depth * 1000, moving_name, run.name(went.hit), went.stopped * 1000)
         return step.fail(Failure.BLOCKED_PATH, blocked)
@@ -195,7 +166,7 @@ def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
         return step.fail(Failure.NO_CONTACT, contact)
     step.passed(contact)
 
-    fit_id = _catalog_fit(obj, request, pair)
+    fit_id = catalog_fit(obj, request, pair)
     joint = Joint(number, fit_id, request.moving, pair[0].id, request.fixed, pair[1].id, motion.touches_only)
     if not motion.touches_only:
         scene.set_dynamic(request.moving, True)
@@ -210,10 +181,9 @@ def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
             short = f"stopped against the {fixed_name} {went.stopped * 1000:.1f} mm before the seat"
             return step.fail(Failure.MISALIGNED, alignment, short if went.hit else "")
         step.passed(alignment)
-    if robot is not None:
-        failed = let_go(robot, motion, path, start, run.homes[request.moving], moving_name, request.fixed)
-        if failed is not None:
-            return step.fail(failed.failure, failed.check)
+    failed = mover.let_go(move)
+    if failed is not None:
+        return step.fail(failed.failure, failed.check)
     if motion.touches_only:
         run.joints.append(joint)  # the flame touched the tip: lit
         scene.place(request.moving, run.homes[request.moving])  # and goes back to the table
@@ -233,52 +203,6 @@ def _specs(obj: AssemblyObject, part_id: str) -> str:
     return ", ".join(f"{c.kind} {c.spec}" for c in obj.part(part_id).connectors) or "no connectors"
 
 
-def designed_poses(obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...]) -> dict[str, Pose]:
-    """Return where the plan means each part it joins to end up: the base at the origin, the rest at their seats."""
-    base = parts[obj.base]
-    design = {
-        obj.base: Pose((-(base.lower[0] + base.upper[0]) / 2, -(base.lower[1] + base.upper[1]) / 2, -base.lower[2]))
-    }
-    joints: list[Joint] = []
-    for request in requests:
-        pair = _connectors(obj, request, joints)
-        if pair is None or request.fixed not in design or request.moving in design:
-            continue
-        if MOTIONS[request.action].touches_only:
-            continue
-        relative = mating_pose(parts[request.moving].frames[pair[0].id], parts[request.fixed].frames[pair[1].id])
-        design[request.moving] = design[request.fixed] * relative
-        joints.append(Joint(0, None, request.moving, pair[0].id, request.fixed, pair[1].id))
-    return design
-
-
-def layout(
-    obj: AssemblyObject, parts: dict[str, Solid], requests: tuple[StepRequest, ...], gap: float = ROW_GAP
-) -> tuple[dict[str, Pose], Box]:
-    """Return where each part starts, and the bounds of the assembly the plan means to build.
-
-    The base stands at the origin; the other parts wait in a row behind where the assembly
-    will be (for the robot, in two rows, behind and in front, so that all are in its reach).
-    The designed bounds (every part at its seat, lights included) frame the camera.
-    """
-    design = designed_poses(obj, parts, requests)
-    homes = {obj.base: design[obj.base]}
-    lower, upper = bounding_box(
-        pose.apply(corner) for part, pose in design.items() for corner in corners(parts[part].drawn_bounds)
-    )
-    waiting = [part for part in parts if part != obj.base]
-    rows = [waiting[0::2], waiting[1::2]] if gap == ROBOT_ROW_GAP else [waiting]
-    for side, row_parts in zip((1.0, -1.0), rows, strict=False):
-        widths = [parts[part].upper[0] - parts[part].lower[0] for part in row_parts]
-        left = -(sum(widths) + gap * (len(row_parts) - 1)) / 2
-        for part, width in zip(row_parts, widths, strict=True):
-            solid = parts[part]
-            row = upper[1] + gap - solid.lower[1] if side > 0 else lower[1] - gap - solid.upper[1]
-            homes[part] = Pose((left - solid.lower[0], row, -solid.lower[2]))
-            left += width + gap
-    return homes, (lower, upper)
-
-
 def simulate_plan(
     target: PlanningTask | AssemblyObject,
     steps: Sequence[StepRequest | PlanStep],
@@ -287,6 +211,8 @@ def simulate_plan(
     arm: bool = False,
     size: tuple[int, int] = DEFAULT_SIZE,
     robot: bool = False,
+    safety_factor: float = DEFAULT_SAFETY_FACTOR,
+    motors: bool = False,
     video: bool = False,
     video_size: tuple[int, int] = VIDEO_SIZE,
     on_frame: Callable[[int], None] | None = None,
@@ -296,66 +222,65 @@ def simulate_plan(
     Raises PlanInputError when a step does not belong to the object, SimulatorUnavailableError
     when PyBullet cannot start. ``render`` picks the pictures (none, the final assembly, or a
     frame per step too); ``arm`` adds the Panda's reachability per step; ``robot`` has the
-    Panda carry out every step (its motor commands are in the report's ``trajectory``), and
-    ``video`` films it doing so (the report's ``video`` frames, ``video_size`` pixels;
-    ``on_frame`` hears of every frame drawn).
+    Panda carry out every step (its planned waypoints are the report's ``trajectory``, its
+    motor commands, within the datasheet's limits times ``safety_factor``, its
+    ``motor_commands``); ``motors`` then plays them through the Panda's joint motors in a fresh
+    scene (the report's ``motors``); ``video`` films the robot (the report's ``video`` frames,
+    ``video_size`` pixels; ``on_frame`` hears of every frame drawn). Raises
+    LimitViolationError (``limit_violation``) when no motor commands keep within the limits.
     """
     obj = target.obj if isinstance(target, PlanningTask) else target
     requests = check_steps(steps, obj)
     timing: dict[str, float] = {}
     clock = time.perf_counter()
     parts = solids(obj)
-    homes, design = layout(obj, parts, requests, ROBOT_ROW_GAP if robot else ROW_GAP)
-    frames: list[Picture] = []
     video = video and robot
+    homes, design = layout(obj, parts, requests, ROBOT_ROW_GAP if robot else ROW_GAP)
     with Scene(parts, drawn=render is not RenderMode.NONE or video) as scene:
         for part, pose in homes.items():
             scene.add_part(part, pose, dynamic=part == obj.base)
-        run = _Run(obj, scene, homes, {obj.base}, arm=Arm(scene) if arm else None)
-        camera = Camera.around(scene, *design, size=size) if render is not RenderMode.NONE else None
         recorder = VideoRecorder(scene, design, obj.name, video_size, on_frame) if video else None
+        mover: Mover
         if robot:
-            run.robot = Robot(scene, observe=recorder.observe if recorder else None)
+            mover = PandaMovesThem(scene, recorder.observe if recorder else None, safety_factor)
+        else:
+            mover = PartsMoveThemselves(scene, Arm(scene) if arm else None)
+        run = _Run(obj, scene, homes, {obj.base}, mover)
+        pictures = None
+        if render is not RenderMode.NONE:
+            pictures = Pictures(scene, Camera.around(scene, *design, size=size), render, obj.name)
+        observers: list[Observer] = [o for o in (pictures, recorder) if o is not None]
         timing["scene"], clock = time.perf_counter() - clock, time.perf_counter()
-        if camera is not None and render is RenderMode.FRAMES:
-            frames.append(draw(scene, camera, (), f"{obj.name}: the parts"))
         reports: list[StepReport] = []
         for number, request in enumerate(requests, start=1):
             if reports and reports[-1].status is not StepStatus.PASSED:
                 reports.append(_StepChecks(run, number, request).report(not_run=True))
                 continue
-            if recorder is not None:
-                recorder.caption = f"{number}/{len(requests)} {request.text(obj)}"
-            reports.append(_step(run, number, request))
-            if run.robot is not None:
-                reports[-1] = replace(reports[-1], motions=step_motions(run.robot.trajectory, number))
-            if camera is not None and render is RenderMode.FRAMES:
-                lit = _lit_parts(run, evaluate(obj, scene, run.joints))
-                caption = f"{number}/{len(requests)} {reports[-1].text} {reports[-1].status.value}"
-                frames.append(draw(scene, camera, lit, caption))
-        if run.robot is not None:
-            run.robot.step = len(requests)
-            if not reports or reports[-1].status is StepStatus.PASSED:
-                run.robot.go_home()
-            timing["robot_ik"] = run.robot.panda.ik_seconds
-            timing["robot_planning"] = run.robot.planning_seconds
+            for observer in observers:
+                observer.step_started(number, len(requests), request.text(obj))
+            reports.append(replace(_step(run, number, request), motions=mover.motions(number)))
+            for observer in observers:
+                observer.step_ended(
+                    reports[-1], len(requests), lambda: _lit_parts(run, evaluate(obj, scene, run.joints))
+                )
+        carried_out = not reports or reports[-1].status is StepStatus.PASSED
+        timing.update(mover.finish(len(requests), carried_out))
         timing["steps"], clock = time.perf_counter() - clock, time.perf_counter()
-        if run.arm is not None:
-            run.arm.go_home()
         stability, culprit = _settle(run, checks.FINAL_SETTLE_SECONDS)
         timing["settle"], clock = time.perf_counter() - clock, time.perf_counter()
         requirements = evaluate(obj, scene, run.joints)
         produces_goal = all(requirement.met for requirement in requirements)
         timing["mechanism"], clock = time.perf_counter() - clock, time.perf_counter()
-        picture = None
-        if camera is not None:
-            verdict = f"produces {obj.goal}" if produces_goal else f"no {obj.goal}"
-            picture = draw(scene, camera, _lit_parts(run, requirements), f"{obj.name}: {verdict}")
-            if render is RenderMode.FRAMES:
-                frames.append(picture)
-            timing["render"] = time.perf_counter() - clock
-        if recorder is not None:
-            recorder.finish(_lit_parts(run, requirements), f"{obj.name}: " + ("light" if produces_goal else "no goal"))
+        for observer in observers:
+            observer.finished(obj.name, _lit_parts(run, requirements), produces_goal, obj.goal)
+        if pictures is not None:
+            timing["render"] = pictures.seconds
+    commands = mover.commands
+    motor_run = None
+    if motors and commands is not None:
+        clock = time.perf_counter()
+        motor_run = drive_with_motors(obj, requests, commands)
+        timing["motors"] = time.perf_counter() - clock
     return SimulationReport(
         object_id=obj.id,
         object_name=obj.name,
@@ -368,11 +293,13 @@ def simulate_plan(
         tolerances=dict(checks.TOLERANCES),
         arm=arm,
         timing=timing,
-        picture=picture,
-        frames=tuple(frames),
+        picture=pictures.picture if pictures else None,
+        frames=tuple(pictures.frames) if pictures else (),
         robot=robot,
-        trajectory=run.robot.trajectory if run.robot else None,
-        placed=dict(run.robot.released) if run.robot else {},
+        trajectory=mover.trajectory,
+        motor_commands=commands,
+        motors=motor_run,
+        placed=mover.placed,
         video=tuple(recorder.frames) if recorder else (),
     )
 

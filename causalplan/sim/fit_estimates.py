@@ -31,14 +31,14 @@ from dataclasses import dataclass, field
 
 from causalplan.objects.model import AssemblyObject, Fit
 from causalplan.sim.checks import ALIGNMENT_TOLERANCE_DEG, ALIGNMENT_TOLERANCE_MM, PENETRATION_TOLERANCE_MM
-from causalplan.sim.executor import ROBOT_ROW_GAP, designed_poses, layout
 from causalplan.sim.geometry import Solid, solids
+from causalplan.sim.layout import ROBOT_ROW_GAP, designed_poses, layout
 from causalplan.sim.motions import MOTIONS, approach_path, approach_start
 from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.poses import Pose, about_axis, angle_between, dot, normalized, scale
 from causalplan.sim.report import Failure
-from causalplan.sim.robot import Robot
-from causalplan.sim.robot_steps import PUSH_DEPTH, bring, drive
+from causalplan.sim.robot.robot import Robot
+from causalplan.sim.robot.steps import PUSH_DEPTH, bring, drive
 from causalplan.sim.scene import Scene
 
 DEFAULT_TRIALS = 200

@@ -11,7 +11,8 @@ if TYPE_CHECKING:
     from PIL import Image
 
     from causalplan.sim.poses import Pose
-    from causalplan.sim.trajectory import Trajectory
+    from causalplan.sim.robot.motors import MotorRun
+    from causalplan.sim.robot.trajectory import Trajectory, Waypoints
 
 
 class RenderMode(StrEnum):
@@ -42,6 +43,9 @@ class Failure(StrEnum):
     NO_COLLISION_FREE_PATH = "no_collision_free_path"  # the robot: the motion planner found no path
     COLLISION = "collision"  # the robot: an executed motion touched what it must not
     GRASP_LOST = "grasp_lost"  # the robot: the part moved in the gripper beyond tolerance
+    LIMIT_VIOLATION = "limit_violation"  # the robot: a motor command beyond its datasheet limits
+    TRACKING_ERROR = "tracking_error"  # the robot's motors: the arm did not follow its commands
+    GRASP_SLIPPED = "grasp_slipped"  # the robot's motors: a held part slipped in (or out of) the gripper
 
 
 @dataclass(frozen=True)
@@ -65,6 +69,14 @@ class Check:
             "unit": self.unit,
             "detail": self.detail,
         }
+
+
+@dataclass(frozen=True)
+class RobotFailure:
+    """Why the robot could not do a motion: the failure code and the check that says so."""
+
+    failure: Failure
+    check: Check
 
 
 @dataclass(frozen=True)
@@ -171,8 +183,12 @@ class SimulationReport:
     timing: dict[str, float] = field(default_factory=dict, compare=False)
     picture: Picture | None = field(default=None, compare=False)
     frames: tuple[Picture, ...] = field(default=(), compare=False)
-    trajectory: Trajectory | None = field(default=None, compare=False)
-    """The robot's motor commands (``robot`` runs only)."""
+    trajectory: Waypoints | None = field(default=None, compare=False)
+    """The robot's planned waypoints, untimed (``robot`` runs only; the film draws them)."""
+    motor_commands: Trajectory | None = field(default=None, compare=False)
+    """The robot's motor commands: the waypoints time-parameterized within its limits (``robot`` runs only)."""
+    motors: MotorRun | None = field(default=None, compare=False)
+    """How the motors carried out the motor commands in physics (``robot`` runs with ``motors`` only)."""
     placed: dict[str, Pose] = field(default_factory=dict, compare=False)
     """Where the robot let go of each part it joined (``robot`` runs only), before the assembly settled."""
     video: tuple[Picture, ...] = field(default=(), compare=False)
@@ -189,8 +205,9 @@ class SimulationReport:
 
     @property
     def passed(self) -> bool:
-        """Return whether every step passed, the assembly held still, and it produces the goal."""
-        return self.failed_step is None and self.is_stable and self.produces_goal
+        """Return whether every step passed, the assembly held still, and it produces the goal (by motors too)."""
+        motors = self.motors is None or (self.motors.failure is None and self.motors.produces_goal)
+        return self.failed_step is None and self.is_stable and self.produces_goal and motors
 
     @property
     def unmet_requirements(self) -> tuple[str, ...]:
@@ -207,6 +224,11 @@ class SimulationReport:
             problems.append("the assembly did not hold still" + where + ": " + self.stability[0].detail)
         if not self.produces_goal:
             problems.append(f"no {self.goal}, because not: " + "; ".join(self.unmet_requirements))
+        motors = self.motors
+        if motors is not None and motors.failure is not None:
+            problems.append(f"driven by its motors, the robot failed at step {motors.step}: {motors.message}")
+        elif motors is not None and not motors.produces_goal:
+            problems.append(f"driven by its motors, the robot built no {self.goal}")
         return "; ".join(problems)
 
     def summary(self) -> dict[str, object]:
@@ -243,11 +265,21 @@ class SimulationReport:
         }
 
     def _robot_summary(self) -> dict[str, object]:
-        """Return what the robot did overall: how long it moved, at what control rate, in how many motions."""
-        if self.trajectory is None:
-            return {"seconds": 0.0, "rate_hz": None, "motions": 0}
-        return {
-            "seconds": round(self.trajectory.seconds, 2),
-            "rate_hz": self.trajectory.rate_hz,
-            "motions": len(self.trajectory.segments),
+        """Return what the robot did overall: how long its motor commands take, and how its motors did."""
+        planned = self.trajectory
+        commands = self.motor_commands
+        summary: dict[str, object] = {
+            "seconds": round(commands.seconds, 2) if commands else 0.0,
+            "unconstrained_seconds": round(sum(len(s.positions) for s in planned.segments) / planned.rate_hz, 2)
+            if planned
+            else 0.0,
+            "rate_hz": planned.rate_hz if planned else None,
+            "motions": len(planned.segments) if planned else 0,
         }
+        if commands is not None:
+            summary["points"] = len(commands.points)
+            summary["robot_model"] = commands.limits.model
+            summary["safety_factor"] = commands.safety_factor
+        if self.motors is not None:
+            summary["motors"] = self.motors.as_dict()
+        return summary

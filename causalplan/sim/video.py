@@ -1,8 +1,9 @@
 """A film of the robot at work: frames drawn while it moves, written as MP4 (imageio + ffmpeg) or GIF.
 
-``VideoRecorder.observe`` is called after every commanded position and draws one frame in
-``FRAME_EVERY``; ``finish`` adds the finished object, lit when it produces its goal, held
-for a moment. ``encode`` writes the frames with imageio: MP4 through the ffmpeg binary that
+``VideoRecorder`` is an observer of the simulation (``sim.observers``): it captions the
+frames with the step being done. Its ``observe`` is called after every commanded position
+and draws one frame in ``FRAME_EVERY``; ``finish`` adds the finished object, lit when it
+produces its goal, held for a moment. ``encode`` writes the frames with imageio: MP4 through the ffmpeg binary that
 ``imageio-ffmpeg`` ships, or an animated GIF.
 """
 
@@ -14,9 +15,9 @@ from dataclasses import dataclass, field
 from causalplan.errors import CausalPlanError
 from causalplan.sim.geometry import Box
 from causalplan.sim.render import Camera, draw
-from causalplan.sim.report import Picture
+from causalplan.sim.report import Picture, StepReport
+from causalplan.sim.robot.trajectory import RATE_HZ
 from causalplan.sim.scene import Scene
-from causalplan.sim.trajectory import RATE_HZ
 
 VIDEO_SIZE = (480, 360)
 FRAME_EVERY = 5
@@ -63,6 +64,17 @@ class VideoRecorder:
             if self.on_frame is not None:
                 self.on_frame(len(self.frames))
         self.count += 1
+
+    def step_started(self, number: int, total: int, text: str) -> None:
+        """Caption the frames with the step being done."""
+        self.caption = f"{number}/{total} {text}"
+
+    def step_ended(self, report: StepReport, total: int, lit: Callable[[], tuple[str, ...]]) -> None:
+        return None
+
+    def finished(self, title: str, lit: tuple[str, ...], produces_goal: bool, goal: str) -> None:
+        """End the film on the finished object."""
+        self.finish(lit, f"{title}: " + ("light" if produces_goal else "no goal"))
 
     def finish(self, lit_parts: Sequence[str], caption: str) -> None:
         """Add the finished object (lit when it produces its goal), held for ``HOLD_SECONDS``."""

@@ -219,8 +219,8 @@ def _unchecked_verdict(exc: PlanRejectedError | ValidatorError, training: str, t
 
 
 Judge = Callable[[TransferVerdict, Catalog], TransferVerdict]
-"""A last judge of a verdict, e.g. the robot (``sim.robot_verdict.robot_judged``; passed in, since
-``transfer`` never imports the simulator above it)."""
+"""A last judge of a verdict, e.g. the robot (``transfer.robot_verdict.robot_judged``; passed in, so
+a batch loads PyBullet only when it is asked to)."""
 
 
 def evaluate_trial(

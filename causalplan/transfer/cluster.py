@@ -70,7 +70,7 @@ class JudgeOptions:
     simulate: bool = True
     val: bool = False
     judge: Judge | None = None
-    """The last judge of each verdict (e.g. ``sim.robot_verdict.robot_judged``): a top-level function,
+    """The last judge of each verdict (e.g. ``transfer.robot_verdict.robot_judged``): a top-level function,
     so it travels to the workers by name."""
 
 

@@ -76,7 +76,7 @@ def transfer_job(
     catalog = worker_catalog(catalog_folders)
     verdict = evaluate_transfer(model, mapping, catalog, planner, time_limit, val=val)
     if robot:
-        from causalplan.sim.robot_verdict import robot_judged
+        from causalplan.transfer.robot_verdict import robot_judged
 
         verdict = robot_judged(verdict, catalog)
     return verdict.as_dict()

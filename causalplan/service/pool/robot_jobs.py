@@ -85,8 +85,8 @@ def robot_simulation(
     the file ``stop`` exists (the app cannot reach into the worker otherwise).
     """
     from causalplan.sim import RenderMode, simulate_plan
-    from causalplan.sim.robot_verdict import robot_run
     from causalplan.sim.video import encode
+    from causalplan.transfer.robot_verdict import robot_run
 
     report = robot_run(obj, tuple(steps))
     if video is None:
@@ -127,7 +127,7 @@ def robot_film_job(
 
 def robot_outcome(report: SimulationReport) -> dict[str, object]:
     """Return whether the robot carried out the plan and, when not, why: the ``robot_cannot_execute`` reason."""
-    from causalplan.sim.robot_verdict import robot_reason
+    from causalplan.transfer.robot_verdict import robot_reason
 
     reason = robot_reason(report)
     if reason is None:

@@ -7,7 +7,7 @@ import numpy as np
 
 from causalplan.inputs import load_mapping, load_model
 from causalplan.objects.catalog import load_catalog
-from causalplan.sim.robot_verdict import ROBOT_CANNOT_EXECUTE, robot_transfer_verdict, robot_video
+from causalplan.transfer.robot_verdict import ROBOT_CANNOT_EXECUTE, robot_transfer_verdict, robot_video
 from causalplan.transfer.verdict import Verdict, transfer_verdict
 from tests.conftest import EXAMPLES, builtin_catalog
 from tests.sim_fixtures import PEG_BOARD, parsed_object, steps

@@ -20,13 +20,13 @@ from dataclasses import dataclass, field
 
 from causalplan.objects.model import Part
 from causalplan.sim.checks import PENETRATION_TOLERANCE_MM
-from causalplan.sim.grasps import FINGER_REACH, finger_gap, grasp_of
-from causalplan.sim.motion_planning import plan_path
-from causalplan.sim.panda import FINGER_JOINTS, FINGER_OPEN, HOME, Configuration, Contact, Panda
 from causalplan.sim.poses import Pose, about_axis, scale
-from causalplan.sim.report import Check, Failure
+from causalplan.sim.report import Check, Failure, RobotFailure
+from causalplan.sim.robot.grasps import FINGER_REACH, finger_gap, grasp_of
+from causalplan.sim.robot.motion_planning import plan_path
+from causalplan.sim.robot.panda import FINGER_JOINTS, FINGER_OPEN, HOME, Configuration, Contact, Panda
+from causalplan.sim.robot.trajectory import Gripper, Segment, Waypoints
 from causalplan.sim.scene import GROUND, Scene
-from causalplan.sim.trajectory import Gripper, Segment, Trajectory
 
 PREGRASP = 0.08
 """Metres the gripper stays back from a grasp before going straight in (and after letting go)."""
@@ -51,14 +51,6 @@ RANDOM_SEEDS = 12
 """Further starting configurations for the IK (drawn once, from a fixed seed) when the first ones fail."""
 
 
-@dataclass(frozen=True)
-class RobotFailure:
-    """Why the robot could not do a motion: the failure code and the check that says so."""
-
-    failure: Failure
-    check: Check
-
-
 @dataclass
 class Held:
     """The part in the gripper, and the grasp: the gripper's pose in the part's frame."""
@@ -69,13 +61,13 @@ class Held:
 
 @dataclass
 class Robot:
-    """A Panda building in a scene, writing what it does into ``trajectory``.
+    """A Panda building in a scene, writing what it plans to do into ``waypoints``.
 
     ``observe`` is called after every commanded position (a video draws frames from it).
     """
 
     scene: Scene
-    trajectory: Trajectory = field(default_factory=Trajectory)
+    waypoints: Waypoints = field(default_factory=Waypoints)
     observe: Callable[[], None] | None = None
     panda: Panda = field(init=False)
     held: Held | None = None
@@ -135,9 +127,9 @@ class Robot:
     # --- writing commands --------------------------------------------------------------------
 
     def _command(self, kind: str, gripper: Gripper, positions: Sequence[Configuration]) -> None:
-        segment = Segment(self.step, kind, gripper)
-        self.trajectory.segments.append(segment)
         fingers = FINGER_OPEN if gripper == "open" else None
+        segment = Segment(self.step, kind, gripper, 2 * (self.panda.fingers if fingers is None else fingers))
+        self.waypoints.segments.append(segment)
         for position in positions:
             self.panda.set(position, fingers)
             self._place_held()
@@ -150,8 +142,8 @@ class Robot:
         start, end = self.panda.fingers, FINGER_OPEN if gripper == "open" else max(0.0, width / 2)
         if on is not None:
             end = 0.0
-        segment = Segment(self.step, kind, gripper)
-        self.trajectory.segments.append(segment)
+        segment = Segment(self.step, kind, gripper, 2 * end)
+        self.waypoints.segments.append(segment)
         for k in range(1, CLOSE_POSITIONS + 1):
             self.panda.set(self.panda.configuration, start + (end - start) * k / CLOSE_POSITIONS)
             segment.positions.append(self.panda.configuration)
@@ -159,6 +151,7 @@ class Robot:
                 self.observe()
             if on is not None and finger_gap(self.scene, self.panda.body, on) <= TOUCH:
                 break
+        segment.width = 2 * self.panda.fingers
 
     # --- motions -----------------------------------------------------------------------------
 

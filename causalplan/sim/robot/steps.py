@@ -15,8 +15,9 @@ from collections.abc import Callable
 from causalplan.objects.model import Part
 from causalplan.sim.motions import ENGAGEMENT, Motion
 from causalplan.sim.poses import Pose
-from causalplan.sim.robot import LIFT, LINE_STEP, SCREW_STEP, Robot, RobotFailure, line_poses
-from causalplan.sim.trajectory import Trajectory
+from causalplan.sim.report import RobotFailure
+from causalplan.sim.robot.robot import LIFT, LINE_STEP, SCREW_STEP, Robot, line_poses
+from causalplan.sim.robot.trajectory import Waypoints
 
 PUSH_DEPTH = 0.005
 """Metres of the approach, at its end, that are the push home (insert, clip, place) or the touch (ignite)."""
@@ -83,10 +84,10 @@ def let_go(
     return robot.release(mate=None if motion.touches_only else mate)
 
 
-def step_motions(trajectory: Trajectory, step: int) -> tuple[str, ...]:
+def step_motions(waypoints: Waypoints, step: int) -> tuple[str, ...]:
     """Return the kinds of motion the robot made in ``step``, in order, repeats merged."""
     kinds: list[str] = []
-    for segment in trajectory.segments:
+    for segment in waypoints.segments:
         if segment.step == step and segment.positions and (not kinds or kinds[-1] != segment.kind):
             kinds.append(segment.kind)
     return tuple(kinds)

@@ -16,11 +16,12 @@ from dataclasses import dataclass
 
 from causalplan.objects.model import Vector
 from causalplan.sim.poses import Pose, difference
+from causalplan.sim.robot.limits import PANDA, POSITION_MARGIN
 from causalplan.sim.scene import Scene, SimulatorUnavailableError
 
 PANDA_FILE = "franka_panda/panda.urdf"
 ROBOT_NAME = "franka_panda"
-JOINT_NAMES = tuple(f"panda_joint{number}" for number in range(1, 8))
+JOINT_NAMES = PANDA.joints
 ARM_JOINTS = tuple(range(7))
 FINGER_JOINTS = (9, 10)
 BASE_LINKS = frozenset({-1, 0})
@@ -38,8 +39,6 @@ BASE_POSITION: Vector = (-0.55, 0.0, 0.0)
 IK_POSITION_TOLERANCE = 0.0005
 IK_ANGLE_TOLERANCE = math.radians(0.5)
 IK_ROUNDS = 40
-LIMIT_MARGIN = 0.02
-"""Radians kept clear of every joint limit (OMPL's bounds and the IK's)."""
 
 Configuration = tuple[float, ...]
 """The seven arm joint angles, in radians."""
@@ -69,9 +68,9 @@ class Panda:
         self.links = tuple(range(-1, pb.getNumJoints(self.body, physicsClientId=client)))
         for link in self.links:
             pb.setCollisionFilterGroupMask(self.body, link, 0, 0, physicsClientId=client)
-        limits = [pb.getJointInfo(self.body, joint, physicsClientId=client)[8:10] for joint in ARM_JOINTS]
-        self.lower = tuple(low + LIMIT_MARGIN for low, _ in limits)
-        self.upper = tuple(high - LIMIT_MARGIN for _, high in limits)
+        # The datasheet's position limits, not the URDF's (which are wider), for OMPL's bounds and the IK's.
+        self.lower = tuple(low + POSITION_MARGIN for low in PANDA.position_min)
+        self.upper = tuple(high - POSITION_MARGIN for high in PANDA.position_max)
         self.fingers = FINGER_OPEN
         self.ik_seconds = 0.0
         """Time spent in inverse kinematics so far (the benchmark's breakdown)."""

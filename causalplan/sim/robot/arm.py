@@ -13,9 +13,9 @@ import math
 from causalplan.objects.model import Vector
 from causalplan.sim.checks import REACH_TOLERANCE_MM
 from causalplan.sim.geometry import corners
-from causalplan.sim.panda import ARM_JOINTS, GRASP_LINK, HOME, Panda
 from causalplan.sim.poses import Pose, about_axis
 from causalplan.sim.report import Reach
+from causalplan.sim.robot.panda import ARM_JOINTS, GRASP_LINK, HOME, Panda
 from causalplan.sim.scene import Scene
 
 TOP_GRASP = about_axis((1.0, 0.0, 0.0), math.pi)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from causalplan.objects.model import Grasp, Part, Vector
 from causalplan.sim.geometry import Solid
-from causalplan.sim.panda import FINGER_BELOW_TARGET, FINGER_GAP_OPEN, FINGER_JOINTS
 from causalplan.sim.poses import Pose, about_axis, angle_between, cross, multiply, rotate, shortest_arc
+from causalplan.sim.robot.panda import FINGER_BELOW_TARGET, FINGER_GAP_OPEN, FINGER_JOINTS
 from causalplan.sim.scene import Scene
 
 GRASP_DEPTH = 0.01

@@ -14,7 +14,7 @@ import math
 from collections.abc import Callable, Sequence
 from types import ModuleType
 
-from causalplan.sim.panda import Configuration
+from causalplan.sim.robot.panda import Configuration
 from causalplan.sim.scene import SimulatorUnavailableError
 
 PLANNING_SECONDS = 2.0

@@ -1,4 +1,4 @@
-"""Replay a robot trajectory file in a fresh scene: the joint positions alone rebuild the assembly.
+"""Replay a robot trajectory file in a fresh scene: the motor commands' joint positions alone rebuild the assembly.
 
 Nothing of the original run is used but the object, the plan (which lays the parts out on
 the table) and the motor commands: when the gripper closes, the part between its fingers
@@ -12,13 +12,13 @@ from collections.abc import Sequence
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.planners.result import PlanStep
-from causalplan.sim.executor import ROBOT_ROW_GAP, layout
 from causalplan.sim.geometry import solids
-from causalplan.sim.panda import FINGER_JOINTS, FINGER_OPEN, Panda
+from causalplan.sim.layout import ROBOT_ROW_GAP, layout
 from causalplan.sim.plan_steps import StepRequest, check_steps
 from causalplan.sim.poses import Pose
+from causalplan.sim.robot.panda import FINGER_JOINTS, FINGER_OPEN, Panda
+from causalplan.sim.robot.trajectory import Trajectory
 from causalplan.sim.scene import Scene
-from causalplan.sim.trajectory import Trajectory
 
 GRASP_REACH = 0.02
 """Metres from each finger within which a part counts as between the fingers."""
@@ -53,7 +53,8 @@ def replay(obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], traject
         panda = Panda(scene)
         held: tuple[str, Pose] | None = None
         for segment in trajectory.segments:
-            panda.set(segment.positions[0], FINGER_OPEN if segment.gripper == "open" else 0.0)
+            first = trajectory.points[segment.first]
+            panda.set(first.positions, FINGER_OPEN if segment.gripper == "open" else 0.0)
             if segment.gripper == "closed" and held is None:
                 between = _part_between_fingers(scene, panda)
                 if between is not None:
@@ -61,8 +62,8 @@ def replay(obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], traject
             elif segment.gripper == "open" and held is not None:
                 released[held[0]] = scene.pose(held[0])
                 held = None
-            for position in segment.positions:
-                panda.set(position)
+            for point in trajectory.points[segment.first : segment.last + 1]:
+                panda.set(point.positions)
                 if held is not None:
                     scene.place(held[0], panda.gripper_pose() * held[1])
     return released

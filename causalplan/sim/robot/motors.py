@@ -1,0 +1,338 @@
+"""The robot driven by its motors: the motor commands played through PyBullet's joint motors, in physics.
+
+The planning run (``sim.robot.robot``) moves a kinematic arm; this run checks that the
+motors can follow what it wrote. In a fresh scene laid out as the plan lays it out, every
+simulation step (240 a second) sends each arm joint the trajectory's position and velocity
+there (position control, each joint's force capped at its datasheet torque) and each finger
+the commanded width (capped at the gripper's force). A part is held by a fixed constraint
+made only once both fingers touch it, whose force is capped at what the fingers' friction
+can hold (a part that moved in the gripper between grasp and release slipped); when the
+gripper opens the constraint goes, and the part stays where it is (welded to its mate for a
+fastening primitive, resting on it for ``place``, as the simulator's own run does). The
+part's collisions with the scene are off while it is held: the planning run has already
+checked its path.
+
+The run reports the tracking error (the largest joint error, and the largest distance
+between the gripper and where the commands put it), how far each held part slipped in the
+gripper, the first failure (``limit_violation``, ``tracking_error``, ``grasp_slipped``)
+and whether the object, settled, produces its goal.
+"""
+
+from __future__ import annotations
+
+import bisect
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from causalplan.objects.model import AssemblyObject
+from causalplan.sim import checks
+from causalplan.sim.geometry import solids
+from causalplan.sim.layout import ROBOT_ROW_GAP, catalog_fit, layout, step_connectors
+from causalplan.sim.mechanism import Joint, evaluate
+from causalplan.sim.motions import MOTIONS
+from causalplan.sim.plan_steps import StepRequest
+from causalplan.sim.poses import Pose, distance
+from causalplan.sim.report import Failure, RequirementCheck
+from causalplan.sim.robot.panda import ARM_JOINTS, FINGER_JOINTS, Panda
+from causalplan.sim.robot.trajectory import Point, Trajectory
+from causalplan.sim.scene import TIME_STEP, Scene
+
+TRACKING_TOLERANCE_RAD = 0.05
+"""The largest joint error the run accepts (radians)."""
+TRACKING_TOLERANCE_MM = 10.0
+"""The largest gripper position error the run accepts (millimetres): PyBullet's motors follow a step (4 ms) behind."""
+SLIP_TOLERANCE_MM = 2.0
+"""How far a held part may move in the gripper (millimetres)."""
+TOUCH = 0.003
+"""Metres within which a finger counts as touching a part (the arm follows a step behind its commands)."""
+FRICTION = 0.8
+"""Friction coefficient between the fingers and a part: the grasp holds 2 x FRICTION x the finger force."""
+HAND_LINK = 8
+"""``panda_hand``: the link a held part is fixed to."""
+POSITION_GAIN, VELOCITY_GAIN = 1.0, 1.0
+ERP = 0.8
+"""How much of a held part's error its constraint corrects each simulation step."""
+FK_EVERY = 4
+"""Simulation steps between two measures of the gripper's error (forward kinematics of the commands)."""
+
+
+@dataclass(frozen=True)
+class MotorRun:
+    """What happened when the motors carried out the trajectory."""
+
+    seconds: float
+    joint_error: float
+    """The largest joint error (radians) over the run."""
+    joint: str
+    """The joint it was at."""
+    gripper_error_mm: float
+    slip_mm: dict[str, float]
+    """For each part held, the most it had moved in the gripper when let go (millimetres)."""
+    requirements: tuple[RequirementCheck, ...]
+    produces_goal: bool
+    failure: Failure | None = None
+    step: int | None = None
+    message: str = ""
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "seconds": round(self.seconds, 3),
+            "tracking": {
+                "max_joint_error_rad": round(self.joint_error, 5),
+                "joint": self.joint,
+                "max_end_effector_error_mm": round(self.gripper_error_mm, 3),
+                "tolerance_rad": TRACKING_TOLERANCE_RAD,
+                "tolerance_mm": TRACKING_TOLERANCE_MM,
+            },
+            "slip_mm": {part: round(slip, 3) for part, slip in self.slip_mm.items()},
+            "slip_tolerance_mm": SLIP_TOLERANCE_MM,
+            "grasp_slipped": any(slip > SLIP_TOLERANCE_MM for slip in self.slip_mm.values()),
+            "failure": self.failure.value if self.failure else None,
+            "step": self.step,
+            "message": self.message,
+            "produces_goal": self.produces_goal,
+            "mechanism": [requirement.as_dict() for requirement in self.requirements],
+        }
+
+
+@dataclass
+class _Held:
+    part: str
+    step: int
+    constraint: int
+    relative: Pose  # the part's centre of mass in the hand's frame, when grasped
+
+
+@dataclass
+class _Driver:
+    """One motor-driven run as it goes."""
+
+    obj: AssemblyObject
+    scene: Scene
+    trajectory: Trajectory
+    requests: tuple[StepRequest, ...]
+    panda: Panda = field(init=False)
+    ghost: Panda = field(init=False)
+    held: _Held | None = None
+    joints: list[Joint] = field(default_factory=list)
+    slip: dict[str, float] = field(default_factory=dict)
+    joint_error: float = 0.0
+    joint: str = ""
+    gripper_error: float = 0.0
+    failure: tuple[Failure, int, str] | None = None
+
+    def __post_init__(self) -> None:
+        self.panda = Panda(self.scene)
+        self.ghost = Panda(self.scene)  # the commands' arm, for the gripper's error: never stepped against
+        start = self.trajectory.points[0]
+        self.panda.set(start.positions, start.gripper_width / 2)
+        pb, client = self.scene.pb, self.scene.client
+        # The motors' loops replace PyBullet's default velocity motors.
+        pb.setJointMotorControlArray(
+            self.ghost.body, list(ARM_JOINTS), pb.VELOCITY_CONTROL, forces=[0.0] * 7, physicsClientId=client
+        )
+
+    def _fail(self, failure: Failure, step: int, message: str) -> None:
+        if self.failure is None:
+            self.failure = (failure, step, message)
+
+    def _hand(self) -> Pose:
+        state = self.scene.pb.getLinkState(self.panda.body, HAND_LINK, physicsClientId=self.scene.client)
+        return Pose(tuple(state[0]), tuple(state[1]))
+
+    def _command(self, point: Point) -> None:
+        pb, client, limits = self.scene.pb, self.scene.client, self.trajectory.limits
+        pb.setJointMotorControlArray(
+            self.panda.body,
+            list(ARM_JOINTS),
+            pb.POSITION_CONTROL,
+            targetPositions=list(point.positions),
+            targetVelocities=list(point.velocities),
+            forces=list(limits.torque),
+            positionGains=[POSITION_GAIN] * 7,
+            velocityGains=[VELOCITY_GAIN] * 7,
+            physicsClientId=client,
+        )
+        pb.setJointMotorControlArray(
+            self.panda.body,
+            list(FINGER_JOINTS),
+            pb.POSITION_CONTROL,
+            targetPositions=[point.gripper_width / 2] * 2,
+            forces=[limits.gripper_force] * 2,
+            physicsClientId=client,
+        )
+
+    def _touched(self) -> str | None:
+        """Return the part both fingers touch, if any."""
+        pb, client = self.scene.pb, self.scene.client
+        for part, body in self.scene.bodies.items():
+            if all(
+                pb.getClosestPoints(self.panda.body, body, TOUCH, linkIndexA=finger, physicsClientId=client)
+                for finger in FINGER_JOINTS
+            ):
+                return part
+        return None
+
+    def _collide(self, part: str, on: bool) -> None:
+        pb, client = self.scene.pb, self.scene.client
+        body = self.scene.bodies[part]
+        for other in [self.scene.ground, *self.scene.bodies.values()]:
+            if other != body:
+                pb.setCollisionFilterPair(body, other, -1, -1, int(on), physicsClientId=client)
+
+    def _grasp(self, part: str, step: int) -> None:
+        pb, client = self.scene.pb, self.scene.client
+        self.scene.set_dynamic(part, True)
+        self._collide(part, False)
+        relative = self._hand().inverse() * self.scene._body_pose(self.scene.bodies[part])
+        constraint = pb.createConstraint(
+            self.panda.body,
+            HAND_LINK,
+            self.scene.bodies[part],
+            -1,
+            pb.JOINT_FIXED,
+            [0, 0, 0],
+            relative.position,
+            [0, 0, 0],
+            relative.orientation,
+            [0, 0, 0, 1],
+            physicsClientId=client,
+        )
+        pb.changeConstraint(
+            constraint, maxForce=2 * FRICTION * self.trajectory.limits.gripper_force, erp=ERP, physicsClientId=client
+        )
+        self.held = _Held(part, step, constraint, relative)
+        self.slip.setdefault(part, 0.0)
+
+    def _slipped(self, held: _Held, step: int) -> None:
+        """Note how far the held part moved in the gripper since it was grasped (a constraint that gave way)."""
+        now = self._hand().inverse() * self.scene._body_pose(self.scene.bodies[held.part])
+        slip = distance(now.position, held.relative.position) * 1000
+        self.slip[held.part] = max(self.slip[held.part], slip)
+        if slip > SLIP_TOLERANCE_MM:
+            name = self.scene.solids[held.part].name
+            self._fail(Failure.GRASP_SLIPPED, step, f"the {name} slipped {slip:.1f} mm in the gripper")
+
+    def _release(self, regrasp: bool) -> None:
+        """Let go of the held part; for a ``regrasp`` (the step takes it again) it stays where it is, unjoined."""
+        assert self.held is not None
+        held, self.held = self.held, None
+        self._slipped(held, held.step)
+        self.scene.pb.removeConstraint(held.constraint, physicsClientId=self.scene.client)
+        if regrasp:
+            self.scene.set_dynamic(held.part, False)
+            # A body without mass still moves at the velocity it had (PyBullet moves it kinematically).
+            self.scene.pb.resetBaseVelocity(
+                self.scene.bodies[held.part], [0, 0, 0], [0, 0, 0], physicsClientId=self.scene.client
+            )
+            return
+        request = next((r for r in self.requests if r.moving == held.part), None)
+        self._collide(held.part, True)
+        if request is None:
+            return
+        motion = MOTIONS[request.action]
+        pair = step_connectors(self.obj, request, self.joints)
+        if pair is None:
+            return
+        fit = catalog_fit(self.obj, request, pair)
+        joint = Joint(held.step, fit, request.moving, pair[0].id, request.fixed, pair[1].id, motion.touches_only)
+        if motion.touches_only:
+            self.joints.append(joint)  # the flame touched the wick on its way: lit
+            return
+        if motion.fastens:
+            self.scene.weld(request.fixed, request.moving)
+        self.joints.append(joint)
+
+    def _measure(self, point: Point, step: int, count: int) -> None:
+        pb, client, limits = self.scene.pb, self.scene.client, self.trajectory.limits
+        states = pb.getJointStates(self.panda.body, list(ARM_JOINTS), physicsClientId=client)
+        for index, (state, wanted) in enumerate(zip(states, point.positions, strict=True)):
+            error = abs(state[0] - wanted)
+            if error > self.joint_error:
+                self.joint_error, self.joint = error, limits.joints[index]
+            if not limits.position_min[index] <= state[0] <= limits.position_max[index]:
+                detail = f"{limits.joints[index]} at {state[0]:.4f} rad, beyond its limits"
+                self._fail(Failure.LIMIT_VIOLATION, step, detail)
+        if self.joint_error > TRACKING_TOLERANCE_RAD:
+            detail = f"{self.joint} {self.joint_error:.3f} rad from its command (tolerance {TRACKING_TOLERANCE_RAD})"
+            self._fail(Failure.TRACKING_ERROR, step, detail)
+        if count % FK_EVERY == 0:
+            self.ghost.set(point.positions)
+            error = distance(self.ghost.gripper_pose().position, self.panda.gripper_pose().position) * 1000
+            self.gripper_error = max(self.gripper_error, error)
+            if error > TRACKING_TOLERANCE_MM:
+                self._fail(Failure.TRACKING_ERROR, step, f"the gripper {error:.1f} mm from its command")
+
+    def run(self) -> None:
+        points, segments = self.trajectory.points, self.trajectory.segments
+        times = [point.time for point in points]
+        ends = [points[segment.last].time for segment in segments]
+        regrasps = {  # segments that open the gripper on a part the same step takes again
+            k
+            for k, segment in enumerate(segments)
+            if any(later.step == segment.step and later.kind == "grasp" for later in segments[k + 1 :])
+        }
+        count = 0
+        while (count + 1) * TIME_STEP <= points[-1].time + TIME_STEP and self.failure is None:
+            count += 1
+            now = count * TIME_STEP  # the command for the end of this simulation step, and what it is measured on
+            index = min(len(segments) - 1, bisect.bisect_left(ends, now)) if segments else 0
+            segment = segments[index] if segments else None
+            point = _at(points, times, now)
+            self._command(point)
+            self.scene.pb.stepSimulation(physicsClientId=self.scene.client)
+            step = segment.step if segment else 0
+            closed = segment is not None and segment.gripper == "closed"
+            if closed and self.held is None and segment is not None and segment.kind == "grasp":
+                touched = self._touched()
+                if touched is not None:
+                    self._grasp(touched, step)
+                elif now >= ends[index] - TIME_STEP:
+                    self._fail(Failure.GRASP_SLIPPED, step, "the fingers closed and hold nothing")
+            elif not closed and self.held is not None:
+                self._release(regrasp=index in regrasps)
+            self._measure(point, step, count)
+        if self.held is not None and self.failure is None:
+            self._release(regrasp=False)
+
+
+def _at(points: Sequence[Point], times: list[float], now: float) -> Point:
+    """Return the command at ``now``: linear between the two points around it."""
+    after = bisect.bisect_right(times, now)
+    if after >= len(points):
+        return points[-1]
+    before = points[after - 1]
+    nxt = points[after]
+    share = (now - before.time) / (nxt.time - before.time)
+
+    def mix(a: tuple[float, ...], b: tuple[float, ...]) -> tuple[float, ...]:
+        return tuple(x + (y - x) * share for x, y in zip(a, b, strict=True))
+
+    width = before.gripper_width + (nxt.gripper_width - before.gripper_width) * share
+    return Point(now, mix(before.positions, nxt.positions), mix(before.velocities, nxt.velocities), (0.0,) * 7, width)
+
+
+def drive_with_motors(obj: AssemblyObject, requests: tuple[StepRequest, ...], trajectory: Trajectory) -> MotorRun:
+    """Return how the motors carried out ``trajectory`` (the plan ``requests`` on ``obj``) in a fresh scene."""
+    parts = solids(obj)
+    homes, _ = layout(obj, parts, requests, ROBOT_ROW_GAP)
+    with Scene(parts, drawn=False) as scene:
+        for part, pose in homes.items():
+            scene.add_part(part, pose, dynamic=part == obj.base)
+        driver = _Driver(obj, scene, trajectory, requests)
+        driver.run()
+        scene.settle(checks.FINAL_SETTLE_SECONDS)
+        requirements = evaluate(obj, scene, driver.joints)
+    failure, step, message = driver.failure or (None, None, "")
+    return MotorRun(
+        trajectory.seconds,
+        driver.joint_error,
+        driver.joint,
+        driver.gripper_error,
+        driver.slip,
+        requirements,
+        failure is None and all(requirement.met for requirement in requirements),
+        failure,
+        step,
+        message,
+    )

@@ -1,0 +1,42 @@
+"""The robot driven by its motors, for every object of the catalog and the two user objects of examples/catalog."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import pytest
+
+from causalplan.objects.catalog import load_catalog
+from causalplan.sim import simulate_plan
+from causalplan.sim.plan_steps import check_steps
+from causalplan.sim.report import RenderMode
+from causalplan.sim.robot.checker import violations
+from causalplan.sim.robot.motors import drive_with_motors
+from causalplan.sim.robot.trajectory import read_trajectory
+from tests.conftest import EXAMPLES
+from tests.sim_fixtures import goal_plans
+
+CATALOG = load_catalog([EXAMPLES / "catalog"])
+"""The built-in catalog (whatever it holds) and the user objects of examples/catalog."""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("object_id", sorted(CATALOG.objects))
+def test_the_motor_commands_pass_the_checker_and_the_motors_build_the_object(object_id: str) -> None:
+    obj = CATALOG.get(object_id)
+    for plan in goal_plans(obj):  # the first order the robot can carry out
+        report = simulate_plan(obj, plan, render=RenderMode.NONE, robot=True)
+        if report.passed:
+            break
+    assert report.failed_step is None and report.produces_goal, report.explanation()
+    assert report.motor_commands is not None
+    report = replace(report, motors=drive_with_motors(obj, check_steps(plan, obj), report.motor_commands))
+    assert report.motor_commands is not None and report.motors is not None
+    written = read_trajectory(json.loads(json.dumps(report.motor_commands.as_dict())))
+    assert violations(written) == []
+    assert report.motors.failure is None, report.motors.message
+    assert report.motors.produces_goal, report.explanation()
+    motors = report.as_dict()["robot"]["motors"]  # type: ignore[index]
+    assert motors["tracking"]["max_joint_error_rad"] <= motors["tracking"]["tolerance_rad"]
+    assert not motors["grasp_slipped"]
