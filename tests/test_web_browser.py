@@ -454,10 +454,9 @@ def filming_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         yield base
 
 
-def test_watch_the_robot_plays_the_film_of_the_desk_lamp_while_the_page_stays_usable(
-    filming_server: str, page: Page
-) -> None:
-    page.goto(new_link(filming_server, tutorial=False))
+def lamp_plan_shown(page: Page, base: str) -> str:
+    """Reach step 2 with the desk lamp's rules and show the robot's plan; return the participant's code."""
+    page.goto(new_link(base, tutorial=False))
     page.get_by_label("Functions of the base with cables (one per line)").fill("provide electricity")
     bulb = page.get_by_label("Functions of the light bulb (one per line)")
     bulb.fill("turn electricity into light\nclose the circuit")
@@ -467,17 +466,56 @@ def test_watch_the_robot_plays_the_film_of_the_desk_lamp_while_the_page_stays_us
     page.get_by_label("Your rules, one per line").fill(LAMP_RULES)
     expect(page.locator("#problems")).to_have_class(re.compile(r"\bok\b"))
     page.get_by_role("button", name="Show the robot's plan").click()
+    code = re.search(r"/p/([^/]+)/step2$", page.url)
+    assert code is not None
+    return code.group(1)
+
+
+PLAYER = "document.querySelector('.robot-player').player"
+
+
+@pytest.mark.slow
+def test_watch_the_robot_plays_the_run_in_3d_and_its_last_frame_is_the_assembled_lamp(
+    filming_server: str, page: Page
+) -> None:
+    code = lamp_plan_shown(page, filming_server)
     page.get_by_role("button", name="Watch the robot").click()
+    canvas = page.locator(".robot-player canvas")
+    expect(canvas).to_have_count(1, timeout=60_000)
+    page.wait_for_function(f"() => {PLAYER}.state().frames > 2")
+    before = canvas.screenshot()
+    first = page.evaluate(f"{PLAYER}.state().time")
+    page.wait_for_function(f"() => {PLAYER}.state().time > {first} + 1", timeout=30_000)
+    assert canvas.screenshot() != before  # the arm has moved on the canvas
+    assert float(page.locator(".player-timeline").input_value()) > first  # and the timeline with it
+    expect(page.get_by_role("button", name="Submit my model")).to_be_enabled()  # the page stays usable
+
+    fits = page.request.post(f"{filming_server}/p/{code}/plan", data={"rules": LAMP_RULES}).json()["plans"][0]["fits"]
+    run = page.request.post(f"{filming_server}/p/{code}/films/playback", data={"object": "desk_lamp", "fits": fits})
+    assembled = run.json()["assembled"]
+    page.evaluate(f"{PLAYER}.seek({PLAYER}.state().seconds - 0.5); {PLAYER}.play()")
+    page.wait_for_function(f"() => !{PLAYER}.state().playing", timeout=30_000)
+    state = page.evaluate(f"{PLAYER}.state()")
+    assert state["time"] == state["seconds"] == run.json()["seconds"]
+    assert set(assembled) == {"light_bulb"}  # the rules need only the bulb screwed in
+    for part, pose in assembled.items():
+        assert max(abs(a - b) for a, b in zip(state["parts"][part], pose, strict=True)) < 1e-4, part
+    expect(page.get_by_role("button", name="Play again")).to_be_visible()
+    shoot(page, "participant-2-watch-the-robot")
+
+
+@pytest.mark.slow
+def test_the_film_of_the_desk_lamp_is_made_in_the_background_and_offered_to_download(
+    filming_server: str, page: Page
+) -> None:
+    lamp_plan_shown(page, filming_server)
+    page.get_by_role("button", name="Make a film to download (MP4)").click()
     progress = page.locator(".film-progress")
     expect(progress).to_contain_text("frames", timeout=30_000)  # frames filmed of those expected
     expect(page.get_by_role("button", name="Submit my model")).to_be_enabled()  # the page stays usable
-    video = page.locator("video.robot-video")
-    expect(video).to_have_count(1, timeout=120_000)
-    expect(video).to_have_attribute("controls", "")
-    page.wait_for_function("() => document.querySelector('video.robot-video').readyState >= 2", timeout=30_000)
-    started = float(video.evaluate("v => v.currentTime"))
-    page.wait_for_function(
-        f"() => document.querySelector('video.robot-video').currentTime > {started} + 0.5", timeout=30_000
-    )
+    link = page.locator("a.film-download")
+    expect(link).to_have_count(1, timeout=120_000)
+    expect(link).to_contain_text("Download the film (MP4")
+    film = page.request.get(filming_server + str(link.get_attribute("href")))
+    assert film.ok and film.headers["content-type"] == "video/mp4" and len(film.body()) > 1000
     assert not progress.is_visible()
-    shoot(page, "participant-2-watch-the-robot")

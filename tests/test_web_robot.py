@@ -76,3 +76,33 @@ def test_an_experiment_that_needs_the_robot_fails_a_transfer_the_robot_cannot_ca
 def test_the_research_form_offers_the_robot_option(client: TestClient) -> None:
     page = client.get("/research/experiments/new", headers=AUTH)
     assert 'name="robot_verdict"' in page.text
+
+
+@pytest.mark.slow
+def test_the_robots_run_for_the_3d_player_has_the_motor_commands_and_the_parts_tracks(client: TestClient) -> None:
+    code = new_participant(client)
+    post(client, f"/p/{code}/step1/1", {"part:base_with_cables": "provide electricity", "part:light_bulb": "x"})
+    (plan,) = client.post(f"/p/{code}/plan", json={"rules": "provide electricity AND x CAUSES light"}).json()["plans"]
+    answer = client.post(f"/p/{code}/films/playback", json={"object": "desk_lamp", "fits": plan["fits"]})
+    assert answer.status_code == 200, answer.text
+    run = answer.json()
+    assert run["format"] == "causalplan-playback/1" and run["outcome"] == {"carried_out": True, "reason": None}
+    assert run["trajectory"]["points"][-1]["time_from_start"] == run["seconds"]
+    assert set(run["trajectory"]["points"][0]) == {"time_from_start", "positions", "gripper_width"}
+    assert set(run["assembled"]) == {"light_bulb"}
+    (bulb,) = [part for part in run["parts"] if part["id"] == "light_bulb"]
+    assert bulb["track"]["poses"][-1] == run["assembled"]["light_bulb"]
+    refused = client.post(f"/p/{code}/films/playback", json={"object": "flashlight", "fits": plan["fits"]})
+    assert error_of(refused, 404)["code"] == "not_found"
+
+
+def test_the_players_libraries_and_the_pandas_files_are_served_and_nothing_else(client: TestClient) -> None:
+    three = client.get("/web/vendor/three/build/three.module.js")
+    assert three.status_code == 200 and three.headers["content-type"].startswith("text/javascript")
+    assert client.get("/web/vendor/three/LICENSE").text.startswith("The MIT License")
+    assert "Apache License" in client.get("/web/vendor/urdf-loader/LICENSE").text
+    urdf = client.get("/web/vendor/franka_panda/panda.urdf")
+    assert urdf.status_code == 200 and 'name="panda_joint7"' in urdf.text
+    assert client.get("/web/vendor/franka_panda/meshes/collision/link0.obj").status_code == 200
+    for path in ("franka_panda/meshes/visual/link1.obj", "franka_panda/../plane.urdf", "three/package.json", "x/y.js"):
+        assert error_of(client.get(f"/web/vendor/{path}"), 404)["code"] == "not_found", path

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 from importlib import resources
+from pathlib import Path
 
 from fastapi import APIRouter, Request, Response
 
@@ -68,3 +69,40 @@ def part(object_id: str, part_id: str, services: ServicesDep, catalog: CatalogDe
     picture, media_type = part_picture(services, obj, part_id)
     cache = "public, max-age=86400" if media_type == "image/png" else "no-store"
     return Response(picture, media_type=media_type, headers={**SVG_HEADERS, "Cache-Control": cache})
+
+
+VENDOR_TYPES = {
+    ".js": "text/javascript; charset=utf-8",
+    ".obj": "text/plain; charset=utf-8",
+    ".urdf": "application/xml; charset=utf-8",
+    ".txt": "text/plain; charset=utf-8",
+    "": "text/plain; charset=utf-8",  # LICENSE
+}
+_VENDOR_PATH = re.compile(r"(?:[A-Za-z0-9_-]+/)*[A-Za-z0-9_-]+(?:\.[a-z0-9]+)*")
+PANDA_FILES = re.compile(r"franka_panda/(?:panda\.urdf|LICENSE\.txt|meshes/collision/[a-z0-9]+\.obj)")
+"""The Panda's files the player reads from pybullet_data: its URDF and light (collision) meshes."""
+_VENDORED = resources.files("causalplan.service.pages") / "static" / "vendor"
+
+
+@router.get("/web/vendor/{path:path}")
+def vendor(path: str) -> Response:
+    """Return a file of the robot player's libraries (``static/vendor``) or of the Panda (from ``pybullet_data``).
+
+    Only the files shipped are served: the libraries unchanged from npm with their licences,
+    the Panda's URDF and meshes from the installed ``pybullet_data`` (Apache-2.0) with its own.
+    """
+    if not _VENDOR_PATH.fullmatch(path) or Path(path).suffix not in VENDOR_TYPES:
+        raise NotFoundError(f"There is no file '{path}'.")
+    if path.startswith("franka_panda/") and not PANDA_FILES.fullmatch(path):
+        raise NotFoundError(f"There is no file '{path}'.")
+    # the Panda's files where the simulator reads them; the libraries from this package
+    folder = resources.files("pybullet_data") if path.startswith("franka_panda/") else _VENDORED
+    file = folder.joinpath(*path.split("/"))
+    if not file.is_file():
+        raise NotFoundError(f"There is no file '{path}'.")
+    media_type = VENDOR_TYPES[Path(path).suffix]
+    return Response(
+        file.read_bytes(),
+        media_type=media_type,
+        headers={"Cache-Control": "public, max-age=86400", "X-Content-Type-Options": "nosniff"},
+    )

@@ -1,4 +1,8 @@
-"""'Watch the robot' on step 2: film the robot carrying out the plan as a job, and say how far it is.
+"""'Watch the robot' on step 2: the robot's run for the page's 3D player, and its film as a job.
+
+``POST /p/<code>/films/playback`` runs the robot (no film) in a planner worker and answers with
+what the page's player (``static/robot_player.js``) draws at once: the timed motor commands and
+each part's pose over time. The MP4 stays as a download:
 
 ``POST /p/<code>/films`` finds the film's job (one per object, plan, format and size, shared by
 every participant while it is kept) or queues it, and answers at once; the page polls ``GET
@@ -12,8 +16,9 @@ from __future__ import annotations
 import uuid
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Path
+from fastapi import APIRouter, Path, Response
 
+from causalplan.objects.model import AssemblyObject
 from causalplan.service.api.routes.simulations import VIDEO_KEY
 from causalplan.service.api.schemas.experiments import FilmIn, FilmOut
 from causalplan.service.deps import ServicesDep
@@ -21,8 +26,9 @@ from causalplan.service.errors import InvalidRequestError, NotFoundError
 from causalplan.service.films import FilmNotFoundError, film_key
 from causalplan.service.jobs.video import FILM_KEY, fits_film_request, video_url
 from causalplan.service.pages.journeys import JourneyDep
-from causalplan.service.pool.robot_jobs import CONTENT_TYPES
+from causalplan.service.pool.robot_jobs import CONTENT_TYPES, robot_playback_job
 from causalplan.service.storage import jobs as store
+from causalplan.service.storage.experiments import ParticipantJourney
 from causalplan.service.storage.jobs import JobKind, JobStatus
 from causalplan.service.storage.records import JobRecord, utc_now
 
@@ -66,9 +72,8 @@ def _out(code: str, job: JobRecord) -> FilmOut:
     )
 
 
-@router.post("", response_model=FilmOut)
-def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesDep) -> FilmOut:
-    """Start filming the robot making ``fits`` of one of the participant's training objects (kept once made)."""
+def _training_object(body: FilmIn, journey: ParticipantJourney) -> AssemblyObject:
+    """Return the training object ``body`` names, once its fits are the object's."""
     obj = next((o for o in journey.training if o.id == body.object), None)
     if obj is None:
         raise NotFoundError(f"'{body.object}' is not one of your objects in this step.")
@@ -78,6 +83,27 @@ def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesD
         raise InvalidRequestError(
             f"The {obj.name} has no fit '{unknown[0]}'.", details={"fit": unknown[0], "fits": sorted(known)}
         )
+    return obj
+
+
+@router.post("/playback")
+def robot_playback(body: FilmIn, code: str, journey: JourneyDep, services: ServicesDep) -> Response:
+    """Return the robot's run of ``fits`` for the page's 3D player: motor commands and the parts' tracks.
+
+    The robot's run alone (no film) in a planner worker: what the page plays at once
+    (``sim.robot.playback``'s document, plus ``outcome``: whether it carried out the plan).
+    """
+    del code
+    obj = _training_object(body, journey)
+    args = (obj.id, tuple(body.fits), tuple(services.settings.catalog_folders))
+    document = services.pool.run(robot_playback_job, args, services.settings.robot_seconds)
+    return Response(document, media_type="application/json")
+
+
+@router.post("", response_model=FilmOut)
+def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesDep) -> FilmOut:
+    """Start filming the robot making ``fits`` of one of the participant's training objects (kept once made)."""
+    obj = _training_object(body, journey)
     settings = services.settings
     size = (settings.robot_video_width, settings.robot_video_height)
     fits = tuple(body.fits)

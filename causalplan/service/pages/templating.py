@@ -2,11 +2,15 @@
 
 Every template is autoescaped: labels are free text typed by participants, so they are only
 ever shown as text. Pages carry a strict Content-Security-Policy (scripts and styles from
-this server only, nothing inline) and send no Referer, because participant links hold a secret.
+this server only, nothing inline but the import map of the robot player's libraries, allowed
+by its hash) and send no Referer, because participant links hold a secret.
 """
 
 from __future__ import annotations
 
+import base64
+import hashlib
+import json
 import logging
 from collections.abc import Callable, Coroutine, Sequence
 from functools import cache
@@ -14,6 +18,7 @@ from typing import Any
 from urllib.parse import quote
 
 import jinja2
+import markupsafe
 from fastapi import Request, Response
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, RedirectResponse
@@ -25,8 +30,20 @@ from causalplan.version import __version__
 
 logger = logging.getLogger(__name__)
 
+IMPORT_MAP = json.dumps(
+    {
+        "imports": {
+            "three": "/web/vendor/three/build/three.module.js",
+            "three/addons/": "/web/vendor/three/examples/jsm/",
+            "three/examples/jsm/": "/web/vendor/three/examples/jsm/",
+            "urdf-loader": "/web/vendor/urdf-loader/URDFLoader.js",
+        }
+    }
+)
+"""Where the robot player's modules find three.js and urdf-loader: the one inline script, allowed by its hash."""
+IMPORT_MAP_SOURCE = "'sha256-" + base64.b64encode(hashlib.sha256(IMPORT_MAP.encode()).digest()).decode() + "'"
 CONTENT_SECURITY_POLICY = (
-    "default-src 'self'; img-src 'self' data:; script-src 'self'; style-src 'self'; "
+    "default-src 'self'; img-src 'self' data:; script-src 'self' " + IMPORT_MAP_SOURCE + "; style-src 'self'; "
     "object-src 'none'; base-uri 'none'; form-action 'self'{posts_to}; frame-ancestors {framed_by}"
 )
 PAGE_HEADERS = {
@@ -52,6 +69,7 @@ def environment() -> jinja2.Environment:
         lstrip_blocks=True,
     )
     env.globals["version"] = __version__
+    env.globals["import_map"] = markupsafe.Markup(IMPORT_MAP)  # JSON of fixed paths; its hash is in the CSP
     env.filters["nice"] = lambda identifier: str(identifier).replace("_", " ")
     return env
 

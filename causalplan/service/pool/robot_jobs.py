@@ -142,3 +142,20 @@ def robot_outcome(report: SimulationReport) -> dict[str, object]:
             "failure": failed.failure.value if failed is not None and failed.failure else None,
         },
     }
+
+
+def robot_playback_job(object_id: str, fit_ids: tuple[str, ...], catalog_folders: tuple[Path, ...]) -> bytes:
+    """Return the browser player's document of the robot making ``fit_ids`` of the object, as JSON (in a worker).
+
+    ``sim.robot.playback``'s document plus ``"outcome"``: whether the robot carried out the plan,
+    or why not. Encoded here: the app passes the bytes on, unlike a dict of thousands of lists.
+    """
+    from causalplan.service.pool.catalog import worker_catalog
+    from causalplan.sim.robot.playback import playback
+    from causalplan.transfer.robot_verdict import robot_run
+
+    obj = worker_catalog(catalog_folders).get(object_id)
+    steps = steps_of(obj, fit_ids)
+    report = robot_run(obj, tuple(steps))
+    document = {**playback(obj, steps, report), "outcome": robot_outcome(report)}
+    return json.dumps(document, separators=(",", ":")).encode()

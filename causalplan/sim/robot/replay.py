@@ -3,12 +3,14 @@
 Nothing of the original run is used but the object, the plan (which lays the parts out on
 the table) and the motor commands: when the gripper closes, the part between its fingers
 rides along; when it opens, the part stays where it is. The poses where parts were let go
-are what the replay returns, to compare with the run's ``SimulationReport.placed``.
+are what the replay returns, to compare with the run's ``SimulationReport.placed``; every
+part's pose over time (``part_tracks``) is what the browser's robot player draws.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.planners.result import PlanStep
@@ -22,6 +24,8 @@ from causalplan.sim.scene import Scene
 
 GRASP_REACH = 0.02
 """Metres from each finger within which a part counts as between the fingers."""
+TRACK_EVERY = 4
+"""A held part's pose is kept at every 4th motor command (25 a second) and at each segment's end."""
 
 
 def _part_between_fingers(scene: Scene, panda: Panda) -> str | None:
@@ -41,12 +45,36 @@ def _part_between_fingers(scene: Scene, panda: Panda) -> str | None:
     return nearest[1] if nearest else None
 
 
-def replay(obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], trajectory: Trajectory) -> dict[str, Pose]:
-    """Return where each part was last let go when ``trajectory`` is played in a fresh scene."""
+@dataclass(frozen=True)
+class PartTrack:
+    """Where a part's frame is while the motor commands play: ``poses[k]`` from ``times[k]`` seconds on.
+
+    Between two keyframes the part moves smoothly (the gripper's points are 100 a second);
+    after the last one it stays put. ``released`` says whether the robot ever let it go.
+    """
+
+    part_id: str
+    times: tuple[float, ...]
+    poses: tuple[Pose, ...]
+    released: bool
+
+
+def part_tracks(
+    obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], trajectory: Trajectory
+) -> dict[str, PartTrack]:
+    """Return every part's track when ``trajectory`` is played in a fresh scene (parts laid out as the plan's run)."""
     requests = check_steps(steps, obj)
     parts = solids(obj)
     homes, _ = layout(obj, parts, requests, ROBOT_ROW_GAP)
-    released: dict[str, Pose] = {}
+    keys: dict[str, list[tuple[float, Pose]]] = {part: [(0.0, pose)] for part, pose in homes.items()}
+    released: set[str] = set()
+
+    def keep(part: str, time: float, pose: Pose) -> None:
+        track = keys[part]
+        if track[-1][0] >= time:  # consecutive segments share their joining point
+            track.pop()
+        track.append((time, pose))
+
     with Scene(parts, drawn=False) as scene:
         for part, pose in homes.items():
             scene.add_part(part, pose, dynamic=False)
@@ -59,11 +87,25 @@ def replay(obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], traject
                 between = _part_between_fingers(scene, panda)
                 if between is not None:
                     held = (between, panda.gripper_pose().inverse() * scene.pose(between))
+                    keep(between, first.time, scene.pose(between))
             elif segment.gripper == "open" and held is not None:
-                released[held[0]] = scene.pose(held[0])
+                released.add(held[0])
                 held = None
-            for point in trajectory.points[segment.first : segment.last + 1]:
+            if held is None:
+                continue  # nothing rides along: the next segment's first point is all that matters
+            part, offset = held
+            for index in (*range(segment.first, segment.last, TRACK_EVERY), segment.last):
+                point = trajectory.points[index]
                 panda.set(point.positions)
-                if held is not None:
-                    scene.place(held[0], panda.gripper_pose() * held[1])
-    return released
+                pose = panda.gripper_pose() * offset
+                scene.place(part, pose)
+                keep(part, point.time, pose)
+    return {
+        part: PartTrack(part, tuple(time for time, _ in track), tuple(pose for _, pose in track), part in released)
+        for part, track in keys.items()
+    }
+
+
+def replay(obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], trajectory: Trajectory) -> dict[str, Pose]:
+    """Return where each part was last let go when ``trajectory`` is played in a fresh scene."""
+    return {part: track.poses[-1] for part, track in part_tracks(obj, steps, trajectory).items() if track.released}

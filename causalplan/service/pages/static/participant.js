@@ -254,8 +254,9 @@
     return frame;
   }
 
-  // "Watch the robot": the film is made in a worker (tens of seconds); the page asks how far it
-  // is every second, shows the frames filmed so far, and plays the MP4 once it is ready.
+  // "Watch the robot": the robot's run (its motor commands and the parts' tracks) is played at once
+  // in 3D (robot_player.js). "Make a film" still has the MP4 made in a worker (tens of seconds);
+  // the page asks how far it is every second, shows the frames filmed, then offers it to download.
   const FILM_POLL_MS = 1000;
 
   function filmProgressText(status) {
@@ -267,10 +268,22 @@
   function watchRobot(plan, filmUrl) {
     const frame = document.createElement("div");
     frame.className = "robot-film";
+    const watch = document.createElement("button");
+    watch.type = "button";
+    watch.className = "watch-robot";
+    watch.textContent = "Watch the robot";
+    frame.appendChild(watch);
+    const stage = document.createElement("div");
+    stage.className = "robot-player";
+    const stageNote = document.createElement("p");
+    stageNote.className = "small";
+    stageNote.setAttribute("role", "status");
+    stage.appendChild(stageNote);
+    frame.appendChild(stage);
     const button = document.createElement("button");
     button.type = "button";
-    button.className = "watch-robot";
-    button.textContent = "Watch the robot";
+    button.className = "film-robot";
+    button.textContent = "Make a film to download (MP4)";
     frame.appendChild(button);
     const progress = document.createElement("p");
     progress.className = "small film-progress";
@@ -294,26 +307,45 @@
       words.textContent = filmProgressText(status);
     }
 
+    function whyNot(outcome) {
+      if (!outcome || outcome.carried_out || !outcome.reason) return;
+      const note = document.createElement("p");
+      note.className = "feedback";
+      note.textContent = outcome.reason.message;
+      frame.appendChild(note);
+    }
+
     function play(status) {
       progress.hidden = true;
-      const video = document.createElement("video");
-      video.className = "robot-video";
-      video.controls = true;
-      video.muted = true;
-      video.autoplay = true;
-      video.playsInline = true;
-      video.preload = "auto";
-      video.setAttribute("aria-label", "The robot assembling the " + plan.name);
-      video.src = status.video_url;
-      frame.appendChild(video);
-      if (status.robot && !status.robot.carried_out && status.robot.reason) {
-        const note = document.createElement("p");
-        note.className = "feedback";
-        note.textContent = status.robot.reason.message;
-        frame.appendChild(note);
-      }
+      const link = document.createElement("a");
+      link.className = "film-download";
+      link.href = status.video_url;
+      link.download = plan.object + ".mp4";
+      link.textContent = "Download the film (MP4, " + Math.max(1, Math.round(status.bytes / 1024)) + " kB)";
+      frame.appendChild(link);
       button.remove();
     }
+
+    watch.addEventListener("click", async function () {
+      watch.disabled = true;
+      stageNote.textContent = "The robot is working out its motions…";
+      try {
+        const [player, run] = await Promise.all([
+          import("/web/static/robot_player.js").then(function (module) {
+            module.loadPanda(); // the arm's meshes load while the robot works out its motions
+            return module;
+          }),
+          postJson(filmUrl + "/playback", { object: plan.object, fits: plan.fits }),
+        ]);
+        await player.createPlayer(stage, run);
+        stageNote.remove();
+        watch.remove();
+        whyNot(run.outcome);
+      } catch (error) {
+        stageNote.textContent = "The robot cannot be shown now: " + error.message;
+        watch.disabled = false;
+      }
+    });
 
     async function follow(status) {
       while (status.state === "filming") {

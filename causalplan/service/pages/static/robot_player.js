@@ -1,0 +1,215 @@
+// The robot player: plays the robot's run in 3D from its timed motor commands, at once.
+//
+// The page gets one JSON document (POST /p/<code>/films/playback, `sim.robot.playback`): the motor
+// commands (joint positions and the gripper's width at times from the start) and, per part, its
+// shapes from the catalog and its pose over time. The Panda is pybullet_data's URDF with its light
+// (collision) meshes, posed by urdf-loader; the parts are drawn from their shapes. Frames are in the
+// simulator's world: metres, z up, quaternions x, y, z, w.
+import * as THREE from "three";
+import { OBJLoader } from "three/addons/loaders/OBJLoader.js";
+import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import URDFLoader from "urdf-loader";
+
+const PANDA_URDF = "/web/vendor/franka_panda/panda.urdf";
+const PANDA_MESHES = "/web/vendor/franka_panda/meshes";
+const WIDTH = 480;
+const HEIGHT = 360;
+
+let panda = null;
+
+// The Panda's model, loaded once per page (its meshes are cached by the browser too).
+export function loadPanda() {
+  if (panda) return panda;
+  panda = new Promise(function (resolve, reject) {
+    const manager = new THREE.LoadingManager();
+    const loader = new URDFLoader(manager);
+    let robot = null;
+    loader.packages = function () { return PANDA_MESHES; };
+    // The visual meshes are 9 MB; the collision meshes (0.4 MB) show the arm as well at this size.
+    loader.loadMeshCb = function (path, loading, material, done) {
+      new OBJLoader(loading).load(path.replace("/meshes/visual/", "/meshes/collision/"), function (mesh) {
+        mesh.traverse(function (child) {
+          if (child.isMesh) child.material = new THREE.MeshStandardMaterial({ color: 0xe8e8e8, roughness: 0.6 });
+        });
+        done(mesh);
+      }, undefined, function (error) { done(null, error); });
+    };
+    manager.onLoad = function () { if (robot) resolve(robot); };
+    manager.onError = function (url) { reject(new Error("Could not load " + url)); };
+    loader.load(PANDA_URDF, function (model) { robot = model; }, undefined, reject);
+  });
+  return panda;
+}
+
+function shapeMesh(shape) {
+  let geometry;
+  if (shape.kind === "box") {
+    geometry = new THREE.BoxGeometry(1, 1, 1);
+  } else if (shape.kind === "sphere") {
+    geometry = new THREE.SphereGeometry(0.5, 24, 16);
+  } else {
+    geometry = new THREE.CylinderGeometry(0.5, 0.5, 1, 32);
+    geometry.rotateX(Math.PI / 2); // the catalog's cylinders stand along z, three.js's along y
+  }
+  const [r, g, b, a] = shape.color;
+  const material = new THREE.MeshStandardMaterial({
+    color: new THREE.Color(r, g, b), roughness: 0.5, transparent: a < 1, opacity: a,
+  });
+  const mesh = new THREE.Mesh(geometry, material);
+  mesh.scale.set(shape.size[0], shape.size[1], shape.size[2]);
+  mesh.position.set(shape.position[0], shape.position[1], shape.position[2]);
+  mesh.rotation.set(shape.rotation[0], shape.rotation[1], shape.rotation[2], "ZYX"); // roll, pitch, yaw
+  return mesh;
+}
+
+// The index of the last of the sorted `times` at or before `t` (0 before the first).
+function before(times, t) {
+  let low = 0;
+  let high = times.length - 1;
+  while (low < high) {
+    const middle = (low + high + 1) >> 1;
+    if (times[middle] <= t) low = middle; else high = middle - 1;
+  }
+  return low;
+}
+
+function fraction(times, k, t) {
+  if (k + 1 >= times.length) return 0;
+  const span = times[k + 1] - times[k];
+  return span > 0 ? Math.min(1, Math.max(0, (t - times[k]) / span)) : 0;
+}
+
+// Build the player in `container` for the run `run`; it starts playing once the Panda is loaded.
+export async function createPlayer(container, run) {
+  const points = run.trajectory.points;
+  const pointTimes = points.map(function (point) { return point.time_from_start; });
+  const joints = run.trajectory.joints;
+  const fingers = run.trajectory.gripper_joints;
+  const seconds = run.seconds;
+
+  const scene = new THREE.Scene();
+  scene.background = new THREE.Color(0xf4f6f8);
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x667788, 1.6));
+  const sun = new THREE.DirectionalLight(0xffffff, 1.8);
+  sun.position.set(1, -1.5, 2);
+  scene.add(sun);
+  const grid = new THREE.GridHelper(2, 20, 0xbbbbbb, 0xdddddd);
+  grid.rotation.x = Math.PI / 2;
+  scene.add(grid);
+
+  const parts = run.parts.map(function (part) {
+    const group = new THREE.Group();
+    group.name = part.id;
+    part.shapes.concat(part.light).forEach(function (shape) { group.add(shapeMesh(shape)); });
+    scene.add(group);
+    return { id: part.id, group: group, times: part.track.times, poses: part.track.poses };
+  });
+
+  const robot = await loadPanda();
+  robot.position.set(run.robot.base_position[0], run.robot.base_position[1], run.robot.base_position[2]);
+  scene.add(robot);
+
+  const camera = new THREE.PerspectiveCamera(45, WIDTH / HEIGHT, 0.01, 10);
+  camera.up.set(0, 0, 1);
+  camera.position.set(0.55, -1.55, 1.0);
+  const renderer = new THREE.WebGLRenderer({ antialias: true });
+  renderer.setSize(WIDTH, HEIGHT);
+  renderer.domElement.className = "robot-canvas";
+  renderer.domElement.setAttribute("role", "img");
+  renderer.domElement.setAttribute("aria-label", "The robot assembling the " + run.name + " in 3D (drag to turn the view)");
+  const controls = new OrbitControls(camera, renderer.domElement);
+  controls.target.set(-0.25, 0, 0.3);
+  controls.update();
+
+  const bar = document.createElement("div");
+  bar.className = "player-controls";
+  const button = document.createElement("button");
+  button.type = "button";
+  button.className = "player-play";
+  const timeline = document.createElement("input");
+  timeline.type = "range";
+  timeline.className = "player-timeline";
+  timeline.min = "0";
+  timeline.max = String(seconds);
+  timeline.step = "0.01";
+  timeline.setAttribute("aria-label", "Time in the robot's run (seconds)");
+  const clock = document.createElement("span");
+  clock.className = "small player-clock";
+  const speed = document.createElement("select");
+  speed.className = "player-speed";
+  speed.setAttribute("aria-label", "Playback speed");
+  [1, 2, 4].forEach(function (times) { speed.add(new Option(times + "×", String(times))); });
+  bar.append(button, timeline, clock, speed);
+  container.append(renderer.domElement, bar);
+
+  let time = 0;
+  let playing = true;
+  let frames = 0;
+  let last = null;
+  const posed = {};
+
+  function pose(t) {
+    const k = before(pointTimes, t);
+    const f = fraction(pointTimes, k, t);
+    const a = points[k];
+    const b = points[Math.min(k + 1, points.length - 1)];
+    joints.forEach(function (name, j) {
+      robot.setJointValue(name, a.positions[j] + f * (b.positions[j] - a.positions[j]));
+    });
+    const width = a.gripper_width + f * (b.gripper_width - a.gripper_width);
+    fingers.forEach(function (name) { robot.setJointValue(name, width / 2); }); // each finger opens half
+    parts.forEach(function (part) {
+      const i = before(part.times, t);
+      const g = fraction(part.times, i, t);
+      const p = part.poses[i];
+      const q = part.poses[Math.min(i + 1, part.poses.length - 1)];
+      part.group.position.set(p[0] + g * (q[0] - p[0]), p[1] + g * (q[1] - p[1]), p[2] + g * (q[2] - p[2]));
+      part.group.quaternion.set(p[3], p[4], p[5], p[6]).slerp(new THREE.Quaternion(q[3], q[4], q[5], q[6]), g);
+      posed[part.id] = part.group.position.toArray().concat(part.group.quaternion.toArray());
+    });
+  }
+
+  function show() {
+    button.textContent = playing ? "Pause" : time >= seconds ? "Play again" : "Play";
+    timeline.value = String(time);
+    clock.textContent = time.toFixed(1) + " / " + seconds.toFixed(1) + " s";
+  }
+
+  function frame(now) {
+    if (playing && last !== null) {
+      time = Math.min(seconds, time + (Number(speed.value) * (now - last)) / 1000);
+      if (time >= seconds) playing = false;
+    }
+    last = now;
+    pose(time);
+    renderer.render(scene, camera);
+    frames += 1;
+    if (frames === 1) container.dataset.firstFrame = String(performance.now());
+    show();
+    requestAnimationFrame(frame);
+  }
+
+  button.addEventListener("click", function () {
+    if (!playing && time >= seconds) time = 0;
+    playing = !playing;
+    show();
+  });
+  timeline.addEventListener("input", function () {
+    time = Number(timeline.value);
+    playing = false;
+    show();
+  });
+
+  const player = {
+    // What is shown: the time, whether it plays, frames drawn, and every part's pose [x, y, z, qx, qy, qz, qw].
+    state: function () {
+      return { time: time, seconds: seconds, playing: playing, frames: frames, parts: posed };
+    },
+    seek: function (t) { time = Math.max(0, Math.min(seconds, t)); playing = false; show(); },
+    play: function () { playing = true; show(); },
+    pause: function () { playing = false; show(); },
+  };
+  container.player = player;
+  requestAnimationFrame(frame);
+  return player;
+}
