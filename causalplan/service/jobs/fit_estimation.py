@@ -117,7 +117,7 @@ def _in_pool(request: dict[str, Any], services: Services, progress: Progress) ->
     rows: list[dict[str, object]] = []
     for fit_id in fit_ids:
         args = (object_id, fit_id, trials, seed, noise_mm, noise_deg, folders)
-        rows.append(in_pool(services, estimate_fit_job, args, timeout))
+        rows.append(in_pool(services, progress, estimate_fit_job, args, timeout))
         progress(len(rows) * trials, len(fit_ids) * trials)
     return rows
 

@@ -147,7 +147,9 @@ def run_batch_job(request: dict[str, Any], services: Services, progress: Progres
     for start in range(0, total, CHUNK_SIZE):
         chunk = trials[start : start + CHUNK_SIZE]
         timeout = len(chunk) * (time_limit + settings.solve_grace_seconds)
-        results.extend(in_pool(services, judge_trials, (chunk, planner, time_limit, simulate, folders), timeout))
+        results.extend(
+            in_pool(services, progress, judge_trials, (chunk, planner, time_limit, simulate, folders), timeout)
+        )
         progress(len(results), total)
     return _summary(results)
 
@@ -199,7 +201,7 @@ def run_simulation_job(request: dict[str, Any], services: Services, progress: Pr
     timeout = inputs.time_limit + services.settings.solve_grace_seconds
     if body.robot:
         timeout += services.settings.robot_seconds
-    data = in_pool(services, worker_jobs.simulate_job, args, timeout)
+    data = in_pool(services, progress, worker_jobs.simulate_job, args, timeout)
     progress(1, 1)
     return {**data, "model_id": request["model_id"]}
 
@@ -260,7 +262,7 @@ def run_consensus_job(request: dict[str, Any], services: Services, progress: Pro
     )
     # Every member's trial plus one per test object may each take the time limit.
     timeout = (int(request["count"]) + 8) * (time_limit + services.settings.solve_grace_seconds)
-    data = in_pool(services, consensus_report, args, timeout + CONSENSUS_GRACE_SECONDS)
+    data = in_pool(services, progress, consensus_report, args, timeout + CONSENSUS_GRACE_SECONDS)
     progress(1, 1)
     return data
 

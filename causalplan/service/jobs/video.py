@@ -12,9 +12,12 @@ cancelled. The film's bytes go into the job's row, so any replica serves them
 
 from __future__ import annotations
 
+import hashlib
+import json
 import logging
 import tempfile
 import threading
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -35,7 +38,18 @@ WATCH_SECONDS = 1.0
 FITS_KEY = "fits"
 """A stored request with this key is the participant page's: film these fits of ``object``."""
 FILM_KEY = "film"
-"""The participant page's film's key (``films.film_key``) in its stored request: one job per film, reused."""
+"""The participant page's film's key (``film_key``) in its stored request: one job per film, reused."""
+FILM_KEY_PATTERN = r"^[0-9a-f]{32}$"
+"""What a film's key looks like (``film_key``, and a job's id as hex)."""
+
+
+def film_key(catalog_key: str, object_id: str, fit_ids: Sequence[str], video: str, size: tuple[int, int]) -> str:
+    """Return the key of the film of the plan making ``fit_ids`` of the object, in ``video`` format and ``size``.
+
+    The robot is deterministic, so one film per object, plan, format, size and catalog is enough.
+    """
+    text = json.dumps([catalog_key, object_id, list(fit_ids), video, list(size)], ensure_ascii=False)
+    return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()[:32]
 
 
 def video_url(job_id: object) -> str:
@@ -106,7 +120,9 @@ def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key:
     return {"object": object_id, FITS_KEY: list(fit_ids), "video": video, FILM_KEY: key}
 
 
-def _film_in_worker(request: dict[str, Any], services: Services, progress_file: Path, stop: Path) -> dict[str, Any]:
+def _film_in_worker(
+    request: dict[str, Any], services: Services, progress: Progress, progress_file: Path, stop: Path
+) -> dict[str, Any]:
     from causalplan.service.api.schemas.jobs import VideoPlanIn
     from causalplan.service.pool.robot_jobs import robot_film_job
 
@@ -116,13 +132,13 @@ def _film_in_worker(request: dict[str, Any], services: Services, progress_file: 
     video = str(request["video"])
     if FITS_KEY in request:
         args: tuple[Any, ...] = (str(request["object"]), tuple(request[FITS_KEY]), folders, video, size, progress_file)
-        made: dict[str, Any] = in_pool(services, robot_film_job, (*args, stop), settings.robot_seconds)
+        made: dict[str, Any] = in_pool(services, progress, robot_film_job, (*args, stop), settings.robot_seconds)
         return made
     body = VideoPlanIn.model_validate(request)
     inputs = _plan_inputs(body, services)
     args = (inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, folders, body.validate_plan, video, size)
     timeout = inputs.time_limit + settings.solve_grace_seconds + settings.robot_seconds
-    data: dict[str, Any] = in_pool(services, film_plan_job, (*args, progress_file, stop), timeout)
+    data: dict[str, Any] = in_pool(services, progress, film_plan_job, (*args, progress_file, stop), timeout)
     return {**data, "model_id": request["model_id"]}
 
 
@@ -151,7 +167,7 @@ def run_video_job(request: dict[str, Any], services: Services, progress: Progres
         watcher = threading.Thread(target=watch, name="causalplan-film-watch", daemon=True)
         watcher.start()
         try:
-            data = _film_in_worker(request, services, progress_file, stop)
+            data = _film_in_worker(request, services, progress, progress_file, stop)
         except CausalPlanError as exc:
             if exc.code == FilmStoppedError.code:
                 logger.info("filming stopped in its worker: the job was cancelled")
