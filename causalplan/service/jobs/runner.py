@@ -204,7 +204,7 @@ class JobRunner:
         """Return the job's result and file; raise the CausalPlanError that failed it (a bug: internal_error)."""
         kind = KINDS[JobKind(job.kind)]  # claim_job takes only the kinds of KINDS
         try:
-            done = kind.run(job.request, self.services, progress)
+            done = kind.run(kind.read(job.request), self.services, progress)
             return done if isinstance(done, Outcome) else Outcome(done)
         except (CausalPlanError, JobCancelledError):
             raise

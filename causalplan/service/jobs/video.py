@@ -1,13 +1,12 @@
 """The ``video`` kind of job: the robot carrying out a plan, filmed; the film is stored with the job.
 
-Two requests make a film. The API's (``POST /v1/jobs`` with ``kind: video``) is a plan
-request: the model is planned (on the mapping's object), then the Panda carries out the plan
-on camera. The participant page's ("Watch the robot") names the object and the fits of a plan
-it has shown already. Either way the planner worker films and writes its progress (frames
-drawn, frames expected) to a file that this replica's runner reads and reports, and it stops
-at the next frame once a stop file appears, which the runner writes when the job is
-cancelled. The film's bytes go into the job's row, so any replica serves them
-(``GET /v1/jobs/{id}/video``) until the job expires.
+Two requests make a film. The API's (``POST /v1/jobs`` with ``kind: video``, or POST
+/v1/simulations with ``robot`` and ``video``) is a plan request: the model is planned (on the
+mapping's object), then the Panda carries out the plan on camera. The participant page's
+("Watch the robot") names the object and the fits of a plan it has shown already. Either way
+a job worker films and writes its progress (frames drawn, frames expected) to a file that
+this replica's runner reads and reports; a cancel kills the worker. The film's bytes go into
+the job's row, so any replica serves them (``GET /v1/jobs/{id}/video``) until the job expires.
 """
 
 from __future__ import annotations
@@ -22,12 +21,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from causalplan.errors import CausalPlanError
+from causalplan.service.jobs.requests import FitsFilmRequest, PlanFilmRequest, VideoRequest
 from causalplan.service.jobs.work import JobCancelledError, JobFile, Outcome, Progress, in_pool
 from causalplan.service.pool.robot_jobs import CONTENT_TYPES, FilmStoppedError, read_progress
 
 if TYPE_CHECKING:
     from causalplan.causal.model import CausalModel, Labelling
-    from causalplan.service.api.schemas.jobs import VideoPlanIn
+    from causalplan.service.api.schemas.jobs import VideoJobIn, VideoPlanIn
     from causalplan.service.deps import Services
     from causalplan.service.documents import PlanInputs
 
@@ -35,8 +35,6 @@ logger = logging.getLogger(__name__)
 
 WATCH_SECONDS = 1.0
 """How often the runner reads the film's progress (and so how soon a cancel reaches the worker)."""
-FITS_KEY = "fits"
-"""A stored request with this key is the participant page's: film these fits of ``object``."""
 FILM_KEY = "film"
 """The participant page's film's key (``film_key``) in its stored request: one job per film, reused."""
 FILM_KEY_PATTERN = r"^[0-9a-f]{32}$"
@@ -95,33 +93,30 @@ def _plan_inputs(body: VideoPlanIn, services: Services) -> PlanInputs:
     from causalplan.service.documents import plan_inputs
     from causalplan.service.storage.crud import ClientIds
 
-    plan = PlanIn.model_validate(body.model_dump(mode="json", by_alias=True, exclude={"video"}))
+    plan = PlanIn.model_validate(body.model_dump(mode="json", by_alias=True, exclude={"video", "kind"}))
     return plan_inputs(plan, services, ClientIds())
 
 
-def prepare_video(request: dict[str, Any], services: Services) -> dict[str, Any]:
-    from causalplan.service.api.schemas.jobs import VideoPlanIn
-
-    body = VideoPlanIn.model_validate({key: value for key, value in request.items() if key != "kind"})
+def prepare_video(body: VideoJobIn, services: Services) -> PlanFilmRequest:
     inputs = _plan_inputs(body, services)
     inputs.store(services)
-    return {
-        "model_id": str(inputs.submission.record.id),
-        "mapping": body.mapping,
-        "planner": inputs.planner,
-        "time_limit": inputs.time_limit,
-        "validate": body.validate_plan,
-        "video": body.video,
-    }
+    return PlanFilmRequest(
+        model_id=str(inputs.submission.record.id),
+        mapping=body.mapping,
+        planner=inputs.planner,
+        time_limit=inputs.time_limit,
+        validate=body.validate_plan,
+        video=body.video,
+    )
 
 
-def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key: str) -> dict[str, Any]:
+def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key: str) -> FitsFilmRequest:
     """Return the stored request of the film ``key`` of ``fit_ids`` of the object (the participant page's)."""
-    return {"object": object_id, FITS_KEY: list(fit_ids), "video": video, FILM_KEY: key}
+    return FitsFilmRequest(object=object_id, fits=list(fit_ids), video=video, film=key)
 
 
 def _film_in_worker(
-    request: dict[str, Any], services: Services, progress: Progress, progress_file: Path, stop: Path
+    request: VideoRequest, services: Services, progress: Progress, progress_file: Path, stop: Path
 ) -> dict[str, Any]:
     from causalplan.service.api.schemas.jobs import VideoPlanIn
     from causalplan.service.pool.robot_jobs import robot_film_job
@@ -129,24 +124,24 @@ def _film_in_worker(
     settings = services.settings
     size = (settings.robot_video_width, settings.robot_video_height)
     folders = tuple(settings.catalog_folders)
-    video = str(request["video"])
-    if FITS_KEY in request:
-        args: tuple[Any, ...] = (str(request["object"]), tuple(request[FITS_KEY]), folders, video, size, progress_file)
+    video = request.video
+    if isinstance(request, FitsFilmRequest):
+        args: tuple[Any, ...] = (request.object, tuple(request.fits), folders, video, size, progress_file)
         made: dict[str, Any] = in_pool(services, progress, robot_film_job, (*args, stop), settings.robot_seconds)
         return made
-    body = VideoPlanIn.model_validate(request)
+    body = VideoPlanIn.model_validate(request.stored())
     inputs = _plan_inputs(body, services)
     args = (inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, folders, body.validate_plan, video, size)
     timeout = inputs.time_limit + settings.solve_grace_seconds + settings.robot_seconds
     data: dict[str, Any] = in_pool(services, progress, film_plan_job, (*args, progress_file, stop), timeout)
-    return {**data, "model_id": request["model_id"]}
+    return {**data, "model_id": request.model_id}
 
 
-def run_video_job(request: dict[str, Any], services: Services, progress: Progress) -> Outcome:
-    """Film the plan, reporting frames drawn of frames expected; stop the worker's filming on a cancel.
+def run_video_job(request: VideoRequest, services: Services, progress: Progress) -> Outcome:
+    """Film the plan, reporting frames drawn of frames expected; a cancel kills the worker (``in_pool``).
 
-    A cancel that comes while the worker still plans, or runs the robot before filming, stops
-    it at the first frame.
+    The stop file the watcher touches on a cancel is the worker's own way to end a film at the
+    next frame; the kill comes first, so it matters only to a worker that outlives its job.
     """
     progress(0, 1)
     with tempfile.TemporaryDirectory(prefix="causalplan-film-job-") as folder:
@@ -179,7 +174,7 @@ def run_video_job(request: dict[str, Any], services: Services, progress: Progres
     if cancelled.is_set():
         raise JobCancelledError
     film = data.pop("video", None)
-    content_type = CONTENT_TYPES[str(request["video"])]
+    content_type = CONTENT_TYPES[request.video]
     if not isinstance(film, bytes):
         return Outcome({**data, "video": None})
     # The URL is the route's to say (``video_url``, filled in when the job is read).

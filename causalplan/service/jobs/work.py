@@ -5,15 +5,20 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+from pydantic import BaseModel
 
 from causalplan.service.errors import QueueFullError
+from causalplan.service.jobs.requests import JobRequest
 from causalplan.service.pool.pool import RunStoppedError
 
 if TYPE_CHECKING:
     from causalplan.service.deps import Services
 
 T = TypeVar("T")
+B = TypeVar("B", bound=BaseModel)
+R = TypeVar("R", bound=JobRequest)
 
 
 class JobCancelledError(Exception):
@@ -55,11 +60,13 @@ class Outcome:
 
 
 @dataclass(frozen=True)
-class Kind:
-    """One kind of job: ``prepare`` checks a request at POST time, ``run`` does the work in a runner."""
+class Kind(Generic[B, R]):
+    """One kind of job: ``prepare`` checks the API's body at POST time and returns the request to
+    store; ``read`` reads it back from the job's row; ``run`` does the work in a runner."""
 
-    prepare: Callable[[dict[str, Any], Services], dict[str, Any]]
-    run: Callable[[dict[str, Any], Services, Progress], dict[str, Any] | Outcome]
+    prepare: Callable[[B, Services], R]
+    read: Callable[[Any], R]
+    run: Callable[[R, Services, Progress], dict[str, Any] | Outcome]
 
 
 def in_pool(

@@ -84,7 +84,7 @@ def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesD
     job = store.find_job(services.engine, kind, FILM_KEY, key)
     if job is None:  # two participants asking at once may each start one: harmless, and rare
         request = fits_film_request(obj.id, fits, FILM_FORMAT, key)
-        job = store.create_job(services.engine, kind, request, 1, settings.max_queued_jobs)
+        job = store.create_job(services.engine, kind, request.stored(), 1, settings.max_queued_jobs)
     return _out(code, job)
 
 

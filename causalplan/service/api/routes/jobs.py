@@ -13,7 +13,7 @@ import anyio.to_thread
 from fastapi import APIRouter, Body, Response
 
 from causalplan.service.api.schemas.common import ErrorOut, error_responses
-from causalplan.service.api.schemas.jobs import JOB_EXAMPLES, JobIn, JobOut
+from causalplan.service.api.schemas.jobs import JOB_EXAMPLES, JobBody, JobIn, JobOut
 from causalplan.service.deps import Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute
 from causalplan.service.errors import FilmNotFoundError
@@ -98,17 +98,18 @@ async def create_job(
     422 (404 for an unknown object) and nothing is queued; a batch's unreadable lines become
     `invalid` trials in the result, as in the CLI.
     """
-    request: dict[str, Any] = body.model_dump(mode="json", by_alias=True)  # stored as the API reads it
-    record = await anyio.to_thread.run_sync(queue_job, JobKind(body.kind), request, services)
+    record = await anyio.to_thread.run_sync(queue_job, body, services)
     response.headers["Location"] = job_url(record.id)
     return job_out(record)
 
 
-def queue_job(kind: JobKind, request: dict[str, Any], services: Services) -> JobRecord:
-    """Check ``request`` (the kind's ``prepare``: a clear error and nothing queued when it is wrong) and queue it."""
-    prepared = KINDS[kind].prepare(request, services)
-    total = int(prepared.get("count", 1))
-    return store.create_job(services.engine, kind.value, prepared, total, services.settings.max_queued_jobs)
+def queue_job(body: JobBody, services: Services) -> JobRecord:
+    """Check ``body`` (its kind's ``prepare``: a clear error and nothing queued when it is wrong) and queue it."""
+    kind = JobKind(body.kind)
+    prepared = KINDS[kind].prepare(body, services)
+    return store.create_job(
+        services.engine, kind.value, prepared.stored(), prepared.units(), services.settings.max_queued_jobs
+    )
 
 
 @router.get(

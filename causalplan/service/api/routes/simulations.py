@@ -14,7 +14,7 @@ from fastapi import APIRouter, Response
 
 from causalplan.service.api.routes.jobs import job_out, job_url, queue_job
 from causalplan.service.api.schemas.common import error_responses
-from causalplan.service.api.schemas.jobs import JobOut
+from causalplan.service.api.schemas.jobs import JobOut, SimulationJobIn, VideoJobIn
 from causalplan.service.api.schemas.plans import SimulationIn
 from causalplan.service.deps import ClientIdsDep, Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, plan_inputs
@@ -34,12 +34,12 @@ _ONLY_PLANNED = ("picture", "robot", "include_pddl")
 
 def queue_robot_run(body: SimulationIn, services: Services) -> JobRecord:
     """Queue the robot's run of ``body`` as a job: a ``video`` job when it is filmed, else a ``simulation`` job."""
-    request: dict[str, Any] = body.model_dump(mode="json", by_alias=True)
+    request: dict[str, Any] = body.model_dump(by_alias=True, exclude_unset=True)
     if body.video is not None:
         request = {key: value for key, value in request.items() if key not in _ONLY_PLANNED}
-        return queue_job(JobKind.VIDEO, {**request, "kind": JobKind.VIDEO.value}, services)
+        return queue_job(VideoJobIn.model_validate({**request, "kind": JobKind.VIDEO.value}), services)
     request = {key: value for key, value in request.items() if key != "video"} | {"picture": False}
-    return queue_job(JobKind.SIMULATION, {**request, "kind": JobKind.SIMULATION.value}, services)
+    return queue_job(SimulationJobIn.model_validate({**request, "kind": JobKind.SIMULATION.value}), services)
 
 
 @router.post(
