@@ -26,7 +26,6 @@ from causalplan.consensus.population import population
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.api.schemas.jobs import JOB_EXAMPLES
 from causalplan.service.errors import JobNotFoundError
-from causalplan.service.pool.robot_jobs import FilmStoppedError, robot_film_job
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.migrate import upgrade
 from causalplan.service.storage.records import JobRecord, utc_now
@@ -151,15 +150,6 @@ def test_cancelling_a_film_kills_its_worker_before_the_answer(tmp_path: Path) ->
         assert job["status"] == "cancelled" and job["result"] is None
         assert job["progress"]["done"] < job["progress"]["total"]
         assert error_of(client.get(f"{url}/video"), 404)["code"] == "video_not_found"
-
-
-def test_a_stop_file_stops_filming_at_the_first_frame(tmp_path: Path) -> None:
-    stop = tmp_path / "stop"
-    stop.touch()
-    catalog = load_catalog(())
-    fits = tuple(fit.id for fit in catalog.get("flashlight").fits)
-    with pytest.raises(FilmStoppedError):
-        robot_film_job("flashlight", fits, (), "mp4", (64, 48), tmp_path / "progress.json", stop)
 
 
 # -- fit estimation -----------------------------------------------------------------------------

@@ -20,10 +20,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from causalplan.errors import CausalPlanError
 from causalplan.service.jobs.requests import FitsFilmRequest, PlanFilmRequest, VideoRequest
 from causalplan.service.jobs.work import JobCancelledError, JobFile, Outcome, Progress, in_pool
-from causalplan.service.pool.robot_jobs import CONTENT_TYPES, FilmStoppedError, read_progress
+from causalplan.service.pool.robot_jobs import CONTENT_TYPES, read_progress
 
 if TYPE_CHECKING:
     from causalplan.causal.model import CausalModel, Labelling
@@ -34,7 +33,7 @@ if TYPE_CHECKING:
 logger = logging.getLogger(__name__)
 
 WATCH_SECONDS = 1.0
-"""How often the runner reads the film's progress (and so how soon a cancel reaches the worker)."""
+"""How often the runner reads the film's progress and reports it."""
 FILM_KEY = "film"
 """The participant page's film's key (``film_key``) in its stored request: one job per film, reused."""
 FILM_KEY_PATTERN = r"^[0-9a-f]{32}$"
@@ -65,7 +64,6 @@ def film_plan_job(
     video: str,
     size: tuple[int, int],
     progress: Path,
-    stop: Path,
 ) -> dict[str, object]:
     """Plan ``model`` and film the robot carrying the plan out (runs in a planner worker).
 
@@ -82,7 +80,7 @@ def film_plan_job(
     data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "robot": None, "video": None}
     if not result.has_plan:
         return data
-    report, film = robot_simulation(task.obj, result.steps, video, size, progress, stop)
+    report, film = robot_simulation(task.obj, result.steps, video, size, progress)
     data.update(simulation=report.as_dict(), robot=robot_outcome(report), video=film)
     return data
 
@@ -116,7 +114,7 @@ def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key:
 
 
 def _film_in_worker(
-    request: VideoRequest, services: Services, progress: Progress, progress_file: Path, stop: Path
+    request: VideoRequest, services: Services, progress: Progress, progress_file: Path
 ) -> dict[str, Any]:
     from causalplan.service.api.schemas.jobs import VideoPlanIn
     from causalplan.service.pool.robot_jobs import robot_film_job
@@ -127,52 +125,38 @@ def _film_in_worker(
     video = request.video
     if isinstance(request, FitsFilmRequest):
         args: tuple[Any, ...] = (request.object, tuple(request.fits), folders, video, size, progress_file)
-        made: dict[str, Any] = in_pool(services, progress, robot_film_job, (*args, stop), settings.robot_seconds)
+        made: dict[str, Any] = in_pool(services, progress, robot_film_job, args, settings.robot_seconds)
         return made
     body = VideoPlanIn.model_validate(request.stored())
     inputs = _plan_inputs(body, services)
     args = (inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, folders, body.validate_plan, video, size)
     timeout = inputs.time_limit + settings.solve_grace_seconds + settings.robot_seconds
-    data: dict[str, Any] = in_pool(services, progress, film_plan_job, (*args, progress_file, stop), timeout)
+    data: dict[str, Any] = in_pool(services, progress, film_plan_job, (*args, progress_file), timeout)
     return {**data, "model_id": request.model_id}
 
 
 def run_video_job(request: VideoRequest, services: Services, progress: Progress) -> Outcome:
-    """Film the plan, reporting frames drawn of frames expected; a cancel kills the worker (``in_pool``).
-
-    The stop file the watcher touches on a cancel is the worker's own way to end a film at the
-    next frame; the kill comes first, so it matters only to a worker that outlives its job.
-    """
+    """Film the plan, reporting frames drawn of frames expected; a cancel kills the worker (``in_pool``)."""
     progress(0, 1)
     with tempfile.TemporaryDirectory(prefix="causalplan-film-job-") as folder:
-        progress_file, stop = Path(folder) / "progress.json", Path(folder) / "stop"
+        progress_file = Path(folder) / "progress.json"
         finished = threading.Event()
-        cancelled = threading.Event()
 
         def watch() -> None:
             while not finished.wait(WATCH_SECONDS):
                 frames, expected = read_progress(progress_file)
                 try:  # before the first frame the robot is still planning: 0 of 1
                     progress(frames, expected or 1)
-                except JobCancelledError:
-                    cancelled.set()
-                    stop.touch()
+                except JobCancelledError:  # the job's stop event is set: its worker is being killed
                     return
 
         watcher = threading.Thread(target=watch, name="causalplan-film-watch", daemon=True)
         watcher.start()
         try:
-            data = _film_in_worker(request, services, progress, progress_file, stop)
-        except CausalPlanError as exc:
-            if exc.code == FilmStoppedError.code:
-                logger.info("filming stopped in its worker: the job was cancelled")
-                raise JobCancelledError from None
-            raise
+            data = _film_in_worker(request, services, progress, progress_file)
         finally:
             finished.set()
             watcher.join()
-    if cancelled.is_set():
-        raise JobCancelledError
     film = data.pop("video", None)
     content_type = CONTENT_TYPES[request.video]
     if not isinstance(film, bytes):
