@@ -120,13 +120,10 @@ class Settings(BaseSettings):
         default=240.0,
         gt=0,
         description="Seconds a worker may take to have the robot carry out a plan and film it, "
-        "beyond the planner's limit (POST /v1/simulations with robot, 'Watch the robot').",
+        "beyond the planner's limit (a robot simulation job, a video job, 'Watch the robot').",
     )
     robot_video_width: int = Field(default=480, ge=64, le=1920, description="Width of the robot's films, in pixels.")
     robot_video_height: int = Field(default=360, ge=48, le=1080, description="Height of the robot's films, in pixels.")
-    video_cache_mb: int = Field(
-        default=64, ge=1, le=4096, description="Megabytes of the robot's films the app keeps (the least used go first)."
-    )
     draw_plans_ahead: bool = Field(
         default=True, description="Draw the pictures of the catalog objects' likely plans in the background at start."
     )

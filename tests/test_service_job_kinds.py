@@ -22,10 +22,10 @@ from sqlalchemy import update
 from sqlalchemy.orm import Session
 
 from causalplan.cli import app as cli
+from causalplan.consensus.population import population
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.api.schemas.jobs import JOB_EXAMPLES
 from causalplan.service.errors import JobNotFoundError
-from causalplan.service.pool.robot_jobs import FilmStoppedError, robot_film_job
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.migrate import upgrade
 from causalplan.service.storage.records import JobRecord, utc_now
@@ -141,29 +141,19 @@ def test_a_wrong_film_request_is_refused_and_nothing_is_queued(tmp_path: Path) -
 
 
 @pytest.mark.slow
-def test_cancelling_a_film_stops_the_filming_in_its_worker(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
-    caplog.set_level(logging.INFO, logger="causalplan.service.jobs.video")
+def test_cancelling_a_film_kills_its_worker_before_the_answer(tmp_path: Path) -> None:
     settings = settings_for(sqlite_url(tmp_path), planning_workers=1, job_poll_seconds=0.05, **SMALL)
     with running_client(settings) as client:
         url = start(client, {"kind": "video", "model": DESK_LAMP, "mapping": None})
         wait_until(lambda: client.get(url).json()["progress"]["total"] > 1, 240.0)  # frames are being drawn
+        pool = services_of(client).job_pool
+        filming = pool.worker_pids()
         assert client.delete(url).json()["status"] == "cancelled"
-        pool = services_of(client).pool
-        wait_until(lambda: pool.stats().as_dict()["busy"] == 0, 60.0)
-        assert "filming stopped in its worker" in caplog.text
+        assert pool.stats().busy == 0 and not set(filming) & set(pool.worker_pids())
         job = client.get(url).json()
         assert job["status"] == "cancelled" and job["result"] is None
         assert job["progress"]["done"] < job["progress"]["total"]
         assert error_of(client.get(f"{url}/video"), 404)["code"] == "video_not_found"
-
-
-def test_a_stop_file_stops_filming_at_the_first_frame(tmp_path: Path) -> None:
-    stop = tmp_path / "stop"
-    stop.touch()
-    catalog = load_catalog(())
-    fits = tuple(fit.id for fit in catalog.get("flashlight").fits)
-    with pytest.raises(FilmStoppedError):
-        robot_film_job("flashlight", fits, (), "mp4", (64, 48), tmp_path / "progress.json", stop)
 
 
 # -- fit estimation -----------------------------------------------------------------------------
@@ -323,7 +313,7 @@ def test_a_failed_job_keeps_no_file(database_url: str) -> None:
 def test_a_cancelled_batch_stops_sending_chunks_to_the_workers(tmp_path: Path) -> None:
     settings = settings_for(sqlite_url(tmp_path), planning_workers=1, job_poll_seconds=0.05)
     with running_client(settings) as client:
-        pool = services_of(client).pool
+        pool = services_of(client).job_pool
         one = first_trials(1).strip()
         chunks = 20
         url = start(client, {"kind": "batch", "trials": "\n".join([one] * (20 * chunks)), "simulate": True})
@@ -333,6 +323,48 @@ def test_a_cancelled_batch_stops_sending_chunks_to_the_workers(tmp_path: Path) -
         wait_until(lambda: client.get("/health").json()["jobs"]["runners_busy"] == 0, 120.0)
         # The runner let the job go: at most the chunk in hand (and one that ended as the cancel came), not 18.
         assert pool.stats().completed - before <= 2
+        assert client.get(url).json()["status"] == "cancelled"
+
+
+LONG_WORK = {
+    "consensus": {
+        "kind": "consensus",
+        "trials": "\n".join(json.dumps(line) for line in population("desk_lamp", 400, 1, tests=("flashlight",))),
+    },
+    "fit_estimation": {"kind": "fit_estimation", "object": "flashlight", "trials": 5000, "fits": ["head_onto_case"]},
+    "simulation": {"kind": "simulation", "model": DESK_LAMP, "robot": True},
+}
+"""Jobs each one call of a worker that runs long (minutes): only killing the worker stops them soon."""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", sorted(LONG_WORK))
+def test_deleting_a_running_job_stops_its_worker_before_the_answer(tmp_path: Path, kind: str) -> None:
+    settings = settings_for(sqlite_url(tmp_path), planning_workers=1, job_poll_seconds=0.05)
+    with running_client(settings) as client:
+        pool = services_of(client).job_pool
+        url = start(client, LONG_WORK[kind])
+        wait_until(lambda: client.get(url).json()["status"] == "running" and pool.stats().busy == 1, 120.0)
+        working = pool.worker_pids()
+        assert client.delete(url).json()["status"] == "cancelled"
+        # Stopped before DELETE answered: the worker was killed and replaced, none is busy.
+        assert pool.stats().busy == 0 and not set(working) & set(pool.worker_pids())
+        job = client.get(url).json()
+        assert job["status"] == "cancelled" and job["result"] is None
+
+
+@pytest.mark.slow
+def test_a_job_cancelled_through_another_replica_stops_its_worker(tmp_path: Path) -> None:
+    database = sqlite_url(tmp_path)
+    settings = settings_for(database, planning_workers=1, job_poll_seconds=0.05)
+    with running_client(settings) as client:
+        pool = services_of(client).job_pool
+        url = start(client, LONG_WORK["fit_estimation"])
+        wait_until(lambda: pool.stats().busy == 1, 120.0)
+        store.cancel_job(services_of(client).engine, uuid.UUID(url.rsplit("/", 1)[1]), 60.0)  # as another would
+        # Seen by the runner's heartbeat in the job's row: the worker is killed, the runner free.
+        wait_until(lambda: client.get("/health").json()["jobs"]["runners_busy"] == 0, 30.0)
+        assert pool.stats().busy == 0
         assert client.get(url).json()["status"] == "cancelled"
 
 

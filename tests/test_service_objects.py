@@ -72,7 +72,6 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/models/{model_id}/graph",
         "/v1/plans",
         "/v1/simulations",
-        "/v1/simulations/videos/{key}",
         "/v1/transfers",
         "/v1/explanations",
         "/v1/jobs",

@@ -4,7 +4,7 @@ Each run gets a private temp folder as its working directory (FD's search writes
 there, so concurrent runs never share files), its own process group (killed whole at the
 deadline), an address-space limit (``RLIMIT_AS``) and its output captured in ``OUTPUT_FILE``
 there (a file, not a pipe: a reader of a pipe wakes for every line a program logs); the
-command is logged shell-quoted. The service pool can use ``memory_limit`` and ``kill_group`` for its workers.
+command is logged shell-quoted. The service's workers are killed by ``kill_group`` too.
 """
 
 from __future__ import annotations
@@ -65,11 +65,28 @@ def limit_memory(pid: int, megabytes: int) -> None:
         resource.prlimit(pid, resource.RLIMIT_AS, (limit, limit))
 
 
+def children_of(pid: int) -> list[int]:
+    """Return the pids of the children of process ``pid`` (empty when /proc does not list them)."""
+    children: list[int] = []
+    with contextlib.suppress(OSError):
+        for task in Path(f"/proc/{pid}/task").iterdir():
+            with contextlib.suppress(OSError, ValueError):
+                children.extend(int(child) for child in (task / "children").read_text().split())
+    return children
+
+
 def kill_group(process: subprocess.Popen[bytes]) -> None:
-    """Kill ``process`` and everything it started (its process group), then reap it."""
-    if process.poll() is None:  # not reaped yet, so its pid (= its group id) cannot have been reused
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(process.pid, signal.SIGKILL)
+    """Kill ``process``, everything it started (its process group), and the groups its children lead, then reap it.
+
+    The children's groups: a service worker runs FD's search in a session of its own, which a
+    signal to the worker's group misses. This is the one place a started process is killed
+    (FD's runs, the idle searches, the service's workers); no pool library kills process groups.
+    """
+    if process.returncode is None:  # not reaped yet, so its pid (= its group id) cannot have been reused
+        children = children_of(process.pid)  # found before it dies, killed with it
+        for group in (process.pid, *children):
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(group, signal.SIGKILL)
     process.wait()
 
 

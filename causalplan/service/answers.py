@@ -26,7 +26,6 @@ from causalplan.pddl.task import catalog_task
 from causalplan.pddl.writer import compile_task
 from causalplan.planners import pipeline
 from causalplan.planners.result import PlanStatus
-from causalplan.service.films import FilmStore, film_key, video_url
 from causalplan.service.pool import jobs
 from causalplan.service.pool.pool import PlannerPool
 from causalplan.settings import Settings
@@ -271,48 +270,6 @@ class Answerer:
         seconds = time_limit + self.settings.solve_grace_seconds + SIMULATION_SECONDS
         args = (*self._args(model, mapping, planner, time_limit), picture)
         return self._answer(key, jobs.simulate_job, args, seconds, _is_final_simulation, meanwhile)
-
-    def robot_simulation(
-        self,
-        model: CausalModel,
-        mapping: Labelling | None,
-        planner: str,
-        time_limit: float,
-        video: str | None,
-        films: FilmStore,
-        meanwhile: Callable[[], None] | None = None,
-    ) -> Answer:
-        """Return the plan and the robot's run of it; with ``video``, the film is kept in ``films``.
-
-        The answer's ``video`` is then ``{"key", "url", "content_type", "bytes"}`` (the bytes stay
-        out of the answer cache); a kept answer whose film was let go is filmed again.
-        """
-        size = (self.settings.robot_video_width, self.settings.robot_video_height)
-        key = self.key(f"robot:{video}:{size[0]}x{size[1]}", model, mapping, planner, time_limit)
-        started = time.perf_counter()
-        cached = self.cache.get(key)
-        if cached is not None and (cached["video"] is None or films.has(str(cached["video"]["key"]))):
-            if meanwhile is not None:
-                meanwhile()
-            return Answer(cached, True, time.perf_counter() - started)
-        seconds = time_limit + self.settings.solve_grace_seconds + self.settings.robot_seconds
-        args = (*self._args(model, mapping, planner, time_limit), False, True, video, size)
-        data: dict[str, Any] = self.pool.run(jobs.simulate_job, args, seconds, meanwhile)
-        film = data.pop("video", None)
-        data["video"] = None
-        if video is not None and isinstance(film, bytes):
-            fits = [str(step.get("fit") or "") for step in data["planning"].get("plan") or []]
-            object_id = (mapping or model.labelling).object_id
-            kept = films.put(film_key(self.catalog_key, object_id, fits, video, size), video, film, data.get("robot"))
-            data["video"] = {
-                "key": kept.key,
-                "url": video_url(kept.key),
-                "content_type": kept.content_type,
-                "bytes": len(film),
-            }
-        if _is_final_simulation(data):
-            self.cache.put(key, data)
-        return Answer(data, False, time.perf_counter() - started)
 
 
 def _is_final_plan(data: dict[str, Any]) -> bool:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import secrets
 import threading
+import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Annotated, Protocol
@@ -16,7 +17,6 @@ from sqlalchemy.orm import Session
 from causalplan.objects.catalog import Catalog
 from causalplan.service.answers import Answerer, ResultCache
 from causalplan.service.errors import NotAuthenticatedError, ResearchDisabledError
-from causalplan.service.films import FilmStore
 from causalplan.service.pool.pool import PlannerPool
 from causalplan.service.storage.crud import ClientIds
 from causalplan.service.storage.records import MAX_CLIENT_ID_LENGTH
@@ -35,6 +35,8 @@ class Runner(Protocol):
 
     def stats(self) -> dict[str, int]: ...
 
+    def cancel(self, job_id: uuid.UUID, seconds: float) -> bool: ...
+
 
 @dataclass
 class Services:
@@ -50,15 +52,13 @@ class Services:
     """The catalog's fingerprint, part of every answer's cache key."""
     failed_attempts: FailedAttempts
     """Wrong research tokens by client and in total, to refuse guessing at full speed."""
+    job_pool: PlannerPool
+    """The workers of long work (jobs: batches, robot runs, films), one per job runner: ``pool``
+    is for interactive requests only, so long work can never take its workers."""
     runner: Runner | None = None
     """This replica's job runner (started after the pool)."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
-    films: FilmStore = field(init=False)
-    """The robot's films, by key (``video_cache_mb`` of them)."""
-
-    def __post_init__(self) -> None:
-        self.films = FilmStore(self.settings.video_cache_mb * 1024 * 1024)
 
     @property
     def answers(self) -> Answerer:

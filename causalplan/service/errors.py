@@ -59,6 +59,12 @@ class NotFoundError(ServiceError):
     status_code = 404
 
 
+class FilmNotFoundError(NotFoundError):
+    """No film of the robot is made under this key or job (never, not yet, or it has expired)."""
+
+    code = "video_not_found"
+
+
 class ModelNotFoundError(NotFoundError):
     """No stored model has this id."""
 

@@ -75,6 +75,8 @@ def start_services(settings: Settings) -> Services:
     except BaseException:
         engine.dispose()
         raise
+    # Long work's own workers, one per runner thread (no queue: a runner waits for its worker).
+    job_pool = PlannerPool(max(settings.job_runners, 1), 0, settings.worker_memory_mb, settings.queue_wait_seconds)
     services = Services(
         settings,
         catalog,
@@ -89,6 +91,7 @@ def start_services(settings: Settings) -> Services:
             settings.research_failure_window_seconds,
             settings.research_max_failures_total,
         ),
+        job_pool=job_pool,
     )
     threading.Thread(target=_probe, args=(services,), name="causalplan-probe", daemon=True).start()
     services.runner = JobRunner(services)
@@ -138,6 +141,7 @@ def stop_services(services: Services) -> None:
     if services.runner is not None:
         services.runner.stop()
     services.pool.close()
+    services.job_pool.close()
     if services.runner is not None:
         services.runner.join(10.0)
     services.engine.dispose()

@@ -17,9 +17,11 @@ from typing import TYPE_CHECKING, Any
 
 from causalplan.limits import LimitExceededError
 from causalplan.service.errors import InvalidRequestError
+from causalplan.service.jobs.requests import FitEstimationRequest
 from causalplan.service.jobs.work import Progress, in_pool
 
 if TYPE_CHECKING:
+    from causalplan.service.api.schemas.jobs import FitEstimationJobIn
     from causalplan.service.deps import Services
     from causalplan.sim.fit_estimates import ChunkOutcome, InsertionChunk
 
@@ -45,10 +47,10 @@ def estimate_fit_job(
     return estimate.as_dict()
 
 
-def prepare_fit_estimation(request: dict[str, Any], services: Services) -> dict[str, Any]:
-    obj = services.catalog.get(str(request["object"]))  # unknown_object (404), with a suggestion
+def prepare_fit_estimation(body: FitEstimationJobIn, services: Services) -> FitEstimationRequest:
+    obj = services.catalog.get(body.object)  # unknown_object (404), with a suggestion
     known = [fit.id for fit in obj.fits]
-    asked: list[str] = list(request.get("fits") or [])
+    asked = list(body.fits)
     unknown = [fit for fit in asked if fit not in known]
     if unknown:
         raise InvalidRequestError(
@@ -58,7 +60,7 @@ def prepare_fit_estimation(request: dict[str, Any], services: Services) -> dict[
     chosen = [fit for fit in known if not asked or fit in asked]
     if not chosen:
         raise InvalidRequestError(f"The {obj.name} has no fits to estimate.", details={"object": obj.id})
-    trials = int(request["trials"])
+    trials = body.trials
     limit, count = services.settings.max_job_trials, trials * len(chosen)
     if count > limit:
         raise LimitExceededError(
@@ -67,24 +69,24 @@ def prepare_fit_estimation(request: dict[str, Any], services: Services) -> dict[
             f"this server takes at most {limit} per job.",
             details={"limit": limit, "actual": count},
         )
-    return {
-        "object": obj.id,
-        "fits": chosen,
-        "count": count,
-        "trials": trials,
-        "seed": int(request["seed"]),
-        "noise_mm": float(request["noise_mm"]),
-        "noise_deg": float(request["noise_deg"]),
-    }
+    return FitEstimationRequest(
+        object=obj.id,
+        fits=chosen,
+        count=count,
+        trials=trials,
+        seed=body.seed,
+        noise_mm=body.noise_mm,
+        noise_deg=body.noise_deg,
+    )
 
 
-def _on_cluster(request: dict[str, Any], services: Services, progress: Progress) -> list[dict[str, object]]:
+def _on_cluster(request: FitEstimationRequest, services: Services, progress: Progress) -> list[dict[str, object]]:
     """Return the fits' estimates, their insertions run in chunks on the Dask cluster the settings name."""
     from causalplan.sim.fit_estimates import estimate_fits
     from causalplan.transfer.cluster import map_on_cluster
 
     address = services.settings.dask_scheduler
-    fit_ids, trials = list(request["fits"]), int(request["trials"])
+    fit_ids, trials = request.fits, request.trials
     total, done = trials * len(fit_ids), 0
 
     def map_chunks(
@@ -99,36 +101,36 @@ def _on_cluster(request: dict[str, Any], services: Services, progress: Progress)
         done += count
         progress(done, total)  # raises JobCancelledError on a cancel: the cluster's client is closed
 
-    obj = services.catalog.get(str(request["object"]))
-    seed, noise_mm, noise_deg = int(request["seed"]), float(request["noise_mm"]), float(request["noise_deg"])
+    obj = services.catalog.get(request.object)
+    seed, noise_mm, noise_deg = request.seed, request.noise_mm, request.noise_deg
     estimates = estimate_fits(
         obj, trials, seed, noise_mm, noise_deg, fit_ids, map_chunks=map_chunks, progress=on_insertions
     )
     return [estimate.as_dict() for estimate in estimates]
 
 
-def _in_pool(request: dict[str, Any], services: Services, progress: Progress) -> list[dict[str, object]]:
+def _in_pool(request: FitEstimationRequest, services: Services, progress: Progress) -> list[dict[str, object]]:
     """Return the fits' estimates, each fit one call of a planner worker."""
     settings = services.settings
-    object_id, fit_ids, trials = str(request["object"]), list(request["fits"]), int(request["trials"])
-    seed, noise_mm, noise_deg = int(request["seed"]), float(request["noise_mm"]), float(request["noise_deg"])
+    object_id, fit_ids, trials = request.object, request.fits, request.trials
+    seed, noise_mm, noise_deg = request.seed, request.noise_mm, request.noise_deg
     folders = tuple(settings.catalog_folders)
     timeout = settings.robot_seconds + trials * TRIAL_SECONDS
     rows: list[dict[str, object]] = []
     for fit_id in fit_ids:
         args = (object_id, fit_id, trials, seed, noise_mm, noise_deg, folders)
-        rows.append(in_pool(services, estimate_fit_job, args, timeout))
+        rows.append(in_pool(services, progress, estimate_fit_job, args, timeout))
         progress(len(rows) * trials, len(fit_ids) * trials)
     return rows
 
 
-def run_fit_estimation_job(request: dict[str, Any], services: Services, progress: Progress) -> dict[str, Any]:
+def run_fit_estimation_job(request: FitEstimationRequest, services: Services, progress: Progress) -> dict[str, Any]:
     """Estimate the fits; return what ``causalplan estimate-fits --json`` prints, and the overlay."""
     from causalplan.objects.overlay import overlay_data
 
-    object_id, trials = str(request["object"]), int(request["trials"])
-    seed, noise_mm, noise_deg = int(request["seed"]), float(request["noise_mm"]), float(request["noise_deg"])
-    progress(0, trials * len(request["fits"]))
+    object_id, trials = request.object, request.trials
+    seed, noise_mm, noise_deg = request.seed, request.noise_mm, request.noise_deg
+    progress(0, trials * len(request.fits))
     on_cluster = services.settings.dask_scheduler is not None
     rows = (_on_cluster if on_cluster else _in_pool)(request, services, progress)
     command = (

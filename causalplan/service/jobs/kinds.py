@@ -1,8 +1,9 @@
 """What each kind of job does: read its upload when it is posted, then do the work when a runner takes it.
 
-A kind is a ``JobKind`` with two functions: ``prepare`` (at POST time, on the request's
-thread: refuse what is wrong with a clear error before anything is queued, and return the
-request to store) and ``run`` (in a runner thread of whichever replica took the job). Adding a
+A kind is a ``JobKind`` with ``prepare`` (at POST time, on the request's thread: refuse what
+is wrong with a clear error before anything is queued, and return the request to store, a
+model of ``jobs.requests``), ``read`` (that model from the job's row) and ``run`` (in a runner
+thread of whichever replica took the job). Adding a
 kind is one enum member and one entry in ``KINDS``; the longer kinds live in modules of their
 own (``video``, ``fit_estimation``).
 """
@@ -17,6 +18,13 @@ from causalplan.errors import InputFileError
 from causalplan.limits import LimitExceededError
 from causalplan.service.errors import InvalidRequestError
 from causalplan.service.jobs.fit_estimation import prepare_fit_estimation, run_fit_estimation_job
+from causalplan.service.jobs.requests import (
+    BatchRequest,
+    ConsensusRequest,
+    FitEstimationRequest,
+    SimulationRequest,
+    read_video_request,
+)
 from causalplan.service.jobs.video import prepare_video, run_video_job
 from causalplan.service.jobs.work import Kind, Progress, in_pool
 from causalplan.service.pool import jobs as worker_jobs
@@ -26,6 +34,7 @@ from causalplan.transfer import batch
 from causalplan.transfer.batch import Trial, TrialResult, read_trials, run_batch
 
 if TYPE_CHECKING:
+    from causalplan.service.api.schemas.jobs import BatchJobIn, ConsensusJobIn, SimulationJobIn
     from causalplan.service.deps import Services
 
 CHUNK_SIZE = 20
@@ -62,24 +71,19 @@ def read_uploaded_trials(text: str, limit: int) -> list[Trial]:
     return trials
 
 
-def _batch_lines(request: dict[str, Any]) -> str:
-    text: str = request["trials"]
-    return csv_to_json_lines(text) if request.get("format") == "csv" else text
-
-
-def prepare_batch(request: dict[str, Any], services: Services) -> dict[str, Any]:
+def prepare_batch(body: BatchJobIn, services: Services) -> BatchRequest:
     from causalplan.service.answers import resolve_planner, resolve_time_limit
 
-    lines = _batch_lines(request)
+    lines = csv_to_json_lines(body.trials) if body.format == "csv" else body.trials
     trials = read_uploaded_trials(lines, services.settings.max_job_trials)
-    return {
-        "trials": lines,
-        "count": len(trials),
-        "planner": resolve_planner(request.get("planner", "auto")),
-        "time_limit": resolve_time_limit(request.get("time_limit"), services.settings),
-        "simulate": bool(request.get("simulate", True)),
-        "validate": bool(request.get("validate", True)),
-    }
+    return BatchRequest(
+        trials=lines,
+        count=len(trials),
+        planner=resolve_planner(body.planner),
+        time_limit=resolve_time_limit(body.time_limit, services.settings),
+        simulate=body.simulate,
+        validate=body.validate_plan,
+    )
 
 
 def judge_trials(
@@ -96,11 +100,11 @@ def _summary(results: list[TrialResult]) -> dict[str, Any]:
     return {"trials": len(results), "verdicts": counts, "results": [result.row() for result in results]}
 
 
-def run_batch_job(request: dict[str, Any], services: Services, progress: Progress) -> dict[str, Any]:
+def run_batch_job(request: BatchRequest, services: Services, progress: Progress) -> dict[str, Any]:
     settings = services.settings
-    trials = read_uploaded_trials(request["trials"], settings.max_job_trials)
-    planner, time_limit, simulate = request["planner"], float(request["time_limit"]), bool(request["simulate"])
-    val = bool(request.get("validate", False))  # jobs stored before VAL was asked for ran without it
+    trials = read_uploaded_trials(request.trials, settings.max_job_trials)
+    planner, time_limit, simulate = request.planner, request.time_limit, request.simulate
+    val = request.validate_plan
     total = len(trials)
     progress(0, total)
     if settings.dask_scheduler is not None:
@@ -126,7 +130,9 @@ def run_batch_job(request: dict[str, Any], services: Services, progress: Progres
     for start in range(0, total, CHUNK_SIZE):
         chunk = trials[start : start + CHUNK_SIZE]
         timeout = len(chunk) * (time_limit + settings.solve_grace_seconds)
-        results.extend(in_pool(services, judge_trials, (chunk, planner, time_limit, simulate, folders, val), timeout))
+        results.extend(
+            in_pool(services, progress, judge_trials, (chunk, planner, time_limit, simulate, folders, val), timeout)
+        )
         progress(len(results), total)
     return _summary(results)
 
@@ -134,12 +140,10 @@ def run_batch_job(request: dict[str, Any], services: Services, progress: Progres
 # -- simulation ---------------------------------------------------------------------------------
 
 
-def prepare_simulation(request: dict[str, Any], services: Services) -> dict[str, Any]:
-    from causalplan.service.api.schemas.plans import SimulationIn
+def prepare_simulation(body: SimulationJobIn, services: Services) -> SimulationRequest:
     from causalplan.service.documents import plan_inputs
     from causalplan.service.storage.crud import ClientIds
 
-    body = SimulationIn.model_validate({key: value for key, value in request.items() if key != "kind"})
     if body.video is not None:
         raise InvalidRequestError(
             'A simulation job makes no film: post the same request with "kind": "video" (the film is '
@@ -148,22 +152,22 @@ def prepare_simulation(request: dict[str, Any], services: Services) -> dict[str,
         )
     inputs = plan_inputs(body, services, ClientIds())
     inputs.store(services)
-    return {
-        "model_id": str(inputs.submission.record.id),
-        "mapping": body.mapping,
-        "planner": inputs.planner,
-        "time_limit": inputs.time_limit,
-        "picture": body.picture,
-        "robot": body.robot,
-    }
+    return SimulationRequest(
+        model_id=str(inputs.submission.record.id),
+        mapping=body.mapping,
+        planner=inputs.planner,
+        time_limit=inputs.time_limit,
+        picture=body.picture,
+        robot=body.robot,
+    )
 
 
-def run_simulation_job(request: dict[str, Any], services: Services, progress: Progress) -> dict[str, Any]:
+def run_simulation_job(request: SimulationRequest, services: Services, progress: Progress) -> dict[str, Any]:
     from causalplan.service.api.schemas.plans import SimulationIn
     from causalplan.service.documents import plan_inputs
     from causalplan.service.storage.crud import ClientIds
 
-    body = SimulationIn.model_validate(request)
+    body = SimulationIn.model_validate(request.stored())
     inputs = plan_inputs(body, services, ClientIds())
     progress(0, 1)
     args = (
@@ -178,19 +182,18 @@ def run_simulation_job(request: dict[str, Any], services: Services, progress: Pr
     timeout = inputs.time_limit + services.settings.solve_grace_seconds
     if body.robot:
         timeout += services.settings.robot_seconds
-    data = in_pool(services, worker_jobs.simulate_job, args, timeout)
+    data = in_pool(services, progress, worker_jobs.simulate_job, args, timeout)
     progress(1, 1)
-    return {**data, "model_id": request["model_id"]}
+    return {**data, "model_id": request.model_id}
 
 
 # -- consensus ----------------------------------------------------------------------------------
 
 
-def prepare_consensus(request: dict[str, Any], services: Services) -> dict[str, Any]:
+def prepare_consensus(body: ConsensusJobIn, services: Services) -> ConsensusRequest:
     from causalplan.service.answers import resolve_planner, resolve_time_limit
 
-    text: str = request["trials"]
-    count = len([line for line in text.splitlines() if line.strip()])
+    count = len([line for line in body.trials.splitlines() if line.strip()])
     if count == 0:
         raise InvalidRequestError("The upload has no participants: one JSON object a line, with 'id' and 'model'.")
     if count > services.settings.max_job_trials:
@@ -199,14 +202,14 @@ def prepare_consensus(request: dict[str, Any], services: Services) -> dict[str, 
             f"The upload has {count} lines; this server takes at most {services.settings.max_job_trials} per job.",
             details={"limit": services.settings.max_job_trials, "actual": count},
         )
-    return {
-        "trials": text,
-        "count": count,
-        "min_support": float(request.get("min_support", 0.5)),
-        "planner": resolve_planner(request.get("planner", "auto")),
-        "time_limit": resolve_time_limit(request.get("time_limit"), services.settings),
-        "simulate": bool(request.get("simulate", True)),
-    }
+    return ConsensusRequest(
+        trials=body.trials,
+        count=count,
+        min_support=body.min_support,
+        planner=resolve_planner(body.planner),
+        time_limit=resolve_time_limit(body.time_limit, services.settings),
+        simulate=body.simulate,
+    )
 
 
 def consensus_report(
@@ -226,28 +229,28 @@ def consensus_report(
     return report(judge(crowd, participants, catalog, planner, time_limit, simulate))
 
 
-def run_consensus_job(request: dict[str, Any], services: Services, progress: Progress) -> dict[str, Any]:
+def run_consensus_job(request: ConsensusRequest, services: Services, progress: Progress) -> dict[str, Any]:
     progress(0, 1)
-    time_limit = float(request["time_limit"])
+    time_limit = request.time_limit
     args = (
-        request["trials"],
-        float(request["min_support"]),
-        request["planner"],
+        request.trials,
+        request.min_support,
+        request.planner,
         time_limit,
-        bool(request["simulate"]),
+        request.simulate,
         tuple(services.settings.catalog_folders),
     )
     # Every member's trial plus one per test object may each take the time limit.
-    timeout = (int(request["count"]) + 8) * (time_limit + services.settings.solve_grace_seconds)
-    data = in_pool(services, consensus_report, args, timeout + CONSENSUS_GRACE_SECONDS)
+    timeout = (request.count + 8) * (time_limit + services.settings.solve_grace_seconds)
+    data = in_pool(services, progress, consensus_report, args, timeout + CONSENSUS_GRACE_SECONDS)
     progress(1, 1)
     return data
 
 
-KINDS: dict[JobKind, Kind] = {
-    JobKind.BATCH: Kind(prepare_batch, run_batch_job),
-    JobKind.SIMULATION: Kind(prepare_simulation, run_simulation_job),
-    JobKind.CONSENSUS: Kind(prepare_consensus, run_consensus_job),
-    JobKind.VIDEO: Kind(prepare_video, run_video_job),
-    JobKind.FIT_ESTIMATION: Kind(prepare_fit_estimation, run_fit_estimation_job),
+KINDS: dict[JobKind, Kind[Any, Any]] = {
+    JobKind.BATCH: Kind(prepare_batch, BatchRequest.model_validate, run_batch_job),
+    JobKind.SIMULATION: Kind(prepare_simulation, SimulationRequest.model_validate, run_simulation_job),
+    JobKind.CONSENSUS: Kind(prepare_consensus, ConsensusRequest.model_validate, run_consensus_job),
+    JobKind.VIDEO: Kind(prepare_video, read_video_request, run_video_job),
+    JobKind.FIT_ESTIMATION: Kind(prepare_fit_estimation, FitEstimationRequest.model_validate, run_fit_estimation_job),
 }

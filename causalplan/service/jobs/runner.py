@@ -2,9 +2,13 @@
 
 Each thread takes one job at a time (``store.claim_job``), renews the job's lease every third
 of ``job_lease_seconds`` while the work goes on, and stores the result with a write that only
-the lease's owner can make. A replica that dies mid-job stops renewing; once the lease has
-lapsed, another replica's runner takes the job up again. A replica that stops cleanly puts its
-running jobs back in the queue at once.
+the lease's owner can make. A cancel stops the work at once: ``cancel`` (what DELETE calls in
+this replica) sets the job's stop event, which kills its worker; a job cancelled through
+another replica is seen within ``job_poll_seconds`` (its row is no longer this runner's).
+
+A replica that dies mid-job stops renewing; once the lease has lapsed, another replica's
+runner takes the job up again. A replica that stops cleanly puts its running jobs back in the
+queue at once.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import socket
 import threading
 import time
 import uuid
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from causalplan.errors import CausalPlanError
@@ -44,6 +49,14 @@ def error_of(exc: CausalPlanError) -> dict[str, Any]:
     return {"code": exc.code, "message": exc.message, "details": exc.details}
 
 
+@dataclass
+class _Running:
+    """A job this runner does: ``stop`` ends its work, ``ended`` is set once its worker is free."""
+
+    stop: threading.Event = field(default_factory=threading.Event)
+    ended: threading.Event = field(default_factory=threading.Event)
+
+
 class JobRunner:
     """``settings.job_runners`` threads doing jobs for the replica that owns ``services``."""
 
@@ -55,11 +68,24 @@ class JobRunner:
         self._last_sweep = 0.0
         self._lock = threading.Lock()
         self._busy = 0
+        self._running: dict[uuid.UUID, _Running] = {}
 
     def stats(self) -> dict[str, int]:
         """Return this replica's runner threads: how many, and how many are doing a job now."""
         with self._lock:
             return {"threads": len(self._threads), "busy": self._busy}
+
+    def cancel(self, job_id: uuid.UUID, seconds: float) -> bool:
+        """Stop the work of job ``job_id`` if this runner does it (cancelled in the database already).
+
+        Waits up to ``seconds`` for its worker to be killed; return whether the work ended here.
+        """
+        with self._lock:
+            running = self._running.get(job_id)
+        if running is None:
+            return False
+        running.stop.set()
+        return running.ended.wait(seconds)
 
     def start(self) -> None:
         """Start the runner threads (none when ``job_runners`` is 0)."""
@@ -115,31 +141,47 @@ class JobRunner:
     def _run(self, job: JobRecord) -> None:
         engine, settings = self.services.engine, self.services.settings
         lease, keep = settings.job_lease_seconds, settings.job_result_seconds
+        running = _Running()
         lost = threading.Event()
         finished = threading.Event()
         state = {"progress": (job.done, job.total)}
 
+        def lose() -> None:
+            lost.set()
+            running.stop.set()
+
         def heartbeat() -> None:
-            while not finished.wait(lease / 3):
+            # Looks often (is the job still ours? else it was cancelled), renews every third of the lease.
+            renewed = time.monotonic()
+            while not finished.wait(min(lease / 3, settings.job_poll_seconds)):
                 try:
-                    if not store.renew_lease(engine, job.id, self.owner, lease, state["progress"]):
-                        lost.set()
-                        return
+                    if time.monotonic() - renewed >= lease / 3:
+                        renewed = time.monotonic()
+                        held = store.renew_lease(engine, job.id, self.owner, lease, state["progress"])
+                    else:
+                        held = store.is_held(engine, job.id, self.owner)
                 except CausalPlanError as exc:
                     logger.warning("cannot renew the lease of job %s: %s", job.id, exc.message)
+                    continue
+                if not held:
+                    lose()
+                    return
 
-        def progress(done: int, total: int) -> None:
+        def report(done: int, total: int) -> None:
             state["progress"] = (done, total)
-            if lost.is_set() or self._stop.is_set():
+            if self._stop.is_set():
+                running.stop.set()
                 raise JobCancelledError
             if not store.renew_lease(engine, job.id, self.owner, lease, (done, total)):
-                lost.set()
+                lose()
                 raise JobCancelledError
 
+        with self._lock:
+            self._running[job.id] = running
         beating = threading.Thread(target=heartbeat, name=f"causalplan-lease-{job.id}", daemon=True)
         beating.start()
         try:
-            outcome = self._work(job, progress)
+            outcome = self._work(job, Progress(report, running.stop))
             made = outcome.file
             file = (made.data, made.content_type) if made is not None else None
             store.finish_job(engine, job.id, self.owner, keep, result=outcome.result, file=file)
@@ -154,12 +196,15 @@ class JobRunner:
         finally:
             finished.set()
             beating.join()
+            with self._lock:
+                self._running.pop(job.id, None)
+            running.ended.set()
 
     def _work(self, job: JobRecord, progress: Progress) -> Outcome:
         """Return the job's result and file; raise the CausalPlanError that failed it (a bug: internal_error)."""
         kind = KINDS[JobKind(job.kind)]  # claim_job takes only the kinds of KINDS
         try:
-            done = kind.run(job.request, self.services, progress)
+            done = kind.run(kind.read(job.request), self.services, progress)
             return done if isinstance(done, Outcome) else Outcome(done)
         except (CausalPlanError, JobCancelledError):
             raise

@@ -1,41 +1,52 @@
 """The ``video`` kind of job: the robot carrying out a plan, filmed; the film is stored with the job.
 
-Two requests make a film. The API's (``POST /v1/jobs`` with ``kind: video``) is a plan
-request: the model is planned (on the mapping's object), then the Panda carries out the plan
-on camera. The participant page's ("Watch the robot") names the object and the fits of a plan
-it has shown already. Either way the planner worker films and writes its progress (frames
-drawn, frames expected) to a file that this replica's runner reads and reports, and it stops
-at the next frame once a stop file appears, which the runner writes when the job is
-cancelled. The film's bytes go into the job's row, so any replica serves them
-(``GET /v1/jobs/{id}/video``) until the job expires.
+Two requests make a film. The API's (``POST /v1/jobs`` with ``kind: video``, or POST
+/v1/simulations with ``robot`` and ``video``) is a plan request: the model is planned (on the
+mapping's object), then the Panda carries out the plan on camera. The participant page's
+("Watch the robot") names the object and the fits of a plan it has shown already. Either way
+a job worker films and writes its progress (frames drawn, frames expected) to a file that
+this replica's runner reads and reports; a cancel kills the worker. The film's bytes go into
+the job's row, so any replica serves them (``GET /v1/jobs/{id}/video``) until the job expires.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import logging
 import tempfile
 import threading
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from causalplan.errors import CausalPlanError
+from causalplan.service.jobs.requests import FitsFilmRequest, PlanFilmRequest, VideoRequest
 from causalplan.service.jobs.work import JobCancelledError, JobFile, Outcome, Progress, in_pool
-from causalplan.service.pool.robot_jobs import CONTENT_TYPES, FilmStoppedError, read_progress
+from causalplan.service.pool.robot_jobs import CONTENT_TYPES, read_progress
 
 if TYPE_CHECKING:
     from causalplan.causal.model import CausalModel, Labelling
-    from causalplan.service.api.schemas.jobs import VideoPlanIn
+    from causalplan.service.api.schemas.jobs import VideoJobIn, VideoPlanIn
     from causalplan.service.deps import Services
     from causalplan.service.documents import PlanInputs
 
 logger = logging.getLogger(__name__)
 
 WATCH_SECONDS = 1.0
-"""How often the runner reads the film's progress (and so how soon a cancel reaches the worker)."""
-FITS_KEY = "fits"
-"""A stored request with this key is the participant page's: film these fits of ``object``."""
+"""How often the runner reads the film's progress and reports it."""
 FILM_KEY = "film"
-"""The participant page's film's key (``films.film_key``) in its stored request: one job per film, reused."""
+"""The participant page's film's key (``film_key``) in its stored request: one job per film, reused."""
+FILM_KEY_PATTERN = r"^[0-9a-f]{32}$"
+"""What a film's key looks like (``film_key``, and a job's id as hex)."""
+
+
+def film_key(catalog_key: str, object_id: str, fit_ids: Sequence[str], video: str, size: tuple[int, int]) -> str:
+    """Return the key of the film of the plan making ``fit_ids`` of the object, in ``video`` format and ``size``.
+
+    The robot is deterministic, so one film per object, plan, format, size and catalog is enough.
+    """
+    text = json.dumps([catalog_key, object_id, list(fit_ids), video, list(size)], ensure_ascii=False)
+    return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()[:32]
 
 
 def video_url(job_id: object) -> str:
@@ -53,7 +64,6 @@ def film_plan_job(
     video: str,
     size: tuple[int, int],
     progress: Path,
-    stop: Path,
 ) -> dict[str, object]:
     """Plan ``model`` and film the robot carrying the plan out (runs in a planner worker).
 
@@ -70,7 +80,7 @@ def film_plan_job(
     data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "robot": None, "video": None}
     if not result.has_plan:
         return data
-    report, film = robot_simulation(task.obj, result.steps, video, size, progress, stop)
+    report, film = robot_simulation(task.obj, result.steps, video, size, progress)
     data.update(simulation=report.as_dict(), robot=robot_outcome(report), video=film)
     return data
 
@@ -81,89 +91,74 @@ def _plan_inputs(body: VideoPlanIn, services: Services) -> PlanInputs:
     from causalplan.service.documents import plan_inputs
     from causalplan.service.storage.crud import ClientIds
 
-    plan = PlanIn.model_validate(body.model_dump(mode="json", by_alias=True, exclude={"video"}))
+    plan = PlanIn.model_validate(body.model_dump(mode="json", by_alias=True, exclude={"video", "kind"}))
     return plan_inputs(plan, services, ClientIds())
 
 
-def prepare_video(request: dict[str, Any], services: Services) -> dict[str, Any]:
-    from causalplan.service.api.schemas.jobs import VideoPlanIn
-
-    body = VideoPlanIn.model_validate({key: value for key, value in request.items() if key != "kind"})
+def prepare_video(body: VideoJobIn, services: Services) -> PlanFilmRequest:
     inputs = _plan_inputs(body, services)
     inputs.store(services)
-    return {
-        "model_id": str(inputs.submission.record.id),
-        "mapping": body.mapping,
-        "planner": inputs.planner,
-        "time_limit": inputs.time_limit,
-        "validate": body.validate_plan,
-        "video": body.video,
-    }
+    return PlanFilmRequest(
+        model_id=str(inputs.submission.record.id),
+        mapping=body.mapping,
+        planner=inputs.planner,
+        time_limit=inputs.time_limit,
+        validate=body.validate_plan,
+        video=body.video,
+    )
 
 
-def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key: str) -> dict[str, Any]:
+def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key: str) -> FitsFilmRequest:
     """Return the stored request of the film ``key`` of ``fit_ids`` of the object (the participant page's)."""
-    return {"object": object_id, FITS_KEY: list(fit_ids), "video": video, FILM_KEY: key}
+    return FitsFilmRequest(object=object_id, fits=list(fit_ids), video=video, film=key)
 
 
-def _film_in_worker(request: dict[str, Any], services: Services, progress_file: Path, stop: Path) -> dict[str, Any]:
+def _film_in_worker(
+    request: VideoRequest, services: Services, progress: Progress, progress_file: Path
+) -> dict[str, Any]:
     from causalplan.service.api.schemas.jobs import VideoPlanIn
     from causalplan.service.pool.robot_jobs import robot_film_job
 
     settings = services.settings
     size = (settings.robot_video_width, settings.robot_video_height)
     folders = tuple(settings.catalog_folders)
-    video = str(request["video"])
-    if FITS_KEY in request:
-        args: tuple[Any, ...] = (str(request["object"]), tuple(request[FITS_KEY]), folders, video, size, progress_file)
-        made: dict[str, Any] = in_pool(services, robot_film_job, (*args, stop), settings.robot_seconds)
+    video = request.video
+    if isinstance(request, FitsFilmRequest):
+        args: tuple[Any, ...] = (request.object, tuple(request.fits), folders, video, size, progress_file)
+        made: dict[str, Any] = in_pool(services, progress, robot_film_job, args, settings.robot_seconds)
         return made
-    body = VideoPlanIn.model_validate(request)
+    body = VideoPlanIn.model_validate(request.stored())
     inputs = _plan_inputs(body, services)
     args = (inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, folders, body.validate_plan, video, size)
     timeout = inputs.time_limit + settings.solve_grace_seconds + settings.robot_seconds
-    data: dict[str, Any] = in_pool(services, film_plan_job, (*args, progress_file, stop), timeout)
-    return {**data, "model_id": request["model_id"]}
+    data: dict[str, Any] = in_pool(services, progress, film_plan_job, (*args, progress_file), timeout)
+    return {**data, "model_id": request.model_id}
 
 
-def run_video_job(request: dict[str, Any], services: Services, progress: Progress) -> Outcome:
-    """Film the plan, reporting frames drawn of frames expected; stop the worker's filming on a cancel.
-
-    A cancel that comes while the worker still plans, or runs the robot before filming, stops
-    it at the first frame.
-    """
+def run_video_job(request: VideoRequest, services: Services, progress: Progress) -> Outcome:
+    """Film the plan, reporting frames drawn of frames expected; a cancel kills the worker (``in_pool``)."""
     progress(0, 1)
     with tempfile.TemporaryDirectory(prefix="causalplan-film-job-") as folder:
-        progress_file, stop = Path(folder) / "progress.json", Path(folder) / "stop"
+        progress_file = Path(folder) / "progress.json"
         finished = threading.Event()
-        cancelled = threading.Event()
 
         def watch() -> None:
             while not finished.wait(WATCH_SECONDS):
                 frames, expected = read_progress(progress_file)
                 try:  # before the first frame the robot is still planning: 0 of 1
                     progress(frames, expected or 1)
-                except JobCancelledError:
-                    cancelled.set()
-                    stop.touch()
+                except JobCancelledError:  # the job's stop event is set: its worker is being killed
                     return
 
         watcher = threading.Thread(target=watch, name="causalplan-film-watch", daemon=True)
         watcher.start()
         try:
-            data = _film_in_worker(request, services, progress_file, stop)
-        except CausalPlanError as exc:
-            if exc.code == FilmStoppedError.code:
-                logger.info("filming stopped in its worker: the job was cancelled")
-                raise JobCancelledError from None
-            raise
+            data = _film_in_worker(request, services, progress, progress_file)
         finally:
             finished.set()
             watcher.join()
-    if cancelled.is_set():
-        raise JobCancelledError
     film = data.pop("video", None)
-    content_type = CONTENT_TYPES[str(request["video"])]
+    content_type = CONTENT_TYPES[request.video]
     if not isinstance(film, bytes):
         return Outcome({**data, "video": None})
     # The URL is the route's to say (``video_url``, filled in when the job is read).

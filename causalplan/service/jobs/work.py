@@ -1,26 +1,46 @@
-"""What every kind of job's work shares: the progress callback, the cancel signal, the planner pool."""
+"""What every kind of job's work shares: the progress callback, the cancel signal, the jobs' workers."""
 
 from __future__ import annotations
 
-import time
+import threading
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TypeVar
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+from pydantic import BaseModel
 
 from causalplan.service.errors import QueueFullError
+from causalplan.service.jobs.requests import JobRequest
+from causalplan.service.pool.pool import RunStoppedError
 
 if TYPE_CHECKING:
     from causalplan.service.deps import Services
 
 T = TypeVar("T")
+B = TypeVar("B", bound=BaseModel)
+R = TypeVar("R", bound=JobRequest)
 
 
 class JobCancelledError(Exception):
     """The job was cancelled (or its lease lost) while it ran: stop, store nothing."""
 
 
-Progress = Callable[[int, int], None]
-"""Called by a job's work with (done, total); raises JobCancelledError when the job is no longer ours."""
+@dataclass(frozen=True)
+class Progress:
+    """What a job's work reports its progress to, and hears a cancel from.
+
+    Called with (done, total): raises JobCancelledError once ``stop`` is set (the job was
+    cancelled, its lease lost, or the replica stops), or when ``report`` finds the job no
+    longer ours. ``stop`` also kills the job's worker at once (``in_pool``).
+    """
+
+    report: Callable[[int, int], None]
+    stop: threading.Event = field(default_factory=threading.Event)
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.stop.is_set():
+            raise JobCancelledError
+        self.report(done, total)
 
 
 @dataclass(frozen=True)
@@ -40,20 +60,30 @@ class Outcome:
 
 
 @dataclass(frozen=True)
-class Kind:
-    """One kind of job: ``prepare`` checks a request at POST time, ``run`` does the work in a runner."""
+class Kind(Generic[B, R]):
+    """One kind of job: ``prepare`` checks the API's body at POST time and returns the request to
+    store; ``read`` reads it back from the job's row; ``run`` does the work in a runner."""
 
-    prepare: Callable[[dict[str, Any], Services], dict[str, Any]]
-    run: Callable[[dict[str, Any], Services, Progress], dict[str, Any] | Outcome]
+    prepare: Callable[[B, Services], R]
+    read: Callable[[Any], R]
+    run: Callable[[R, Services, Progress], dict[str, Any] | Outcome]
 
 
-def in_pool(services: Services, function: Callable[..., T], args: tuple[Any, ...], timeout: float) -> T:
-    """Return ``function(*args)`` run in a planner worker, waiting while interactive requests fill the queue.
+def in_pool(
+    services: Services, progress: Progress, function: Callable[..., T], args: tuple[Any, ...], timeout: float
+) -> T:
+    """Return ``function(*args)`` run in a worker of the jobs' pool (never the interactive requests' pool).
 
-    A job is not in a hurry: a full queue (QueueFullError) means wait and try again, not fail.
+    The jobs' pool has a worker per runner thread and starts with its first job. A job is not
+    in a hurry: a full queue (QueueFullError) means wait and try again, not fail. Once the job
+    is stopped (``progress.stop``), its worker is killed and this raises JobCancelledError.
     """
+    services.job_pool.start_once()
     while True:
         try:
-            return services.pool.run(function, args, timeout)
+            return services.job_pool.run(function, args, timeout, stop=progress.stop)
+        except RunStoppedError:
+            raise JobCancelledError from None
         except QueueFullError as exc:
-            time.sleep(exc.retry_after)
+            if progress.stop.wait(exc.retry_after):
+                raise JobCancelledError from None

@@ -19,12 +19,10 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Path, Response
 
 from causalplan.objects.model import AssemblyObject
-from causalplan.service.api.routes.simulations import VIDEO_KEY
 from causalplan.service.api.schemas.experiments import FilmIn, FilmOut
 from causalplan.service.deps import ServicesDep
-from causalplan.service.errors import InvalidRequestError, NotFoundError
-from causalplan.service.films import FilmNotFoundError, film_key
-from causalplan.service.jobs.video import FILM_KEY, fits_film_request, video_url
+from causalplan.service.errors import FilmNotFoundError, InvalidRequestError, NotFoundError
+from causalplan.service.jobs.video import FILM_KEY, FILM_KEY_PATTERN, film_key, fits_film_request, video_url
 from causalplan.service.pages.journeys import JourneyDep
 from causalplan.service.pool.robot_jobs import CONTENT_TYPES, robot_playback_job
 from causalplan.service.storage import jobs as store
@@ -112,13 +110,13 @@ def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesD
     job = store.find_job(services.engine, kind, FILM_KEY, key)
     if job is None:  # two participants asking at once may each start one: harmless, and rare
         request = fits_film_request(obj.id, fits, FILM_FORMAT, key)
-        job = store.create_job(services.engine, kind, request, 1, settings.max_queued_jobs)
+        job = store.create_job(services.engine, kind, request.stored(), 1, settings.max_queued_jobs)
     return _out(code, job)
 
 
 @router.get("/{key}", response_model=FilmOut)
 def film_status(
-    code: str, key: Annotated[str, Path(pattern=VIDEO_KEY)], journey: JourneyDep, services: ServicesDep
+    code: str, key: Annotated[str, Path(pattern=FILM_KEY_PATTERN)], journey: JourneyDep, services: ServicesDep
 ) -> FilmOut:
     """Return how far the film is: filming (frames drawn of those expected), ready (where it is) or failed (why)."""
     del journey  # only participants may ask

@@ -41,10 +41,16 @@ T = TypeVar("T")
 START_SECONDS = 60.0
 STARTED = "started"
 """What a worker sends first when it receives a job."""
+STOP_POLL_SECONDS = 0.02
+"""How often a call with a ``stop`` event looks at it while its worker works."""
 
 
 class _NotTaken(Exception):
     """The worker ended before it said it had the job (so it never ran it)."""
+
+
+class RunStoppedError(Exception):
+    """The caller's ``stop`` event was set while its worker worked: the worker was killed (and replaced)."""
 
 
 @dataclass(frozen=True)
@@ -81,9 +87,22 @@ class PlannerPool:
         self._seconds_per_job = 0.05  # moving average, for Retry-After
         self._workers: set[WorkerProcess] = set()
         self._closed = False
+        self._start_lock = threading.Lock()
+        self._started = False
 
     def start(self) -> None:
         """Remove stale workers' folders, start the workers and wait until each has imported the planners."""
+        with self._start_lock:
+            self._start()
+
+    def start_once(self) -> None:
+        """Start the workers unless they are started (the jobs' pool starts when its first job comes)."""
+        with self._start_lock:
+            if not self._started and not self._closed:
+                self._start()
+
+    def _start(self) -> None:
+        self._started = True
         for folder in remove_stale_folders():
             logger.info("removed %s, left by a planner worker of a server that was killed", folder)
         workers = [self._spawn() for _ in range(self.size)]
@@ -127,8 +146,12 @@ class PlannerPool:
         args: tuple[Any, ...],
         timeout: float,
         meanwhile: Callable[[], None] | None = None,
+        stop: threading.Event | None = None,
     ) -> T:
         """Run ``function(*args)`` in a worker, waiting here; kill the worker after ``timeout`` seconds.
+
+        ``stop`` (a cancelled job's): once it is set, the worker is killed at once, and this
+        raises RunStoppedError (a job's work may run for minutes between its own checks).
 
         Blocks while no worker is free: call it from a thread, not the event loop. ``meanwhile``
         runs here once a worker has the job, while it works (e.g. storing the request's record),
@@ -141,7 +164,9 @@ class PlannerPool:
         job = pickle.dumps((function, args), protocol=pickle.HIGHEST_PROTOCOL)  # before any worker is taken
         self._admit()
         try:
-            result: T = self._run_admitted(job, timeout, meanwhile)
+            if stop is not None and stop.is_set():
+                raise RunStoppedError
+            result: T = self._run_admitted(job, timeout, meanwhile, stop)
             return result
         finally:
             with self._lock:
@@ -174,14 +199,19 @@ class PlannerPool:
             return self._take_worker()
         return worker
 
-    def _run_admitted(self, job: bytes, timeout: float, meanwhile: Callable[[], None] | None) -> Any:
+    def _run_admitted(
+        self, job: bytes, timeout: float, meanwhile: Callable[[], None] | None, stop: threading.Event | None
+    ) -> Any:
         for _ in range(2):  # a worker that ends before it takes the job hands it to its replacement
             worker = self._take_worker()
             with self._lock:
                 self._busy += 1
             started = time.perf_counter()
             try:
-                reply = self._call(worker, job, timeout, meanwhile)
+                reply = self._call(worker, job, timeout, meanwhile, stop)
+            except RunStoppedError:
+                self._give_back(worker, None, replace=True)
+                raise
             except _NotTaken:
                 logger.warning("planner worker %s ended before taking its job; replacing it", worker.pid)
                 self._give_back(worker, None, replace=True)
@@ -212,9 +242,13 @@ class PlannerPool:
 
     @staticmethod
     def _call(
-        worker: WorkerProcess, job: bytes, timeout: float, meanwhile: Callable[[], None] | None
+        worker: WorkerProcess,
+        job: bytes,
+        timeout: float,
+        meanwhile: Callable[[], None] | None,
+        stop: threading.Event | None = None,
     ) -> tuple[tuple[Any, ...], Exception | None]:
-        """Send ``job`` to ``worker``; return its reply and what ``meanwhile`` raised."""
+        """Send ``job`` to ``worker``; return its reply and what ``meanwhile`` raised (RunStoppedError on ``stop``)."""
         deadline = time.monotonic() + timeout
         try:
             worker.wait_ready(timeout)
@@ -231,6 +265,13 @@ class PlannerPool:
                 meanwhile()
             except Exception as exc:  # noqa: BLE001 - raised once the worker has answered
                 failure = exc
+        while stop is not None and not worker.connection.poll(
+            max(0.0, min(STOP_POLL_SECONDS, deadline - time.monotonic()))
+        ):
+            if stop.is_set():
+                raise RunStoppedError
+            if time.monotonic() >= deadline:
+                raise TimeoutError
         reply: tuple[Any, ...] = worker.receive(deadline - time.monotonic())
         return reply, failure
 

@@ -15,7 +15,6 @@ from __future__ import annotations
 import os
 import re
 import shutil
-import signal
 import socket
 import subprocess
 import sys
@@ -25,6 +24,8 @@ from contextlib import suppress
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
+
+from causalplan.planners import processes
 
 STOP_SECONDS = 2.0
 FOLDER_PREFIX = "causalplan-worker-"
@@ -54,16 +55,6 @@ def remove_stale_folders(root: Path | None = None) -> list[Path]:
             shutil.rmtree(folder, ignore_errors=True)
             removed.append(folder)
     return removed
-
-
-def _children_of(pid: int) -> list[int]:
-    """Return the pids of the children of process ``pid`` (empty when /proc does not list them)."""
-    children: list[int] = []
-    with suppress(OSError):
-        for task in Path(f"/proc/{pid}/task").iterdir():
-            with suppress(OSError, ValueError):
-                children.extend(int(child) for child in (task / "children").read_text().split())
-    return children
 
 
 class WorkerProcess:
@@ -136,15 +127,7 @@ class WorkerProcess:
         that timed out may both kill a busy worker).
         """
         try:
-            children = _children_of(self.process.pid)  # found before the worker dies, killed with it
-            with suppress(ProcessLookupError, PermissionError):
-                os.killpg(self.process.pid, signal.SIGKILL)
-            for child in children:
-                with suppress(ProcessLookupError, PermissionError):
-                    os.killpg(child, signal.SIGKILL)
-            with suppress(ProcessLookupError):
-                self.process.kill()
-            self.process.wait()
+            processes.kill_group(self.process)
             self.connection.close()
         finally:
             self._remove_folder()

@@ -14,7 +14,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from causalplan.errors import CausalPlanError
 from causalplan.objects.model import AssemblyObject
 
 if TYPE_CHECKING:
@@ -24,12 +23,6 @@ if TYPE_CHECKING:
 FORMATS = {"mp4": ".mp4", "gif": ".gif"}
 """Video formats a request may ask for, by name, and the file suffix each is written with."""
 CONTENT_TYPES = {"mp4": "video/mp4", "gif": "image/gif"}
-
-
-class FilmStoppedError(CausalPlanError):
-    """Filming stopped because its stop file appeared (the job that asked for the film was cancelled)."""
-
-    code = "film_stopped"
 
 
 def write_progress(path: Path | None, frames: int, expected: int | None) -> None:
@@ -76,13 +69,11 @@ def robot_simulation(
     video: str | None,
     size: tuple[int, int],
     progress: Path | None = None,
-    stop: Path | None = None,
 ) -> tuple[SimulationReport, bytes | None]:
     """Return the robot's run of ``steps`` on ``obj`` and, when ``video`` names a format, its film.
 
     Without a film the run comes from the robot's cache (``robot_verdict.robot_run``). Filming
-    writes its progress to ``progress`` and raises FilmStoppedError at the first frame after
-    the file ``stop`` exists (the app cannot reach into the worker otherwise).
+    writes its progress to ``progress``; a cancelled film's worker is killed by the app.
     """
     from causalplan.sim import RenderMode, simulate_plan
     from causalplan.sim.video import encode
@@ -95,8 +86,6 @@ def robot_simulation(
     write_progress(progress, 0, expected)
 
     def on_frame(frames: int) -> None:
-        if stop is not None and stop.exists():
-            raise FilmStoppedError("Filming was stopped: the job that asked for the film was cancelled.")
         write_progress(progress, min(frames, expected), expected)
 
     filmed = simulate_plan(
@@ -112,7 +101,6 @@ def robot_film_job(
     video: str,
     size: tuple[int, int],
     progress: Path | None,
-    stop: Path | None = None,
 ) -> dict[str, object]:
     """Film the robot making ``fit_ids`` of the object (runs in a worker); return the film and the report.
 
@@ -121,7 +109,7 @@ def robot_film_job(
     from causalplan.service.pool.catalog import worker_catalog
 
     obj = worker_catalog(catalog_folders).get(object_id)
-    report, film = robot_simulation(obj, steps_of(obj, fit_ids), video, size, progress, stop)
+    report, film = robot_simulation(obj, steps_of(obj, fit_ids), video, size, progress)
     return {"video": film, "simulation": report.as_dict(), "robot": robot_outcome(report)}
 
 

@@ -235,6 +235,12 @@ def _mine(job_id: uuid.UUID, owner: str) -> Any:
     return and_(JobRecord.id == job_id, JobRecord.lease_owner == owner, JobRecord.status == JobStatus.RUNNING)
 
 
+def is_held(engine: Engine, job_id: uuid.UUID, owner: str) -> bool:
+    """Return whether the job still runs under ``owner``'s lease (False once it was cancelled or taken)."""
+    with Session(engine) as session, storage_errors(session):
+        return session.scalar(select(JobRecord.id).where(_mine(job_id, owner))) is not None
+
+
 def renew_lease(
     engine: Engine, job_id: uuid.UUID, owner: str, lease_seconds: float, progress: tuple[int, int] | None = None
 ) -> bool:

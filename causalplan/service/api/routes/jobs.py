@@ -13,10 +13,10 @@ import anyio.to_thread
 from fastapi import APIRouter, Body, Response
 
 from causalplan.service.api.schemas.common import ErrorOut, error_responses
-from causalplan.service.api.schemas.jobs import JOB_EXAMPLES, JobIn, JobOut
-from causalplan.service.deps import ServicesDep
+from causalplan.service.api.schemas.jobs import JOB_EXAMPLES, JobBody, JobIn, JobOut
+from causalplan.service.deps import Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute
-from causalplan.service.films import FilmNotFoundError
+from causalplan.service.errors import FilmNotFoundError
 from causalplan.service.jobs.kinds import KINDS
 from causalplan.service.jobs.video import video_url
 from causalplan.service.storage import jobs as store
@@ -32,6 +32,8 @@ _LINKS = {
     "ReadJobVideo": {"operationId": "read_job_video", "parameters": _JOB_ID, "description": "A video job's film."},
 }
 """OpenAPI links from a posted job to what can be done with it (clients and stateful tests follow them)."""
+CANCEL_WAIT_SECONDS = 5.0
+"""How long DELETE waits for this replica's worker of the job to be killed (it takes a moment)."""
 _NOT_FOUND: dict[int | str, dict[str, Any]] = {
     404: {"model": ErrorOut, "description": "No such job, or its result has expired."}
 }
@@ -96,17 +98,18 @@ async def create_job(
     422 (404 for an unknown object) and nothing is queued; a batch's unreadable lines become
     `invalid` trials in the result, as in the CLI.
     """
-    kind = JobKind(body.kind)
-    request: dict[str, Any] = body.model_dump(mode="json", by_alias=True)  # stored as the API reads it
-
-    def prepare_and_store() -> JobRecord:
-        prepared = KINDS[kind].prepare(request, services)
-        total = int(prepared.get("count", 1))
-        return store.create_job(services.engine, kind.value, prepared, total, services.settings.max_queued_jobs)
-
-    record = await anyio.to_thread.run_sync(prepare_and_store)
+    record = await anyio.to_thread.run_sync(queue_job, body, services)
     response.headers["Location"] = job_url(record.id)
     return job_out(record)
+
+
+def queue_job(body: JobBody, services: Services) -> JobRecord:
+    """Check ``body`` (its kind's ``prepare``: a clear error and nothing queued when it is wrong) and queue it."""
+    kind = JobKind(body.kind)
+    prepared = KINDS[kind].prepare(body, services)
+    return store.create_job(
+        services.engine, kind.value, prepared.stored(), prepared.units(), services.settings.max_queued_jobs
+    )
 
 
 @router.get(
@@ -129,9 +132,16 @@ async def read_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
     operation_id="cancel_job",
 )
 async def cancel_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
-    """Cancel a queued or running job (a running one stops at its next step); answer the cancelled job."""
+    """Cancel a queued or running job; answer the cancelled job.
+
+    A running job's worker is stopped at once: before the answer when this server runs the job,
+    within `job_poll_seconds` when another replica does.
+    """
     keep = services.settings.job_result_seconds
-    return job_out(await anyio.to_thread.run_sync(store.cancel_job, services.engine, job_id, keep))
+    record = await anyio.to_thread.run_sync(store.cancel_job, services.engine, job_id, keep)
+    if services.runner is not None:
+        await anyio.to_thread.run_sync(services.runner.cancel, job_id, CANCEL_WAIT_SECONDS)
+    return job_out(record)
 
 
 @router.get(

@@ -1,19 +1,25 @@
-"""POST /v1/simulations: plan a model and run the plan in the headless physics simulator (or by the robot).
+"""POST /v1/simulations: plan a model and run the plan in the headless physics simulator; a robot run is a job.
 
-GET /v1/simulations/videos/{key}: a film of the robot that a simulation with ``video`` made.
+A run of the robot (and its film) takes tens of seconds to minutes, so it is long work: it is
+queued in the jobs table and done by a job runner in the jobs' own workers, never in the
+workers that answer plans, transfers and checks. Its request is answered with 202 and the
+job, as POST /v1/jobs answers (the same body works: clients follow the job's ``url``).
 """
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Any
 
-from fastapi import APIRouter, Path, Response
+from fastapi import APIRouter, Response
 
+from causalplan.service.api.routes.jobs import job_out, job_url, queue_job
 from causalplan.service.api.schemas.common import error_responses
+from causalplan.service.api.schemas.jobs import JobOut, SimulationJobIn, VideoJobIn
 from causalplan.service.api.schemas.plans import SimulationIn
-from causalplan.service.deps import ClientIdsDep, ServicesDep
+from causalplan.service.deps import ClientIdsDep, Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, plan_inputs
-from causalplan.service.films import FilmNotFoundError
+from causalplan.service.storage.jobs import JobKind
+from causalplan.service.storage.records import JobRecord
 
 router = APIRouter(
     prefix="/v1/simulations",
@@ -22,67 +28,64 @@ router = APIRouter(
     route_class=StrictJSONRoute,
 )
 
-VIDEO_KEY = r"^[0-9a-f]{32}$"
+_ONLY_PLANNED = ("picture", "robot", "include_pddl")
+"""What a robot run's job does not take of a simulation's body (it films, or reports, the robot)."""
 
 
-@router.post("", summary="Plan a model and simulate the plan (or have the robot carry it out, and film it)")
-def create_simulation(body: SimulationIn, services: ServicesDep, client: ClientIdsDep) -> dict[str, Any]:
+def queue_robot_run(body: SimulationIn, services: Services) -> JobRecord:
+    """Queue the robot's run of ``body`` as a job: a ``video`` job when it is filmed, else a ``simulation`` job."""
+    request: dict[str, Any] = body.model_dump(by_alias=True, exclude_unset=True)
+    if body.video is not None:
+        request = {key: value for key, value in request.items() if key not in _ONLY_PLANNED}
+        return queue_job(VideoJobIn.model_validate({**request, "kind": JobKind.VIDEO.value}), services)
+    request = {key: value for key, value in request.items() if key != "video"} | {"picture": False}
+    return queue_job(SimulationJobIn.model_validate({**request, "kind": JobKind.SIMULATION.value}), services)
+
+
+@router.post(
+    "",
+    summary="Plan a model and simulate the plan (with the robot: a job, answered 202)",
+    responses={
+        202: {
+            "model": JobOut,
+            "description": "With `robot`: the robot's run (and film) is queued as a job; follow `url` "
+            "(also in `Location`) as for POST /v1/jobs.",
+        },
+        429: {"description": "Every planner worker is busy, or the service holds as many jobs as it takes."},
+    },
+)
+def create_simulation(
+    body: SimulationIn, services: ServicesDep, client: ClientIdsDep, response: Response
+) -> dict[str, Any]:
     """Plan as POST /v1/plans does, then run the plan in headless PyBullet and check every step.
 
     Returns `planning` (the plan request's JSON), `simulation` (per-step checks with measured
     figures, stability, the true mechanism on the simulated assembly, `produces_goal`) and
     `image` (a PNG data URL of the final assembly, when `picture` is true), plus `cached`.
 
-    With `robot: true` the Franka Panda carries out the plan: each step of `simulation` says
-    what the robot did (`robot`: transit, grasp, carry, ...), `simulation.trajectory` sums up
-    its motions, and `robot` says whether it carried out the plan: `{"carried_out": false,
-    "reason": {"code": "robot_cannot_execute", "step": N, "failure": "unreachable" |
-    "no_collision_free_path" | "collision" | "grasp_lost" | a simulator code, "message"}}`.
-    With `video: "mp4"` or `"gif"` it is filmed too, and `video` is `{"key", "url",
-    "content_type", "bytes"}`: fetch the film at `url` while the server keeps it. A robot run
-    may take the server's `robot_seconds` (GET /health, `limits`) beyond the planner's limit.
+    With `robot: true` the Franka Panda carries out the plan, which takes up to the server's
+    `robot_seconds` (GET /health, `limits`): that is long work, so the answer is **202 with a
+    job** (as POST /v1/jobs answers; its `url` is also in `Location`), and the plan requests of
+    others never wait for it. The job's `result`, once it has `succeeded`, is this route's
+    answer with the robot: each step of `simulation` says what the robot did (`robot`:
+    transit, grasp, carry, ...), and `robot` says whether it carried out the plan
+    (`{"carried_out": false, "reason": {"code": "robot_cannot_execute", "step": N, "failure":
+    ..., "message"}}`). With `video: "mp4"` or `"gif"` the job is a `video` job: its result's
+    `video` is `{"url", "content_type", "bytes"}`, the film at `/v1/jobs/{id}/video`.
     """
-    inputs = plan_inputs(body, services, client)
     if body.robot:
-        answer = services.answers.robot_simulation(
-            inputs.model,
-            inputs.mapping,
-            inputs.planner,
-            inputs.time_limit,
-            body.video,
-            services.films,
-            lambda: inputs.store(services),
-        )
-    else:
-        answer = services.answers.simulate(
-            inputs.model,
-            inputs.mapping,
-            inputs.planner,
-            inputs.time_limit,
-            body.picture,
-            lambda: inputs.store(services),
-        )
-    return {**answer.data, "cached": answer.cached, "model_id": str(inputs.submission.record.id)}
-
-
-@router.get(
-    "/videos/{key}",
-    summary="A film of the robot carrying out a plan (MP4 or GIF)",
-    response_class=Response,
-    responses={200: {"content": {"video/mp4": {}, "image/gif": {}}, "description": "The film."}},
-)
-def get_video(
-    key: Annotated[str, Path(pattern=VIDEO_KEY, description="The key from a simulation's `video`.")],
-    services: ServicesDep,
-) -> Response:
-    """Return the film kept under `key` (404 `video_not_found` when it is not, or not yet, made)."""
-    film = services.films.get(key)
-    if film.state != "ready":
-        raise FilmNotFoundError(
-            f"The video '{key}' is {film.state}, not ready.", details={"key": key, "state": film.state}
-        )
-    return Response(
-        film.data,
-        media_type=film.content_type,
-        headers={"Cache-Control": "private, max-age=86400", "X-Content-Type-Options": "nosniff"},
+        record = queue_robot_run(body, services)
+        response.status_code = 202
+        response.headers["Location"] = job_url(record.id)
+        job: dict[str, Any] = job_out(record).model_dump(mode="json")
+        return job
+    inputs = plan_inputs(body, services, client)
+    answer = services.answers.simulate(
+        inputs.model,
+        inputs.mapping,
+        inputs.planner,
+        inputs.time_limit,
+        body.picture,
+        lambda: inputs.store(services),
     )
+    return {**answer.data, "cached": answer.cached, "model_id": str(inputs.submission.record.id)}

@@ -130,9 +130,8 @@ class FitEstimationJobIn(InputModel):
     )
 
 
-JobIn = Annotated[
-    BatchJobIn | SimulationJobIn | ConsensusJobIn | VideoJobIn | FitEstimationJobIn, Field(discriminator="kind")
-]
+JobBody = BatchJobIn | SimulationJobIn | ConsensusJobIn | VideoJobIn | FitEstimationJobIn
+JobIn = Annotated[JobBody, Field(discriminator="kind")]
 
 
 class ProgressOut(OutputModel):

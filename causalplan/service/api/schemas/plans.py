@@ -75,13 +75,14 @@ class SimulationIn(PlanIn):
     )
     robot: StrictBool = Field(
         default=False,
-        description="Have the Franka Panda carry out the plan: per step what it did ('robot' in each step), "
-        "and in the answer's 'robot' whether it could (else the reason robot_cannot_execute, its step and code).",
+        description="Have the Franka Panda carry out the plan, as a job (answered 202 with the job): per step "
+        "what it did ('robot' in each step), and in the result's 'robot' whether it could (else the reason "
+        "robot_cannot_execute, its step and code).",
     )
     video: Literal["mp4", "gif"] | None = Field(
         default=None,
-        description="With 'robot': also film it, as MP4 (H.264) or GIF; the answer's 'video' says where to "
-        "fetch the film (GET /v1/simulations/videos/{key}). Filming takes tens of seconds.",
+        description="With 'robot': also film it, as MP4 (H.264) or GIF, in a 'video' job; its result's 'video' "
+        "says where to fetch the film (GET /v1/jobs/{id}/video). Filming takes tens of seconds.",
     )
 
     @model_validator(mode="after")
