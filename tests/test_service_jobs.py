@@ -23,6 +23,7 @@ from sqlalchemy.orm import Session
 
 from causalplan.consensus.population import population
 from causalplan.objects.catalog import load_catalog
+from causalplan.service.api.schemas.jobs import BatchJobIn
 from causalplan.service.jobs.kinds import KINDS, csv_to_json_lines, judge_trials, read_uploaded_trials
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.jobs import MAX_ATTEMPTS
@@ -159,8 +160,12 @@ def test_csv_rows_that_share_an_id_are_refused_naming_it(jobs_client: TestClient
 def test_a_batch_job_checks_plans_with_val_by_default_as_the_cli_does(jobs_client: TestClient) -> None:
     services = services_of(jobs_client)
     lines = first_trials(1)
-    assert KINDS["batch"].prepare({"kind": "batch", "trials": lines}, services)["validate"] is True
-    assert KINDS["batch"].prepare({"kind": "batch", "trials": lines, "validate": False}, services)["validate"] is False
+    for body, expected in (
+        ({"kind": "batch", "trials": lines}, True),
+        ({"kind": "batch", "trials": lines, "validate": False}, False),
+    ):
+        stored = KINDS["batch"].prepare(BatchJobIn.model_validate(body), services).stored()
+        assert stored["validate"] is expected
     (checked,) = judge_trials(read_uploaded_trials(lines, 1), "auto", 30.0, False, (), val=True)
     assert checked.verdict.plan is not None and checked.verdict.plan.validated_by["val"] == "valid"
 
