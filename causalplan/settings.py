@@ -116,6 +116,25 @@ class Settings(BaseSettings):
     demo_retention_hours: float = Field(
         default=24.0, gt=0, description="Hours a demo participant's work is kept after their last change; then purged."
     )
+    arrivals_per_minute: int = Field(
+        default=30,
+        ge=0,
+        description="New arrivals one client may make on public study links a minute (0: no limit).",
+    )
+    place_start_minutes: float = Field(
+        default=15.0,
+        gt=0,
+        description="Minutes a participant admitted on a public link holds a place before saving anything.",
+    )
+    place_hold_hours: float = Field(
+        default=3.0, gt=0, description="Hours a participant who started holds a place after their last change."
+    )
+    over_admission: float = Field(
+        default=0.1,
+        ge=0,
+        le=1,
+        description="Fraction of a quota admitted beyond it while completions are under it (rounded down).",
+    )
     robot_seconds: float = Field(
         default=240.0,
         gt=0,

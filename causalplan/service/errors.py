@@ -8,7 +8,12 @@ from __future__ import annotations
 
 from causalplan.errors import CatalogError, CausalPlanError, InputFileError, PlannerUnavailableError, UnknownObjectError
 from causalplan.limits import LimitExceededError
-from causalplan.studies.errors import InvalidExperimentError, InvalidRecruitmentError, StepLockedError
+from causalplan.studies.errors import (
+    InvalidExperimentError,
+    InvalidRecruitmentError,
+    PlatformIdRequiredError,
+    StepLockedError,
+)
 
 
 class ServiceError(CausalPlanError):
@@ -212,6 +217,12 @@ class TooManyDemoStartsError(TryLaterError):
     code = "too_many_demo_starts"
 
 
+class TooManyArrivalsError(TryLaterError):
+    """One client arrived on public study links more often this minute than the service allows."""
+
+    code = "too_many_arrivals"
+
+
 _STATUS_BY_CODE = {
     "unknown_planner": 422,
     "plan_rejected_by_val": 500,  # our compilation and VAL disagree: a fault of ours, with VAL's words
@@ -228,6 +239,7 @@ _LOWER_STATUS: dict[type[CausalPlanError], int] = {
     InvalidExperimentError: 422,
     InvalidRecruitmentError: 422,
     StepLockedError: 409,
+    PlatformIdRequiredError: 403,
 }
 
 
