@@ -121,6 +121,11 @@ class Settings(BaseSettings):
         ge=0,
         description="New arrivals one client may make on public study links a minute (0: no limit).",
     )
+    undecided_arrival_hours: float = Field(
+        default=24.0,
+        gt=0,
+        description="Hours an arrival on a public study link is kept without a consent decision; then purged.",
+    )
     place_start_minutes: float = Field(
         default=15.0,
         gt=0,

@@ -17,6 +17,7 @@ from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
 
 from causalplan.cli import app
+from causalplan.service.pages.upkeep import purge
 from causalplan.service.storage.records import ArrivalRecord, ParticipantRecord, utc_now
 from tests.service_fixtures import AUTH, RESEARCH_TOKEN, running_client, services_of, settings_for, sqlite_url
 from tests.web_flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, post
@@ -290,3 +291,25 @@ def test_the_research_form_sets_and_shows_the_platform_id_requirement(client: Te
     page = client.get(f"/research/experiments/{created['id']}")
     assert 'name="require_platform_id" value="yes" checked' in page.text
     client.cookies.clear()
+
+
+def test_undecided_arrivals_are_purged_after_the_stated_time(client: TestClient) -> None:
+    created = experiment(client)
+    client.get(f"/s/{created['id']}", params=prolific("pid-undecided"))
+    client.get(f"/s/{created['id']}", params=prolific("pid-declined-old"))
+    declined = client.get(f"/s/{created['id']}", params=prolific("pid-declined-old"))
+    post(client, f"/s/{created['id']}/consent", {"arrival": consent_code(declined.text), "decision": "decline"}, 200)
+    join(client, created["id"], prolific("pid-admitted-old"))
+    services = services_of(client)
+    hours = services.settings.undecided_arrival_hours
+    with Session(services.engine) as session:
+        session.execute(
+            update(ArrivalRecord)
+            .where(ArrivalRecord.experiment_id == uuid.UUID(created["id"]))
+            .values(created_at=utc_now() - timedelta(hours=hours, minutes=1))
+        )
+        session.commit()
+    client.get(f"/s/{created['id']}", params=prolific("pid-undecided-new"))
+    purge(services)
+    stored = recruiting(client, created["id"])["arrivals"]
+    assert stored == {"arrived": 3, "consented": 1, "declined": 1, "undecided": 1}  # the old undecided one went

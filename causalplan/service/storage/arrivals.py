@@ -15,7 +15,7 @@ from __future__ import annotations
 import uuid
 from datetime import datetime
 
-from sqlalchemy import and_, case, func, or_, select, update
+from sqlalchemy import and_, case, delete, func, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -220,6 +220,23 @@ def decline(session: Session, arrival: ArrivalRecord) -> None:
     arrival.consented = False
     arrival.decided_at = utc_now()
     store.save(session, arrival)
+
+
+def purge_undecided(session: Session, arrived_before: datetime) -> int:
+    """Delete the arrivals that made no consent decision and came before ``arrived_before``; return how many.
+
+    Nothing else was stored about them; one who comes back later simply arrives anew.
+    """
+    with storage_errors(session):
+        purged = session.execute(
+            delete(ArrivalRecord).where(
+                ArrivalRecord.consented.is_(None),
+                ArrivalRecord.participant_id.is_(None),
+                ArrivalRecord.created_at < arrived_before,
+            )
+        )
+        session.commit()
+    return int(purged.rowcount)  # type: ignore[attr-defined]  # a CursorResult for a DELETE
 
 
 def exclusion(participant: ParticipantRecord, reason: str, detail: str) -> ExclusionRecord:
