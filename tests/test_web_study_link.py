@@ -313,3 +313,21 @@ def test_undecided_arrivals_are_purged_after_the_stated_time(client: TestClient)
     purge(services)
     stored = recruiting(client, created["id"])["arrivals"]
     assert stored == {"arrived": 3, "consented": 1, "declined": 1, "undecided": 1}  # the old undecided one went
+
+
+def test_a_bot_with_a_victims_platform_id_neither_declines_for_them_nor_takes_their_record(
+    client: TestClient,
+) -> None:
+    created = experiment(client)
+    victim = prolific("pid-victim")
+    first_bot = client.get(f"/s/{created['id']}", params={**victim, "SESSION_ID": "bot-guess-1"})
+    post(client, f"/s/{created['id']}/consent", {"arrival": consent_code(first_bot.text), "decision": "decline"}, 200)
+    arriving = client.get(f"/s/{created['id']}", params=victim)
+    assert "You chose not to take part" not in arriving.text and 'name="arrival"' in arriving.text
+    bot_code = join(client, created["id"], {**victim, "SESSION_ID": "bot-guess-2"})
+    victim_code = join(client, created["id"], victim)
+    assert victim_code != bot_code
+    back = client.get(f"/s/{created['id']}", params=victim, follow_redirects=False)
+    assert back.status_code == 303 and back.headers["location"] == f"/p/{victim_code}"
+    copied = client.get(f"/s/{created['id']}", params={**victim, "SESSION_ID": "bot-guess-3"}, follow_redirects=False)
+    assert copied.status_code == 200 and f"/p/{victim_code}" not in copied.text and f"/p/{bot_code}" not in copied.text

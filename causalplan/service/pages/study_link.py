@@ -3,8 +3,10 @@
 The link is what a researcher puts on Prolific or in an MTurk external question. Arriving
 stores only the arrival (with the platform's ids); consenting admits the person to the open
 condition with the fewest participants and sends them to their own participant pages;
-declining ends politely, with the platform's no-consent code. The same platform id coming
-back finds its own arrival: consent again if undecided, their progress if admitted.
+declining ends politely, with the platform's no-consent code. The same platform session (the
+platform id with Prolific's SESSION_ID or MTurk's assignmentId) coming back finds its own
+arrival: consent again if undecided, their progress if admitted. The platform id alone finds
+nothing, so a bot that copies someone's PROLIFIC_PID cannot decide for them or take their record.
 
 In the open: a client may make ``arrivals_per_minute`` new arrivals a minute; a study may
 refuse arrivals without platform ids; and an admitted person holds a place only while at work

@@ -138,8 +138,14 @@ def is_full(session: Session, experiment: ExperimentRecord, rules: PlaceRules = 
 
 
 def find_arrival(session: Session, experiment_id: uuid.UUID, visit: PlatformVisit) -> ArrivalRecord | None:
-    """Return the earlier arrival of the same platform id on this experiment (None: first time, or no id)."""
-    if visit.participant is None:
+    """Return the earlier arrival of the same platform session on this experiment (None: first time, or no ids).
+
+    Both the platform id and its session must match: a platform id is easy to copy (it is in
+    every link of that person), the session (Prolific's ``SESSION_ID``, MTurk's
+    ``assignmentId``) only the platform's link to that person carries. So whoever arrives with
+    another's platform id alone neither decides for them nor is sent to their record.
+    """
+    if visit.participant is None or visit.session is None:
         return None
     with storage_errors(session):
         return session.scalars(
@@ -147,12 +153,13 @@ def find_arrival(session: Session, experiment_id: uuid.UUID, visit: PlatformVisi
                 ArrivalRecord.experiment_id == experiment_id,
                 ArrivalRecord.platform == visit.platform,
                 ArrivalRecord.platform_id == visit.participant,
+                ArrivalRecord.platform_session == visit.session,
             )
         ).first()
 
 
 def arrive(session: Session, experiment: ExperimentRecord, visit: PlatformVisit) -> ArrivalRecord:
-    """Return this visit's arrival: the one stored for its platform id, or a new one (all that precedes consent)."""
+    """Return this visit's arrival: the one stored for its platform session, or a new one (before consent)."""
     found = find_arrival(session, experiment.id, visit)
     if found is not None:
         return found
