@@ -211,6 +211,13 @@ class CrossSiteRequestError(ServiceError):
     status_code = 403
 
 
+class ParticipantIdReservedError(ServiceError):
+    """A client named a study participant (or their pages' session) as itself: only their own pages may."""
+
+    code = "participant_id_reserved"
+    status_code = 403
+
+
 class TooManyDemoStartsError(TryLaterError):
     """One client started more demo participants this minute than the service allows."""
 

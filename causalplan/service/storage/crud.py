@@ -31,9 +31,13 @@ MAX_NESTING = 16
 _SHORT_TEXT = 200
 
 
+PAGE_SESSION_PREFIX = "experiment:"
+"""The participant pages store a participant's records under the session ``experiment:<id>``."""
+
+
 @dataclass(frozen=True)
 class ClientIds:
-    """Who sent a request, as the client says (``X-Participant-Id``, ``X-Session-Id``)."""
+    """Who sent a request: as the client says (``X-Participant-Id``, ``X-Session-Id``), or a participant's pages."""
 
     participant_id: str | None = None
     session_id: str | None = None

@@ -24,7 +24,7 @@ from causalplan.service.storage import crud
 from causalplan.service.storage.records import ModelRecord
 
 router = APIRouter(
-    prefix="/v1/models", tags=["models"], responses=error_responses(404, 503), route_class=StrictJSONRoute
+    prefix="/v1/models", tags=["models"], responses=error_responses(403, 404, 503), route_class=StrictJSONRoute
 )
 
 SVG_CACHE_SIZE = 128
