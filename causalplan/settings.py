@@ -107,6 +107,15 @@ class Settings(BaseSettings):
     max_labels_per_part: int = Field(default=16, ge=1, description="Most function labels one part may carry.")
     max_rules: int = Field(default=200, ge=1, description="Most rules a model may have.")
 
+    models_per_minute: int = Field(
+        default=60, ge=0, description="Models one client may store with POST /v1/models a minute (0: no limit)."
+    )
+    invalid_model_hours: float = Field(
+        default=168.0,
+        gt=0,
+        description="Hours an invalid model stored by POST /v1/models is kept (unless a trial uses it); then purged.",
+    )
+
     # The participant pages (causalplan.service.pages).
     demo_starts_per_minute: int = Field(
         default=10,

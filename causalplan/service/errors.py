@@ -224,6 +224,12 @@ class TooManyDemoStartsError(TryLaterError):
     code = "too_many_demo_starts"
 
 
+class TooManyModelsError(TryLaterError):
+    """One client stored more models with POST /v1/models this minute than the service allows."""
+
+    code = "too_many_models"
+
+
 class TooManyArrivalsError(TryLaterError):
     """One client arrived on public study links more often this minute than the service allows."""
 
