@@ -5,7 +5,7 @@ from __future__ import annotations
 import uuid
 from typing import Annotated, Any, Literal
 
-from pydantic import ConfigDict, Field
+from pydantic import ConfigDict, Field, StrictBool
 
 from causalplan.service.api.schemas.common import DiagnosticOut, InputModel, OutputModel, UtcDatetime
 
@@ -76,7 +76,7 @@ class RecruitmentIn(InputModel):
     )
     too_fast_seconds: int | None = Field(default=None, description="Flag as excluded who finishes faster than this.")
     demographics: list[str] = Field(default=[], max_length=10, description="Ids of the demographic questions to ask.")
-    require_platform_id: bool = Field(
+    require_platform_id: StrictBool = Field(
         default=False,
         description="Refuse arrivals without a crowd platform's ids (Prolific's PID and session, MTurk's worker).",
     )
