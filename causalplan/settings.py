@@ -107,6 +107,15 @@ class Settings(BaseSettings):
     max_labels_per_part: int = Field(default=16, ge=1, description="Most function labels one part may carry.")
     max_rules: int = Field(default=200, ge=1, description="Most rules a model may have.")
 
+    models_per_minute: int = Field(
+        default=60, ge=0, description="Models one client may store with POST /v1/models a minute (0: no limit)."
+    )
+    invalid_model_hours: float = Field(
+        default=168.0,
+        gt=0,
+        description="Hours an invalid model stored by POST /v1/models is kept (unless a trial uses it); then purged.",
+    )
+
     # The participant pages (causalplan.service.pages).
     demo_starts_per_minute: int = Field(
         default=10,
@@ -115,6 +124,30 @@ class Settings(BaseSettings):
     )
     demo_retention_hours: float = Field(
         default=24.0, gt=0, description="Hours a demo participant's work is kept after their last change; then purged."
+    )
+    arrivals_per_minute: int = Field(
+        default=30,
+        ge=0,
+        description="New arrivals one client may make on public study links a minute (0: no limit).",
+    )
+    undecided_arrival_hours: float = Field(
+        default=24.0,
+        gt=0,
+        description="Hours an arrival on a public study link is kept without a consent decision; then purged.",
+    )
+    place_start_minutes: float = Field(
+        default=15.0,
+        gt=0,
+        description="Minutes a participant admitted on a public link holds a place before saving anything.",
+    )
+    place_hold_hours: float = Field(
+        default=3.0, gt=0, description="Hours a participant who started holds a place after their last change."
+    )
+    over_admission: float = Field(
+        default=0.1,
+        ge=0,
+        le=1,
+        description="Fraction of a quota admitted beyond it while completions are under it (rounded down).",
     )
     robot_seconds: float = Field(
         default=240.0,

@@ -4,11 +4,39 @@ from __future__ import annotations
 
 import json
 import uuid
+from collections.abc import Iterator
+from datetime import timedelta
 from typing import Any
 
+import pytest
 from fastapi.testclient import TestClient
+from sqlalchemy import update
+from sqlalchemy.orm import Session
 
-from tests.service_fixtures import DESK_LAMP, FAILED_DESK_LAMP, error_of
+from causalplan.service.pages.upkeep import purge
+from causalplan.service.storage.records import ModelRecord, utc_now
+from tests.service_fixtures import (
+    AUTH,
+    DESK_LAMP,
+    FAILED_DESK_LAMP,
+    FLASHLIGHT_MAPPING,
+    error_of,
+    running_client,
+    services_of,
+    settings_for,
+    sqlite_url,
+)
+
+MODELS_PER_MINUTE = 3
+INVALID = {**DESK_LAMP, "rules": ["light CAUSES"]}
+
+
+@pytest.fixture(scope="module")
+def limited(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+    """An app that stores ``MODELS_PER_MINUTE`` models a minute per client."""
+    url = sqlite_url(tmp_path_factory.mktemp("db"))
+    with running_client(settings_for(url, models_per_minute=MODELS_PER_MINUTE, planning_workers=1)) as running:
+        yield running
 
 
 def test_a_valid_model_is_stored_with_its_report_and_links(client: TestClient) -> None:
@@ -186,3 +214,28 @@ def test_text_that_utf8_cannot_hold_is_stored_and_echoed_safely(client: TestClie
     assert [d["code"] for d in error["details"]["model"]["errors"]][:2] == ["invalid_character", "invalid_character"]
     kept = client.get(f"/v1/models/{error['details']['model_id']}").json()
     assert kept["model"]["functions"]["light_bulb"] == ["bad \ufffd label", "nul \ufffd label"]
+
+
+def test_one_client_storing_models_too_often_is_told_to_wait(limited: TestClient) -> None:
+    for _ in range(MODELS_PER_MINUTE):
+        assert limited.post("/v1/models", json=INVALID).status_code == 422
+    refused = limited.post("/v1/models", json=INVALID)
+    error = error_of(refused, 429)
+    assert error["code"] == "too_many_models" and int(refused.headers["retry-after"]) >= 1
+
+
+def test_invalid_models_expire_unless_a_trial_uses_them(client: TestClient) -> None:
+    alone = error_of(client.post("/v1/models", json=INVALID), 422)["details"]["model_id"]
+    valid = client.post("/v1/models", json=DESK_LAMP).json()["id"]
+    tried = error_of(client.post("/v1/transfers", json={"model": INVALID, "mapping": FLASHLIGHT_MAPPING}), 422)
+    trials = client.get("/v1/export", headers=AUTH).json()["trials"]
+    (used,) = [trial["model_id"] for trial in trials if trial["id"] == tried["details"]["trial_id"]]
+    services = services_of(client)
+    with Session(services.engine) as session:
+        old = utc_now() - timedelta(hours=services.settings.invalid_model_hours, minutes=1)
+        session.execute(update(ModelRecord).values(created_at=old))
+        session.commit()
+    purge(services)
+    assert client.get(f"/v1/models/{alone}").status_code == 404
+    assert client.get(f"/v1/models/{valid}").status_code == 200
+    assert client.get(f"/v1/models/{used}").status_code == 200  # its trial is a study's data

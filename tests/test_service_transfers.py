@@ -13,6 +13,7 @@ from tests.service_fixtures import (
     error_of,
     with_unique_effect,
 )
+from tests.web_flows import experiment, links
 
 VERDICT_FIELDS = {
     "verdict",
@@ -128,3 +129,16 @@ def test_unknown_planner_and_too_long_time_limit(client: TestClient) -> None:
     assert error_of(client.post("/v1/transfers", json={**body, "planner": "x"}), 422)["code"] == "unknown_planner"
     error = error_of(client.post("/v1/transfers", json={**body, "time_limit": 1000}), 422)
     assert error["code"] == "time_limit_too_long"
+
+
+def test_a_study_participants_id_cannot_be_claimed_by_an_anonymous_client(client: TestClient) -> None:
+    (participant,) = links(client, experiment(client)["id"])
+    body = {"model": DESK_LAMP, "mapping": FLASHLIGHT_MAPPING}
+    forged = client.post("/v1/transfers", json=body, headers={"X-Participant-Id": participant["id"]})
+    assert error_of(forged, 403)["code"] == "participant_id_reserved"
+    page_session = f"experiment:{participant['id']}"
+    assert error_of(client.post("/v1/transfers", json=body, headers={"X-Session-Id": page_session}), 403)
+    assert error_of(client.post("/v1/models", json=DESK_LAMP, headers={"X-Participant-Id": participant["id"]}), 403)
+    assert trials_of(client, participant["id"]) == []
+    exported = client.get("/v1/export", headers=AUTH).json()
+    assert participant["id"] not in {trial["participant_id"] for trial in exported["trials"]}

@@ -93,13 +93,14 @@ def test_of_two_arrivals_that_saw_the_last_place_only_one_takes_it(engine: Engin
         arrivals.set_quotas(first, experiment, {"near": 1})
         seen_by_first = choose(arrivals.places(first, experiment))
         seen_by_second = choose(arrivals.places(second, store.get_experiment(second, experiment_id)))
-        assert seen_by_first == seen_by_second == Place("near", 0, 1)
+        assert seen_by_first == seen_by_second == Place("near", 0, 1, admitted=0)
         assert seen_by_first is not None and seen_by_second is not None
         assert arrivals.take_place(first, experiment_id, seen_by_first)
         first.commit()
         assert not arrivals.take_place(second, experiment_id, seen_by_second)
         second.rollback()
-        assert arrivals.is_full(second, store.get_experiment(second, experiment_id))
+        # The number was taken (no participant stored here, so the place itself is not held).
+        assert arrivals.places(second, store.get_experiment(second, experiment_id))[0].admitted == 1
 
 
 def test_simultaneous_arrivals_never_exceed_the_quota(engine: Engine) -> None:
@@ -132,13 +133,21 @@ def test_simultaneous_arrivals_never_exceed_the_quota(engine: Engine) -> None:
         ]
 
 
-def test_the_same_platform_id_arrives_once_and_is_admitted_once(engine: Engine) -> None:
+def test_the_same_platform_session_arrives_once_and_is_admitted_once(engine: Engine) -> None:
     experiment_id = new_experiment(engine, ONE_CONDITION)
     visit = PlatformVisit("prolific", "5f1e2d3c4b5a697887766554", "study-1", "sess_9")
     first = admit_one(engine, experiment_id, visit)
-    again = admit_one(engine, experiment_id, PlatformVisit("prolific", "5f1e2d3c4b5a697887766554", "study-1", "s2"))
+    again = admit_one(engine, experiment_id, visit)
     assert first is not None and again is not None and first.id == again.id
     with Session(engine) as session:
         experiment = session.get(ExperimentRecord, experiment_id)
         assert experiment is not None
         assert [place.taken for place in arrivals.places(session, experiment)] == [1]
+
+
+def test_a_copied_platform_id_with_another_session_is_another_arrival(engine: Engine) -> None:
+    experiment_id = new_experiment(engine, ONE_CONDITION)
+    victim = PlatformVisit("prolific", "5f1e2d3c4b5a697887766554", "study-1", "sess_victim")
+    squatter = admit_one(engine, experiment_id, PlatformVisit("prolific", victim.participant, "study-1", "guess"))
+    own = admit_one(engine, experiment_id, victim)
+    assert squatter is not None and own is not None and squatter.id != own.id

@@ -5,21 +5,40 @@ from __future__ import annotations
 import json
 import re
 import uuid
+from collections.abc import Iterator
+from datetime import timedelta
 from pathlib import Path
 from typing import Any
 
 import pytest
 from click.testing import CliRunner
 from fastapi.testclient import TestClient
-from sqlalchemy import func, select
+from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
 
 from causalplan.cli import app
-from causalplan.service.storage.records import ArrivalRecord, ParticipantRecord
-from tests.service_fixtures import AUTH, services_of
+from causalplan.service.pages.upkeep import purge
+from causalplan.service.storage.records import ArrivalRecord, ParticipantRecord, utc_now
+from tests.service_fixtures import AUTH, RESEARCH_TOKEN, running_client, services_of, settings_for, sqlite_url
 from tests.web_flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, post
 
 WRONG_ANSWERS = {**TUTORIAL_ANSWERS, "answer:diffuse": "yes"}
+ARRIVALS_PER_MINUTE = 3
+
+
+@pytest.fixture(scope="module")
+def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+    """The module's app with no limit on arrivals (the tests arrive many times from one address)."""
+    with running_client(settings_for(sqlite_url(tmp_path_factory.mktemp("db")), arrivals_per_minute=0)) as running:
+        yield running
+
+
+@pytest.fixture(scope="module")
+def throttled(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+    """An app that lets one client arrive ``ARRIVALS_PER_MINUTE`` times a minute."""
+    url = sqlite_url(tmp_path_factory.mktemp("db"))
+    with running_client(settings_for(url, arrivals_per_minute=ARRIVALS_PER_MINUTE, planning_workers=1)) as running:
+        yield running
 
 
 def recruiting(client: TestClient, experiment_id: str, **settings: Any) -> dict[str, Any]:
@@ -60,6 +79,18 @@ def counts(client: TestClient, experiment_id: str) -> tuple[int, int]:
             select(func.count()).select_from(ParticipantRecord).where(ParticipantRecord.experiment_id == experiment)
         )
     return int(arrivals or 0), int(participants or 0)
+
+
+def age_participants(client: TestClient, experiment_id: str, minutes: float) -> None:
+    """Move the experiment's participants ``minutes`` into the past, as if that long had gone by."""
+    earlier = utc_now() - timedelta(minutes=minutes)
+    with Session(services_of(client).engine) as session:
+        session.execute(
+            update(ParticipantRecord)
+            .where(ParticipantRecord.experiment_id == uuid.UUID(experiment_id))
+            .values(created_at=earlier, started_at=earlier)
+        )
+        session.commit()
 
 
 def exported(client: TestClient, experiment_id: str, platform_ids: str = "plain") -> dict[str, Any]:
@@ -201,3 +232,103 @@ def test_the_crowds_model_waits_for_two_models(client: TestClient) -> None:
     assert "appears once two participants have written a model" in page.text
     refused = client.get(f"/research/experiments/{created['id']}/consensus.svg", headers=AUTH)
     assert refused.status_code == 422 and "There is no consensus to draw" in refused.text
+
+
+def test_a_bot_that_agrees_and_leaves_lets_its_place_go(client: TestClient) -> None:
+    created = experiment(client)
+    recruiting(client, created["id"], quotas={"near": 2})
+    for bot in range(2):
+        join(client, created["id"], prolific(f"bot-{bot}"))  # agrees, then never starts the work
+    assert "This study is full" in client.get(f"/s/{created['id']}", params=prolific("pid-real")).text
+    age_participants(client, created["id"], minutes=16)
+    code = join(client, created["id"], prolific("pid-real"))
+    assert client.get(f"/p/{code}").status_code == 200
+    places = recruiting(client, created["id"], quotas={"near": 2})["places"]
+    assert [(place["taken"], place["admitted"]) for place in places] == [(1, 3)]
+
+
+def test_completions_count_against_the_quota_with_a_bounded_over_admission(client: TestClient) -> None:
+    created = experiment(client)
+    recruiting(client, created["id"], quotas={"near": 10})
+    codes = [join(client, created["id"], prolific(f"pid-over-{n}")) for n in range(11)]  # 10 and 10 % more
+    assert "This study is full" in client.get(f"/s/{created['id']}", params=prolific("pid-over-11")).text
+    complete(client, codes[0])
+    age_participants(client, created["id"], minutes=16)  # the ten others never started
+    for n in range(11, 21):  # one finished and ten at work
+        join(client, created["id"], prolific(f"pid-over-{n}"))
+    assert "This study is full" in client.get(f"/s/{created['id']}", params=prolific("pid-over-21")).text
+    places = recruiting(client, created["id"], quotas={"near": 10})["places"]
+    assert [(place["taken"], place["finished"], place["extra"]) for place in places] == [(11, 1, 1)]
+
+
+def test_one_client_arriving_too_often_is_told_to_wait(throttled: TestClient) -> None:
+    created = experiment(throttled)
+    for n in range(ARRIVALS_PER_MINUTE):
+        assert throttled.get(f"/s/{created['id']}", params=prolific(f"pid-fast-{n}")).status_code == 200
+    refused = throttled.get(f"/s/{created['id']}", params=prolific("pid-fast-again"))
+    assert refused.status_code == 429 and int(refused.headers["retry-after"]) >= 1
+    assert "too many" in refused.text.lower()
+    assert counts(throttled, created["id"]) == (ARRIVALS_PER_MINUTE, 0)
+
+
+def test_a_study_that_requires_a_platform_id_refuses_anonymous_arrivals(client: TestClient) -> None:
+    created = experiment(client)
+    settings = recruiting(client, created["id"], require_platform_id=True)
+    assert settings["require_platform_id"] is True
+    anonymous = client.get(f"/s/{created['id']}")
+    assert anonymous.status_code == 403 and "Prolific" in anonymous.text
+    assert counts(client, created["id"]) == (0, 0)
+    join(client, created["id"], prolific("pid-required"))
+    assert counts(client, created["id"]) == (1, 1)
+
+
+def test_the_research_form_sets_and_shows_the_platform_id_requirement(client: TestClient) -> None:
+    created = experiment(client)
+    post(client, "/research/login", {"token": RESEARCH_TOKEN, "next": "/research"})
+    form = {"consent_text": "", "quota:0": "", "require_platform_id": "yes"}
+    saved = post(client, f"/research/experiments/{created['id']}/recruitment", form)
+    assert saved.headers["location"].endswith("#recruiting")
+    assert client.get(f"/v1/experiments/{created['id']}/recruitment", headers=AUTH).json()["require_platform_id"]
+    page = client.get(f"/research/experiments/{created['id']}")
+    assert 'name="require_platform_id" value="yes" checked' in page.text
+    client.cookies.clear()
+
+
+def test_undecided_arrivals_are_purged_after_the_stated_time(client: TestClient) -> None:
+    created = experiment(client)
+    client.get(f"/s/{created['id']}", params=prolific("pid-undecided"))
+    client.get(f"/s/{created['id']}", params=prolific("pid-declined-old"))
+    declined = client.get(f"/s/{created['id']}", params=prolific("pid-declined-old"))
+    post(client, f"/s/{created['id']}/consent", {"arrival": consent_code(declined.text), "decision": "decline"}, 200)
+    join(client, created["id"], prolific("pid-admitted-old"))
+    services = services_of(client)
+    hours = services.settings.undecided_arrival_hours
+    with Session(services.engine) as session:
+        session.execute(
+            update(ArrivalRecord)
+            .where(ArrivalRecord.experiment_id == uuid.UUID(created["id"]))
+            .values(created_at=utc_now() - timedelta(hours=hours, minutes=1))
+        )
+        session.commit()
+    client.get(f"/s/{created['id']}", params=prolific("pid-undecided-new"))
+    purge(services)
+    stored = recruiting(client, created["id"])["arrivals"]
+    assert stored == {"arrived": 3, "consented": 1, "declined": 1, "undecided": 1}  # the old undecided one went
+
+
+def test_a_bot_with_a_victims_platform_id_neither_declines_for_them_nor_takes_their_record(
+    client: TestClient,
+) -> None:
+    created = experiment(client)
+    victim = prolific("pid-victim")
+    first_bot = client.get(f"/s/{created['id']}", params={**victim, "SESSION_ID": "bot-guess-1"})
+    post(client, f"/s/{created['id']}/consent", {"arrival": consent_code(first_bot.text), "decision": "decline"}, 200)
+    arriving = client.get(f"/s/{created['id']}", params=victim)
+    assert "You chose not to take part" not in arriving.text and 'name="arrival"' in arriving.text
+    bot_code = join(client, created["id"], {**victim, "SESSION_ID": "bot-guess-2"})
+    victim_code = join(client, created["id"], victim)
+    assert victim_code != bot_code
+    back = client.get(f"/s/{created['id']}", params=victim, follow_redirects=False)
+    assert back.status_code == 303 and back.headers["location"] == f"/p/{victim_code}"
+    copied = client.get(f"/s/{created['id']}", params={**victim, "SESSION_ID": "bot-guess-3"}, follow_redirects=False)
+    assert copied.status_code == 200 and f"/p/{victim_code}" not in copied.text and f"/p/{bot_code}" not in copied.text

@@ -16,9 +16,10 @@ from sqlalchemy.orm import Session
 
 from causalplan.objects.catalog import Catalog
 from causalplan.service.answers import Answerer, ResultCache
-from causalplan.service.errors import NotAuthenticatedError, ResearchDisabledError
+from causalplan.service.errors import NotAuthenticatedError, ParticipantIdReservedError, ResearchDisabledError
 from causalplan.service.pool.pool import PlannerPool
-from causalplan.service.storage.crud import ClientIds
+from causalplan.service.storage.crud import PAGE_SESSION_PREFIX, ClientIds
+from causalplan.service.storage.experiments import is_participant
 from causalplan.service.storage.records import MAX_CLIENT_ID_LENGTH
 from causalplan.service.storage.throttle import FailedAttempts
 from causalplan.settings import Settings
@@ -101,15 +102,42 @@ CatalogDep = Annotated[Catalog, Depends(get_catalog)]
 SessionDep = Annotated[Session, Depends(get_session)]
 
 
-async def get_client_ids(
+def get_client_ids(
+    services: ServicesDep,
     x_participant_id: Annotated[
         str | None,
-        Header(max_length=MAX_CLIENT_ID_LENGTH, description="Who submits (a study participant); stored as given."),
+        Header(
+            max_length=MAX_CLIENT_ID_LENGTH,
+            description="Who submits, in the client's own words; stored as given. "
+            "The id of a participant of a study on this service is refused (403): their pages store their work.",
+        ),
     ] = None,
     x_session_id: Annotated[
-        str | None, Header(max_length=MAX_CLIENT_ID_LENGTH, description="The client's session; stored as given.")
+        str | None,
+        Header(
+            max_length=MAX_CLIENT_ID_LENGTH,
+            description=f"The client's session; stored as given ('{PAGE_SESSION_PREFIX}...' is the pages' own).",
+        ),
     ] = None,
 ) -> ClientIds:
+    """Return who the client says it is; a study participant's id, or their pages' session, is not the client's to say.
+
+    A participant's trials are attributed only by their own pages (``pages.participation``),
+    so an anonymous request can never store a trial, or a model, under a participant.
+    """
+    if x_session_id and x_session_id.startswith(PAGE_SESSION_PREFIX):
+        raise ParticipantIdReservedError(
+            f"X-Session-Id may not begin with '{PAGE_SESSION_PREFIX}': those sessions are the participant pages' own.",
+            details={"header": "X-Session-Id"},
+        )
+    if x_participant_id:
+        with open_session(services) as session:
+            if is_participant(session, x_participant_id):
+                raise ParticipantIdReservedError(
+                    "X-Participant-Id names a participant of a study here: "
+                    "their work is stored only from their own participant pages.",
+                    details={"header": "X-Participant-Id"},
+                )
     return ClientIds(x_participant_id or None, x_session_id or None)
 
 

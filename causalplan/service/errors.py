@@ -8,7 +8,12 @@ from __future__ import annotations
 
 from causalplan.errors import CatalogError, CausalPlanError, InputFileError, PlannerUnavailableError, UnknownObjectError
 from causalplan.limits import LimitExceededError
-from causalplan.studies.errors import InvalidExperimentError, InvalidRecruitmentError, StepLockedError
+from causalplan.studies.errors import (
+    InvalidExperimentError,
+    InvalidRecruitmentError,
+    PlatformIdRequiredError,
+    StepLockedError,
+)
 
 
 class ServiceError(CausalPlanError):
@@ -212,10 +217,29 @@ class CrossSiteRequestError(ServiceError):
     status_code = 403
 
 
+class ParticipantIdReservedError(ServiceError):
+    """A client named a study participant (or their pages' session) as itself: only their own pages may."""
+
+    code = "participant_id_reserved"
+    status_code = 403
+
+
 class TooManyDemoStartsError(TryLaterError):
     """One client started more demo participants this minute than the service allows."""
 
     code = "too_many_demo_starts"
+
+
+class TooManyModelsError(TryLaterError):
+    """One client stored more models with POST /v1/models this minute than the service allows."""
+
+    code = "too_many_models"
+
+
+class TooManyArrivalsError(TryLaterError):
+    """One client arrived on public study links more often this minute than the service allows."""
+
+    code = "too_many_arrivals"
 
 
 _STATUS_BY_CODE = {
@@ -234,6 +258,7 @@ _LOWER_STATUS: dict[type[CausalPlanError], int] = {
     InvalidExperimentError: 422,
     InvalidRecruitmentError: 422,
     StepLockedError: 409,
+    PlatformIdRequiredError: 403,
 }
 
 

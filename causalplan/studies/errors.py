@@ -30,3 +30,9 @@ class StepLockedError(StudyError):
     """The participant's work on this step is finished (or not reached yet), so it cannot change."""
 
     code = "step_locked"
+
+
+class PlatformIdRequiredError(StudyError):
+    """The study takes only arrivals from a crowd platform, and the link carried no platform ids."""
+
+    code = "platform_id_required"

@@ -92,6 +92,8 @@ class Recruitment:
     """Flag as excluded who finishes in fewer seconds than this (None: never)."""
     demographics: tuple[str, ...] = field(default=())
     """Ids of ``DEMOGRAPHICS`` asked at the end, in this order."""
+    require_platform_id: bool = False
+    """Refuse arrivals without a platform's ids (Prolific's PID and session, MTurk's worker and assignment)."""
 
     def as_dict(self) -> dict[str, Any]:
         return {**vars(self), "demographics": list(self.demographics)}
@@ -109,6 +111,7 @@ class Recruitment:
             data.get("comprehension_tries"),
             data.get("too_fast_seconds"),
             tuple(data.get("demographics", ())),
+            bool(data.get("require_platform_id", False)),
         )
 
     def questions(self) -> list[DemographicQuestion]:
@@ -148,7 +151,12 @@ def read_recruitment(values: Mapping[str, Any]) -> Recruitment:
             "The recruiting settings are not valid: " + " ".join(problems), details={"errors": problems}
         )
     return Recruitment(
-        consent, **codes, comprehension_tries=tries, too_fast_seconds=too_fast, demographics=demographics
+        consent,
+        **codes,
+        comprehension_tries=tries,
+        too_fast_seconds=too_fast,
+        demographics=demographics,
+        require_platform_id=bool(values.get("require_platform_id", False)),
     )
 
 

@@ -18,7 +18,7 @@ from causalplan.service.deps import Services
 from causalplan.service.documents import first_errors
 from causalplan.service.errors import InvalidModelError
 from causalplan.service.storage import crud
-from causalplan.service.storage.crud import ClientIds
+from causalplan.service.storage.crud import PAGE_SESSION_PREFIX, ClientIds
 from causalplan.service.storage.experiments import ParticipantJourney
 from causalplan.service.storage.records import ParticipantTrialRecord, utc_now
 from causalplan.studies.errors import StepLockedError
@@ -27,7 +27,7 @@ from causalplan.studies.steps import MappingCheck, ParticipantModel, Stage, mode
 
 def client_ids(journey: ParticipantJourney) -> ClientIds:
     """Return who the stored records are from: the participant's id and the experiment's."""
-    return ClientIds(str(journey.participant.id), f"experiment:{journey.participant.experiment_id}")
+    return ClientIds(str(journey.participant.id), f"{PAGE_SESSION_PREFIX}{journey.participant.experiment_id}")
 
 
 def invalid_model_error(check: LoadedModel) -> InvalidModelError:

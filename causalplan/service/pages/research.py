@@ -238,6 +238,7 @@ async def set_recruitment(
                 **{name: form.text(name, "", max_length=32).strip() for name in CODE_FIELDS},
                 "comprehension_tries": _whole_number(form, "comprehension_tries", "The number of tries"),
                 "too_fast_seconds": _whole_number(form, "too_fast_seconds", "The too-fast threshold"),
+                "require_platform_id": form.text("require_platform_id", "", max_length=8) == "yes",
                 "demographics": form.texts("demographics", max_count=len(DEMOGRAPHICS), max_length=40),
                 "quotas": {
                     name: _whole_number(form, f"quota:{index}", f"The quota of condition '{name}'")

@@ -3,8 +3,14 @@
 The link is what a researcher puts on Prolific or in an MTurk external question. Arriving
 stores only the arrival (with the platform's ids); consenting admits the person to the open
 condition with the fewest participants and sends them to their own participant pages;
-declining ends politely, with the platform's no-consent code. The same platform id coming
-back finds its own arrival: consent again if undecided, their progress if admitted.
+declining ends politely, with the platform's no-consent code. The same platform session (the
+platform id with Prolific's SESSION_ID or MTurk's assignmentId) coming back finds its own
+arrival: consent again if undecided, their progress if admitted. The platform id alone finds
+nothing, so a bot that copies someone's PROLIFIC_PID cannot decide for them or take their record.
+
+In the open: a client may make ``arrivals_per_minute`` new arrivals a minute; a study may
+refuse arrivals without platform ids; and an admitted person holds a place only while at work
+(``studies.assignment.PlaceRules``), so a bot that agrees and leaves cannot keep a study full.
 """
 
 from __future__ import annotations
@@ -14,14 +20,18 @@ from typing import Any
 
 from fastapi import APIRouter, Request, Response
 
-from causalplan.service.deps import SessionDep
-from causalplan.service.errors import InvalidFormError
+from causalplan.service.deps import ServicesDep, SessionDep, client_address
+from causalplan.service.errors import InvalidFormError, TooManyArrivalsError
 from causalplan.service.pages.forms import read_form
 from causalplan.service.pages.templating import PageRoute, redirect, render
 from causalplan.service.storage import arrivals
 from causalplan.service.storage import experiments as store
 from causalplan.service.storage.records import ExperimentRecord
+from causalplan.service.storage.throttle import PerMinute
+from causalplan.settings import Settings
 from causalplan.studies import recruitment
+from causalplan.studies.assignment import PlaceRules
+from causalplan.studies.errors import PlatformIdRequiredError
 from causalplan.studies.recruitment import MTURK_FRAME_ORIGINS, PlatformVisit, Recruitment, finish, read_visit
 
 router = APIRouter(prefix="/s/{experiment_id}", route_class=PageRoute, include_in_schema=False)
@@ -38,20 +48,37 @@ def _full(request: Request, platform: str) -> Response:
     )
 
 
+def place_rules(settings: Settings) -> PlaceRules:
+    """Return how long an admitted participant holds a place, and the over-admission, as the settings say."""
+    return PlaceRules(settings.place_start_minutes, settings.place_hold_hours, settings.over_admission)
+
+
+def _require_platform(recruiting: Recruitment, platform: str) -> None:
+    if recruiting.require_platform_id and platform == "direct":
+        raise PlatformIdRequiredError(
+            "This study is open only to participants of a crowd platform: "
+            "please open it from its page on Prolific or Amazon Mechanical Turk."
+        )
+
+
 @router.get("")
-def arrive(request: Request, experiment_id: uuid.UUID, session: SessionDep) -> Response:
+def arrive(request: Request, experiment_id: uuid.UUID, session: SessionDep, services: ServicesDep) -> Response:
     experiment = store.get_experiment(session, experiment_id)
     visit = read_visit(dict(request.query_params))
     recruiting = Recruitment.from_dict(experiment.recruitment)
     if visit.is_preview:  # MTurk's preview: show what the study is, store nothing
         return _consent_page(request, experiment, visit, recruiting, None)
+    _require_platform(recruiting, visit.platform)
     found = arrivals.find_arrival(session, experiment.id, visit)
     if found is not None and found.participant is not None:
         return redirect(f"/p/{found.participant.code}")  # they come back to their own progress
     if found is not None and found.consented is False:
         return _declined(request, found, recruiting)
-    if found is None and arrivals.is_full(session, experiment):
+    if found is None and arrivals.is_full(session, experiment, place_rules(services.settings)):
         return _full(request, visit.platform)
+    if found is None:  # a new row: counted against the client's arrivals this minute
+        limit = PerMinute(services.engine, "arrival", services.settings.arrivals_per_minute, TooManyArrivalsError)
+        limit.admit(client_address(request, services.settings))
     return _consent_page(request, experiment, visit, recruiting, found or arrivals.arrive(session, experiment, visit))
 
 
@@ -87,7 +114,7 @@ def _declined(request: Request, arrival: Any, recruiting: Recruitment) -> Respon
 
 
 @router.post("/consent")
-async def consent(request: Request, experiment_id: uuid.UUID, session: SessionDep) -> Response:
+async def consent(request: Request, experiment_id: uuid.UUID, session: SessionDep, services: ServicesDep) -> Response:
     experiment = store.get_experiment(session, experiment_id)
     form = await read_form(request)
     arrival = arrivals.arrival_by_code(session, experiment.id, form.text("arrival", "", max_length=64))
@@ -101,7 +128,8 @@ async def consent(request: Request, experiment_id: uuid.UUID, session: SessionDe
     if arrival.consented is False or decision == "decline":
         arrivals.decline(session, arrival)
         return _declined(request, arrival, Recruitment.from_dict(experiment.recruitment))
-    participant = arrivals.admit(session, experiment, arrival)
+    _require_platform(Recruitment.from_dict(experiment.recruitment), arrival.platform)
+    participant = arrivals.admit(session, experiment, arrival, place_rules(services.settings))
     if participant is None:
         return _full(request, arrival.platform)
     return redirect(f"/p/{participant.code}")

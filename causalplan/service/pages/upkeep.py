@@ -1,6 +1,8 @@
 """What the web pages do beside requests, in one background thread for the app's life.
 
-At start and then periodically: purge the demo participants left alone too long, forget the
+At start and then periodically: purge the demo participants left alone too long, the arrivals
+on public study links that never decided on consent (``undecided_arrival_hours``), the invalid
+models of ``POST /v1/models`` that no trial uses (``invalid_model_hours``), and forget the
 revocations of research cookies that have lapsed anyway. Once, after start: draw the pictures
 of the catalog objects' likely plans (``ahead``). The thread starts after the service is up,
 so none of this delays start-up, and requests never wait for it.
@@ -20,6 +22,8 @@ from fastapi import FastAPI
 from causalplan.errors import CausalPlanError
 from causalplan.service.deps import Services, open_session
 from causalplan.service.pages import ahead
+from causalplan.service.storage.arrivals import purge_undecided
+from causalplan.service.storage.crud import purge_invalid_models
 from causalplan.service.storage.demo import DemoStarts, purge_demo_participants
 from causalplan.service.storage.records import utc_now
 from causalplan.service.storage.revocations import forget_lapsed_revocations
@@ -27,24 +31,32 @@ from causalplan.service.storage.revocations import forget_lapsed_revocations
 logger = logging.getLogger(__name__)
 
 LONGEST_PURGE_INTERVAL_SECONDS = 3600.0
-"""The purge runs at least this often, and four times per retention period when that is shorter."""
+"""The purge runs at least this often, and four times per (shortest) retention period when that is shorter."""
 FIRST_OBJECTS = ("desk_lamp", "flashlight")
 """Drawn ahead first: the demo's training objects."""
 
 
 def purge_interval(services: Services) -> float:
     """Return the seconds between two purges."""
-    return min(LONGEST_PURGE_INTERVAL_SECONDS, services.settings.demo_retention_hours * 3600 / 4)
+    settings = services.settings
+    shortest = min(settings.demo_retention_hours, settings.undecided_arrival_hours, settings.invalid_model_hours)
+    return min(LONGEST_PURGE_INTERVAL_SECONDS, shortest * 3600 / 4)
 
 
 def purge(services: Services) -> int:
-    """Purge the demo participants past the retention age and lapsed revocations; return the participants purged."""
+    """Purge old demo participants, undecided arrivals, unused invalid models and lapsed revocations.
+
+    Return the demo participants purged.
+    """
     now = utc_now()
+    settings = services.settings
     with open_session(services) as session:
-        purged = purge_demo_participants(session, now - timedelta(hours=services.settings.demo_retention_hours))
+        purged = purge_demo_participants(session, now - timedelta(hours=settings.demo_retention_hours))
+        arrivals = purge_undecided(session, now - timedelta(hours=settings.undecided_arrival_hours))
+        models = purge_invalid_models(session, now - timedelta(hours=settings.invalid_model_hours))
         forget_lapsed_revocations(session, now)
-    if purged:
-        logger.info("purged %d demo participants", purged)
+    if purged or arrivals or models:
+        logger.info("purged %d demo participants, %d undecided arrivals, %d invalid models", purged, arrivals, models)
     return purged
 
 

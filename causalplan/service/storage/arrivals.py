@@ -1,17 +1,21 @@
 """The public study link's records: arrivals, the places of each condition, consent, and exclusions.
 
-An arrival is admitted (on consent) to the open condition with the fewest places taken, and
+An arrival is admitted (on consent) to the open condition with the fewest places held, and
 numbered within it, which picks its object orders from the Latin squares: conditions and
-orders stay balanced as people come. A place is taken by a compare-and-set update
-(``taken = n + 1 where taken = n``) in the transaction that stores the participant, so two
-arrivals, even on two replicas over PostgreSQL, never take the same place or one over the quota.
+orders stay balanced as people come. Places held are counted from the participants (finished,
+or at work lately: ``studies.assignment.PlaceRules``); admissions are counted in
+``study_places.taken`` by a compare-and-set update (``taken = n + 1 where taken = n``) in the
+transaction that stores the participant. That update serialises the admissions of a condition,
+so two arrivals, even on two replicas over PostgreSQL, never take the same number, and the
+second counts the places held after the first is stored: never one over the bound.
 """
 
 from __future__ import annotations
 
 import uuid
+from datetime import datetime
 
-from sqlalchemy import func, select, update
+from sqlalchemy import and_, case, delete, func, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -26,15 +30,39 @@ from causalplan.service.storage.records import (
     StudyPlaceRecord,
     utc_now,
 )
-from causalplan.studies.assignment import Place, choose
+from causalplan.studies.assignment import Place, PlaceRules, choose
 from causalplan.studies.design import Condition, Design
 from causalplan.studies.recruitment import PlatformVisit
+from causalplan.studies.steps import Stage
 
 MAX_CLAIM_ATTEMPTS = 50
 """Tries to take a place while others take them at the same moment (each lost race means one was taken)."""
+DEFAULT_RULES = PlaceRules()
 
 
-def places(session: Session, experiment: ExperimentRecord) -> list[Place]:
+def held_places(
+    session: Session, experiment_id: uuid.UUID, rules: PlaceRules, now: datetime
+) -> dict[str, tuple[int, int]]:
+    """Return, per condition, the places held (finished or at work lately) and the participants who finished."""
+    participant = ParticipantRecord
+    finished = participant.stage == Stage.DONE.value
+    at_work = and_(
+        participant.finished_at.is_(None),
+        or_(
+            and_(participant.updated_at.is_(None), participant.created_at > now - rules.start),
+            participant.updated_at > now - rules.hold,
+        ),
+    )
+    query = (
+        select(participant.condition, func.count(), func.sum(case((finished, 1), else_=0)))
+        .where(participant.experiment_id == experiment_id, or_(finished, at_work))
+        .group_by(participant.condition)
+    )
+    with storage_errors(session):
+        return {condition: (int(held), int(done or 0)) for condition, held, done in session.execute(query)}
+
+
+def places(session: Session, experiment: ExperimentRecord, rules: PlaceRules = DEFAULT_RULES) -> list[Place]:
     """Return each condition's places, in the design's order (rows made on first use)."""
     design = Design.from_dict(experiment.design)
     query = select(StudyPlaceRecord).where(StudyPlaceRecord.experiment_id == experiment.id)
@@ -51,9 +79,14 @@ def places(session: Session, experiment: ExperimentRecord) -> list[Place]:
             except IntegrityError:  # another arrival made them at the same moment: theirs are as good
                 session.rollback()
             rows = {row.condition: row for row in session.scalars(query.execution_options(populate_existing=True))}
-    return [
-        Place(condition.name, rows[condition.name].taken, rows[condition.name].quota) for condition in design.conditions
-    ]
+    held = held_places(session, experiment.id, rules, utc_now())
+    found = []
+    for condition in design.conditions:
+        row = rows[condition.name]
+        taken, finished = held.get(condition.name, (0, 0))
+        extra = 0 if row.quota is None else rules.extra(row.quota)
+        found.append(Place(condition.name, taken, row.quota, finished, extra, row.taken))
+    return found
 
 
 def set_quotas(session: Session, experiment: ExperimentRecord, quotas: dict[str, int | None]) -> None:
@@ -76,35 +109,43 @@ def take_place(session: Session, experiment_id: uuid.UUID, place: Place) -> bool
         .where(
             StudyPlaceRecord.experiment_id == experiment_id,
             StudyPlaceRecord.condition == place.condition,
-            StudyPlaceRecord.taken == place.taken,
+            StudyPlaceRecord.taken == place.number,
         )
-        .values(taken=place.taken + 1)
+        .values(taken=place.number + 1)
     )
     return bool(taken.rowcount == 1)  # type: ignore[attr-defined]  # a CursorResult for an UPDATE
 
 
-def claim_place(session: Session, experiment: ExperimentRecord) -> tuple[Condition, int] | None:
+def claim_place(
+    session: Session, experiment: ExperimentRecord, rules: PlaceRules = DEFAULT_RULES
+) -> tuple[Condition, int] | None:
     """Take a place (uncommitted, in the session's transaction): its condition and number; None when full."""
     design = Design.from_dict(experiment.design)
     for _ in range(MAX_CLAIM_ATTEMPTS):
-        place = choose(places(session, experiment))
+        place = choose(places(session, experiment, rules))
         if place is None:
             return None
         with storage_errors(session):
             if take_place(session, experiment.id, place):
-                return design.condition(place.condition), place.taken
+                return design.condition(place.condition), place.number
             session.rollback()
     raise StorageError("Too many people are starting the study at this moment; please reload the page.")
 
 
-def is_full(session: Session, experiment: ExperimentRecord) -> bool:
+def is_full(session: Session, experiment: ExperimentRecord, rules: PlaceRules = DEFAULT_RULES) -> bool:
     """Return whether every condition has reached its quota."""
-    return choose(places(session, experiment)) is None
+    return choose(places(session, experiment, rules)) is None
 
 
 def find_arrival(session: Session, experiment_id: uuid.UUID, visit: PlatformVisit) -> ArrivalRecord | None:
-    """Return the earlier arrival of the same platform id on this experiment (None: first time, or no id)."""
-    if visit.participant is None:
+    """Return the earlier arrival of the same platform session on this experiment (None: first time, or no ids).
+
+    Both the platform id and its session must match: a platform id is easy to copy (it is in
+    every link of that person), the session (Prolific's ``SESSION_ID``, MTurk's
+    ``assignmentId``) only the platform's link to that person carries. So whoever arrives with
+    another's platform id alone neither decides for them nor is sent to their record.
+    """
+    if visit.participant is None or visit.session is None:
         return None
     with storage_errors(session):
         return session.scalars(
@@ -112,12 +153,13 @@ def find_arrival(session: Session, experiment_id: uuid.UUID, visit: PlatformVisi
                 ArrivalRecord.experiment_id == experiment_id,
                 ArrivalRecord.platform == visit.platform,
                 ArrivalRecord.platform_id == visit.participant,
+                ArrivalRecord.platform_session == visit.session,
             )
         ).first()
 
 
 def arrive(session: Session, experiment: ExperimentRecord, visit: PlatformVisit) -> ArrivalRecord:
-    """Return this visit's arrival: the one stored for its platform id, or a new one (all that precedes consent)."""
+    """Return this visit's arrival: the one stored for its platform session, or a new one (before consent)."""
     found = find_arrival(session, experiment.id, visit)
     if found is not None:
         return found
@@ -155,11 +197,13 @@ def arrival_by_code(session: Session, experiment_id: uuid.UUID, code: str) -> Ar
         ).first()
 
 
-def admit(session: Session, experiment: ExperimentRecord, arrival: ArrivalRecord) -> ParticipantRecord | None:
+def admit(
+    session: Session, experiment: ExperimentRecord, arrival: ArrivalRecord, rules: PlaceRules = DEFAULT_RULES
+) -> ParticipantRecord | None:
     """Record consent and make the arrival a participant in the emptiest open condition; None when the study is full."""
     if arrival.participant is not None:
         return arrival.participant
-    claimed = claim_place(session, experiment)
+    claimed = claim_place(session, experiment, rules)
     if claimed is None:
         return None
     condition, ordinal = claimed
@@ -183,6 +227,23 @@ def decline(session: Session, arrival: ArrivalRecord) -> None:
     arrival.consented = False
     arrival.decided_at = utc_now()
     store.save(session, arrival)
+
+
+def purge_undecided(session: Session, arrived_before: datetime) -> int:
+    """Delete the arrivals that made no consent decision and came before ``arrived_before``; return how many.
+
+    Nothing else was stored about them; one who comes back later simply arrives anew.
+    """
+    with storage_errors(session):
+        purged = session.execute(
+            delete(ArrivalRecord).where(
+                ArrivalRecord.consented.is_(None),
+                ArrivalRecord.participant_id.is_(None),
+                ArrivalRecord.created_at < arrived_before,
+            )
+        )
+        session.commit()
+    return int(purged.rowcount)  # type: ignore[attr-defined]  # a CursorResult for a DELETE
 
 
 def exclusion(participant: ParticipantRecord, reason: str, detail: str) -> ExclusionRecord:

@@ -14,15 +14,22 @@ import uuid
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
+from datetime import datetime
 from typing import Any
 
-from sqlalchemy import Engine, func, select
+from sqlalchemy import Engine, delete, func, select
 from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session
 
 from causalplan.inputs import clean_text
 from causalplan.service.errors import InvalidRequestError, ModelNotFoundError, StorageError
-from causalplan.service.storage.records import MAX_CLIENT_ID_LENGTH, ModelRecord, TrialRecord, utc_now
+from causalplan.service.storage.records import (
+    MAX_CLIENT_ID_LENGTH,
+    ModelRecord,
+    ParticipantRecord,
+    TrialRecord,
+    utc_now,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -31,9 +38,13 @@ MAX_NESTING = 16
 _SHORT_TEXT = 200
 
 
+PAGE_SESSION_PREFIX = "experiment:"
+"""The participant pages store a participant's records under the session ``experiment:<id>``."""
+
+
 @dataclass(frozen=True)
 class ClientIds:
-    """Who sent a request, as the client says (``X-Participant-Id``, ``X-Session-Id``)."""
+    """Who sent a request: as the client says (``X-Participant-Id``, ``X-Session-Id``), or a participant's pages."""
 
     participant_id: str | None = None
     session_id: str | None = None
@@ -184,3 +195,23 @@ def all_records(session: Session) -> tuple[list[ModelRecord], list[TrialRecord]]
         models = session.scalars(select(ModelRecord).order_by(ModelRecord.created_at, ModelRecord.id)).all()
         trials = session.scalars(select(TrialRecord).order_by(TrialRecord.created_at, TrialRecord.id)).all()
     return list(models), list(trials)
+
+
+def purge_invalid_models(session: Session, stored_before: datetime) -> int:
+    """Delete the invalid models stored before ``stored_before`` that no trial or participant uses; return how many.
+
+    A model that a trial was run with stays as long as its trial (it is a study's data).
+    """
+    used_by_trial = select(TrialRecord.id).where(TrialRecord.model_id == ModelRecord.id).exists()
+    used_by_participant = select(ParticipantRecord.id).where(ParticipantRecord.model_id == ModelRecord.id).exists()
+    with storage_errors(session):
+        purged = session.execute(
+            delete(ModelRecord).where(
+                ModelRecord.is_valid.is_(False),
+                ModelRecord.created_at < stored_before,
+                ~used_by_trial,
+                ~used_by_participant,
+            )
+        )
+        session.commit()
+    return int(purged.rowcount)  # type: ignore[attr-defined]  # a CursorResult for a DELETE

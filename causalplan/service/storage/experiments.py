@@ -170,6 +170,16 @@ def participant_record(
     )
 
 
+def is_participant(session: Session, claimed: str) -> bool:
+    """Return whether ``claimed`` (an id a client sent) is the id of a study participant."""
+    try:
+        participant_id = uuid.UUID(claimed)
+    except ValueError:
+        return False
+    with storage_errors(session):
+        return session.scalar(select(ParticipantRecord.id).where(ParticipantRecord.id == participant_id)) is not None
+
+
 def participant_by_code(session: Session, code: str) -> ParticipantRecord:
     """Return the participant of a link code; ParticipantNotFoundError when the code is not one."""
     record = None

@@ -186,12 +186,16 @@ class ArrivalRecord(Base):
     """One arrival on an experiment's public link, with the platform's ids and the consent decision.
 
     Before consent, this row is all that is stored about a person. ``code`` is the opaque secret
-    the consent form sends back; one platform id arrives once per experiment (coming back finds it).
+    the consent form sends back; one platform session (the platform id with Prolific's
+    ``SESSION_ID`` or MTurk's ``assignmentId``) arrives once per experiment, and coming back with
+    both finds it: the platform id alone, which anyone may copy, finds nothing.
     """
 
     __tablename__ = "study_arrivals"
     __table_args__ = (
-        UniqueConstraint("experiment_id", "platform", "platform_id", name="uq_study_arrivals_platform_id"),
+        UniqueConstraint(
+            "experiment_id", "platform", "platform_id", "platform_session", name="uq_study_arrivals_platform_session"
+        ),
     )
 
     id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)

@@ -6,7 +6,8 @@ otherwise it raises ``TooManyAttemptsError`` (429, ``Retry-After``) without comp
 right guess during a lockout is refused too. Successes are not counted.
 
 ``WindowCounter.admit`` counts one event of a client in the current fixed window and says
-whether the window still had room (the demo's start limit).
+whether the window still had room (the demo's start limit); ``PerMinute`` raises a 429 error
+when it had not (arrivals on a public study link, stored models).
 
 Both live in tables (``failed_attempts``, ``window_counts``) rather than in process memory, so
 several ``causalplan serve`` replicas behind a load balancer hold one count: a guesser cannot
@@ -29,7 +30,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from causalplan.inputs import clean_text
-from causalplan.service.errors import TooManyAttemptsError
+from causalplan.service.errors import TooManyAttemptsError, TryLaterError
 from causalplan.service.storage.crud import storage_errors
 from causalplan.service.storage.records import MAX_CLIENT_ID_LENGTH, FailedAttemptRecord, WindowCountRecord
 
@@ -176,3 +177,30 @@ class WindowCounter:
             if counted:
                 return None
             return existing or self.per_window, max(1, math.ceil(ends_at - now))
+
+
+class PerMinute:
+    """At most ``per_minute`` events of each client a minute (0: no limit); beyond, ``refuse`` makes the 429 error."""
+
+    def __init__(
+        self,
+        engine: Engine,
+        scope: str,
+        per_minute: int,
+        refuse: Callable[[str, int], TryLaterError],
+        clock: Callable[[], float] = time.time,
+    ) -> None:
+        self.per_minute = per_minute
+        self._refuse = refuse
+        self._counter = WindowCounter(engine, scope, max(per_minute, 1), 60.0, clock)
+
+    def admit(self, client: str) -> None:
+        """Count one event of ``client``; raise ``refuse(message, seconds)`` when its minute is full."""
+        if self.per_minute == 0:
+            return
+        refused = self._counter.admit(client)
+        if refused is not None:
+            count, retry_after = refused
+            raise self._refuse(
+                f"Too many at once from this address ({count} in a minute): wait {retry_after} s.", retry_after
+            )

@@ -19,7 +19,7 @@ from causalplan.service.pool.explain_jobs import explanation_job
 router = APIRouter(
     prefix="/v1/explanations",
     tags=["explanations"],
-    responses=error_responses(404, 429, 503, 504),
+    responses=error_responses(403, 404, 429, 503, 504),
     route_class=StrictJSONRoute,
 )
 

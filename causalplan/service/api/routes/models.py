@@ -14,17 +14,18 @@ from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import CausalModel
 from causalplan.causal.render import DRAW_LOCK
 from causalplan.inputs import model_from_data
-from causalplan.service.api.schemas.common import ModelDocument, error_responses
+from causalplan.service.api.schemas.common import ErrorOut, ModelDocument, error_responses
 from causalplan.service.api.schemas.models import GraphOut, ModelLinks, ModelOut, ModelView
-from causalplan.service.deps import CatalogDep, ClientIdsDep, ServicesDep, SessionDep
+from causalplan.service.deps import CatalogDep, ClientIdsDep, ServicesDep, SessionDep, client_address
 from causalplan.service.documents import StrictJSONRoute, first_errors, read_model
-from causalplan.service.errors import InvalidModelError
+from causalplan.service.errors import InvalidModelError, TooManyModelsError
 from causalplan.service.responses import SafeJSONResponse
 from causalplan.service.storage import crud
 from causalplan.service.storage.records import ModelRecord
+from causalplan.service.storage.throttle import PerMinute
 
 router = APIRouter(
-    prefix="/v1/models", tags=["models"], responses=error_responses(404, 503), route_class=StrictJSONRoute
+    prefix="/v1/models", tags=["models"], responses=error_responses(403, 404, 503), route_class=StrictJSONRoute
 )
 
 SVG_CACHE_SIZE = 128
@@ -46,7 +47,13 @@ def model_out(record: ModelRecord, request: Request) -> ModelOut:
     status_code=201,
     response_model=ModelOut,
     summary="Store and validate a model",
-    responses={201: {"headers": {"Location": {"schema": {"type": "string"}, "description": "The model's URL."}}}},
+    responses={
+        201: {"headers": {"Location": {"schema": {"type": "string"}, "description": "The model's URL."}}},
+        429: {
+            "model": ErrorOut,
+            "description": "Too many models stored from this address this minute; see Retry-After.",
+        },
+    },
 )
 def create_model(
     document: Annotated[ModelDocument, Body(description="The model, in the same schema as model files.")],
@@ -58,8 +65,12 @@ def create_model(
     """Store a model (steps 1 and 2) and return its id, its validation report and links to its graph.
 
     An invalid model is answered with 422 and the report's codes (as `causalplan check`), and
-    is kept all the same for research: `details.model_id` is its id.
+    is kept all the same for research: `details.model_id` is its id. It is purged after
+    `invalid_model_hours` unless a trial uses it. One client may store `models_per_minute`
+    models a minute; beyond, 429 with `Retry-After`.
     """
+    limit = PerMinute(services.engine, "model", services.settings.models_per_minute, TooManyModelsError)
+    limit.admit(client_address(request, services.settings))
     submission = read_model(document, services, client)
     crud.save(services.engine, [submission.record])
     if not submission.is_valid:

@@ -15,7 +15,7 @@ from causalplan.service.documents import StrictJSONRoute, plan_inputs
 router = APIRouter(
     prefix="/v1/plans",
     tags=["plans"],
-    responses=error_responses(404, 429, 503, 504),
+    responses=error_responses(403, 404, 429, 503, 504),
     route_class=StrictJSONRoute,
 )
 

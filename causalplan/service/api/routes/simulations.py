@@ -24,7 +24,7 @@ from causalplan.service.storage.records import JobRecord
 router = APIRouter(
     prefix="/v1/simulations",
     tags=["simulations"],
-    responses=error_responses(404, 429, 503, 504),
+    responses=error_responses(403, 404, 429, 503, 504),
     route_class=StrictJSONRoute,
 )
 

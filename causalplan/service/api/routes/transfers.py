@@ -19,7 +19,7 @@ REPAIR_TIME_FACTOR = 10
 router = APIRouter(
     prefix="/v1/transfers",
     tags=["transfers"],
-    responses=error_responses(404, 429, 503, 504),
+    responses=error_responses(403, 404, 429, 503, 504),
     route_class=StrictJSONRoute,
 )
 

@@ -140,7 +140,8 @@ class ErrorOut(BaseModel):
 
 _ERROR_DESCRIPTIONS = {
     401: "No research token, or the wrong one.",
-    403: "The research endpoints are disabled (no token configured).",
+    403: "Forbidden: the research endpoints are disabled (no token configured), or X-Participant-Id or "
+    "X-Session-Id names a study participant (participant_id_reserved).",
     404: "No such model or object.",
     413: "The request body is over the limit.",
     422: "Invalid request, model or mapping (codes as `causalplan check`), or over a limit.",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import uuid
 from typing import Annotated, Any, Literal
 
-from pydantic import ConfigDict, Field
+from pydantic import ConfigDict, Field, StrictBool
 
 from causalplan.service.api.schemas.common import DiagnosticOut, InputModel, OutputModel, UtcDatetime
 
@@ -76,6 +76,10 @@ class RecruitmentIn(InputModel):
     )
     too_fast_seconds: int | None = Field(default=None, description="Flag as excluded who finishes faster than this.")
     demographics: list[str] = Field(default=[], max_length=10, description="Ids of the demographic questions to ask.")
+    require_platform_id: StrictBool = Field(
+        default=False,
+        description="Refuse arrivals without a crowd platform's ids (Prolific's PID and session, MTurk's worker).",
+    )
     quotas: dict[str, int | None] = Field(
         default={}, description="Condition name -> most participants on the public link (null: no limit)."
     )
@@ -93,8 +97,12 @@ class RecruitmentOut(OutputModel):
     comprehension_tries: int | None
     too_fast_seconds: int | None
     demographics: list[str]
+    require_platform_id: bool
     public_link: str
-    places: list[dict[str, Any]]
+    places: list[dict[str, Any]] = Field(
+        description="Per condition: places held (taken), completions (finished), the quota, how many more than "
+        "the quota may be at work at once (extra), and admissions so far (admitted)."
+    )
     arrivals: dict[str, int] = Field(description="Arrived on the public link: in all, consented, declined, undecided.")
 
 
