@@ -10,7 +10,7 @@ in one set); the order of the training and the test objects is counterbalanced p
 by the experiment's balanced Latin squares (its ``counterbalance_*`` options, on here).
 
 Whether a test is near or far is a property of the test object and the training objects the
-participant saw (``relation``), not of the condition's name: in the far condition both tests
+participant saw (``design.generalization``), not of the condition's name: in the far condition both tests
 share a category with a training object.
 """
 
@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import Catalog
+from causalplan.studies.design import generalization
 from causalplan.studies.statistics import Comparison, Proportion, fisher, wilson
 from causalplan.studies.trials import TrialRow
 
@@ -51,12 +52,6 @@ class PaperCondition:
     def as_dict(self) -> dict[str, object]:
         """Return the condition as ``POST /v1/experiments`` takes it."""
         return {"name": self.name, "training": list(self.training), "tests": list(self.tests)}
-
-
-def relation(training: Sequence[str], test: str, catalog: Catalog) -> str:
-    """Return ``near`` when the test object shares a category with a training object, else ``far``."""
-    trained = {catalog.get(object_id).category for object_id in training}
-    return "near" if catalog.get(test).category in trained else "far"
 
 
 def object_pools(catalog: Catalog, categories: Sequence[str] = CATEGORIES) -> dict[str, list[str]]:
@@ -171,7 +166,7 @@ def _ids(value: object) -> tuple[str, ...]:
 
 def describe(conditions: Sequence[PaperCondition], catalog: Catalog) -> Mapping[str, Mapping[str, str]]:
     """Return, per condition, each test object's relation (near or far) to that condition's training objects."""
-    return {c.name: {test: relation(c.training, test, catalog) for test in c.tests} for c in conditions}
+    return {c.name: {test: generalization(c.training, test, catalog) for test in c.tests} for c in conditions}
 
 
 ONE_CATEGORY, BOTH_CATEGORIES = "one category", "both categories"
