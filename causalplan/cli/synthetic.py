@@ -9,8 +9,6 @@ import click
 
 from causalplan.cli.common import FILE, catalog_from, catalog_option, exit_on_error, say, writing
 
-SPANS = ("one category", "both categories")
-
 
 @click.command("synthetic-study", short_help="Run the paper's design with synthetic participants; write an export.")
 @click.option("--n", "per_condition", type=click.IntRange(1, 1000), default=20, help="Participants per condition.")
@@ -49,7 +47,7 @@ def synthetic_study(
     """
     from causalplan.consensus.paper_study import synthetic_export
     from causalplan.consensus.population import paper_population
-    from causalplan.studies.far_generalization import far_generalization_conditions
+    from causalplan.studies.far_generalization import SPANS, far_generalization_conditions
 
     objects = catalog_from(catalog)
     knobs = {span: {"abstract": abstract[i], "slip": slip[i]} for i, span in enumerate(SPANS)}

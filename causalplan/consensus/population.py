@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import Catalog
-from causalplan.studies.far_generalization import PaperCondition
+from causalplan.studies.far_generalization import PaperCondition, span_of
 
 ERROR_KINDS = ("non_causal", "effect_as_cause", "uncaused_intermediate", "object_specific", "paraphrase", "missed_part")
 DEFAULT_RATES = {
@@ -346,7 +346,7 @@ def paper_population(
     lines: list[dict[str, object]] = []
     for condition in conditions:
         trained = list(dict.fromkeys(category[o] for o in condition.training))
-        settings = knobs["both categories" if len(trained) > 1 else "one category"]
+        settings = knobs[span_of(trained)]
         for number in range(per_condition):
             person = f"{condition.name}-{number:03d}".replace(" ", "_")
             abstract = rng.random() < settings["abstract"]

@@ -17,7 +17,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from causalplan.objects.catalog import Catalog
-from causalplan.studies.far_generalization import prediction_tests
+from causalplan.studies.far_generalization import BOTH_CATEGORIES, ONE_CATEGORY, prediction_tests, span_of
 from causalplan.studies.misconceptions import Misconception, misconceptions
 from causalplan.studies.statistics import (
     ClusteredModel,
@@ -31,7 +31,6 @@ from causalplan.studies.statistics import (
 from causalplan.studies.trials import TrialRow
 
 SIGNIFICANCE = 0.05
-ONE_CATEGORY, BOTH_CATEGORIES = "one category", "both categories"
 
 
 @dataclass(frozen=True)
@@ -95,7 +94,7 @@ def training_spans(rows: Sequence[TrialRow], catalog: Catalog) -> dict[str, str]
     categories: dict[str, set[str]] = {}
     for row in rows:
         categories.setdefault(row.condition, set()).update(catalog.get(o).category for o in row.training_objects)
-    return {condition: ONE_CATEGORY if len(found) <= 1 else BOTH_CATEGORIES for condition, found in categories.items()}
+    return {condition: span_of(found) for condition, found in categories.items()}
 
 
 def _share(rows: Sequence[TrialRow]) -> Proportion:

@@ -16,7 +16,7 @@ share a category with a training object.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from causalplan.errors import CausalPlanError
@@ -33,6 +33,9 @@ GOAL = "light"
 PER_CONDITION = 2
 """Training objects per condition, and test objects per condition (one per category)."""
 SET_NAMES = "ABCDEFGH"
+ONE_CATEGORY, BOTH_CATEGORIES = "one category", "both categories"
+SPANS = (ONE_CATEGORY, BOTH_CATEGORIES)
+"""Whether a participant's training objects come from one category or from both."""
 
 
 class DesignError(CausalPlanError):
@@ -169,28 +172,24 @@ def describe(conditions: Sequence[PaperCondition], catalog: Catalog) -> Mapping[
     return {c.name: {test: generalization(c.training, test, catalog) for test in c.tests} for c in conditions}
 
 
-ONE_CATEGORY, BOTH_CATEGORIES = "one category", "both categories"
+def span_of(training_categories: Iterable[str]) -> str:
+    """Return ``one category`` when the training objects' categories are one, else ``both categories``."""
+    return ONE_CATEGORY if len(set(training_categories)) <= 1 else BOTH_CATEGORIES
 
 
 def training_span(row: TrialRow, catalog: Catalog) -> str:
     """Return whether this participant's training objects come from one category or from both."""
-    found = {catalog.get(object_id).category for object_id in row.training_objects}
-    return ONE_CATEGORY if len(found) <= 1 else BOTH_CATEGORIES
+    return span_of(catalog.get(object_id).category for object_id in row.training_objects)
 
 
 def relation_shares(rows: Sequence[TrialRow], catalog: Catalog) -> dict[tuple[str, str], Proportion]:
     """Return the transfer rate (Wilson interval) of each training span x the test's relation (near, far)."""
-    shares = {}
-    for span in (ONE_CATEGORY, BOTH_CATEGORIES):
-        for kind in ("near", "far"):
-            mine = [
-                r
-                for r in rows
-                if r.outcome is not None and training_span(r, catalog) == span and r.generalization == kind
-            ]
-            if mine:
-                shares[(span, kind)] = wilson(sum(r.outcome or 0 for r in mine), len(mine))
-    return shares
+    outcomes: dict[tuple[str, str], list[int]] = {}
+    for row in rows:
+        if row.outcome is not None:
+            outcomes.setdefault((training_span(row, catalog), row.generalization), []).append(row.outcome)
+    kinds = [(span, kind) for span in SPANS for kind in ("near", "far") if (span, kind) in outcomes]
+    return {key: wilson(sum(outcomes[key]), len(outcomes[key])) for key in kinds}
 
 
 def prediction_tests(rows: Sequence[TrialRow], catalog: Catalog) -> list[Comparison]:
