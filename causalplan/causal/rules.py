@@ -16,12 +16,13 @@ from causalplan.causal.labels import display_label, has_control_characters, norm
 _CAUSES = re.compile(r"(?<!\S)causes(?!\S)", re.IGNORECASE)
 _AND = re.compile(r"(?<!\S)and(?!\S)", re.IGNORECASE)
 _OR = re.compile(r"(?<!\S)or(?!\S)", re.IGNORECASE)
-_KEYWORD = re.compile(r"(?<!\S)(and|causes)(?!\S)", re.IGNORECASE)
+RULE_KEYWORD = re.compile(r"(?<!\S)(and|causes)(?!\S)", re.IGNORECASE)
+"""AND or CAUSES written as a word of a label (any case): a rule would read it as a keyword."""
 
 
 def keywords_in(label: str) -> list[str]:
     """Return the rule keywords (AND, CAUSES) that ``label`` holds as words, upper-case, once each."""
-    return sorted({match.upper() for match in _KEYWORD.findall(label)})
+    return sorted({match.upper() for match in RULE_KEYWORD.findall(label)})
 
 
 @dataclass(frozen=True)

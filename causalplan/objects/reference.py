@@ -8,11 +8,9 @@ on the same parts are the step-3 mapping that tries the model on the object itse
 
 from __future__ import annotations
 
-import re
-
+from causalplan.causal.rules import RULE_KEYWORD
 from causalplan.objects.model import AssemblyObject, Requirement
 
-_KEYWORD = re.compile(r"(?<!\S)(and|causes)(?!\S)", re.IGNORECASE)
 _WORDS_FOR_KEYWORDS = {"and": "plus", "causes": "brings about"}
 
 
@@ -20,7 +18,7 @@ def _label(requirement: Requirement) -> str:
     """Return the requirement's function label: the expert's, else its sentence without rule keywords."""
     if requirement.function is not None:
         return requirement.function
-    return _KEYWORD.sub(lambda match: _WORDS_FOR_KEYWORDS[match.group(1).lower()], requirement.says)
+    return RULE_KEYWORD.sub(lambda match: _WORDS_FOR_KEYWORDS[match.group(1).lower()], requirement.says)
 
 
 def _functions(obj: AssemblyObject) -> list[tuple[str, tuple[str, ...]]]:

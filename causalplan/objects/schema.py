@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import re
 from typing import Annotated, Literal, Self
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from causalplan.causal.rules import keywords_in
 from causalplan.objects.model import PRIMITIVE_TEXTS
 
 IDENTIFIER_PATTERN = r"^[a-z][a-z0-9_]{0,63}$"
@@ -181,7 +181,7 @@ class RequirementSchema(_Strict):
     @field_validator("function")
     @classmethod
     def _no_rule_keywords(cls, value: str | None) -> str | None:
-        if value is not None and re.search(r"(?<!\S)(and|causes)(?!\S)", value, re.IGNORECASE):
+        if value is not None and keywords_in(value):
             raise ValueError("a function label cannot hold the rule keywords AND or CAUSES as words")
         return value
 
