@@ -113,7 +113,7 @@ def test_consensus_reads_an_experiment_export(tmp_path: Path) -> None:
     from causalplan.consensus.population import ERROR_KINDS, population
 
     lines = population("desk_lamp", 3, seed=4, rates=dict.fromkeys(ERROR_KINDS, 0.0), tests=("flashlight",))
-    export = {  # the research page's JSON export (studies/results.py): participants, then trials
+    export = {  # the research page's JSON export (studies/export.py): participants, then trials
         "experiment": {"id": "e1", "name": "pilot"},
         "participants": [
             {"participant_id": f"u{n}", "code": f"P-{n}", "model": line["model"]} for n, line in enumerate(lines)

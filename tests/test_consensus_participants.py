@@ -58,7 +58,7 @@ def test_a_second_line_with_another_model_for_the_same_id_is_ignored_and_said(tm
 
 
 def test_an_experiment_export_gives_each_participant_their_model_and_trial_mappings(tmp_path: Path) -> None:
-    # The shape of the research page's JSON export (studies/results.py).
+    # The shape of the research page's JSON export (studies/export.py).
     export = {
         "exported_at": "2026-12-01T00:00:00+00:00",
         "experiment": {"id": "e1", "name": "pilot"},
