@@ -16,7 +16,7 @@ by VAL like any plan. The answer's ``code`` is one of a closed set:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 from causalplan.causal.graph import goal_holds
 from causalplan.causal.labels import normalize_label
@@ -50,7 +50,6 @@ class Contrast:
     plan: PlanResult
     alternative: PlanResult
     simulation_failure: str | None = None
-    details: dict[str, object] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, object]:
         """Return the answer as a JSON-ready dict (both plans as ``causalplan plan --json`` has them)."""
