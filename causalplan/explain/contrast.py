@@ -26,7 +26,7 @@ from causalplan.objects.model import AssemblyObject, Fit
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.fd import DEFAULT_TIME_LIMIT
 from causalplan.planners.pipeline import plan_task
-from causalplan.planners.result import PlanResult, PlanStatus
+from causalplan.planners.result import PlanResult, PlanStatus, PlanStep
 
 ALTERNATIVE_PLANNER = "fd-opt"
 """The alternative is a shortest plan under the constraint, so "as short" is a fair comparison."""
@@ -165,8 +165,7 @@ def _blocked_words(obj: AssemblyObject, blocker: tuple[Fit, Fit, tuple[str, str]
 
 def _simulated_failure(obj: AssemblyObject, fits: tuple[Fit, Fit]) -> str | None:
     """Return the simulator's failure code when the robot tries ``fits`` in this order (None when it works)."""
-    from causalplan.planners.result import PlanStep
-    from causalplan.sim import RenderMode, simulate_plan
+    from causalplan.sim import RenderMode, simulate_plan  # the simulator loads only when an order is tried
 
     steps = tuple(
         PlanStep(fit.primitive, (fit.moving_part, fit.fixed_part), fit.id, obj.step_text(fit)) for fit in fits
