@@ -52,14 +52,16 @@ class Contrast:
     simulation_failure: str | None = None
 
     def as_dict(self) -> dict[str, object]:
-        """Return the answer as a JSON-ready dict (both plans as ``causalplan plan --json`` has them)."""
+        """Return the answer as a JSON-ready dict (the alternative as ``causalplan plan --json`` has it).
+
+        The plan asked about is not repeated: ``Explanation.as_dict`` holds it once.
+        """
         return {
             "question": self.text,
             "asked": self.question.as_dict(),
             "code": self.code,
             "message": self.message,
             "decided_by": self.decided_by,
-            "plan": self.plan.as_dict(),
             "alternative": self.alternative.as_dict(),
             "simulation_failure": self.simulation_failure,
         }
