@@ -142,7 +142,7 @@ def candidate_edits(model: CausalModel, mapping: Labelling, catalog: Catalog) ->
 
 
 def _conflict(edits: tuple[Edit, ...]) -> bool:
-    """Return whether the edits undo each other or empty a rule."""
+    """Return whether the edits repeat or undo one another (``apply_edits`` refuses a rule left without causes)."""
     if len({(e.kind, e.part, e.rule, normalize_label(e.label)) for e in edits}) < len(edits):
         return True
     given = {(e.part, normalize_label(e.label)) for e in edits if e.kind is EditKind.GIVE_FUNCTION}
