@@ -30,6 +30,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from causalplan.causal.model import CausalModel, Labelling  # noqa: E402
 from causalplan.explain.explanation import explain_plan  # noqa: E402
 from causalplan.explain.repair import search_repairs  # noqa: E402
 from causalplan.inputs import load_mapping, load_model  # noqa: E402
@@ -55,13 +56,13 @@ def cold_median(action: Callable[[], object], rounds: int) -> float:
     return statistics.median(times)
 
 
-def _model(name: str, catalog: Catalog):  # type: ignore[no-untyped-def]
+def _model(name: str, catalog: Catalog) -> CausalModel:
     loaded = load_model(PAPER / name, catalog)
     assert loaded.model is not None
     return loaded.model
 
 
-def _mapping(name: str, catalog: Catalog):  # type: ignore[no-untyped-def]
+def _mapping(name: str, catalog: Catalog) -> Labelling:
     loaded = load_mapping(PAPER / name, catalog)
     assert loaded.mapping is not None
     return loaded.mapping
@@ -78,7 +79,7 @@ def main() -> int:
     explain_plan(task, None, QUESTIONS[0], simulate=False)
 
     plan_seconds = cold_median(lambda: plan_task(task, "fd", val=True), rounds)
-    rows = [("plan request (plan_task fd, VAL)", plan_seconds, None)]
+    rows: list[tuple[str, float, float | None]] = [("plan request (plan_task fd, VAL)", plan_seconds, None)]
     why_not_ratios = []
     for question in QUESTIONS:
         seconds = cold_median(lambda q=question: explain_plan(task, None, q), rounds)  # type: ignore[misc]

@@ -25,7 +25,11 @@ def _task(catalog: Catalog, model: str = "paper/desk_lamp.yaml") -> PlanningTask
 
 def test_no_constraints_write_the_same_problem(catalog: Catalog) -> None:
     task = _task(catalog)
-    assert compile_task(replace(task, constraints=PlanConstraints())).problem == compile_task(task).problem
+    plain = compile_task(task).problem
+    assert compile_task(replace(task, constraints=PlanConstraints())).problem == plain
+    # Without constraints: the model's goal alone, and every fit available.
+    assert "(:goal (n-light))" in plain
+    assert plain.count("(available ") == len(task.obj.fits)
 
 
 def test_constraints_go_into_the_problem_only(catalog: Catalog) -> None:

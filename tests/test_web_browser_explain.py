@@ -2,29 +2,15 @@
 
 from __future__ import annotations
 
-import re
-
 import pytest
 from playwright.sync_api import Page, expect
 
-from tests.test_web_browser import browser, new_link, page, playwright, saved, shoot  # noqa: F401 - fixtures
-from tests.web_flows import LAMP_RULES
+from tests.test_web_browser import browser, lamp_plan_shown, page, playwright, shoot  # noqa: F401 - fixtures
 
 
 @pytest.mark.slow
 def test_why_and_why_not_beside_the_robots_plan(live_server: str, page: Page) -> None:  # noqa: F811
-    page.goto(new_link(live_server, tutorial=False))
-    expect(page).to_have_url(re.compile(r"/step1/1$"))
-    page.get_by_label("Functions of the base with cables (one per line)").fill("provide electricity")
-    page.get_by_label("Functions of the light bulb (one per line)").fill(
-        "turn electricity into light\nclose the circuit"
-    )
-    saved(page)
-    page.get_by_role("button", name="Save and continue").click()
-    expect(page).to_have_url(re.compile(r"/step2$"))
-    page.get_by_label("Your rules, one per line").fill(LAMP_RULES)
-    expect(page.locator("#problems")).to_have_class(re.compile(r"\bok\b"))
-    page.get_by_role("button", name="Show the robot's plan").click()
+    lamp_plan_shown(page, live_server)
     plan = page.locator("#plan-body")
     # The first plan of a new server also starts its planner worker: give it time on a busy machine.
     expect(plan).to_contain_text("Screw the light bulb into the base with cables.", timeout=60_000)

@@ -117,10 +117,9 @@ def explain(
     exit_with(EXIT_OK)
 
 
-def print_repairs(search: RepairSearch, limit: int) -> None:
-    """Print the repairs of a failed transfer, smallest first."""
-    counts = [sum(len(repair.edits) == size for repair in search.repairs) for size in range(1, search.max_edits + 1)]
-    sizes = ", ".join(f"{count} of {size} edit(s)" for size, count in enumerate(counts, start=1))
+def print_repairs(search: RepairSearch) -> None:
+    """Print the repairs of a failed transfer, smallest first (as many as ``search.shown`` shows)."""
+    sizes = ", ".join(f"{count} of {size} edit(s)" for size, count in search.by_size().items())
     say(f"Repairs: {len(search.repairs)} found ({sizes}); {search.checked} edit set(s) checked by a full verdict.")
-    for repair in search.shown(limit):
+    for repair in search.shown():
         say(f"  [{len(repair.edits)}] {repair.describe()}")

@@ -209,7 +209,7 @@ def transfer(
         if repairs is not None:
             from causalplan.cli.explaining import print_repairs
 
-            print_repairs(repairs, limit=5)
+            print_repairs(repairs)
     exit_with(verdict.verdict.exit_code)
 
 

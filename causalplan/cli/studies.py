@@ -55,7 +55,8 @@ def analyze(export: Path, out: Path, near_misses: bool, as_json: bool, catalog: 
 
     objects = catalog_from(catalog)
     with exit_on_error():
-        analysis = analyse(trial_rows(read_export(export), objects), objects)
+        data = read_export(export)
+        analysis = analyse(trial_rows(data, objects), objects)
     with writing(out, "write to"):
         written = write_outputs(analysis, out)
     misses = None
@@ -63,7 +64,7 @@ def analyze(export: Path, out: Path, near_misses: bool, as_json: bool, catalog: 
         from causalplan.explain.near_misses import near_misses as count_near_misses
 
         with exit_on_error():
-            misses = count_near_misses(read_export(export), objects)
+            misses = count_near_misses(data, objects)
     if as_json:
         extra = {"near_misses": [counts.as_dict() for counts in misses]} if misses is not None else {}
         print_json({**analysis.as_dict(), **extra, "files": [str(path) for path in written]})

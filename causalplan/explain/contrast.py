@@ -16,7 +16,7 @@ by VAL like any plan. The answer's ``code`` is one of a closed set:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 from causalplan.causal.graph import goal_holds
 from causalplan.causal.labels import normalize_label
@@ -26,7 +26,7 @@ from causalplan.objects.model import AssemblyObject, Fit
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.fd import DEFAULT_TIME_LIMIT
 from causalplan.planners.pipeline import plan_task
-from causalplan.planners.result import PlanResult, PlanStatus
+from causalplan.planners.result import PlanResult, PlanStatus, PlanStep
 
 ALTERNATIVE_PLANNER = "fd-opt"
 """The alternative is a shortest plan under the constraint, so "as short" is a fair comparison."""
@@ -50,17 +50,18 @@ class Contrast:
     plan: PlanResult
     alternative: PlanResult
     simulation_failure: str | None = None
-    details: dict[str, object] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, object]:
-        """Return the answer as a JSON-ready dict (both plans as ``causalplan plan --json`` has them)."""
+        """Return the answer as a JSON-ready dict (the alternative as ``causalplan plan --json`` has it).
+
+        The plan asked about is not repeated: ``Explanation.as_dict`` holds it once.
+        """
         return {
             "question": self.text,
             "asked": self.question.as_dict(),
             "code": self.code,
             "message": self.message,
             "decided_by": self.decided_by,
-            "plan": self.plan.as_dict(),
             "alternative": self.alternative.as_dict(),
             "simulation_failure": self.simulation_failure,
         }
@@ -166,8 +167,7 @@ def _blocked_words(obj: AssemblyObject, blocker: tuple[Fit, Fit, tuple[str, str]
 
 def _simulated_failure(obj: AssemblyObject, fits: tuple[Fit, Fit]) -> str | None:
     """Return the simulator's failure code when the robot tries ``fits`` in this order (None when it works)."""
-    from causalplan.planners.result import PlanStep
-    from causalplan.sim import RenderMode, simulate_plan
+    from causalplan.sim import RenderMode, simulate_plan  # the simulator loads only when an order is tried
 
     steps = tuple(
         PlanStep(fit.primitive, (fit.moving_part, fit.fixed_part), fit.id, obj.step_text(fit)) for fit in fits

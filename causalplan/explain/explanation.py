@@ -26,10 +26,7 @@ class Explanation:
 
     def as_dict(self) -> dict[str, object]:
         """Return the explanation as a JSON-ready dict (the plan once, as ``causalplan plan --json``)."""
-        contrast = None
-        if self.contrast is not None:
-            contrast = self.contrast.as_dict()
-            contrast.pop("plan")
+        contrast = self.contrast.as_dict() if self.contrast is not None else None
         return {"plan": self.plan.as_dict(), "why": [step.as_dict() for step in self.steps], "why_not": contrast}
 
 

@@ -102,10 +102,14 @@ class RepairSearch:
     def shown(self, limit: int = SHOWN) -> tuple[Repair, ...]:
         return self.repairs[:limit]
 
+    def by_size(self) -> dict[int, int]:
+        """Return how many repairs have each size, from 1 to ``max_edits`` edits."""
+        return {size: sum(len(r.edits) == size for r in self.repairs) for size in range(1, self.max_edits + 1)}
+
     def as_dict(self, limit: int = SHOWN) -> dict[str, object]:
         return {
             "found": len(self.repairs),
-            "by_size": {size: sum(len(r.edits) == size for r in self.repairs) for size in range(1, self.max_edits + 1)},
+            "by_size": self.by_size(),
             "checked": self.checked,
             "max_edits": self.max_edits,
             "repairs": [repair.as_dict() for repair in self.shown(limit)],
@@ -138,7 +142,7 @@ def candidate_edits(model: CausalModel, mapping: Labelling, catalog: Catalog) ->
 
 
 def _conflict(edits: tuple[Edit, ...]) -> bool:
-    """Return whether the edits undo each other or empty a rule."""
+    """Return whether the edits repeat or undo one another (``apply_edits`` refuses a rule left without causes)."""
     if len({(e.kind, e.part, e.rule, normalize_label(e.label)) for e in edits}) < len(edits):
         return True
     given = {(e.part, normalize_label(e.label)) for e in edits if e.kind is EditKind.GIVE_FUNCTION}

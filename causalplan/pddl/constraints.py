@@ -64,6 +64,8 @@ class PlanConstraints:
     def excluded_after(self, obj: AssemblyObject, fit: Fit) -> tuple[str, ...]:
         """Return the fits that making ``fit`` rules out because an ordering puts their part first."""
         earlier = {first for first, then in self.orderings if then == fit.moving_part}
+        if not earlier:  # no ordering (every plan's case): no pass over the object's fits per step
+            return ()
         return tuple(other.id for other in obj.fits if other.moving_part in earlier)
 
     def goal_facts(self) -> list[str]:

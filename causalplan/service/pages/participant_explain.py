@@ -21,7 +21,7 @@ from causalplan.service.deps import CatalogDep, ServicesDep, SettingsDep
 from causalplan.service.errors import InvalidRequestError, NotFoundError
 from causalplan.service.pages.journeys import JourneyDep
 from causalplan.service.pages.participation import invalid_model_error
-from causalplan.service.pool.explain_jobs import explanation_job
+from causalplan.service.pool.explain_jobs import PLANS_PER_EXPLANATION, explanation_job
 from causalplan.studies.steps import Stage, check_model, model_on
 
 router = APIRouter(prefix="/p/{code}", include_in_schema=False)
@@ -60,9 +60,10 @@ def explain(
         raise invalid_model_error(check)
     limit = settings.default_time_limit
     args = (model_on(draft, obj.id), None, default_planner(), limit, tuple(settings.catalog_folders))
+    seconds = PLANS_PER_EXPLANATION * limit + settings.solve_grace_seconds
     try:
         data: dict[str, Any] = services.answers.pool.run(
-            explanation_job, (*args, body.why, body.why_not, False, False), 2 * limit + settings.solve_grace_seconds
+            explanation_job, (*args, body.why, body.why_not, False, False), seconds
         )
     except CausalPlanError as exc:
         if not isinstance(exc, QuestionError | PlanUnavailableError):

@@ -14,6 +14,9 @@ from causalplan.pddl.task import catalog_task
 from causalplan.service.pool.catalog import worker_catalog
 from causalplan.transfer.verdict import Verdict, evaluate_transfer
 
+PLANS_PER_EXPLANATION = 2
+"""An explanation plans at most twice (the plan, and a why-not's alternative): its time limit is twice a plan's."""
+
 
 def explanation_job(
     model: CausalModel,

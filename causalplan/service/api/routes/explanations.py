@@ -14,7 +14,7 @@ from causalplan.service.api.schemas.explanations import ExplanationIn, Explanati
 from causalplan.service.deps import ClientIdsDep, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, plan_inputs
 from causalplan.service.errors import InvalidRequestError
-from causalplan.service.pool.explain_jobs import explanation_job
+from causalplan.service.pool.explain_jobs import PLANS_PER_EXPLANATION, explanation_job
 
 router = APIRouter(
     prefix="/v1/explanations",
@@ -50,8 +50,7 @@ def create_explanation(body: ExplanationIn, services: ServicesDep, client: Clien
         body.validate_plan,
         body.simulate,
     )
-    # Two plans (the plan, the alternative), so twice a plan's time, and the grace once.
-    seconds = 2 * inputs.time_limit + services.settings.solve_grace_seconds
+    seconds = PLANS_PER_EXPLANATION * inputs.time_limit + services.settings.solve_grace_seconds
     try:
         data: dict[str, Any] = services.answers.pool.run(explanation_job, args, seconds)
     except CausalPlanError as exc:
