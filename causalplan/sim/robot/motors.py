@@ -40,7 +40,12 @@ from causalplan.sim.scene import TIME_STEP, Scene
 TRACKING_TOLERANCE_RAD = 0.05
 """The largest joint error the run accepts (radians)."""
 TRACKING_TOLERANCE_MM = 10.0
-"""The largest gripper position error the run accepts (millimetres): PyBullet's motors follow a step (4 ms) behind."""
+"""The largest gripper position error the run accepts (millimetres).
+
+PyBullet's position-controlled motors follow their commands one simulation step behind, so
+the gripper lags where the commands put it by what it travels in a step: the tolerance leaves
+room for that lag at the commands' top speed, and fails an arm that does not keep up.
+"""
 SLIP_TOLERANCE_MM = 2.0
 """How far a held part may move in the gripper (millimetres)."""
 TOUCH = 0.003
