@@ -189,20 +189,8 @@ class _Driver:
         pb, client = self.scene.pb, self.scene.client
         self.scene.set_dynamic(part, True)
         self._collide(part, False)
-        relative = self._hand().inverse() * self.scene._body_pose(self.scene.bodies[part])
-        constraint = pb.createConstraint(
-            self.panda.body,
-            HAND_LINK,
-            self.scene.bodies[part],
-            -1,
-            pb.JOINT_FIXED,
-            [0, 0, 0],
-            relative.position,
-            [0, 0, 0],
-            relative.orientation,
-            [0, 0, 0, 1],
-            physicsClientId=client,
-        )
+        relative = self._hand().inverse() * self.scene.body_pose(self.scene.bodies[part])
+        constraint = self.scene.fix(self.panda.body, HAND_LINK, self.scene.bodies[part], relative)
         pb.changeConstraint(
             constraint, maxForce=2 * FRICTION * self.trajectory.limits.gripper_force, erp=ERP, physicsClientId=client
         )
@@ -211,7 +199,7 @@ class _Driver:
 
     def _slipped(self, held: _Held, step: int) -> None:
         """Note how far the held part moved in the gripper since it was grasped (a constraint that gave way)."""
-        now = self._hand().inverse() * self.scene._body_pose(self.scene.bodies[held.part])
+        now = self._hand().inverse() * self.scene.body_pose(self.scene.bodies[held.part])
         slip = distance(now.position, held.relative.position) * 1000
         self.slip[held.part] = max(self.slip[held.part], slip)
         if slip > SLIP_TOLERANCE_MM:
