@@ -52,7 +52,7 @@ def frames_expected(report: SimulationReport) -> int:
     """
     from causalplan.sim.video import FRAME_EVERY
 
-    positions = sum(len(segment.positions) for segment in report.trajectory.segments) if report.trajectory else 0
+    positions = report.trajectory.positions if report.trajectory else 0
     return max(1, math.ceil(positions / FRAME_EVERY))
 
 
