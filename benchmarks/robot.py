@@ -103,8 +103,7 @@ def main() -> int:
         check, run = statistics.median(checks), statistics.median(runs)
         assert report.trajectory is not None and report.motor_commands is not None
         moved = report.motor_commands.seconds
-        planned = report.trajectory
-        unconstrained = sum(len(segment.positions) for segment in planned.segments) / planned.rate_hz
+        unconstrained = report.trajectory.seconds
         commands.add_row(
             object_id,
             f"{unconstrained:.1f}",

@@ -34,6 +34,16 @@ if TYPE_CHECKING:
     from causalplan.sim.robot.checker import Violation
 
 
+def _read_json(path: Path, what: str, invalid: str) -> object:
+    """Return the JSON data of the ``what`` file ``path``; fail with ``invalid`` when it is not JSON."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        fail("input_file_error", f"Cannot read the {what} file {path}: {exc.strerror}.")
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        fail(invalid, f"{path} is not JSON: {exc}.")
+
+
 def _print_simulation(report: SimulationReport) -> None:
     say(f"Simulated {len(report.steps)} step(s) on the {report.object_name} (headless PyBullet):")
     for step in report.steps:
@@ -175,13 +185,7 @@ def simulate(
     render = RenderMode.FRAMES if frames or gif else RenderMode.FINAL if png else RenderMode.NONE
     with exit_on_error():
         if plan_file is not None:
-            try:
-                data = json.loads(plan_file.read_text(encoding="utf-8"))
-            except OSError as exc:
-                fail("input_file_error", f"Cannot read the plan file {plan_file}: {exc.strerror}.")
-            except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-                fail("invalid_plan", f"{plan_file} is not JSON: {exc}.")
-            steps = read_plan_steps(data, target)
+            steps = read_plan_steps(_read_json(plan_file, "plan", "invalid_plan"), target)
         else:
             result = plan_task(task)
             if not result.has_plan:
@@ -276,12 +280,7 @@ def check_trajectory(file: Path, model: str | None, as_json: bool) -> None:
     from causalplan.sim.robot.checker import violations
     from causalplan.sim.robot.trajectory import read_trajectory
 
-    try:
-        data = json.loads(file.read_text(encoding="utf-8"))
-    except OSError as exc:
-        fail("input_file_error", f"Cannot read the trajectory file {file}: {exc.strerror}.")
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        fail("invalid_trajectory", f"{file} is not JSON: {exc}.")
+    data = _read_json(file, "trajectory", "invalid_trajectory")
     with exit_on_error():
         trajectory = read_trajectory(data, model)
     found = violations(trajectory)

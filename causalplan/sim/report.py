@@ -121,9 +121,7 @@ class SimulationReport:
         commands = self.motor_commands
         summary: dict[str, object] = {
             "seconds": round(commands.seconds, 2) if commands else 0.0,
-            "unconstrained_seconds": round(sum(len(s.positions) for s in planned.segments) / planned.rate_hz, 2)
-            if planned
-            else 0.0,
+            "unconstrained_seconds": round(planned.seconds, 2) if planned else 0.0,
             "rate_hz": planned.rate_hz if planned else None,
             "motions": len(planned.segments) if planned else 0,
         }

@@ -227,13 +227,14 @@ class Scene:
 
     # --- poses -----------------------------------------------------------------------------------
 
-    def _body_pose(self, body: int) -> Pose:
+    def body_pose(self, body: int) -> Pose:
+        """Return a body's frame in the world: its centre of mass, which PyBullet's constraints are in."""
         position, orientation = self.pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
         return Pose(tuple(position), tuple(orientation))
 
     def pose(self, part_id: str) -> Pose:
         """Return the pose of a part's frame in the world."""
-        return self._body_pose(self.bodies[part_id]) * Pose(scale(self.solids[part_id].center, -1.0))
+        return self.body_pose(self.bodies[part_id]) * Pose(scale(self.solids[part_id].center, -1.0))
 
     def place(self, part_id: str, pose: Pose) -> None:
         """Put a part's frame at ``pose``, at rest."""
@@ -253,24 +254,29 @@ class Scene:
 
     def weld(self, fixed: str, moving: str) -> None:
         """Join two parts rigidly where they are now, and stop them colliding with each other."""
-        pb, client = self.pb, self.client
         fixed_body, moving_body = self.bodies[fixed], self.bodies[moving]
         # Body frames (centres of mass), since that is what PyBullet's constraint frames are in.
-        relative = self._body_pose(fixed_body).inverse() * self._body_pose(moving_body)
-        pb.createConstraint(
-            fixed_body,
-            -1,
-            moving_body,
-            -1,
-            pb.JOINT_FIXED,
-            [0, 0, 0],
-            relative.position,
-            [0, 0, 0],
-            relative.orientation,
-            [0, 0, 0, 1],
-            physicsClientId=client,
-        )
+        relative = self.body_pose(fixed_body).inverse() * self.body_pose(moving_body)
+        self.fix(fixed_body, -1, moving_body, relative)
         self.ignore_contacts(fixed, moving)
+
+    def fix(self, parent: int, parent_link: int, child: int, relative: Pose) -> int:
+        """Hold ``child``'s body frame at ``relative`` in ``parent``'s link (-1: its base); return the constraint."""
+        return int(
+            self.pb.createConstraint(
+                parent,
+                parent_link,
+                child,
+                -1,
+                self.pb.JOINT_FIXED,
+                [0, 0, 0],
+                relative.position,
+                [0, 0, 0],
+                relative.orientation,
+                [0, 0, 0, 1],
+                physicsClientId=self.client,
+            )
+        )
 
     def ignore_contacts(self, a: str, b: str) -> None:
         """Stop two parts colliding (joined parts touch along their connectors)."""

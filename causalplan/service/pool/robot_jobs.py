@@ -1,6 +1,6 @@
 """The robot's jobs for the planner workers: carry out a plan, and film it with progress.
 
-Filming takes tens of seconds, so a film job writes its progress (frames drawn, frames
+Filming is slow, so a film job writes its progress (frames drawn, frames
 expected) to a small JSON file that the app reads while the worker works: the worker's
 socket carries only the job and its answer.
 """
@@ -48,11 +48,11 @@ def frames_expected(report: SimulationReport) -> int:
     """Return how many frames filming the run of ``report`` draws while the robot moves.
 
     The recorder draws one frame every ``FRAME_EVERY`` commanded positions, and the run is
-    deterministic, so the run without a film (a few percent of the filming's cost) says it.
+    deterministic, so the run without a film (far cheaper than filming) says it.
     """
     from causalplan.sim.video import FRAME_EVERY
 
-    positions = sum(len(segment.positions) for segment in report.trajectory.segments) if report.trajectory else 0
+    positions = report.trajectory.positions if report.trajectory else 0
     return max(1, math.ceil(positions / FRAME_EVERY))
 
 

@@ -40,7 +40,12 @@ from causalplan.sim.scene import TIME_STEP, Scene
 TRACKING_TOLERANCE_RAD = 0.05
 """The largest joint error the run accepts (radians)."""
 TRACKING_TOLERANCE_MM = 10.0
-"""The largest gripper position error the run accepts (millimetres): PyBullet's motors follow a step (4 ms) behind."""
+"""The largest gripper position error the run accepts (millimetres).
+
+PyBullet's position-controlled motors follow their commands one simulation step behind, so
+the gripper lags where the commands put it by what it travels in a step: the tolerance leaves
+room for that lag at the commands' top speed, and fails an arm that does not keep up.
+"""
 SLIP_TOLERANCE_MM = 2.0
 """How far a held part may move in the gripper (millimetres)."""
 TOUCH = 0.003
@@ -184,20 +189,8 @@ class _Driver:
         pb, client = self.scene.pb, self.scene.client
         self.scene.set_dynamic(part, True)
         self._collide(part, False)
-        relative = self._hand().inverse() * self.scene._body_pose(self.scene.bodies[part])
-        constraint = pb.createConstraint(
-            self.panda.body,
-            HAND_LINK,
-            self.scene.bodies[part],
-            -1,
-            pb.JOINT_FIXED,
-            [0, 0, 0],
-            relative.position,
-            [0, 0, 0],
-            relative.orientation,
-            [0, 0, 0, 1],
-            physicsClientId=client,
-        )
+        relative = self._hand().inverse() * self.scene.body_pose(self.scene.bodies[part])
+        constraint = self.scene.fix(self.panda.body, HAND_LINK, self.scene.bodies[part], relative)
         pb.changeConstraint(
             constraint, maxForce=2 * FRICTION * self.trajectory.limits.gripper_force, erp=ERP, physicsClientId=client
         )
@@ -206,7 +199,7 @@ class _Driver:
 
     def _slipped(self, held: _Held, step: int) -> None:
         """Note how far the held part moved in the gripper since it was grasped (a constraint that gave way)."""
-        now = self._hand().inverse() * self.scene._body_pose(self.scene.bodies[held.part])
+        now = self._hand().inverse() * self.scene.body_pose(self.scene.bodies[held.part])
         slip = distance(now.position, held.relative.position) * 1000
         self.slip[held.part] = max(self.slip[held.part], slip)
         if slip > SLIP_TOLERANCE_MM:

@@ -124,7 +124,8 @@ def time_parameterize(
         last, factor = points[-1], safety_factor
         for _ in range(RETRIES):
             added = _segment_points(segment, last, limits, factor)
-            if _within([last, *added], limits) and (len(points) < 2 or _within([*points[-3:], *added[:3]], limits)):
+            # The segment, and its join with the previous one: jerk spans three points back.
+            if _within([*points[-3:], *added], limits):
                 break
             factor *= SLOWER
         else:

@@ -62,6 +62,16 @@ class Waypoints:
     segments: list[Segment] = field(default_factory=list)
     rate_hz: int = RATE_HZ
 
+    @property
+    def positions(self) -> int:
+        """Return how many positions the robot planned, over every segment."""
+        return sum(len(segment.positions) for segment in self.segments)
+
+    @property
+    def seconds(self) -> float:
+        """Return how long the planned positions last at ``rate_hz`` (the film's pace, before any limit)."""
+        return self.positions / self.rate_hz
+
 
 @dataclass(frozen=True)
 class Point:
