@@ -97,14 +97,19 @@ class _Solver:
 
 def solve_mdp(task: PlanningTask, time_limit: float = 10.0, step_cost: float = STEP_COST) -> MdpSolution:
     """Solve the task's MDP exactly; ``too_large`` (quickly) beyond its size limits, ``timeout`` at ``time_limit``."""
-    fits = relevant_fits(task)
+    return solve_compiled_mdp(compile_mdp(task, relevant_fits(task)), time_limit, step_cost)
+
+
+def solve_compiled_mdp(compiled: CompiledMdp, time_limit: float, step_cost: float) -> MdpSolution:
+    """Solve a compiled MDP exactly (``solve_mdp``'s work, for callers that solve it more than once)."""
+    fits = compiled.fits
     if len(fits) > MAX_RELEVANT_FITS:
         return MdpSolution(
             PlanStatus.TOO_LARGE,
             relevant_fits=len(fits),
             message=f"{len(fits)} fits matter for this model; the exact MDP stops at {MAX_RELEVANT_FITS}.",
         )
-    solver = _Solver(compile_mdp(task, fits), time.monotonic() + time_limit, step_cost)
+    solver = _Solver(compiled, time.monotonic() + time_limit, step_cost)
     start: State = (0, 0)
     try:
         root = solver.solve(start, solver.c.base, 0)
