@@ -110,22 +110,26 @@ def solve_compiled_mdp(compiled: CompiledMdp, time_limit: float, step_cost: floa
             message=f"{len(fits)} fits matter for this model; the exact MDP stops at {MAX_RELEVANT_FITS}.",
         )
     solver = _Solver(compiled, time.monotonic() + time_limit, step_cost)
+
+    def stopped(status: PlanStatus, message: str) -> MdpSolution:
+        return MdpSolution(status, states=len(solver.values), relevant_fits=len(fits), message=message)
+
     start: State = (0, 0)
+    # No RecursionError to catch: each level of the recursion (two frames) attempts one more
+    # fit, so it is at most MAX_RELEVANT_FITS levels deep.
     try:
-        root = solver.solve(start, solver.c.base, 0)
+        root = solver.solve(start, compiled.base, 0)
     except _OutOfTime:
-        message = (
+        return stopped(
+            PlanStatus.TIMEOUT,
             f"The exact MDP did not finish within {time_limit:g} s "
-            f"({len(solver.values):,} states solved over {len(fits)} relevant fits)."
+            f"({len(solver.values):,} states solved over {len(fits)} relevant fits).",
         )
-        return MdpSolution(PlanStatus.TIMEOUT, states=len(solver.values), relevant_fits=len(fits), message=message)
-    except (_TooLarge, RecursionError) as exc:
-        message = (
-            "The MDP's plans are too long to solve exactly."
-            if isinstance(exc, RecursionError)
-            else f"The exact MDP over {len(fits)} relevant fits passed {len(solver.values):,} states; it was stopped."
+    except _TooLarge:
+        return stopped(
+            PlanStatus.TOO_LARGE,
+            f"The exact MDP over {len(fits)} relevant fits passed {len(solver.values):,} states; it was stopped.",
         )
-        return MdpSolution(PlanStatus.TOO_LARGE, states=len(solver.values), relevant_fits=len(fits), message=message)
     if root.success == 0.0:
         return MdpSolution(
             PlanStatus.UNSOLVABLE,
@@ -147,7 +151,7 @@ def solve_compiled_mdp(compiled: CompiledMdp, time_limit: float, step_cost: floa
         tuple(actions),
         root.success,
         root.attempts,
-        policy_entries(solver.c, table, {state: value.success for state, value in solver.values.items()}),
+        policy_entries(compiled, table, {state: value.success for state, value in solver.values.items()}),
         len(solver.values),
         len(fits),
         success_upper=root.success,
