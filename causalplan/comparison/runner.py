@@ -3,8 +3,8 @@
 Each run is forked from a warm parent: multiprocessing's fork server, which has preloaded the
 planners, FD's translator and the MDP (``PRELOADED``), so a run (``worker``) starts with
 nothing left to import and no state of an earlier run; it sends its record through a pipe and
-is killed at its limit (by hand: ``pebble``'s wait for a finished process cost each run
-several times what the paper's tasks take to plan). A run that crashes, is killed at its
+is killed at its limit (by hand: ``pebble``'s wait for a finished process was slower than the
+paper's tasks take to plan; benchmarks/RESULTS.md). A run that crashes, is killed at its
 limit or runs out of memory becomes a row with that status; it never stops the comparison.
 Plans are checked by replay inside the run and by VAL here in the parent (each distinct plan
 of a task once), outside the timed part.
