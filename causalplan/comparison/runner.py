@@ -80,11 +80,7 @@ def fork_server(planners: Iterable[str] = ()) -> ForkServerContext:
 
 def _died(folder: Path, exitcode: int | None) -> dict[str, object]:
     """Return the record of a run whose process ended without a record (its output's last line says why)."""
-    try:
-        output = (folder / worker.OUTPUT_FILE).read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        output = ""
-    tail = output.strip().splitlines()[-1:] or [f"exit code {exitcode}"]
+    tail = processes.output_in(folder).strip().splitlines()[-1:] or [f"exit code {exitcode}"]
     status = "out_of_memory" if "MemoryError" in tail[0] else "error"
     return {"status": status, "message": f"the worker failed: {tail[0]}"}
 
