@@ -285,22 +285,20 @@ def _solution(search: _Search, root: _Node, optimality: Optimality, time_limit: 
             fits=fits,
         )
     success, attempts, table, successes = _evaluate(search, root, deadline)
+    message = ""
     if optimality is Optimality.BOUNDED:
         fallback = _default_success(compiled, (0, 0), step_cost)
         if fallback > success:  # the default policy alone is provably better than what was bounded
             success, table, successes = fallback, {}, {}
-    message = ""
-    draft = MdpSolution(PlanStatus.SOLVED, fits=fits, policy_table=table)
-    actions = _all_success_path(compiled, draft, step_cost)
-    if optimality is Optimality.BOUNDED:
         message = (
             f"The time limit ({time_limit:g} s) or the state budget came first after {search.expanded:,} expansions: "
             f"this is the best policy so far; it succeeds with probability at least {success:.4f}, and no policy "
             f"does better than {root.success:.4f}."
         )
+    draft = MdpSolution(PlanStatus.SOLVED, fits=fits, policy_table=table)
     return MdpSolution(
         PlanStatus.SOLVED,
-        actions,
+        _all_success_path(compiled, draft, step_cost),
         success,
         attempts if optimality is Optimality.OPTIMAL else None,
         policy_entries(compiled, table, successes),
