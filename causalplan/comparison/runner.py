@@ -24,7 +24,7 @@ from pathlib import Path
 from causalplan.comparison import worker
 from causalplan.comparison.tasks import ComparisonTask, build
 from causalplan.pddl.task import PlanningTask
-from causalplan.pddl.writer import compile_task
+from causalplan.pddl.writer import CompiledTask, compile_task
 from causalplan.planners import processes
 from causalplan.planners.val import ValVerdict, validate
 
@@ -112,30 +112,41 @@ def _run(
     return record
 
 
-def _checked_by_val(task: PlanningTask, record: dict[str, object]) -> dict[str, object]:
-    """Return ``record`` with VAL's verdict on its plan (VAL runs once per distinct plan of a task)."""
+def _checked_by_val(readable: CompiledTask, record: dict[str, object]) -> dict[str, object]:
+    """Return ``record`` with VAL's verdict on its plan for the ``readable`` PDDL (VAL runs once per distinct plan)."""
     actions = record.get("actions")
     verdicts = record.get("validated_by")
     if not isinstance(actions, list) or not isinstance(verdicts, dict):
         return record
-    readable = compile_task(task)  # the person's rules as written: one derived clause per rule
     report = validate(readable.domain, readable.problem, [(action, tuple(args)) for action, args in actions])
     message = record.get("message") or ("" if report.verdict is ValVerdict.VALID else report.words)
     return {**record, "validated_by": {**verdicts, "val": report.verdict.value}, "message": message}
 
 
+def _readable(task: PlanningTask, val: bool) -> CompiledTask | None:
+    """Return the PDDL VAL checks a task's plans on (the person's rules as written: one derived clause per rule)."""
+    return compile_task(task) if val else None
+
+
 def _record(
-    task: PlanningTask, planner: str, time_limit: float, memory_mb: int, val: bool, context: ForkServerContext
+    task: PlanningTask,
+    planner: str,
+    time_limit: float,
+    memory_mb: int,
+    readable: CompiledTask | None,
+    context: ForkServerContext,
 ) -> dict[str, object]:
+    """Run one planner on one task; VAL checks its plan on ``readable`` (None: no VAL)."""
     record = _run(task, planner, time_limit, memory_mb, context)
-    return _checked_by_val(task, record) if val else record
+    return record if readable is None else _checked_by_val(readable, record)
 
 
 def run_once(
     task: ComparisonTask, planner: str, time_limit: float, memory_mb: int, val: bool = False
 ) -> dict[str, object]:
     """Run one planner on one task in a process of its own; return its raw record (``val``: VAL checks the plan)."""
-    return _record(build(task.spec), planner, time_limit, memory_mb, val, fork_server([planner]))
+    built = build(task.spec)
+    return _record(built, planner, time_limit, memory_mb, _readable(built, val), fork_server([planner]))
 
 
 def _is_valid(record: dict[str, object]) -> bool:
@@ -188,10 +199,11 @@ def compare(
     rows: list[RunRecord] = []
     for task in tasks:
         built = build(task.spec)
+        readable = _readable(built, val)  # compiled once for every run of the task
         for planner in planners:
             records: list[dict[str, object]] = []
             for _ in range(repeat):
-                records.append(_record(built, planner, time_limit, memory_mb, val, context))
+                records.append(_record(built, planner, time_limit, memory_mb, readable, context))
                 if progress is not None:
                     progress(f"{planner} on {task.name}")
             rows.append(_summary(task, planner, records))
