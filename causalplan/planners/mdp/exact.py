@@ -74,10 +74,8 @@ class _Solver:
         made, failed = state
         c = self.c
         best: _Value | None = None
-        for index, p in enumerate(c.probability):
-            if unusable >> index & 1 or not parts & c.fixed[index] or parts & c.moving[index]:
-                continue
-            bit = 1 << index
+        for index in c.applicable(parts, unusable):
+            p, bit = c.probability[index], 1 << index
             success = self.solve((made | bit, failed), parts | c.moving[index], unusable | c.taken_on_success[index])
             failure = (
                 self.solve((made, failed | bit), parts, unusable | c.taken_on_failure[index]) if p < 1.0 else success
