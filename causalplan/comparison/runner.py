@@ -3,8 +3,8 @@
 Each run is forked from a warm parent: multiprocessing's fork server, which has preloaded the
 planners, FD's translator and the MDP (``PRELOADED``), so a run (``worker``) starts with
 nothing left to import and no state of an earlier run; it sends its record through a pipe and
-is killed at its limit (by hand: ``pebble``'s wait for a finished process cost each run
-several times what the paper's tasks take to plan). A run that crashes, is killed at its
+is killed at its limit (by hand: ``pebble``'s wait for a finished process was slower than the
+paper's tasks take to plan; benchmarks/RESULTS.md). A run that crashes, is killed at its
 limit or runs out of memory becomes a row with that status; it never stops the comparison.
 Plans are checked by replay inside the run and by VAL here in the parent (each distinct plan
 of a task once), outside the timed part.
@@ -24,7 +24,7 @@ from pathlib import Path
 from causalplan.comparison import worker
 from causalplan.comparison.tasks import ComparisonTask, build
 from causalplan.pddl.task import PlanningTask
-from causalplan.pddl.writer import compile_task
+from causalplan.pddl.writer import CompiledTask, compile_task
 from causalplan.planners import processes
 from causalplan.planners.val import ValVerdict, validate
 
@@ -80,11 +80,7 @@ def fork_server(planners: Iterable[str] = ()) -> ForkServerContext:
 
 def _died(folder: Path, exitcode: int | None) -> dict[str, object]:
     """Return the record of a run whose process ended without a record (its output's last line says why)."""
-    try:
-        output = (folder / worker.OUTPUT_FILE).read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        output = ""
-    tail = output.strip().splitlines()[-1:] or [f"exit code {exitcode}"]
+    tail = processes.output_in(folder).strip().splitlines()[-1:] or [f"exit code {exitcode}"]
     status = "out_of_memory" if "MemoryError" in tail[0] else "error"
     return {"status": status, "message": f"the worker failed: {tail[0]}"}
 
@@ -116,30 +112,41 @@ def _run(
     return record
 
 
-def _checked_by_val(task: PlanningTask, record: dict[str, object]) -> dict[str, object]:
-    """Return ``record`` with VAL's verdict on its plan (VAL runs once per distinct plan of a task)."""
+def _checked_by_val(readable: CompiledTask, record: dict[str, object]) -> dict[str, object]:
+    """Return ``record`` with VAL's verdict on its plan for the ``readable`` PDDL (VAL runs once per distinct plan)."""
     actions = record.get("actions")
     verdicts = record.get("validated_by")
     if not isinstance(actions, list) or not isinstance(verdicts, dict):
         return record
-    readable = compile_task(task)  # the person's rules as written: one derived clause per rule
     report = validate(readable.domain, readable.problem, [(action, tuple(args)) for action, args in actions])
     message = record.get("message") or ("" if report.verdict is ValVerdict.VALID else report.words)
     return {**record, "validated_by": {**verdicts, "val": report.verdict.value}, "message": message}
 
 
+def _readable(task: PlanningTask, val: bool) -> CompiledTask | None:
+    """Return the PDDL VAL checks a task's plans on (the person's rules as written: one derived clause per rule)."""
+    return compile_task(task) if val else None
+
+
 def _record(
-    task: PlanningTask, planner: str, time_limit: float, memory_mb: int, val: bool, context: ForkServerContext
+    task: PlanningTask,
+    planner: str,
+    time_limit: float,
+    memory_mb: int,
+    readable: CompiledTask | None,
+    context: ForkServerContext,
 ) -> dict[str, object]:
+    """Run one planner on one task; VAL checks its plan on ``readable`` (None: no VAL)."""
     record = _run(task, planner, time_limit, memory_mb, context)
-    return _checked_by_val(task, record) if val else record
+    return record if readable is None else _checked_by_val(readable, record)
 
 
 def run_once(
     task: ComparisonTask, planner: str, time_limit: float, memory_mb: int, val: bool = False
 ) -> dict[str, object]:
     """Run one planner on one task in a process of its own; return its raw record (``val``: VAL checks the plan)."""
-    return _record(build(task.spec), planner, time_limit, memory_mb, val, fork_server([planner]))
+    built = build(task.spec)
+    return _record(built, planner, time_limit, memory_mb, _readable(built, val), fork_server([planner]))
 
 
 def _is_valid(record: dict[str, object]) -> bool:
@@ -192,10 +199,11 @@ def compare(
     rows: list[RunRecord] = []
     for task in tasks:
         built = build(task.spec)
+        readable = _readable(built, val)  # compiled once for every run of the task
         for planner in planners:
             records: list[dict[str, object]] = []
             for _ in range(repeat):
-                records.append(_record(built, planner, time_limit, memory_mb, val, context))
+                records.append(_record(built, planner, time_limit, memory_mb, readable, context))
                 if progress is not None:
                     progress(f"{planner} on {task.name}")
             rows.append(_summary(task, planner, records))

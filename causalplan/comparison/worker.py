@@ -23,9 +23,6 @@ from causalplan.planners import processes
 if TYPE_CHECKING:
     from causalplan.pddl.task import PlanningTask
 
-OUTPUT_FILE = "output.log"
-"""Where a run's stdout and stderr go, in its folder (what planners print would garble the progress bar)."""
-
 
 def _limit_memory(megabytes: int) -> None:
     limit = processes.memory_limit(megabytes)
@@ -33,8 +30,11 @@ def _limit_memory(megabytes: int) -> None:
 
 
 def _output_to(folder: Path) -> None:
-    """Send this process's stdout and stderr (file descriptors 1 and 2) to ``OUTPUT_FILE`` in ``folder``."""
-    descriptor = os.open(folder / OUTPUT_FILE, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    """Send this process's stdout and stderr (file descriptors 1 and 2) to ``processes.OUTPUT_FILE`` in ``folder``.
+
+    What planners print would garble the parent's progress bar; the parent reads the file when the run dies.
+    """
+    descriptor = os.open(folder / processes.OUTPUT_FILE, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     os.dup2(descriptor, 1)
     os.dup2(descriptor, 2)
     os.close(descriptor)

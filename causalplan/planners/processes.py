@@ -99,7 +99,8 @@ def start(command: Sequence[str], *, folder: Path) -> subprocess.Popen[bytes]:
         )
 
 
-def _output(folder: Path) -> str:
+def output_in(folder: Path) -> str:
+    """Return the output a run left in ``folder`` (its ``OUTPUT_FILE``), empty when there is none."""
     try:
         return (folder / OUTPUT_FILE).read_text(encoding="utf-8", errors="replace")
     except FileNotFoundError:
@@ -121,11 +122,11 @@ def finish(
     except subprocess.TimeoutExpired:
         kill_group(process)
         process.communicate()
-        return Finished(None, _output(folder), time.perf_counter() - started)
+        return Finished(None, output_in(folder), time.perf_counter() - started)
     except BaseException:
         kill_group(process)
         raise
-    return Finished(process.returncode, _output(folder), time.perf_counter() - started)
+    return Finished(process.returncode, output_in(folder), time.perf_counter() - started)
 
 
 def run_limited(

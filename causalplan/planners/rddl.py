@@ -128,17 +128,15 @@ def export_rddl(task: PlanningTask) -> RddlTask:
         ]
     )
     facts: list[str] = []
-    index_of = {fit.id: index for index, fit in enumerate(obj.fits)}
-    for fit in obj.fits:
+    for index, fit in enumerate(obj.fits):  # compiled over obj.fits: a fit's index is its bit
         f = fits[fit.id]
         facts += [
             f"P({f}) = {_real(fit.probability)};",
             f"MOVING({f}, {parts[fit.moving_part]}) = true;",
             f"FIXED({f}, {parts[fit.fixed_part]}) = true;",
         ]
-        index = index_of[fit.id]
-        for other in obj.fits:
-            bit = 1 << index_of[other.id]
+        for other_index, other in enumerate(obj.fits):
+            bit = 1 << other_index
             if compiled.taken_on_success[index] & bit:
                 facts.append(f"TAKEN_ON_SUCCESS({f}, {fits[other.id]}) = true;")
             if compiled.taken_on_failure[index] & bit:

@@ -74,10 +74,8 @@ class _Solver:
         made, failed = state
         c = self.c
         best: _Value | None = None
-        for index, p in enumerate(c.probability):
-            if unusable >> index & 1 or not parts & c.fixed[index] or parts & c.moving[index]:
-                continue
-            bit = 1 << index
+        for index in c.applicable(parts, unusable):
+            p, bit = c.probability[index], 1 << index
             success = self.solve((made | bit, failed), parts | c.moving[index], unusable | c.taken_on_success[index])
             failure = (
                 self.solve((made, failed | bit), parts, unusable | c.taken_on_failure[index]) if p < 1.0 else success
@@ -97,30 +95,39 @@ class _Solver:
 
 def solve_mdp(task: PlanningTask, time_limit: float = 10.0, step_cost: float = STEP_COST) -> MdpSolution:
     """Solve the task's MDP exactly; ``too_large`` (quickly) beyond its size limits, ``timeout`` at ``time_limit``."""
-    fits = relevant_fits(task)
+    return solve_compiled_mdp(compile_mdp(task, relevant_fits(task)), time_limit, step_cost)
+
+
+def solve_compiled_mdp(compiled: CompiledMdp, time_limit: float, step_cost: float) -> MdpSolution:
+    """Solve a compiled MDP exactly (``solve_mdp``'s work, for callers that solve it more than once)."""
+    fits = compiled.fits
     if len(fits) > MAX_RELEVANT_FITS:
         return MdpSolution(
             PlanStatus.TOO_LARGE,
             relevant_fits=len(fits),
             message=f"{len(fits)} fits matter for this model; the exact MDP stops at {MAX_RELEVANT_FITS}.",
         )
-    solver = _Solver(compile_mdp(task, fits), time.monotonic() + time_limit, step_cost)
+    solver = _Solver(compiled, time.monotonic() + time_limit, step_cost)
+
+    def stopped(status: PlanStatus, message: str) -> MdpSolution:
+        return MdpSolution(status, states=len(solver.values), relevant_fits=len(fits), message=message)
+
     start: State = (0, 0)
+    # No RecursionError to catch: each level of the recursion (two frames) attempts one more
+    # fit, so it is at most MAX_RELEVANT_FITS levels deep.
     try:
-        root = solver.solve(start, solver.c.base, 0)
+        root = solver.solve(start, compiled.base, 0)
     except _OutOfTime:
-        message = (
+        return stopped(
+            PlanStatus.TIMEOUT,
             f"The exact MDP did not finish within {time_limit:g} s "
-            f"({len(solver.values):,} states solved over {len(fits)} relevant fits)."
+            f"({len(solver.values):,} states solved over {len(fits)} relevant fits).",
         )
-        return MdpSolution(PlanStatus.TIMEOUT, states=len(solver.values), relevant_fits=len(fits), message=message)
-    except (_TooLarge, RecursionError) as exc:
-        message = (
-            "The MDP's plans are too long to solve exactly."
-            if isinstance(exc, RecursionError)
-            else f"The exact MDP over {len(fits)} relevant fits passed {len(solver.values):,} states; it was stopped."
+    except _TooLarge:
+        return stopped(
+            PlanStatus.TOO_LARGE,
+            f"The exact MDP over {len(fits)} relevant fits passed {len(solver.values):,} states; it was stopped.",
         )
-        return MdpSolution(PlanStatus.TOO_LARGE, states=len(solver.values), relevant_fits=len(fits), message=message)
     if root.success == 0.0:
         return MdpSolution(
             PlanStatus.UNSOLVABLE,
@@ -142,7 +149,7 @@ def solve_mdp(task: PlanningTask, time_limit: float = 10.0, step_cost: float = S
         tuple(actions),
         root.success,
         root.attempts,
-        policy_entries(solver.c, table, {state: value.success for state, value in solver.values.items()}),
+        policy_entries(compiled, table, {state: value.success for state, value in solver.values.items()}),
         len(solver.values),
         len(fits),
         success_upper=root.success,

@@ -22,13 +22,13 @@ from collections.abc import Callable
 
 from causalplan.errors import CausalPlanError
 from causalplan.pddl.task import PlanningTask
-from causalplan.planners.mdp.exact import solve_mdp
-from causalplan.planners.mdp.model import MdpSolution, Objective, Optimality
-from causalplan.planners.mdp.search import solve_mdp_search, tie_breaking_step_cost
+from causalplan.planners.mdp.exact import solve_compiled_mdp
+from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, Objective, Optimality, compile_mdp, relevant_fits
+from causalplan.planners.mdp.search import search_compiled_mdp, tie_breaking_step_cost
 from causalplan.planners.result import PlanStatus
 
-Solver = Callable[[PlanningTask, float, float], MdpSolution]
-"""An MDP solver: the task, the time limit and the step cost in; the solution out."""
+Solver = Callable[[CompiledMdp, float, float], MdpSolution]
+"""An MDP solver: the compiled MDP, the time limit and the step cost in; the solution out."""
 
 MAX_STEP_COST = 4.0
 """Beyond this, one attempt costs more than twice a success is worth: attempts dominate."""
@@ -80,11 +80,15 @@ def solve_for(
     required_success: float | None = None,
     exact: bool = False,
 ) -> MdpSolution:
-    """Solve the task's MDP for ``objective`` with the heuristic search (or the exact solver)."""
-    solve: Solver = solve_mdp if exact else solve_mdp_search
+    """Solve the task's MDP for ``objective`` with the heuristic search (or the exact solver).
+
+    The MDP is compiled once: every solve of the bisection shares it (and its goal cache).
+    """
+    solve: Solver = solve_compiled_mdp if exact else search_compiled_mdp
     deadline = time.monotonic() + time_limit
-    step_cost = tie_breaking_step_cost(task)
-    reliable = solve(task, max(0.0, deadline - time.monotonic()), step_cost)
+    compiled = compile_mdp(task, relevant_fits(task))
+    step_cost = tie_breaking_step_cost(compiled)
+    reliable = solve(compiled, max(0.0, deadline - time.monotonic()), step_cost)
     if objective is Objective.PROBABILITY:
         return reliable
     assert required_success is not None
@@ -109,7 +113,7 @@ def solve_for(
         if remaining <= 0:
             break
         cost = math.exp((low + high) / 2)
-        candidate = solve(task, remaining, cost)
+        candidate = solve(compiled, remaining, cost)
         if _meets(candidate, required_success):
             low = math.log(cost)
             if (candidate.expected_actions or math.inf) < (best.expected_actions or math.inf) - 1e-12:

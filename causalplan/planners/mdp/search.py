@@ -170,7 +170,7 @@ def _default_success(compiled: CompiledMdp, state: State, step_cost: float) -> f
     return chance if compiled.goal_holds(compiled.parts_of((made, failed))[0]) else 0.0
 
 
-def tie_breaking_step_cost(task: PlanningTask) -> float:
+def tie_breaking_step_cost(compiled: CompiledMdp) -> float:
     """Return a step cost that only breaks ties between policies of (nearly) equal success probability.
 
     A fixed step cost outweighs the goal's reward where success is unlikely, and the value's
@@ -179,7 +179,6 @@ def tie_breaking_step_cost(task: PlanningTask) -> float:
     attempts together cost at most ``STEP_COST`` times that probability, so a policy is only
     preferred to a more reliable one when it is less reliable by under ``STEP_COST / 2`` of it.
     """
-    compiled = compile_mdp(task, relevant_fits(task))
     reachable = _default_success(compiled, (0, 0), STEP_COST)
     return STEP_COST * max(reachable, MIN_SUCCESS_SCALE) / max(1, len(compiled.fits))
 
@@ -248,8 +247,12 @@ def _all_success_path(
 
 def solve_mdp_search(task: PlanningTask, time_limit: float = 10.0, step_cost: float = STEP_COST) -> MdpSolution:
     """Solve the task's MDP by improved LAO* from the start; anytime (``bounded``) at the limit."""
-    fits = relevant_fits(task)
-    compiled = compile_mdp(task, fits)
+    return search_compiled_mdp(compile_mdp(task, relevant_fits(task)), time_limit, step_cost)
+
+
+def search_compiled_mdp(compiled: CompiledMdp, time_limit: float, step_cost: float) -> MdpSolution:
+    """Solve a compiled MDP by improved LAO* (``solve_mdp_search``'s work, for callers that solve it more than once)."""
+    fits = compiled.fits
     started = time.monotonic()
     # The last tenth of the time goes to bounding the policy where the search stopped.
     search = _Search(compiled, step_cost, started + SEARCH_SHARE * time_limit)
@@ -282,22 +285,20 @@ def _solution(search: _Search, root: _Node, optimality: Optimality, time_limit: 
             fits=fits,
         )
     success, attempts, table, successes = _evaluate(search, root, deadline)
+    message = ""
     if optimality is Optimality.BOUNDED:
         fallback = _default_success(compiled, (0, 0), step_cost)
         if fallback > success:  # the default policy alone is provably better than what was bounded
             success, table, successes = fallback, {}, {}
-    message = ""
-    draft = MdpSolution(PlanStatus.SOLVED, fits=fits, policy_table=table)
-    actions = _all_success_path(compiled, draft, step_cost)
-    if optimality is Optimality.BOUNDED:
         message = (
             f"The time limit ({time_limit:g} s) or the state budget came first after {search.expanded:,} expansions: "
             f"this is the best policy so far; it succeeds with probability at least {success:.4f}, and no policy "
             f"does better than {root.success:.4f}."
         )
+    draft = MdpSolution(PlanStatus.SOLVED, fits=fits, policy_table=table)
     return MdpSolution(
         PlanStatus.SOLVED,
-        actions,
+        _all_success_path(compiled, draft, step_cost),
         success,
         attempts if optimality is Optimality.OPTIMAL else None,
         policy_entries(compiled, table, successes),
