@@ -44,13 +44,18 @@ class BatchRequest(_Counted):
     """VAL checks each plan; rows stored before VAL was asked for ran without it."""
 
 
-class SimulationRequest(JobRequest):
-    """A stored model planned (on the mapping's object) and simulated, or carried out by the robot."""
+class _StoredPlan(JobRequest):
+    """A stored model, planned (on the mapping's object) with the planner and time limit resolved."""
 
     model_id: str
     mapping: dict[str, Any] | None
     planner: str
     time_limit: float
+
+
+class SimulationRequest(_StoredPlan):
+    """A stored model planned and simulated, or carried out by the robot."""
+
     picture: bool
     robot: bool
 
@@ -65,13 +70,9 @@ class ConsensusRequest(_Counted):
     simulate: bool
 
 
-class PlanFilmRequest(JobRequest):
+class PlanFilmRequest(_StoredPlan):
     """The API's film: plan a stored model, then film the robot carrying out the plan."""
 
-    model_id: str
-    mapping: dict[str, Any] | None
-    planner: str
-    time_limit: float
     validate_plan: bool = Field(alias="validate")
     video: str
 

@@ -26,7 +26,7 @@ from causalplan.service.pool.robot_jobs import CONTENT_TYPES, read_progress
 
 if TYPE_CHECKING:
     from causalplan.causal.model import CausalModel, Labelling
-    from causalplan.service.api.schemas.jobs import VideoJobIn, VideoPlanIn
+    from causalplan.service.api.schemas.jobs import VideoJobIn
     from causalplan.service.deps import Services
     from causalplan.service.documents import PlanInputs
 
@@ -85,18 +85,18 @@ def film_plan_job(
     return data
 
 
-def _plan_inputs(body: VideoPlanIn, services: Services) -> PlanInputs:
-    """Return the plan inputs of a film's request, read as POST /v1/plans reads its body."""
+def _plan_inputs(fields: dict[str, Any], services: Services) -> PlanInputs:
+    """Return the plan inputs of a film's request (its JSON), read as POST /v1/plans reads its body."""
     from causalplan.service.api.schemas.plans import PlanIn
     from causalplan.service.documents import plan_inputs
     from causalplan.service.storage.crud import ClientIds
 
-    plan = PlanIn.model_validate(body.model_dump(mode="json", by_alias=True, exclude={"video", "kind"}))
+    plan = PlanIn.model_validate({key: value for key, value in fields.items() if key not in ("video", "kind")})
     return plan_inputs(plan, services, ClientIds())
 
 
 def prepare_video(body: VideoJobIn, services: Services) -> PlanFilmRequest:
-    inputs = _plan_inputs(body, services)
+    inputs = _plan_inputs(body.model_dump(mode="json", by_alias=True), services)
     inputs.store(services)
     return PlanFilmRequest(
         model_id=str(inputs.submission.record.id),
@@ -116,7 +116,6 @@ def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key:
 def _film_in_worker(
     request: VideoRequest, services: Services, progress: Progress, progress_file: Path
 ) -> dict[str, Any]:
-    from causalplan.service.api.schemas.jobs import VideoPlanIn
     from causalplan.service.pool.robot_jobs import robot_film_job
 
     settings = services.settings
@@ -127,11 +126,10 @@ def _film_in_worker(
         args: tuple[Any, ...] = (request.object, tuple(request.fits), folders, video, size, progress_file)
         made: dict[str, Any] = in_pool(services, progress, robot_film_job, args, settings.robot_seconds)
         return made
-    body = VideoPlanIn.model_validate(request.stored())
-    inputs = _plan_inputs(body, services)
-    args = (inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, folders, body.validate_plan, video, size)
+    inputs = _plan_inputs(request.stored(), services)
+    args = (inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, folders, request.validate_plan)
     timeout = inputs.time_limit + settings.solve_grace_seconds + settings.robot_seconds
-    data: dict[str, Any] = in_pool(services, progress, film_plan_job, (*args, progress_file), timeout)
+    data: dict[str, Any] = in_pool(services, progress, film_plan_job, (*args, video, size, progress_file), timeout)
     return {**data, "model_id": request.model_id}
 
 

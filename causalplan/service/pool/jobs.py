@@ -140,20 +140,19 @@ def simulate_job(
     catalog_folders: tuple[Path, ...],
     picture: bool,
     robot: bool = False,
-    video: str | None = None,
-    video_size: tuple[int, int] = (480, 360),
 ) -> dict[str, object]:
     """Plan ``model`` (on the mapping's object), run the plan in the physics simulator.
 
     Returns the plan (as ``causalplan plan --json``), the simulator's report and, when asked,
     the picture of the final assembly as a PNG data URL. With ``robot`` the Panda carries out
-    the plan (``robot``: whether it could, and why not), and ``video`` ("mp4" or "gif") films
-    it: the film's bytes are in ``video`` (the app keeps them and answers with their URL).
+    the plan (``robot``: whether it could, and why not); its film is a ``video`` job's
+    (``service.jobs.video``), so ``video`` is None here.
     """
     import base64
 
-    from causalplan.service.pool.robot_jobs import robot_outcome, robot_simulation
+    from causalplan.service.pool.robot_jobs import robot_outcome
     from causalplan.sim import RenderMode, simulate_plan
+    from causalplan.transfer.robot_verdict import robot_run
 
     task = catalog_task(model, worker_catalog(catalog_folders), mapping)
     target = task.obj
@@ -162,9 +161,9 @@ def simulate_job(
     if not result.has_plan:
         return data
     if robot:
-        report, film = robot_simulation(target, result.steps, video, video_size)
-        data.update(simulation=report.as_dict(), robot=robot_outcome(report), video=film)
-        return data  # no still picture: the film shows the assembly
+        report = robot_run(target, tuple(result.steps))
+        data.update(simulation=report.as_dict(), robot=robot_outcome(report), video=None)
+        return data  # no still picture with the robot (its film is a video job's)
     report = simulate_plan(target, result.steps, render=RenderMode.FINAL if picture else RenderMode.NONE)
     data["simulation"] = report.as_dict()
     if picture and report.picture is not None:

@@ -23,33 +23,26 @@ from causalplan.service.storage.records import (
     ParticipantTrialRecord,
     TrialRecord,
 )
-from causalplan.service.storage.throttle import WindowCounter
+from causalplan.service.storage.throttle import MINUTE_SECONDS, PerMinute
 
-WINDOW_SECONDS = 60.0
+WINDOW_SECONDS = MINUTE_SECONDS
 """The demo's start limit counts the starts of each client in fixed windows this long."""
 PURGE_BATCH = 500
 """Participants deleted per statement (keeps each IN list short)."""
 
 
-class DemoStarts:
+class DemoStarts(PerMinute):
     """Counts demo starts per client in fixed windows, in the database (one count for every replica)."""
 
     def __init__(self, engine: Engine, per_window: int, clock: Callable[[], float] = time.time) -> None:
-        self.per_window = per_window
-        self._counter = WindowCounter(engine, "demo_start", per_window, WINDOW_SECONDS, clock)
+        super().__init__(engine, "demo_start", per_window, TooManyDemoStartsError, clock)
 
-    def admit(self, client: str) -> None:
-        """Count one start of ``client``; TooManyDemoStartsError when its window is full (0 per window: no limit)."""
-        if self.per_window == 0:
-            return
-        refused = self._counter.admit(client)
-        if refused is not None:
-            count, retry_after = refused
-            raise TooManyDemoStartsError(
-                f"This computer has started the demo {count} times in the last minute; "
-                f"please wait {retry_after} s, or go on with the demo you already started.",
-                retry_after,
-            )
+    def message(self, count: int, retry_after: int) -> str:
+        """Return what the demo's 429 page says to a client that started it ``count`` times this minute."""
+        return (
+            f"This computer has started the demo {count} times in the last minute; "
+            f"please wait {retry_after} s, or go on with the demo you already started."
+        )
 
 
 def _chunks(ids: list[uuid.UUID]) -> Iterator[list[uuid.UUID]]:

@@ -6,8 +6,8 @@ otherwise it raises ``TooManyAttemptsError`` (429, ``Retry-After``) without comp
 right guess during a lockout is refused too. Successes are not counted.
 
 ``WindowCounter.admit`` counts one event of a client in the current fixed window and says
-whether the window still had room (the demo's start limit); ``PerMinute`` raises a 429 error
-when it had not (arrivals on a public study link, stored models).
+whether the window still had room; ``PerMinute`` raises a 429 error when it had not (demo
+starts, arrivals on a public study link, stored models).
 
 Both live in tables (``failed_attempts``, ``window_counts``) rather than in process memory, so
 several ``causalplan serve`` replicas behind a load balancer hold one count: a guesser cannot
@@ -179,6 +179,10 @@ class WindowCounter:
             return existing or self.per_window, max(1, math.ceil(ends_at - now))
 
 
+MINUTE_SECONDS = 60.0
+"""``PerMinute`` counts each client's events in fixed windows this long."""
+
+
 class PerMinute:
     """At most ``per_minute`` events of each client a minute (0: no limit); beyond, ``refuse`` makes the 429 error."""
 
@@ -192,7 +196,11 @@ class PerMinute:
     ) -> None:
         self.per_minute = per_minute
         self._refuse = refuse
-        self._counter = WindowCounter(engine, scope, max(per_minute, 1), 60.0, clock)
+        self._counter = WindowCounter(engine, scope, max(per_minute, 1), MINUTE_SECONDS, clock)
+
+    def message(self, count: int, retry_after: int) -> str:
+        """Return what the 429 error says to a client with ``count`` events this minute."""
+        return f"Too many at once from this address ({count} in a minute): wait {retry_after} s."
 
     def admit(self, client: str) -> None:
         """Count one event of ``client``; raise ``refuse(message, seconds)`` when its minute is full."""
@@ -201,6 +209,4 @@ class PerMinute:
         refused = self._counter.admit(client)
         if refused is not None:
             count, retry_after = refused
-            raise self._refuse(
-                f"Too many at once from this address ({count} in a minute): wait {retry_after} s.", retry_after
-            )
+            raise self._refuse(self.message(count, retry_after), retry_after)
