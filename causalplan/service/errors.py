@@ -7,6 +7,8 @@ handler in ``main`` turn every one of them into ``{"error": {"code", "message", 
 from __future__ import annotations
 
 from causalplan.errors import CatalogError, CausalPlanError, InputFileError, PlannerUnavailableError, UnknownObjectError
+from causalplan.explain.contrast import PlanUnavailableError
+from causalplan.explain.questions import QuestionError
 from causalplan.limits import LimitExceededError
 from causalplan.studies.errors import (
     InvalidExperimentError,
@@ -259,6 +261,8 @@ _LOWER_STATUS: dict[type[CausalPlanError], int] = {
     InvalidRecruitmentError: 422,
     StepLockedError: 409,
     PlatformIdRequiredError: 403,
+    QuestionError: 422,  # a why-not question the plan or the object cannot answer (unknown_part, ...)
+    PlanUnavailableError: 422,  # a model without a plan to explain
 }
 
 

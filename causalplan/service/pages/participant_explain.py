@@ -12,9 +12,6 @@ from typing import Any
 from fastapi import APIRouter
 from pydantic import Field
 
-from causalplan.errors import CausalPlanError
-from causalplan.explain.contrast import PlanUnavailableError
-from causalplan.explain.questions import QuestionError
 from causalplan.service.answers import default_planner
 from causalplan.service.api.schemas.common import InputModel, OutputModel
 from causalplan.service.deps import CatalogDep, ServicesDep, SettingsDep
@@ -61,16 +58,9 @@ def explain(
     limit = settings.default_time_limit
     args = (model_on(draft, obj.id), None, default_planner(), limit, tuple(settings.catalog_folders))
     seconds = PLANS_PER_EXPLANATION * limit + settings.solve_grace_seconds
-    try:
-        data: dict[str, Any] = services.answers.pool.run(
-            explanation_job, (*args, body.why, body.why_not, False, False), seconds
-        )
-    except CausalPlanError as exc:
-        if not isinstance(exc, QuestionError | PlanUnavailableError):
-            raise
-        error = InvalidRequestError(exc.message, details=exc.details)
-        error.code = exc.code
-        raise error from exc
+    data: dict[str, Any] = services.answers.pool.run(
+        explanation_job, (*args, body.why, body.why_not, False, False), seconds
+    )
     contrast = data.get("why_not")
     if contrast is not None:
         steps = (contrast["alternative"].get("plan") or []) if contrast["code"] != "already_does" else []

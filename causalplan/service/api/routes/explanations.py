@@ -6,14 +6,10 @@ from typing import Any
 
 from fastapi import APIRouter
 
-from causalplan.errors import CausalPlanError
-from causalplan.explain.contrast import PlanUnavailableError
-from causalplan.explain.questions import QuestionError
 from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.api.schemas.explanations import ExplanationIn, ExplanationOut
 from causalplan.service.deps import ClientIdsDep, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, plan_inputs
-from causalplan.service.errors import InvalidRequestError
 from causalplan.service.pool.explain_jobs import PLANS_PER_EXPLANATION, explanation_job
 
 router = APIRouter(
@@ -22,9 +18,6 @@ router = APIRouter(
     responses=error_responses(403, 404, 429, 503, 504),
     route_class=StrictJSONRoute,
 )
-
-ANSWERED_AS_INVALID = (QuestionError, PlanUnavailableError)
-"""Errors of the question (or of a model without a plan) that are the request's fault: 422 with their code."""
 
 
 @router.post("", response_model=ExplanationOut, summary="Explain a plan")
@@ -51,12 +44,5 @@ def create_explanation(body: ExplanationIn, services: ServicesDep, client: Clien
         body.simulate,
     )
     seconds = PLANS_PER_EXPLANATION * inputs.time_limit + services.settings.solve_grace_seconds
-    try:
-        data: dict[str, Any] = services.answers.pool.run(explanation_job, args, seconds)
-    except CausalPlanError as exc:
-        if not isinstance(exc, ANSWERED_AS_INVALID):
-            raise
-        error = InvalidRequestError(exc.message, details=exc.details)
-        error.code = exc.code  # the question's own stable code, e.g. unknown_part
-        raise error from exc
+    data: dict[str, Any] = services.answers.pool.run(explanation_job, args, seconds)
     return {**data, "model_id": inputs.submission.record.id}
