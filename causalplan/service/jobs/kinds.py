@@ -10,6 +10,7 @@ own (``video``, ``fit_estimation``).
 
 from __future__ import annotations
 
+import io
 import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -31,7 +32,7 @@ from causalplan.service.pool import jobs as worker_jobs
 from causalplan.service.pool.catalog import worker_catalog
 from causalplan.service.storage.jobs import JobKind
 from causalplan.transfer import batch
-from causalplan.transfer.batch import Trial, TrialResult, read_trials, run_batch
+from causalplan.transfer.batch import Trial, TrialResult, run_batch, trials_of_lines
 
 if TYPE_CHECKING:
     from causalplan.service.api.schemas.jobs import BatchJobIn, ConsensusJobIn, SimulationJobIn
@@ -56,10 +57,8 @@ def csv_to_json_lines(text: str) -> str:
 
 def read_uploaded_trials(text: str, limit: int) -> list[Trial]:
     """Return the trials of a JSON Lines upload, read as ``causalplan batch`` reads a file; at most ``limit``."""
-    with tempfile.TemporaryDirectory(prefix="causalplan-upload-") as folder:
-        path = Path(folder) / "trials.jsonl"
-        path.write_text(text, encoding="utf-8", errors="surrogatepass")
-        trials = list(read_trials(path))
+    lines = io.BytesIO(text.encode("utf-8", errors="surrogatepass"))  # split as a file is: at each b"\n"
+    trials = list(trials_of_lines(enumerate(lines, start=1)))
     if len(trials) > limit:
         raise LimitExceededError(
             "too_many_trials",
