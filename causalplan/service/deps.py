@@ -55,7 +55,8 @@ class Services:
     """Wrong research tokens by client and in total, to refuse guessing at full speed."""
     job_pool: PlannerPool
     """The workers of long work (jobs: batches, robot runs, films), one per job runner: ``pool``
-    is for interactive requests only, so long work can never take its workers."""
+    is for interactive requests (and the robot runs a participant waits for), so no job can take
+    its workers."""
     runner: Runner | None = None
     """This replica's job runner (started after the pool)."""
     probe: dict[str, object] | None = None
