@@ -110,8 +110,9 @@ def _print_simulation(report: SimulationReport) -> None:
     "--safety-factor",
     type=click.FloatRange(0.0, 1.0, min_open=True),
     default=None,
-    help="With --robot: the share of the Panda's datasheet velocity, acceleration and jerk limits its motor "
-    "commands use  [default: sim.robot.limits.DEFAULT_SAFETY_FACTOR, 0.5]",
+    help="With --robot: the share of the Panda's datasheet velocity and acceleration limits its motor "
+    "commands are timed to (jerk is checked against the datasheet)  "
+    "[default: sim.robot.limits.DEFAULT_SAFETY_FACTOR, 0.5]",
 )
 @click.option(
     "--motors/--no-motors",

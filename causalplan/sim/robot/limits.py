@@ -16,7 +16,9 @@ from causalplan.errors import CausalPlanError
 POSITION_MARGIN = 0.02
 """Radians kept clear of every datasheet position limit by IK and motion planning."""
 DEFAULT_SAFETY_FACTOR = 0.5
-"""The share of the datasheet's velocity, acceleration and jerk limits a trajectory uses, by default."""
+"""The share of the datasheet's velocity and acceleration limits a trajectory is timed to, by default.
+
+Jerk, which time parameterization does not bound, is checked against the datasheet itself."""
 
 
 class UnknownRobotError(CausalPlanError):
