@@ -20,6 +20,9 @@ APP_NAME = "causalplan"
 MIN_WORKER_MEMORY_MB = 2560
 """A worker's address space must hold its planner children's own limit (2048 MB) and itself."""
 
+MIN_API_KEY_LENGTH = 16
+"""Shortest API key ``api_keys`` takes: long enough that guessing, slowed to the research token's pace, is hopeless."""
+
 IpNetwork = ipaddress.IPv4Network | ipaddress.IPv6Network
 
 
@@ -187,6 +190,33 @@ class Settings(BaseSettings):
         default=16 * 1024 * 1024, ge=1024, description="Largest request body of POST /v1/jobs (it carries uploads)."
     )
 
+    # Who a job belongs to, and how much one client may hold (``service.owners``).
+    api_keys: list[SecretStr] = Field(
+        default_factory=list,
+        description="JSON list of API keys (at least 16 characters each) a client may send as "
+        "'Authorization: Bearer <key>': its jobs are its own, under the key's limits (job_*).",
+    )
+    jobs_in_flight: int = Field(
+        default=10,
+        ge=1,
+        description="Queued or running jobs one client (an API key, the research token, a participant) may have.",
+    )
+    job_megabytes: float = Field(
+        default=512.0,
+        gt=0,
+        description="Megabytes one client's jobs may keep stored (requests and results, until they expire).",
+    )
+    jobs_per_minute: int = Field(default=60, ge=0, description="Jobs one client may post a minute (0: no limit).")
+    anonymous_jobs_in_flight: int = Field(
+        default=3, ge=1, description="Queued or running jobs a client without a key (one address) may have."
+    )
+    anonymous_job_megabytes: float = Field(
+        default=40.0, gt=0, description="Megabytes the jobs of a client without a key may keep stored."
+    )
+    anonymous_jobs_per_minute: int = Field(
+        default=10, ge=0, description="Jobs a client without a key may post a minute (0: no limit)."
+    )
+
     @field_validator("dask_scheduler")
     @classmethod
     def _empty_scheduler_is_none(cls, value: str | None) -> str | None:
@@ -216,6 +246,14 @@ class Settings(BaseSettings):
     def _empty_token_is_none(cls, value: SecretStr | None) -> SecretStr | None:
         # An empty variable (e.g. compose's ${CAUSALPLAN_RESEARCH_TOKEN:-}) must not be a valid token.
         return value if value is not None and value.get_secret_value().strip() else None
+
+    @field_validator("api_keys")
+    @classmethod
+    def _long_keys(cls, value: list[SecretStr]) -> list[SecretStr]:
+        # A short key is guessed; an empty one (an unset variable in a list) would match nothing useful.
+        if any(len(key.get_secret_value().strip()) < MIN_API_KEY_LENGTH for key in value):
+            raise ValueError(f"every API key must have at least {MIN_API_KEY_LENGTH} characters")
+        return value
 
     @model_validator(mode="after")
     def _time_limits_agree(self) -> Settings:

@@ -29,6 +29,7 @@ from sqlalchemy.engine import make_url
 
 from causalplan.service.deps import Services
 from causalplan.service.main import create_app, uvicorn_config
+from causalplan.service.owners import address_owner
 from causalplan.service.storage.migrate import upgrade
 from causalplan.service.storage.session import create_database_engine
 from causalplan.settings import Settings
@@ -37,6 +38,11 @@ from tests.conftest import EXAMPLES
 POSTGRES_URL_VARIABLE = "CAUSALPLAN_TEST_POSTGRES_URL"
 RESEARCH_TOKEN = "research-token-for-tests"
 AUTH = {"Authorization": f"Bearer {RESEARCH_TOKEN}"}
+API_KEY = "api-key-for-tests-0123456789"
+"""An API key the test apps know: a client that posts many jobs says who it is with it."""
+KEY_AUTH = {"Authorization": f"Bearer {API_KEY}"}
+TEST_CLIENT_OWNER = address_owner("testclient").id
+"""The owner of the jobs a TestClient posts without a key (it is known by its address, 'testclient')."""
 
 
 def example_document(relative: str) -> dict[str, Any]:
@@ -126,6 +132,7 @@ def settings_for(database_url: str, **overrides: Any) -> Settings:
     values: dict[str, Any] = {
         "database_url": database_url,
         "research_token": RESEARCH_TOKEN,
+        "api_keys": [API_KEY],
         "planning_workers": 2,
         "default_time_limit": 20.0,
         "draw_plans_ahead": False,  # the tests that need it ask; elsewhere it would compete for the workers
@@ -135,9 +142,9 @@ def settings_for(database_url: str, **overrides: Any) -> Settings:
 
 
 @contextmanager
-def running_client(settings: Settings) -> Iterator[TestClient]:
-    """Start an app with ``settings`` (workers, migrations) and yield a client; stop it afterwards."""
-    with TestClient(create_app(settings), raise_server_exceptions=False) as client:
+def running_client(settings: Settings, headers: dict[str, str] | None = None) -> Iterator[TestClient]:
+    """Start an app with ``settings`` (workers, migrations) and yield a client sending ``headers``; stop it afterwards."""
+    with TestClient(create_app(settings), raise_server_exceptions=False, headers=headers) as client:
         yield client
 
 

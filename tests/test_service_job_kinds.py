@@ -32,6 +32,7 @@ from causalplan.service.storage.records import JobRecord, utc_now
 from causalplan.service.storage.session import create_database_engine
 from tests.service_fixtures import (
     DESK_LAMP,
+    TEST_CLIENT_OWNER,
     error_of,
     first_trials,
     running_client,
@@ -277,7 +278,7 @@ def test_a_jobs_file_is_kept_with_it_and_expires_with_it(database_url: str) -> N
     engine = create_database_engine(database_url)
     upgrade(engine)
     film = bytes(range(256)) * 64  # every byte value: stored as bytes, not text
-    job_id = store.create_job(engine, "video", {"video": "mp4"}, 1, 10).id
+    job_id = store.create_job(engine, "video", {"video": "mp4"}, 1, 10, owner=TEST_CLIENT_OWNER).id
     assert store.claim_job(engine, "replica-a", 30, ["video"]) is not None
     assert store.get_job_file(engine, job_id) is None  # not made yet
     assert store.finish_job(engine, job_id, "replica-a", 60, result={"video": {}}, file=(film, "video/mp4"))
@@ -299,7 +300,7 @@ def test_a_jobs_file_is_kept_with_it_and_expires_with_it(database_url: str) -> N
 def test_a_failed_job_keeps_no_file(database_url: str) -> None:
     engine = create_database_engine(database_url)
     upgrade(engine)
-    job_id = store.create_job(engine, "video", {"video": "mp4"}, 1, 10).id
+    job_id = store.create_job(engine, "video", {"video": "mp4"}, 1, 10, owner=TEST_CLIENT_OWNER).id
     assert store.claim_job(engine, "replica-a", 30, ["video"]) is not None
     error = {"code": "x", "message": "failed", "details": {}}
     assert store.finish_job(engine, job_id, "replica-a", 60, error=error, file=(b"half a film", "video/mp4"))
@@ -371,8 +372,8 @@ def test_a_job_cancelled_through_another_replica_stops_its_worker(tmp_path: Path
 def test_a_film_is_taken_before_older_jobs_of_other_kinds(tmp_path: Path) -> None:
     engine = create_database_engine(sqlite_url(tmp_path))
     upgrade(engine)
-    batch = store.create_job(engine, "batch", {"trials": "x"}, 1, 10).id
-    film = store.create_job(engine, "video", {"video": "mp4"}, 1, 10).id
+    batch = store.create_job(engine, "batch", {"trials": "x"}, 1, 10, owner=TEST_CLIENT_OWNER).id
+    film = store.create_job(engine, "video", {"video": "mp4"}, 1, 10, owner=TEST_CLIENT_OWNER).id
     first, second = (store.claim_job(engine, "replica", 30, ["batch", "video"]) for _ in range(2))
     assert first is not None and second is not None and (first.id, second.id) == (film, batch)
     engine.dispose()
@@ -381,7 +382,7 @@ def test_a_film_is_taken_before_older_jobs_of_other_kinds(tmp_path: Path) -> Non
 def test_a_participants_film_is_found_again_unless_it_failed(tmp_path: Path) -> None:
     engine = create_database_engine(sqlite_url(tmp_path))
     upgrade(engine)
-    made = store.create_job(engine, "video", {"film": "k1"}, 1, 10).id
+    made = store.create_job(engine, "video", {"film": "k1"}, 1, 10, owner=TEST_CLIENT_OWNER).id
     assert store.find_job(engine, "video", "film", "k2") is None
     found = store.find_job(engine, "video", "film", "k1")
     assert found is not None and found.id == made

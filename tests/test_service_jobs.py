@@ -33,6 +33,8 @@ from tests.service_fixtures import (
     DESK_LAMP,
     FIRST_LINES,
     FLASHLIGHT_MAPPING,
+    KEY_AUTH,
+    TEST_CLIENT_OWNER,
     error_of,
     first_trials,
     migrated_engine,
@@ -58,7 +60,7 @@ def as_csv(json_lines: str) -> str:
 @pytest.fixture(scope="module")
 def jobs_client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
     settings = settings_for(sqlite_url(tmp_path_factory.mktemp("db")), job_poll_seconds=0.05, job_lease_seconds=3.0)
-    with running_client(settings) as client:
+    with running_client(settings, KEY_AUTH) as client:  # a key: more jobs a minute than a client without one
         yield client
 
 
@@ -312,7 +314,7 @@ def engine(tmp_path: Path) -> Engine:
 
 def queued(engine: Engine) -> uuid.UUID:
     request = {"trials": first_trials(1), "count": 1, "planner": "auto", "time_limit": 20.0, "simulate": False}
-    return store.create_job(engine, "batch", request, 1, 10).id
+    return store.create_job(engine, "batch", request, 1, 10, owner=TEST_CLIENT_OWNER).id
 
 
 def lapse(engine: Engine, job_id: uuid.UUID) -> None:
@@ -376,7 +378,7 @@ def test_a_replica_that_stops_puts_its_job_back(engine: Engine) -> None:
 
 
 def test_a_job_of_a_kind_this_server_cannot_do_is_left_for_others(engine: Engine) -> None:
-    store.create_job(engine, "robot_video", {}, 1, 10)
+    store.create_job(engine, "robot_video", {}, 1, 10, owner=TEST_CLIENT_OWNER)
     assert store.claim_job(engine, "older", 30, KIND_NAMES) is None
 
 

@@ -139,6 +139,24 @@ class TooManyJobsError(TryLaterError):
     code = "too_many_jobs"
 
 
+class TooManyJobsInFlightError(TryLaterError):
+    """One client has as many queued or running jobs as it may."""
+
+    code = "too_many_jobs_in_flight"
+
+
+class JobStorageFullError(TryLaterError):
+    """One client's stored jobs (requests and results, until they expire) hold as many bytes as it may."""
+
+    code = "job_storage_full"
+
+
+class TooManyJobStartsError(TryLaterError):
+    """One client posted more jobs this minute than it may."""
+
+    code = "too_many_job_starts"
+
+
 class PlanningTimeoutError(ServiceError):
     """A worker was still busy well after the solve's time limit, so it was killed."""
 

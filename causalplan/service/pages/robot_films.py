@@ -6,9 +6,14 @@ each part's pose over time. The MP4 stays as a download:
 
 ``POST /p/<code>/films`` finds the film's job (one per object, plan, format and size, shared by
 every participant while it is kept) or queues it, and answers at once; the page polls ``GET
-/p/<code>/films/<key>`` for the frames drawn and plays the film from ``/v1/jobs/<id>/video``
-once it is ready. The job, its progress and the film live in the database, so the replica that
-answers a poll, or serves the film, need not be the one filming (``service.jobs.video``).
+/p/<code>/films/<key>`` for the frames drawn and fetches the film from ``GET
+/p/<code>/films/<key>/video`` once it is ready. The job, its progress and the film live in the
+database, so the replica that answers a poll, or serves the film, need not be the one filming
+(``service.jobs.video``).
+
+A film's job is the participant's who asked first (``owners.participant_owner``), under the
+limits of a client with a key; the film shows the robot and a catalog object only, so every
+participant's pages may follow and fetch it, and the API's ``/v1/jobs`` does not show it to them.
 """
 
 from __future__ import annotations
@@ -20,9 +25,10 @@ from fastapi import APIRouter, Path, Response
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.api.schemas.experiments import FilmIn, FilmOut
-from causalplan.service.deps import ServicesDep
+from causalplan.service.deps import Services, ServicesDep
 from causalplan.service.errors import FilmNotFoundError, InvalidRequestError, NotFoundError
-from causalplan.service.jobs.video import FILM_KEY, FILM_KEY_PATTERN, film_key, fits_film_request, video_url
+from causalplan.service.jobs.video import FILM_KEY, FILM_KEY_PATTERN, film_key, fits_film_request
+from causalplan.service.owners import admit_job, job_limits, participant_owner
 from causalplan.service.pages.journeys import JourneyDep
 from causalplan.service.pool.robot_jobs import CONTENT_TYPES, robot_playback_job
 from causalplan.service.storage import jobs as store
@@ -53,6 +59,7 @@ def _out(code: str, job: JobRecord) -> FilmOut:
         failed = job.error or {"code": "job_cancelled", "message": "The film was cancelled."}
         error = {"code": str(failed["code"]), "message": str(failed["message"])}
     key = job.id.hex
+    status_url = f"/p/{code}/films/{key}"
     return FilmOut.model_validate(
         {
             "key": key,
@@ -60,8 +67,8 @@ def _out(code: str, job: JobRecord) -> FilmOut:
             "frames": job.done if job.total > 1 else 0,  # 1 of 1: nothing drawn yet, the robot is planning
             "expected_frames": job.total if job.total > 1 else None,
             "seconds": _seconds(job),
-            "status_url": f"/p/{code}/films/{key}",
-            "video_url": video_url(job.id) if ready else None,
+            "status_url": status_url,
+            "video_url": f"{status_url}/video" if ready else None,
             "content_type": film.get("content_type") or CONTENT_TYPES[FILM_FORMAT],
             "bytes": int(film.get("bytes") or 0),
             "robot": result.get("robot"),
@@ -109,9 +116,22 @@ def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesD
     kind = JobKind.VIDEO.value
     job = store.find_job(services.engine, kind, FILM_KEY, key)
     if job is None:  # two participants asking at once may each start one: harmless, and rare
+        owner = participant_owner(journey.participant.id)
+        admit_job(services, owner)
         request = fits_film_request(obj.id, fits, FILM_FORMAT, key)
-        job = store.create_job(services.engine, kind, request.stored(), 1, settings.max_queued_jobs)
+        limits = job_limits(owner, settings)
+        job = store.create_job(
+            services.engine, kind, request.stored(), 1, settings.max_queued_jobs, owner=owner.id, limits=limits
+        )
     return _out(code, job)
+
+
+def _film_job(key: str, services: Services) -> JobRecord:
+    """Return the job of the participant pages' film ``key``; FilmNotFoundError for any other job."""
+    job = store.get_job(services.engine, uuid.UUID(hex=key))
+    if job.kind != JobKind.VIDEO or FILM_KEY not in job.request:
+        raise FilmNotFoundError(f"No film is made under '{key}'.", details={"key": key})
+    return job
 
 
 @router.get("/{key}", response_model=FilmOut)
@@ -120,7 +140,22 @@ def film_status(
 ) -> FilmOut:
     """Return how far the film is: filming (frames drawn of those expected), ready (where it is) or failed (why)."""
     del journey  # only participants may ask
-    job = store.get_job(services.engine, uuid.UUID(hex=key))
-    if job.kind != JobKind.VIDEO or FILM_KEY not in job.request:
-        raise FilmNotFoundError(f"No film is made under '{key}'.", details={"key": key})
-    return _out(code, job)
+    return _out(code, _film_job(key, services))
+
+
+@router.get("/{key}/video")
+def film_video(
+    key: Annotated[str, Path(pattern=FILM_KEY_PATTERN)], journey: JourneyDep, services: ServicesDep
+) -> Response:
+    """Return the film ``key`` (MP4) once it is made; 404 ``video_not_found`` before, or for any other job."""
+    del journey  # only participants may ask
+    job = _film_job(key, services)
+    found = store.get_job_file(services.engine, job.id)
+    if found is None:
+        raise FilmNotFoundError(f"The film '{key}' is not made (yet).", details={"key": key, "status": job.status})
+    data, content_type = found
+    return Response(
+        data,
+        media_type=content_type,
+        headers={"Cache-Control": "private, max-age=3600", "X-Content-Type-Options": "nosniff"},
+    )

@@ -4,20 +4,39 @@ Every change a runner makes is a conditional UPDATE (``WHERE lease_owner = me AN
 'running'``), so two replicas never both own a job: a claim succeeds for exactly one of them,
 and a runner whose lease was taken over (or whose job was cancelled) finds its writes refused
 and stops. That works the same on PostgreSQL and SQLite, with no lock held between statements.
+
+Creating a job is the one exception: the limits (the service's unfinished jobs, its owner's
+jobs in flight and bytes stored) are counted and the job inserted in one transaction that holds
+the jobs' write lock (``BEGIN IMMEDIATE`` on SQLite, an advisory lock on PostgreSQL), so
+creators on every replica at once never take one job over a limit.
+
+Every job has an owner (``service.owners``); reading or cancelling it as another owner finds
+no job, the same answer as a job that never existed.
 """
 
 from __future__ import annotations
 
+import json
+import math
 import uuid
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from enum import StrEnum
 from typing import Any, cast
 
-from sqlalchemy import CursorResult, Engine, and_, delete, func, or_, select, update
+from sqlalchemy import CursorResult, Engine, and_, delete, func, or_, select, text, update
 from sqlalchemy.orm import Session
 
-from causalplan.service.errors import JobFinishedError, JobNotFoundError, TooManyJobsError
+from causalplan.service.errors import (
+    BodyTooLargeError,
+    JobFinishedError,
+    JobNotFoundError,
+    JobStorageFullError,
+    TooManyJobsError,
+    TooManyJobsInFlightError,
+)
 from causalplan.service.storage.crud import clean_json, storage_errors
 from causalplan.service.storage.records import JobRecord, utc_now
 
@@ -52,25 +71,118 @@ class JobStatus(StrEnum):
 
 UNFINISHED = (JobStatus.QUEUED, JobStatus.RUNNING)
 
+TRY_LATER_SECONDS = 30
+"""``Retry-After`` when the service, or a client, has as many unfinished jobs as it may: about a short job."""
+_JOBS_LOCK_ID = 0x6A6F6273
+"""PostgreSQL advisory lock held while a job is counted and created: creators on every replica take turns."""
+
+
+@dataclass(frozen=True)
+class OwnerLimits:
+    """What one client may hold: jobs queued or running, and bytes stored (requests and results until they expire)."""
+
+    in_flight: int
+    stored_bytes: int
+
 
 def _changed(result: object) -> bool:
     return cast(CursorResult[Any], result).rowcount == 1
 
 
-def create_job(engine: Engine, kind: str, request: dict[str, Any], total: int, max_unfinished: int) -> JobRecord:
-    """Store a new queued job; TooManyJobsError when ``max_unfinished`` jobs are queued or running already."""
+def json_size(value: object) -> int:
+    """Return the bytes ``value`` takes stored as JSON (as the JSON columns write it)."""
+    return len(json.dumps(value).encode("utf-8", "surrogatepass"))
+
+
+def _megabytes(size: float) -> str:
+    return f"{size / 1_000_000:.1f} MB"
+
+
+@contextmanager
+def _one_creator_at_a_time(engine: Engine) -> Iterator[Session]:
+    """Yield a session whose transaction holds the jobs' write lock until it ends (commit or rollback).
+
+    SQLite: ``BEGIN IMMEDIATE`` takes the database's write lock before the first count, so the
+    counts cannot go stale before the insert (other writers wait, up to the busy timeout).
+    PostgreSQL: a transaction-scoped advisory lock; each statement then sees every job committed
+    by the creators before (READ COMMITTED).
+    """
     with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        if engine.dialect.name == "postgresql":
+            session.execute(text("SELECT pg_advisory_xact_lock(:id)"), {"id": _JOBS_LOCK_ID})
+        elif engine.dialect.name == "sqlite":
+            session.execute(text("BEGIN IMMEDIATE"))
+        yield session
+
+
+def _check_owner(session: Session, owner: str, limits: OwnerLimits, size: int, now: datetime) -> None:
+    """Raise the 429 (or 413) error of the first of ``owner``'s limits another job of ``size`` bytes would pass."""
+    mine = JobRecord.owner == owner
+    unfinished = JobRecord.status.in_(UNFINISHED)
+    in_flight = session.scalar(select(func.count()).select_from(JobRecord).where(mine, unfinished))
+    if (in_flight or 0) >= limits.in_flight:
+        raise TooManyJobsInFlightError(
+            f"You have {in_flight} jobs queued or running, as many as you may: "
+            f"try again when one has finished (or cancel one).",
+            TRY_LATER_SECONDS,
+        )
+    if size > limits.stored_bytes:
+        raise BodyTooLargeError(
+            f"This job's request takes {_megabytes(size)}; your jobs may keep {_megabytes(limits.stored_bytes)} "
+            "stored in all.",
+            details={"limit": limits.stored_bytes, "actual": size},
+        )
+    live = or_(JobRecord.expires_at.is_(None), JobRecord.expires_at > now)
+    stored = session.scalar(select(func.sum(JobRecord.request_bytes + JobRecord.result_bytes)).where(mine, live))
+    if (stored or 0) + size > limits.stored_bytes:
+        first_to_go = session.scalar(select(func.min(JobRecord.expires_at)).where(mine, JobRecord.expires_at > now))
+        wait = TRY_LATER_SECONDS
+        if first_to_go is not None:
+            wait = max(1, math.ceil((aware(first_to_go) - now).total_seconds()))
+        raise JobStorageFullError(
+            f"Your jobs keep {_megabytes(stored or 0)} stored and this one adds {_megabytes(size)}; you may keep "
+            f"{_megabytes(limits.stored_bytes)}. A finished job is deleted when its result expires: try again "
+            f"in {wait} s.",
+            wait,
+        )
+
+
+def create_job(
+    engine: Engine,
+    kind: str,
+    request: dict[str, Any],
+    total: int,
+    max_unfinished: int,
+    *,
+    owner: str,
+    limits: OwnerLimits | None = None,
+) -> JobRecord:
+    """Store a new queued job of ``owner``.
+
+    Refused (429, ``TryLaterError``) when the service has ``max_unfinished`` jobs queued or
+    running, or when ``owner`` would pass one of its ``limits`` (None: only the service's).
+    """
+    stored = clean_json(request, "the job's request")
+    size = json_size(stored)
+    with _one_creator_at_a_time(engine) as session:
+        now = utc_now()
         unfinished = session.scalar(select(func.count()).select_from(JobRecord).where(JobRecord.status.in_(UNFINISHED)))
         if (unfinished or 0) >= max_unfinished:
             raise TooManyJobsError(
-                f"This service has {unfinished} unfinished jobs, its limit; try again when some have finished.", 30
+                f"This service has {unfinished} unfinished jobs, its limit; try again when some have finished.",
+                TRY_LATER_SECONDS,
             )
+        if limits is not None:
+            _check_owner(session, owner, limits, size, now)
         record = JobRecord(
             id=uuid.uuid4(),
+            owner=owner,
             kind=kind,
             status=JobStatus.QUEUED,
-            request=clean_json(request, "the job's request"),
-            created_at=utc_now(),
+            request=stored,
+            request_bytes=size,
+            result_bytes=0,
+            created_at=now,
             attempts=0,
             done=0,
             total=total,
@@ -80,12 +192,20 @@ def create_job(engine: Engine, kind: str, request: dict[str, Any], total: int, m
     return record
 
 
-def get_job(engine: Engine, job_id: uuid.UUID, now: datetime | None = None) -> JobRecord:
-    """Return the job; JobNotFoundError when there is none, or its result has expired."""
+def get_job(engine: Engine, job_id: uuid.UUID, now: datetime | None = None, *, owner: str | None = None) -> JobRecord:
+    """Return the job; JobNotFoundError when there is none, its result has expired, or it is not ``owner``'s.
+
+    ``owner``: the client asking (None: whoever may see every job, the research token). Another
+    client's job is answered exactly as one that never existed.
+    """
     now = now or utc_now()
     with Session(engine, expire_on_commit=False) as session, storage_errors(session):
         record = session.get(JobRecord, job_id)
-    if record is None or (record.expires_at is not None and aware(record.expires_at) <= now):
+    if (
+        record is None
+        or (record.expires_at is not None and aware(record.expires_at) <= now)
+        or (owner is not None and record.owner != owner)
+    ):
         raise JobNotFoundError(
             f"There is no job {job_id}: it never existed, or it finished and its result has expired.",
             details={"job_id": str(job_id)},
@@ -111,12 +231,12 @@ def find_job(engine: Engine, kind: str, field: str, value: str) -> JobRecord | N
         ).first()
 
 
-def get_job_file(engine: Engine, job_id: uuid.UUID) -> tuple[bytes, str] | None:
+def get_job_file(engine: Engine, job_id: uuid.UUID, *, owner: str | None = None) -> tuple[bytes, str] | None:
     """Return the file the job made (bytes, media type); None when it made none (yet).
 
-    JobNotFoundError when there is no such job, or it has expired.
+    JobNotFoundError when there is no such job, it has expired, or it is not ``owner``'s (``get_job``).
     """
-    get_job(engine, job_id)
+    get_job(engine, job_id, owner=owner)
     with Session(engine) as session, storage_errors(session):
         row = session.execute(
             select(JobRecord.file_data, JobRecord.file_type).where(JobRecord.id == job_id)
@@ -136,12 +256,13 @@ def count_unfinished(engine: Engine) -> dict[str, int]:
     return {status.value: counts.get(status.value, 0) for status in UNFINISHED}
 
 
-def cancel_job(engine: Engine, job_id: uuid.UUID, keep_seconds: float) -> JobRecord:
+def cancel_job(engine: Engine, job_id: uuid.UUID, keep_seconds: float, *, owner: str | None = None) -> JobRecord:
     """Cancel a queued or running job (its runner stops at its next progress report); return it.
 
-    JobFinishedError when the job has finished already (its result stays until it expires).
+    JobFinishedError when the job has finished already (its result stays until it expires);
+    JobNotFoundError as ``get_job`` (another ``owner``'s job is not touched).
     """
-    get_job(engine, job_id)
+    get_job(engine, job_id, owner=owner)
     now = utc_now()
     with Session(engine, expire_on_commit=False) as session, storage_errors(session):
         changed = session.execute(
@@ -277,10 +398,13 @@ def finish_job(
         "result": clean_json(result, "the job's result") if result is not None else None,
         "error": error,
     }
+    size = sum(json_size(values[field]) for field in ("result", "error") if values[field] is not None)
     if error is None:
         values["done"] = JobRecord.total
     if file is not None and error is None:
         values["file_data"], values["file_type"] = file
+        size += len(file[0])
+    values["result_bytes"] = size
     with Session(engine) as session, storage_errors(session):
         changed = session.execute(update(JobRecord).where(_mine(job_id, owner)).values(**values))
         session.commit()

@@ -30,6 +30,8 @@ from causalplan.studies.recruitment import MAX_PLATFORM_ID_LENGTH
 
 MAX_CLIENT_ID_LENGTH = 128
 """Longest participant or session id a client may send."""
+MAX_OWNER_LENGTH = 160
+"""Longest owner of a job: a kind of client and its id (``address:<address>``, ``participant:<uuid>``, ...)."""
 
 NAMING_CONVENTION = {
     "ix": "ix_%(column_0_label)s",
@@ -269,12 +271,22 @@ class JobRecord(Base):
     """
 
     __tablename__ = "jobs"
-    __table_args__ = (Index("ix_jobs_status_created", "status", "created_at"),)
+    __table_args__ = (
+        Index("ix_jobs_status_created", "status", "created_at"),
+        Index("ix_jobs_owner_status", "owner", "status"),
+    )
 
     id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
+    owner: Mapped[str] = mapped_column(String(MAX_OWNER_LENGTH), server_default="")
+    """The client the job belongs to (``service.owners``): only it, and the research token, may see it.
+    Empty for jobs stored before jobs had owners: the research token's alone."""
     kind: Mapped[str] = mapped_column(String(32))
     status: Mapped[str] = mapped_column(String(16))
     request: Mapped[dict[str, Any]] = mapped_column(JSON)
+    request_bytes: Mapped[int] = mapped_column(Integer, server_default="0")
+    """The stored request's size (its JSON): what it counts against its owner's storage."""
+    result_bytes: Mapped[int] = mapped_column(Integer, server_default="0")
+    """The stored result's, error's and file's size, once the job has finished."""
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utc_now)
     started_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))

@@ -153,5 +153,11 @@ def health(services: ServicesDep) -> HealthOut:
             "robot_seconds": settings.robot_seconds,
             "max_job_trials": settings.max_job_trials,
             "max_queued_jobs": settings.max_queued_jobs,
+            "jobs_in_flight": settings.jobs_in_flight,
+            "job_megabytes": settings.job_megabytes,
+            "jobs_per_minute": settings.jobs_per_minute,
+            "anonymous_jobs_in_flight": settings.anonymous_jobs_in_flight,
+            "anonymous_job_megabytes": settings.anonymous_job_megabytes,
+            "anonymous_jobs_per_minute": settings.anonymous_jobs_per_minute,
         },
     )

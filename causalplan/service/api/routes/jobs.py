@@ -1,29 +1,33 @@
 """/v1/jobs: post long work (trials, a simulation, a consensus, a film, fits), follow it, fetch its result, cancel it.
 
 Any replica answers for any job: jobs live in the database, and whichever replica's runner
-took a job does its work (see ``service.jobs``).
+took a job does its work (see ``service.jobs``). Every job is its poster's (``service.owners``):
+another client reading, cancelling or downloading it is answered 404, as for no job at all.
 """
 
 from __future__ import annotations
 
 import uuid
+from functools import partial
 from typing import Annotated, Any
 
 import anyio.to_thread
 from fastapi import APIRouter, Body, Response
 
-from causalplan.service.api.schemas.common import ErrorOut, error_responses
+from causalplan.service.api.schemas.common import JOB_CLIENT_RESPONSES, JOB_LIMIT_RESPONSE, ErrorOut, error_responses
 from causalplan.service.api.schemas.jobs import JOB_EXAMPLES, JobBody, JobIn, JobOut
 from causalplan.service.deps import Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute
 from causalplan.service.errors import FilmNotFoundError
 from causalplan.service.jobs.kinds import KINDS
 from causalplan.service.jobs.video import video_url
+from causalplan.service.owners import JobOwner, JobOwnerDep, admit_job, job_limits
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.jobs import JobKind
 from causalplan.service.storage.records import JobRecord
 
-router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses=error_responses(503), route_class=StrictJSONRoute)
+_RESPONSES = {**JOB_CLIENT_RESPONSES, **error_responses(503)}
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses=_RESPONSES, route_class=StrictJSONRoute)
 
 _JOB_ID = {"job_id": "$response.body#/id"}
 _LINKS = {
@@ -35,7 +39,7 @@ _LINKS = {
 CANCEL_WAIT_SECONDS = 5.0
 """How long DELETE waits for this replica's worker of the job to be killed (it takes a moment)."""
 _NOT_FOUND: dict[int | str, dict[str, Any]] = {
-    404: {"model": ErrorOut, "description": "No such job, or its result has expired."}
+    404: {"model": ErrorOut, "description": "No such job, its result has expired, or it is another client's."}
 }
 
 
@@ -80,12 +84,15 @@ def job_out(record: JobRecord) -> JobOut:
     responses={
         202: {"description": "Queued: follow `url` (also in `Location`).", "links": _LINKS},
         **error_responses(404, 413, 422),
-        429: {"model": ErrorOut, "description": "The service holds as many unfinished jobs as it takes."},
+        429: JOB_LIMIT_RESPONSE,
     },
     operation_id="create_job",
 )
 async def create_job(
-    body: Annotated[JobIn, Body(openapi_examples=JOB_EXAMPLES)], services: ServicesDep, response: Response
+    body: Annotated[JobIn, Body(openapi_examples=JOB_EXAMPLES)],
+    services: ServicesDep,
+    owner: JobOwnerDep,
+    response: Response,
 ) -> JobOut:
     """Check the request and queue the job; answer 202 with its URL (also in `Location`).
 
@@ -97,18 +104,34 @@ async def create_job(
     without its columns, an unknown object or fit, too many trials) is answered at once with
     422 (404 for an unknown object) and nothing is queued; a batch's unreadable lines become
     `invalid` trials in the result, as in the CLI.
+
+    The job is the client's: an API key's or the research token's (`Authorization: Bearer`),
+    else its address's. Only it may follow, cancel or download the job. Each client has limits
+    on jobs queued or running, megabytes its jobs keep stored (until they expire) and jobs a
+    minute, smaller without a key (GET /health, `limits`): beyond one, 429 with `Retry-After`.
     """
-    record = await anyio.to_thread.run_sync(queue_job, body, services)
+    record = await anyio.to_thread.run_sync(queue_job, body, services, owner)
     response.headers["Location"] = job_url(record.id)
     return job_out(record)
 
 
-def queue_job(body: JobBody, services: Services) -> JobRecord:
-    """Check ``body`` (its kind's ``prepare``: a clear error and nothing queued when it is wrong) and queue it."""
+def queue_job(body: JobBody, services: Services, owner: JobOwner) -> JobRecord:
+    """Check ``body`` (its kind's ``prepare``: a clear error and nothing queued when wrong); queue it as ``owner``'s.
+
+    The minute's count comes first, so a client over it costs no reading of its upload.
+    """
+    admit_job(services, owner)
     kind = JobKind(body.kind)
     prepared = KINDS[kind].prepare(body, services)
+    settings = services.settings
     return store.create_job(
-        services.engine, kind.value, prepared.stored(), prepared.units(), services.settings.max_queued_jobs
+        services.engine,
+        kind.value,
+        prepared.stored(),
+        prepared.units(),
+        settings.max_queued_jobs,
+        owner=owner.id,
+        limits=job_limits(owner, settings),
     )
 
 
@@ -119,9 +142,10 @@ def queue_job(body: JobBody, services: Services) -> JobRecord:
     responses=_NOT_FOUND,
     operation_id="read_job",
 )
-async def read_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
+async def read_job(job_id: uuid.UUID, services: ServicesDep, owner: JobOwnerDep) -> JobOut:
     """Return the job: `status` (queued, running, succeeded, failed, cancelled), `progress`, then `result`."""
-    return job_out(await anyio.to_thread.run_sync(store.get_job, services.engine, job_id))
+    record = await anyio.to_thread.run_sync(partial(store.get_job, services.engine, job_id, owner=owner.visible_owner))
+    return job_out(record)
 
 
 @router.delete(
@@ -131,14 +155,15 @@ async def read_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
     responses={**_NOT_FOUND, 409: {"model": ErrorOut, "description": "The job has finished already."}},
     operation_id="cancel_job",
 )
-async def cancel_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
+async def cancel_job(job_id: uuid.UUID, services: ServicesDep, owner: JobOwnerDep) -> JobOut:
     """Cancel a queued or running job; answer the cancelled job.
 
     A running job's worker is stopped at once: before the answer when this server runs the job,
     within `job_poll_seconds` when another replica does.
     """
     keep = services.settings.job_result_seconds
-    record = await anyio.to_thread.run_sync(store.cancel_job, services.engine, job_id, keep)
+    cancel = partial(store.cancel_job, services.engine, job_id, keep, owner=owner.visible_owner)
+    record = await anyio.to_thread.run_sync(cancel)
     if services.runner is not None:
         await anyio.to_thread.run_sync(services.runner.cancel, job_id, CANCEL_WAIT_SECONDS)
     return job_out(record)
@@ -150,15 +175,16 @@ async def cancel_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
     response_class=Response,
     responses={
         200: {"content": {"video/mp4": {}, "image/gif": {}}, "description": "The film."},
-        404: {"model": ErrorOut, "description": "No such job, it has expired, or it has made no film (yet)."},
+        404: {"model": ErrorOut, "description": "No such job (or another client's), or it has made no film (yet)."},
     },
     operation_id="read_job_video",
 )
-async def read_job_video(job_id: uuid.UUID, services: ServicesDep) -> Response:
+async def read_job_video(job_id: uuid.UUID, services: ServicesDep, owner: JobOwnerDep) -> Response:
     """Return the film of a finished `video` job, from whichever replica is asked, until the job expires."""
-    found = await anyio.to_thread.run_sync(store.get_job_file, services.engine, job_id)
+    seen_by = owner.visible_owner
+    found = await anyio.to_thread.run_sync(partial(store.get_job_file, services.engine, job_id, owner=seen_by))
     if found is None:
-        record = await anyio.to_thread.run_sync(store.get_job, services.engine, job_id)
+        record = await anyio.to_thread.run_sync(partial(store.get_job, services.engine, job_id, owner=seen_by))
         raise FilmNotFoundError(
             f"Job {job_id} ({record.kind}, {record.status}) has no film: only a video job that has succeeded has one.",
             details={"job_id": str(job_id), "kind": record.kind, "status": record.status},

@@ -10,14 +10,15 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter, Response
+from fastapi import APIRouter, Request, Response
 
 from causalplan.service.api.routes.jobs import job_out, job_url, queue_job
-from causalplan.service.api.schemas.common import error_responses
+from causalplan.service.api.schemas.common import JOB_CLIENT_RESPONSES, JOB_LIMIT_RESPONSE, error_responses
 from causalplan.service.api.schemas.jobs import JobOut, SimulationJobIn, VideoJobIn
 from causalplan.service.api.schemas.plans import SimulationIn
 from causalplan.service.deps import ClientIdsDep, Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, plan_inputs
+from causalplan.service.owners import BearerDep, JobOwner, resolve_owner
 from causalplan.service.storage.jobs import JobKind
 from causalplan.service.storage.records import JobRecord
 
@@ -28,18 +29,20 @@ router = APIRouter(
     route_class=StrictJSONRoute,
 )
 
+_TOO_MUCH = {**JOB_LIMIT_RESPONSE, "description": f"Every planner worker is busy. {JOB_LIMIT_RESPONSE['description']}"}
+"""The 429 of a simulation: the planner workers' queue, or a robot run's job over a limit."""
 _ONLY_PLANNED = ("picture", "robot", "include_pddl")
 """What a robot run's job does not take of a simulation's body (it films, or reports, the robot)."""
 
 
-def queue_robot_run(body: SimulationIn, services: Services) -> JobRecord:
-    """Queue the robot's run of ``body`` as a job: a ``video`` job when it is filmed, else a ``simulation`` job."""
+def queue_robot_run(body: SimulationIn, services: Services, owner: JobOwner) -> JobRecord:
+    """Queue the robot's run of ``body`` as ``owner``'s job: a ``video`` job when filmed, else a ``simulation`` job."""
     request: dict[str, Any] = body.model_dump(by_alias=True, exclude_unset=True)
     if body.video is not None:
         request = {key: value for key, value in request.items() if key not in _ONLY_PLANNED}
-        return queue_job(VideoJobIn.model_validate({**request, "kind": JobKind.VIDEO.value}), services)
+        return queue_job(VideoJobIn.model_validate({**request, "kind": JobKind.VIDEO.value}), services, owner)
     request = {key: value for key, value in request.items() if key != "video"} | {"picture": False}
-    return queue_job(SimulationJobIn.model_validate({**request, "kind": JobKind.SIMULATION.value}), services)
+    return queue_job(SimulationJobIn.model_validate({**request, "kind": JobKind.SIMULATION.value}), services, owner)
 
 
 @router.post(
@@ -51,11 +54,17 @@ def queue_robot_run(body: SimulationIn, services: Services) -> JobRecord:
             "description": "With `robot`: the robot's run (and film) is queued as a job; follow `url` "
             "(also in `Location`) as for POST /v1/jobs.",
         },
-        429: {"description": "Every planner worker is busy, or the service holds as many jobs as it takes."},
+        401: JOB_CLIENT_RESPONSES[401],
+        429: _TOO_MUCH,
     },
 )
 def create_simulation(
-    body: SimulationIn, services: ServicesDep, client: ClientIdsDep, response: Response
+    body: SimulationIn,
+    services: ServicesDep,
+    client: ClientIdsDep,
+    request: Request,
+    credentials: BearerDep,
+    response: Response,
 ) -> dict[str, Any]:
     """Plan as POST /v1/plans does, then run the plan in headless PyBullet and check every step.
 
@@ -71,10 +80,12 @@ def create_simulation(
     transit, grasp, carry, ...), and `robot` says whether it carried out the plan
     (`{"carried_out": false, "reason": {"code": "robot_cannot_execute", "step": N, "failure":
     ..., "message"}}`). With `video: "mp4"` or `"gif"` the job is a `video` job: its result's
-    `video` is `{"url", "content_type", "bytes"}`, the film at `/v1/jobs/{id}/video`.
+    `video` is `{"url", "content_type", "bytes"}`, the film at `/v1/jobs/{id}/video`. The job is
+    the client's, under its limits, as for POST /v1/jobs (its bearer token: an API key or the
+    research token; else its address).
     """
     if body.robot:
-        record = queue_robot_run(body, services)
+        record = queue_robot_run(body, services, resolve_owner(request, services, credentials))
         response.status_code = 202
         response.headers["Location"] = job_url(record.id)
         job: dict[str, Any] = job_out(record).model_dump(mode="json")

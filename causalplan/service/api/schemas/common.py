@@ -161,3 +161,23 @@ RESEARCH_ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
     429: {"model": ErrorOut, "description": "Too many wrong research tokens from this address; see Retry-After."},
 }
 """The OpenAPI error responses of every route behind the research token."""
+
+JOB_LIMIT_RESPONSE: dict[str, Any] = {
+    "model": ErrorOut,
+    "description": "Over a limit; see Retry-After. The service's unfinished jobs (`too_many_jobs`), or this "
+    "client's: jobs queued or running (`too_many_jobs_in_flight`), megabytes its jobs keep stored "
+    "(`job_storage_full`), jobs posted this minute (`too_many_job_starts`); or too many wrong bearer tokens "
+    "from this address (`too_many_attempts`).",
+}
+"""The 429 of a route that queues a job: every limit a job passes, each with its own code."""
+JOB_CLIENT_RESPONSES: dict[int | str, dict[str, Any]] = {
+    401: {
+        "model": ErrorOut,
+        "description": "The bearer token is neither an API key nor the research token (`not_authenticated`).",
+    },
+    429: {
+        "model": ErrorOut,
+        "description": "Too many wrong bearer tokens from this address (`too_many_attempts`); see Retry-After.",
+    },
+}
+"""The answers of every route that knows a job's client by its bearer token."""

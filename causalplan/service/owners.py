@@ -1,0 +1,155 @@
+"""Who a job belongs to, and how much each client may hold: the owner of every job.
+
+A job's owner is stored on its row, one string per client:
+
+- ``research``: ``Authorization: Bearer <research token>``; it may also see every job;
+- ``key:<first 16 hex digits of the key's SHA-256>``: an API key (``CAUSALPLAN_API_KEYS``),
+  compared in constant time as the research token is (the key itself is never stored);
+- ``participant:<id>``: a participant's pages (their films of the robot);
+- ``address:<client address>``: anyone else, by the address the throttles count
+  (``deps.client_address``).
+
+Only the owner reads, cancels or downloads a job (the research token any); another client is
+answered 404 ``job_not_found``, as for a job that never existed. Each owner has limits on jobs
+in flight, bytes stored and jobs a minute (``job_limits``); a client without a key has the
+smaller ``anonymous_*`` ones. A bearer token that is neither the research token nor a key is
+refused (401) and counted with the wrong research tokens, so keys cannot be guessed faster.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import secrets
+from dataclasses import dataclass
+from typing import Annotated
+
+from fastapi import Depends, Request
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+
+from causalplan.service.deps import Services, ServicesDep, client_address, is_research_token
+from causalplan.service.errors import NotAuthenticatedError, TooManyJobStartsError
+from causalplan.service.storage.jobs import OwnerLimits
+from causalplan.service.storage.records import MAX_OWNER_LENGTH
+from causalplan.service.storage.throttle import PerMinute
+from causalplan.settings import Settings
+
+RESEARCH_OWNER = "research"
+KEY_PREFIX = "key:"
+PARTICIPANT_PREFIX = "participant:"
+ADDRESS_PREFIX = "address:"
+KEY_ID_HEX_DIGITS = 16
+"""Of a key's SHA-256, what names its owner: enough to tell keys apart, useless to find the key."""
+MEGABYTE = 1_000_000
+
+
+@dataclass(frozen=True)
+class JobOwner:
+    """The client of a request, as the owner of the jobs it posts."""
+
+    id: str
+    is_anonymous: bool = False
+
+    @property
+    def sees_every_job(self) -> bool:
+        """Return whether this client may read and cancel every job (the research token)."""
+        return self.id == RESEARCH_OWNER
+
+    @property
+    def visible_owner(self) -> str | None:
+        """Return the owner whose jobs this client sees (None: every job's), as ``storage.jobs`` takes it."""
+        return None if self.sees_every_job else self.id
+
+
+def key_owner(key: str) -> str:
+    """Return the owner of the jobs posted with API key ``key`` (named by its hash, never by the key)."""
+    return KEY_PREFIX + hashlib.sha256(key.encode()).hexdigest()[:KEY_ID_HEX_DIGITS]
+
+
+def participant_owner(participant_id: object) -> JobOwner:
+    """Return the owner of the jobs a participant's pages start."""
+    return JobOwner(f"{PARTICIPANT_PREFIX}{participant_id}")
+
+
+def address_owner(address: str) -> JobOwner:
+    """Return the owner of the jobs of a client without a key, known by its address."""
+    return JobOwner(f"{ADDRESS_PREFIX}{address}"[:MAX_OWNER_LENGTH], is_anonymous=True)
+
+
+def owner_of_token(candidate: str, settings: Settings) -> JobOwner | None:
+    """Return the owner ``candidate`` names (the research token or an API key); None when it names none.
+
+    Every key is compared, in constant time, whichever matches: the time taken tells nothing.
+    """
+    owner = JobOwner(RESEARCH_OWNER) if is_research_token(candidate, settings) else None
+    for key in settings.api_keys:
+        secret = key.get_secret_value()
+        if secrets.compare_digest(candidate.encode(), secret.encode()) and owner is None:
+            owner = JobOwner(key_owner(secret))
+    return owner
+
+
+def job_limits(owner: JobOwner, settings: Settings) -> OwnerLimits:
+    """Return what ``owner`` may hold: jobs in flight and bytes stored (smaller without a key)."""
+    if owner.is_anonymous:
+        return OwnerLimits(settings.anonymous_jobs_in_flight, int(settings.anonymous_job_megabytes * MEGABYTE))
+    return OwnerLimits(settings.jobs_in_flight, int(settings.job_megabytes * MEGABYTE))
+
+
+class JobStarts(PerMinute):
+    """Jobs each owner posts a minute, counted in the database (one count for every replica)."""
+
+    def __init__(self, services: Services, owner: JobOwner) -> None:
+        settings = services.settings
+        per_minute = settings.anonymous_jobs_per_minute if owner.is_anonymous else settings.jobs_per_minute
+        super().__init__(services.engine, "job", per_minute, TooManyJobStartsError)
+
+    def message(self, count: int, retry_after: int) -> str:
+        """Return what the 429 error says to a client that posted ``count`` jobs this minute."""
+        return f"You have posted {count} jobs this minute, as many as you may: wait {retry_after} s."
+
+
+def admit_job(services: Services, owner: JobOwner) -> None:
+    """Count one job ``owner`` posts this minute; ``TooManyJobStartsError`` (429) when its minute is full."""
+    JobStarts(services, owner).admit(owner.id)
+
+
+_bearer = HTTPBearer(
+    auto_error=False,
+    scheme_name="ClientKey",
+    description="An API key (CAUSALPLAN_API_KEYS) or the research token: the jobs posted with it are its own. "
+    "Without it, a client is known by its address, with smaller limits.",
+)
+
+
+def resolve_owner(request: Request, services: Services, credentials: HTTPAuthorizationCredentials | None) -> JobOwner:
+    """Return the owner of this request's jobs: the bearer token's, else the client's address.
+
+    A token that is neither the research token nor an API key is ``NotAuthenticatedError`` (401),
+    counted against the client as a wrong research token is (``TooManyAttemptsError`` beyond).
+    """
+    address = client_address(request, services.settings)
+    if credentials is None:
+        return address_owner(address)
+    found: list[JobOwner] = []
+
+    def is_known() -> bool:
+        owner = owner_of_token(credentials.credentials, services.settings)
+        found.extend([owner] if owner is not None else [])
+        return owner is not None
+
+    if not services.failed_attempts.check(address, is_known):
+        raise NotAuthenticatedError("The bearer token is neither an API key of this service nor the research token.")
+    return found[0]
+
+
+def get_job_owner(
+    request: Request,
+    services: ServicesDep,
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
+) -> JobOwner:
+    return resolve_owner(request, services, credentials)
+
+
+JobOwnerDep = Annotated[JobOwner, Depends(get_job_owner)]
+BearerDep = Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)]
+"""The bearer token as sent, unchecked: for a route that needs an owner only sometimes (``resolve_owner``)."""
