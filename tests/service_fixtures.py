@@ -143,7 +143,7 @@ def settings_for(database_url: str, **overrides: Any) -> Settings:
 
 @contextmanager
 def running_client(settings: Settings, headers: dict[str, str] | None = None) -> Iterator[TestClient]:
-    """Start an app with ``settings`` (workers, migrations) and yield a client sending ``headers``; stop it afterwards."""
+    """Start an app with ``settings`` (workers, migrations); yield a client sending ``headers``; stop it afterwards."""
     with TestClient(create_app(settings), raise_server_exceptions=False, headers=headers) as client:
         yield client
 
