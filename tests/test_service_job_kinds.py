@@ -32,6 +32,7 @@ from causalplan.service.storage.records import JobRecord, utc_now
 from causalplan.service.storage.session import create_database_engine
 from tests.service_fixtures import (
     DESK_LAMP,
+    KEY_AUTH,
     TEST_CLIENT_OWNER,
     error_of,
     first_trials,
@@ -56,7 +57,7 @@ def kinds_database(tmp_path_factory: pytest.TempPathFactory) -> str:
 @pytest.fixture(scope="module")
 def kinds_client(kinds_database: str) -> Iterator[TestClient]:
     settings = settings_for(kinds_database, job_poll_seconds=0.05, job_lease_seconds=3.0, **SMALL)
-    with running_client(settings) as client:
+    with running_client(settings, KEY_AUTH) as client:  # a key: its jobs a minute are not an anonymous client's few
         yield client
 
 
@@ -82,7 +83,7 @@ def test_a_video_job_films_the_robot_and_serves_the_film(kinds_client: TestClien
 
 def test_another_replica_serves_the_film_from_the_database(kinds_database: str, film: dict[str, Any]) -> None:
     # An app with no runner on the same database: what another replica behind the load balancer is.
-    with running_client(settings_for(kinds_database, planning_workers=1, job_runners=0)) as other:
+    with running_client(settings_for(kinds_database, planning_workers=1, job_runners=0), KEY_AUTH) as other:
         served = other.get(film["result"]["video"]["url"])
         assert served.status_code == 200 and len(served.content) == film["result"]["video"]["bytes"]
         assert other.get(film["url"]).json()["result"]["video"]["url"] == film["result"]["video"]["url"]
