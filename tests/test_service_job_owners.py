@@ -112,13 +112,19 @@ def test_a_key_is_stored_only_as_its_hash(idle_client: TestClient) -> None:
 
 
 def test_jobs_in_flight_are_limited_per_client(tmp_path: Path) -> None:
-    settings = settings_for(sqlite_url(tmp_path), planning_workers=1, job_runners=0, anonymous_jobs_in_flight=2)
+    settings = settings_for(
+        sqlite_url(tmp_path), planning_workers=1, job_runners=0, anonymous_jobs_in_flight=2, jobs_in_flight=3
+    )
     with running_client(settings) as client:
         first, _ = queue(client), queue(client)
         refused = client.post("/v1/jobs", json=BATCH)
         assert error_of(refused, 429)["code"] == "too_many_jobs_in_flight"
         assert int(refused.headers["retry-after"]) > 0
-        queue(client, KEY_AUTH)  # another client is not held up
+        for _ in range(3):
+            queue(client, KEY_AUTH)  # another client is not held up, and a key has more room
+        assert error_of(client.post("/v1/jobs", json=BATCH, headers=KEY_AUTH), 429)["code"] == "too_many_jobs_in_flight"
+        for _ in range(4):
+            queue(client, AUTH)  # the operator's research token: only the service's own cap holds it
         assert client.delete(first["url"]).status_code == 200
         queue(client)  # one finished (cancelled): room for one more
 
@@ -171,7 +177,9 @@ def test_a_client_with_a_key_has_the_larger_limits(idle_client: TestClient) -> N
         job_limits(JobOwner("address:x", is_anonymous=True), settings),
         job_limits(JobOwner("k"), settings),
     )
+    assert anonymous is not None and keyed is not None
     assert anonymous.in_flight < keyed.in_flight and anonymous.stored_bytes < keyed.stored_bytes
+    assert job_limits(JobOwner("research"), settings) is None
     assert settings.anonymous_jobs_per_minute < settings.jobs_per_minute
 
 

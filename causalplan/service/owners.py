@@ -2,7 +2,8 @@
 
 A job's owner is stored on its row, one string per client:
 
-- ``research``: ``Authorization: Bearer <research token>``; it may also see every job;
+- ``research``: ``Authorization: Bearer <research token>``: the operator's, it sees every job
+  and is held only by the service's own cap (``max_queued_jobs``), not by a client's limits;
 - ``key:<first 16 hex digits of the key's SHA-256>``: an API key (``CAUSALPLAN_API_KEYS``),
   compared in constant time as the research token is (the key itself is never stored);
 - ``participant:<id>``: a participant's pages (their films of the robot);
@@ -88,8 +89,10 @@ def owner_of_token(candidate: str, settings: Settings) -> JobOwner | None:
     return owner
 
 
-def job_limits(owner: JobOwner, settings: Settings) -> OwnerLimits:
-    """Return what ``owner`` may hold: jobs in flight and bytes stored (smaller without a key)."""
+def job_limits(owner: JobOwner, settings: Settings) -> OwnerLimits | None:
+    """Return what ``owner`` may hold: jobs in flight and bytes stored (smaller without a key; None: the operator's)."""
+    if owner.sees_every_job:
+        return None
     if owner.is_anonymous:
         return OwnerLimits(settings.anonymous_jobs_in_flight, int(settings.anonymous_job_megabytes * MEGABYTE))
     return OwnerLimits(settings.jobs_in_flight, int(settings.job_megabytes * MEGABYTE))
@@ -109,8 +112,12 @@ class JobStarts(PerMinute):
 
 
 def admit_job(services: Services, owner: JobOwner) -> None:
-    """Count one job ``owner`` posts this minute; ``TooManyJobStartsError`` (429) when its minute is full."""
-    JobStarts(services, owner).admit(owner.id)
+    """Count one job ``owner`` posts this minute; ``TooManyJobStartsError`` (429) when its minute is full.
+
+    The research token's jobs are not counted: it is the operator's.
+    """
+    if not owner.sees_every_job:
+        JobStarts(services, owner).admit(owner.id)
 
 
 _bearer = HTTPBearer(
