@@ -26,7 +26,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import load_catalog
-from causalplan.service.answers import ResultCache, catalog_key
+from causalplan.service.answers import catalog_key
 from causalplan.service.api.routes import (
     experiments,
     explanations,
@@ -40,6 +40,7 @@ from causalplan.service.api.routes import (
     transfers,
 )
 from causalplan.service.api.schemas.common import error_responses
+from causalplan.service.caches import ServiceCaches
 from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
 from causalplan.service.jobs.runner import JobRunner
@@ -82,7 +83,7 @@ def start_services(settings: Settings) -> Services:
         catalog,
         engine,
         pool,
-        ResultCache(settings.cache_size),
+        ServiceCaches.of(settings),
         revision,
         catalog_key=catalog_key(catalog),
         failed_attempts=FailedAttempts(

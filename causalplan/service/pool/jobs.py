@@ -13,6 +13,7 @@ from importlib import metadata
 from importlib.util import find_spec
 from pathlib import Path
 
+from causalplan import caches
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.errors import CausalPlanError
 from causalplan.pddl.task import catalog_task
@@ -35,7 +36,7 @@ def warm_up() -> None:
     settings = Settings()
     if settings.fd_binary is not None:
         fd.use_search_binary(settings.fd_binary)
-    fd.keep_answers(settings.solve_cache_size)
+    caches.fresh({"fd_answers": settings.solve_cache_size})  # this worker's own, sized by the settings
     with suppress(Exception):  # a translator that cannot run says so in the answers (and /health)
         importlib.import_module("fast_downward.translate.main")
     fd.prestart(fd.CONFIGS["fd"])  # the default search, waiting for its first task

@@ -141,7 +141,7 @@ def health(services: ServicesDep) -> HealthOut:
         storage=storage,
         pool=services.pool.stats().as_dict(),
         jobs=jobs_health(services),
-        cache=services.cache.stats(),
+        cache=services.caches.answers.stats(),
         limits={
             "max_body_bytes": settings.max_body_bytes,
             "max_label_length": settings.max_label_length,
