@@ -257,11 +257,12 @@ class Answerer:
         time_limit: float,
         picture: bool,
         meanwhile: Callable[[], None] | None = None,
+        val: bool = False,
     ) -> Answer:
-        """Return the plan and its simulation report (and picture)."""
-        key = self.key(f"simulate:{picture}", model, mapping, planner, time_limit)
+        """Return the plan and its simulation report (and picture); ``val``: VAL checks the plan too."""
+        key = self.key(f"simulate:{picture}" + (":val" if val else ""), model, mapping, planner, time_limit)
         seconds = time_limit + self.settings.solve_grace_seconds + SIMULATION_SECONDS
-        args = (*self._args(model, mapping, planner, time_limit), picture)
+        args = (*self._args(model, mapping, planner, time_limit), picture, False, val)
         return self._answer(key, jobs.simulate_job, args, seconds, _is_final_simulation, meanwhile)
 
 

@@ -158,6 +158,7 @@ def prepare_simulation(body: SimulationJobIn, services: Services) -> SimulationR
         time_limit=inputs.time_limit,
         picture=body.picture,
         robot=body.robot,
+        validate=body.validate_plan,
     )
 
 
@@ -177,6 +178,7 @@ def run_simulation_job(request: SimulationRequest, services: Services, progress:
         tuple(services.settings.catalog_folders),
         body.picture,
         body.robot,
+        body.validate_plan,
     )
     timeout = inputs.time_limit + services.settings.solve_grace_seconds
     if body.robot:

@@ -58,6 +58,8 @@ class SimulationRequest(_StoredPlan):
 
     picture: bool
     robot: bool
+    validate_plan: bool = Field(default=False, alias="validate")
+    """VAL checks the plan; jobs stored before VAL was asked for ran without it."""
 
 
 class ConsensusRequest(_Counted):

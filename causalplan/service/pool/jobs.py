@@ -141,13 +141,15 @@ def simulate_job(
     catalog_folders: tuple[Path, ...],
     picture: bool,
     robot: bool = False,
+    val: bool = False,
 ) -> dict[str, object]:
     """Plan ``model`` (on the mapping's object), run the plan in the physics simulator.
 
     Returns the plan (as ``causalplan plan --json``), the simulator's report and, when asked,
     the picture of the final assembly as a PNG data URL. With ``robot`` the Panda carries out
     the plan (``robot``: whether it could, and why not); its film is a ``video`` job's
-    (``service.jobs.video``), so ``video`` is None here.
+    (``service.jobs.video``), so ``video`` is None here. ``val``: VAL checks the plan too, as
+    in ``plan_job``.
     """
     import base64
 
@@ -157,7 +159,7 @@ def simulate_job(
 
     task = catalog_task(model, worker_catalog(catalog_folders), mapping)
     target = task.obj
-    result = pipeline.plan_task(task, planner, time_limit)
+    result = pipeline.plan_task(task, planner, time_limit, val=val)
     data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "image": None}
     if not result.has_plan:
         return data

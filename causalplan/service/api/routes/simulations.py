@@ -87,5 +87,6 @@ def create_simulation(
         inputs.time_limit,
         body.picture,
         lambda: inputs.store(services),
+        val=body.validate_plan,
     )
     return {**answer.data, "cached": answer.cached, "model_id": str(inputs.submission.record.id)}
