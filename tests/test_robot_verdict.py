@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import imageio.v3 as iio
 import numpy as np
 import pytest
@@ -10,7 +12,14 @@ from causalplan.caches import Caches
 from causalplan.inputs import load_mapping, load_model
 from causalplan.objects.catalog import load_catalog
 from causalplan.planners.result import PlanStep
-from causalplan.transfer.robot_verdict import ROBOT_CANNOT_EXECUTE, robot_run, robot_transfer_verdict, robot_video
+from causalplan.sim.outcomes import Failure
+from causalplan.transfer.robot_verdict import (
+    ROBOT_CANNOT_EXECUTE,
+    robot_reason,
+    robot_run,
+    robot_transfer_verdict,
+    robot_video,
+)
 from causalplan.transfer.verdict import Verdict, transfer_verdict
 from tests.conftest import EXAMPLES, builtin_catalog
 from tests.sim_fixtures import PEG_BOARD, parsed_object, steps
@@ -76,3 +85,16 @@ def test_the_last_frames_show_the_light_when_the_goal_is_produced() -> None:
 
     assert glowing(0) == 0
     assert glowing(-1) > 20
+
+
+def test_a_run_the_motors_cannot_follow_is_a_reason_naming_their_step_and_code() -> None:
+    desk_lamp = builtin_catalog().get("desk_lamp")
+    screw = PlanStep("screw", ("light_bulb", "base_with_cables"), "bulb_into_socket", "Screw the bulb in.")
+    driven = robot_run(desk_lamp, (screw,), motors=True)
+    assert driven.motors is not None and robot_reason(driven) is None
+    slipped = dataclasses.replace(
+        driven, motors=dataclasses.replace(driven.motors, failure=Failure.GRASP_SLIPPED, step=1, message="it slid")
+    )
+    reason = robot_reason(slipped)
+    assert reason is not None and reason.code == ROBOT_CANNOT_EXECUTE
+    assert reason.labels == ("step 1", "grasp_slipped") and "motors" in reason.message

@@ -59,8 +59,8 @@ def _filmed(
     return encode(report.video, suffix), report
 
 
-def robot_run(obj: AssemblyObject, steps: Sequence[PlanStep | StepRequest]) -> SimulationReport:
-    """Return the robot's run of ``steps`` on ``obj``, without pictures.
+def robot_run(obj: AssemblyObject, steps: Sequence[PlanStep | StepRequest], motors: bool = False) -> SimulationReport:
+    """Return the robot's run of ``steps`` on ``obj``, without pictures; ``motors``: driven by its motors too.
 
     Deterministic, so kept (the process's ``robot_runs`` cache) by the object and the checked
     steps: a batch judges the same plan on the same object many times, and a planner's step
@@ -68,12 +68,23 @@ def robot_run(obj: AssemblyObject, steps: Sequence[PlanStep | StepRequest]) -> S
     """
     checked = check_steps(steps, obj)
     runs: BoundedCache[tuple[Hashable, ...], SimulationReport] = caches.current().robot_runs
-    return runs.get_or_make((obj, checked), lambda: simulate_plan(obj, checked, render=RenderMode.NONE, robot=True))
+    return runs.get_or_make(
+        (obj, checked, motors),
+        lambda: simulate_plan(obj, checked, render=RenderMode.NONE, robot=True, motors=motors),
+    )
 
 
 def robot_reason(report: SimulationReport) -> Reason | None:
     """Return why the robot could not carry out the plan of ``report`` (None when it could)."""
     failed = report.failed_step
+    motors = report.motors
+    if failed is None and report.produces_goal and motors is not None and motors.failure is not None:
+        code = motors.failure.value
+        message = f"Driven by its motors, the robot cannot carry out step {motors.step}: {code}: {motors.message}."
+        return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, (f"step {motors.step}", code))
+    if failed is None and report.produces_goal and motors is not None and not motors.produces_goal:
+        message = f"Driven by its motors, the robot carried out every step, but built no {report.goal}."
+        return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, ("motors",))
     if failed is None and report.produces_goal:
         return None
     if failed is None:

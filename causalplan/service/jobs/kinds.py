@@ -159,6 +159,7 @@ def prepare_simulation(body: SimulationJobIn, services: Services) -> SimulationR
         picture=body.picture,
         robot=body.robot,
         validate=body.validate_plan,
+        motors=body.motors,
     )
 
 
@@ -179,6 +180,7 @@ def run_simulation_job(request: SimulationRequest, services: Services, progress:
         body.picture,
         body.robot,
         body.validate_plan,
+        body.motors,
     )
     timeout = inputs.time_limit + services.settings.solve_grace_seconds
     if body.robot:

@@ -142,6 +142,7 @@ def simulate_job(
     picture: bool,
     robot: bool = False,
     val: bool = False,
+    motors: bool = False,
 ) -> dict[str, object]:
     """Plan ``model`` (on the mapping's object), run the plan in the physics simulator.
 
@@ -149,7 +150,8 @@ def simulate_job(
     the picture of the final assembly as a PNG data URL. With ``robot`` the Panda carries out
     the plan (``robot``: whether it could, and why not); its film is a ``video`` job's
     (``service.jobs.video``), so ``video`` is None here. ``val``: VAL checks the plan too, as
-    in ``plan_job``.
+    in ``plan_job``; ``motors``: with ``robot``, the motor commands are also
+    driven through the Panda's joint motors in physics (``simulation.robot.motors``).
     """
     import base64
 
@@ -164,7 +166,7 @@ def simulate_job(
     if not result.has_plan:
         return data
     if robot:
-        report = robot_run(target, tuple(result.steps))
+        report = robot_run(target, tuple(result.steps), motors)
         data.update(simulation=report.as_dict(), robot=robot_outcome(report), video=None)
         return data  # no still picture with the robot (its film is a video job's)
     report = simulate_plan(target, result.steps, render=RenderMode.FINAL if picture else RenderMode.NONE)

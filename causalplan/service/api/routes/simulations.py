@@ -28,7 +28,7 @@ router = APIRouter(
     route_class=StrictJSONRoute,
 )
 
-_ONLY_PLANNED = ("picture", "robot", "include_pddl")
+_ONLY_PLANNED = ("picture", "robot", "include_pddl", "motors")
 """What a robot run's job does not take of a simulation's body (it films, or reports, the robot)."""
 
 

@@ -79,6 +79,13 @@ class SimulationIn(PlanIn):
         "what it did ('robot' in each step), and in the result's 'robot' whether it could (else the reason "
         "robot_cannot_execute, its step and code).",
     )
+    motors: StrictBool = Field(
+        default=True,
+        description="With 'robot': also drive the motor commands through the Panda's joint motors in physics, "
+        "as `causalplan simulate --robot` does; the result's simulation.robot.motors gives the tracking error "
+        "and slip, and a run the motors cannot follow is robot_cannot_execute (tracking_error, grasp_slipped). "
+        "false: the kinematic run alone (faster).",
+    )
     video: Literal["mp4", "gif"] | None = Field(
         default=None,
         description="With 'robot': also film it, as MP4 (H.264) or GIF, in a 'video' job; its result's 'video' "
