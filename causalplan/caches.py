@@ -12,7 +12,7 @@ start) make instead of a reset hook per module. The service's own caches belong 
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Hashable, Iterable, Mapping
+from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any, Generic, Protocol, TypeVar
 
@@ -98,9 +98,21 @@ class Counted(Protocol):
     def clear(self) -> None: ...
 
 
-def stats_of(named: Iterable[tuple[str, Counted]]) -> dict[str, dict[str, int]]:
-    """Return each cache's ``stats()`` by its name."""
-    return {name: cache.stats() for name, cache in named}
+class NamedCaches:
+    """What an owner of caches (a dataclass whose every field is a cache) offers: by name, counted, cleared."""
+
+    def named(self) -> list[tuple[str, Counted]]:
+        """Return every cache with its name."""
+        return [(each.name, getattr(self, each.name)) for each in fields(self)]  # type: ignore[arg-type]
+
+    def stats(self) -> dict[str, dict[str, int]]:
+        """Return each cache's size, entries, hits and misses, by name."""
+        return {name: cache.stats() for name, cache in self.named()}
+
+    def clear(self) -> None:
+        """Forget every kept value."""
+        for _, cache in self.named():
+            cache.clear()
 
 
 FD_ANSWERS = 512
@@ -114,7 +126,7 @@ LABEL_EMBEDDINGS = 4096
 
 
 @dataclass(frozen=True)
-class Caches:
+class Caches(NamedCaches):
     """Every cache of the process by name; a new one is empty. Values are typed where they are used."""
 
     fd_answers: BoundedCache[tuple[str, str, str], Any] = field(default_factory=lambda: BoundedCache(FD_ANSWERS))
@@ -145,19 +157,6 @@ class Caches:
             raise ValueError(f"no cache named {', '.join(unknown)}; the caches are: {', '.join(sorted(names))}")
         made: dict[str, BoundedCache[Any, Any]] = {name: BoundedCache(size) for name, size in sizes.items()}
         return cls(**made)
-
-    def named(self) -> list[tuple[str, BoundedCache[Any, Any]]]:
-        """Return every cache with its name."""
-        return [(each.name, getattr(self, each.name)) for each in fields(self)]
-
-    def stats(self) -> dict[str, dict[str, int]]:
-        """Return each cache's size, entries, hits and misses, by name."""
-        return stats_of(self.named())
-
-    def clear(self) -> None:
-        """Forget every kept value."""
-        for _, cache in self.named():
-            cache.clear()
 
 
 _owner = [Caches()]

@@ -8,9 +8,9 @@ never change). So nothing kept goes stale, and sizes alone bound them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 
-from causalplan.caches import BoundedCache, Counted, stats_of
+from causalplan.caches import BoundedCache, NamedCaches
 from causalplan.service.answers import ResultCache
 from causalplan.service.pages.pictures import PictureCache
 from causalplan.settings import Settings
@@ -22,7 +22,7 @@ PLAN_PICTURES = 256
 
 
 @dataclass(frozen=True)
-class ServiceCaches:
+class ServiceCaches(NamedCaches):
     """Every cache of one app, by name."""
 
     answers: ResultCache
@@ -40,16 +40,3 @@ class ServiceCaches:
     def of(cls, settings: Settings) -> ServiceCaches:
         """Return empty caches sized by ``settings``."""
         return cls(ResultCache(settings.cache_size))
-
-    def named(self) -> list[tuple[str, Counted]]:
-        """Return every cache with its name."""
-        return [(each.name, getattr(self, each.name)) for each in fields(self)]
-
-    def stats(self) -> dict[str, dict[str, int]]:
-        """Return each cache's size, entries, hits and misses, by name."""
-        return stats_of(self.named())
-
-    def clear(self) -> None:
-        """Forget everything kept."""
-        for _, cache in self.named():
-            cache.clear()
