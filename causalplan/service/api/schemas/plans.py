@@ -133,7 +133,7 @@ class PlanResultOut(OutputModel):
     timing: dict[str, float] = Field(description="Seconds per stage.")
     message: str
     pddl: PddlOut | None = Field(default=None, description="The PDDL domain and problem, when asked.")
-    # The MDP's own figures: only in answers the MDP gave ('mdp', or 'auto' when it chose the MDP).
+    # The MDP's own figures, null (or absent, as in the CLI's JSON) unless the MDP gave the answer.
     objective: Literal["probability", "attempts"] | None = Field(default=None, description="What the MDP optimised.")
     required_success: float | None = Field(default=None, description="The success probability the MDP had to reach.")
     optimality: Literal["optimal", "bounded"] | None = Field(
