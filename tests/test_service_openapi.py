@@ -179,6 +179,12 @@ def test_a_generated_client_plans_transfers_simulates_and_follows_a_filmed_job(
     generated: tuple[ModuleType, TestClient],
 ) -> None:
     package, running = generated
+    document = model(package, "ModelDocument").from_dict(DESK_LAMP)
+    stored, status = call(package, "models.create_model", running, body=document)
+    assert status == 201 and isinstance(stored, model(package, "ModelOut")) and stored.valid, stored
+    graph, status = call(package, "models.read_model_graph", running, model_id=stored.id)
+    assert status == 200 and isinstance(graph, str) and "<svg" in graph  # the default answer, not parsed as JSON
+
     plan_in = model(package, "PlanIn")
 
     plan, status = call(package, "plans.create_plan", running, body=plan_in.from_dict({"model": DESK_LAMP}))
