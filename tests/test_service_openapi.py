@@ -23,6 +23,7 @@ import pytest
 import yaml
 from fastapi.testclient import TestClient
 
+from causalplan.service.api.schemas.jobs import JOB_EXAMPLES
 from causalplan.service.main import create_app
 from tests.service_fixtures import (
     DESK_LAMP,
@@ -227,17 +228,42 @@ def test_a_generated_client_plans_transfers_simulates_and_follows_a_filmed_job(
     filmed = simulation_in.from_dict({"model": DESK_LAMP, "robot": True, "video": "mp4"})
     job, status = call(package, "simulations.create_simulation", running, body=filmed)
     assert status == 202 and isinstance(job, model(package, "JobOut")) and job.kind.value == "video", job
-    deadline = time.monotonic() + 300
+    job = finished(package, running, job)
+    assert job.progress.done == job.progress.total > 0 and undeclared_fields(job) == []
+    assert isinstance(job.result, model(package, "SimulationResultOut")) and job.result.robot.carried_out
+    assert job.result.video.content_type == "video/mp4"
+
+    film, status = call(package, "jobs.read_job_video", running, job_id=job.id)
+    assert status == 200 and isinstance(film, importlib.import_module(f"{package.__name__}.types").File), film
+    data = film.payload.read()
+    assert isinstance(data, bytes) and data[4:8] == b"ftyp" and len(data) == job.result.video.bytes_
+
+
+@pytest.mark.slow  # runs a job of each other kind
+def test_a_generated_client_reads_each_kinds_result_typed(generated: tuple[ModuleType, TestClient]) -> None:
+    package, running = generated
+    results = {
+        "batch": "BatchResultOut",
+        "simulation": "SimulationResultOut",
+        "consensus": "ConsensusResultOut",
+        "fit_estimation": "FitEstimationResultOut",
+    }
+    for kind, result_model in results.items():
+        request = {**JOB_EXAMPLES[kind]["value"], **({"trials": 3} if kind == "fit_estimation" else {})}
+        body = model(package, f"{''.join(word.title() for word in kind.split('_'))}JobIn").from_dict(request)
+        job, status = call(package, "jobs.create_job", running, body=body)
+        assert status == 202 and job.kind.value == kind, job
+        job = finished(package, running, job)
+        assert isinstance(job.result, model(package, result_model)), (kind, job.result)
+        assert undeclared_fields(job) == [], kind
+
+
+def finished(package: ModuleType, running: TestClient, job: Any, seconds: float = 300.0) -> Any:
+    """Poll a job through the generated client until it has finished; assert it succeeded; return it."""
+    deadline = time.monotonic() + seconds
     while job.status.value in ("queued", "running") and time.monotonic() < deadline:
         time.sleep(0.2)
         job, status = call(package, "jobs.read_job", running, job_id=job.id)
         assert status == 200
     assert job.status.value == "succeeded", job
-    assert job.progress.done == job.progress.total > 0 and undeclared_fields(job) == []
-    video = job.result["video"]
-    assert video["content_type"] == "video/mp4"
-
-    film, status = call(package, "jobs.read_job_video", running, job_id=job.id)
-    assert status == 200 and isinstance(film, importlib.import_module(f"{package.__name__}.types").File), film
-    data = film.payload.read()
-    assert isinstance(data, bytes) and data[4:8] == b"ftyp" and len(data) == video["bytes"]
+    return job

@@ -115,13 +115,27 @@ class VideoOut(OutputModel):
     bytes: int
 
 
-class SimulationOut(OutputModel):
-    """POST /v1/simulations' answer: the plan, the simulator's report of it and the picture (the robot: in a job)."""
+class SimulationResultOut(OutputModel):
+    """A simulation's answer: the plan, the simulator's report of it, and (with the robot) its run and film.
+
+    Also the result of a ``simulation`` or ``video`` job.
+    """
 
     planning: PlanResultOut
     simulation: SimulationReportOut | None = Field(description="Null when there is no plan to simulate.")
-    image: str | None = Field(description="A PNG data URL of the final assembly, when 'picture' was asked.")
-    cached: bool = Field(description="True when an identical request was answered before.")
-    model_id: uuid.UUID = Field(description="The stored model planned (inline models are stored too).")
-    robot: RobotOutcomeOut | None = Field(default=None, description="With the robot (a job's result): if it could.")
+    image: str | None = Field(
+        default=None, description="A PNG data URL of the final assembly, when 'picture' was asked."
+    )
+    model_id: uuid.UUID | None = Field(
+        default=None, description="The stored model planned (inline models are stored too)."
+    )
+    robot: RobotOutcomeOut | None = Field(default=None, description="With the robot: whether it carried out the plan.")
     video: VideoOut | None = Field(default=None, description="A video job's result: where the film is.")
+
+
+class SimulationOut(SimulationResultOut):
+    """POST /v1/simulations' answer: the plan, the simulator's report of it and the picture (the robot: in a job)."""
+
+    image: str | None = Field(description="A PNG data URL of the final assembly, when 'picture' was asked.")
+    model_id: uuid.UUID = Field(description="The stored model planned (inline models are stored too).")
+    cached: bool = Field(description="True when an identical request was answered before.")
