@@ -19,6 +19,7 @@ import anyio.to_thread
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import RedirectResponse, Response
+from fastapi.routing import APIRoute
 from fastapi_offline import FastAPIOffline
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.routing import BaseRoute, Match
@@ -318,6 +319,15 @@ async def handle_http_error(request: Request, exc: Exception) -> Response:
     return _error_response(code, message, exc.status_code, headers=headers)
 
 
+def operation_id(route: APIRoute) -> str:
+    """Return a route's OpenAPI operation id: its name (``create_plan``), the method name a generated client gets.
+
+    FastAPI's default adds the path and method (``create_plan_v1_plans_post``), which changes when
+    a path does; names are stable and ``tests/test_service_openapi.py`` checks they are unique.
+    """
+    return route.name
+
+
 def create_app(settings: Settings | None = None) -> FastAPI:
     """Return the service's ASGI app (settings from the environment when none are given)."""
     settings = settings or Settings()
@@ -353,6 +363,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         default_response_class=SafeJSONResponse,
         responses=error_responses(413, 422),
         redirect_slashes=False,
+        generate_unique_id_function=operation_id,
     )
     app.add_exception_handler(CausalPlanError, handle_causalplan_error)
     app.add_exception_handler(RequestValidationError, handle_validation_error)

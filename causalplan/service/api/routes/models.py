@@ -118,10 +118,13 @@ def _svg(services: Services, model_id: uuid.UUID, model: CausalModel) -> bytes:
 @router.get(
     "/{model_id}/graph",
     summary="A stored model's causal graph",
-    response_model=GraphOut,
+    # Three media types, the default (SVG) first: a generated client answers the text it can read
+    # rather than parsing every answer as the JSON one.
+    response_class=Response,
     responses={
         200: {
             "description": "SVG (default), Graphviz DOT (format=dot) or JSON nodes and edges (format=json).",
+            "model": GraphOut,
             "content": {
                 "image/svg+xml": {"schema": {"type": "string"}},
                 "text/vnd.graphviz": {"schema": {"type": "string"}},

@@ -13,9 +13,10 @@ from typing import Any
 from fastapi import APIRouter, Response
 
 from causalplan.service.api.routes.jobs import job_out, job_url, queue_job
-from causalplan.service.api.schemas.common import error_responses
+from causalplan.service.api.schemas.common import ErrorOut, error_responses
 from causalplan.service.api.schemas.jobs import JobOut, SimulationJobIn, VideoJobIn
 from causalplan.service.api.schemas.plans import SimulationIn
+from causalplan.service.api.schemas.simulations import SimulationOut
 from causalplan.service.deps import ClientIdsDep, Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, plan_inputs
 from causalplan.service.storage.jobs import JobKind
@@ -45,13 +46,18 @@ def queue_robot_run(body: SimulationIn, services: Services) -> JobRecord:
 @router.post(
     "",
     summary="Plan a model and simulate the plan (with the robot: a job, answered 202)",
+    response_model=None,  # two answers: declared below, each with its model
     responses={
+        200: {"model": SimulationOut, "description": "The plan, the simulator's report of it and the picture."},
         202: {
             "model": JobOut,
             "description": "With `robot`: the robot's run (and film) is queued as a job; follow `url` "
             "(also in `Location`) as for POST /v1/jobs.",
         },
-        429: {"description": "Every planner worker is busy, or the service holds as many jobs as it takes."},
+        429: {
+            "model": ErrorOut,
+            "description": "Every planner worker is busy, or the service holds as many jobs as it takes.",
+        },
     },
 )
 def create_simulation(
