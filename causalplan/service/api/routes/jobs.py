@@ -14,7 +14,13 @@ from typing import Annotated, Any
 import anyio.to_thread
 from fastapi import APIRouter, Body, Response
 
-from causalplan.service.api.schemas.common import JOB_CLIENT_RESPONSES, JOB_LIMIT_RESPONSE, ErrorOut, error_responses
+from causalplan.service.api.schemas.common import (
+    BINARY,
+    JOB_CLIENT_RESPONSES,
+    JOB_LIMIT_RESPONSE,
+    ErrorOut,
+    error_responses,
+)
 from causalplan.service.api.schemas.jobs import JOB_EXAMPLES, JobBody, JobIn, JobOut
 from causalplan.service.deps import Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute
@@ -86,7 +92,6 @@ def job_out(record: JobRecord) -> JobOut:
         **error_responses(404, 413, 422),
         429: JOB_LIMIT_RESPONSE,
     },
-    operation_id="create_job",
 )
 async def create_job(
     body: Annotated[JobIn, Body(openapi_examples=JOB_EXAMPLES)],
@@ -140,7 +145,6 @@ def queue_job(body: JobBody, services: Services, owner: JobOwner) -> JobRecord:
     response_model=JobOut,
     summary="A job's status, progress and result",
     responses=_NOT_FOUND,
-    operation_id="read_job",
 )
 async def read_job(job_id: uuid.UUID, services: ServicesDep, owner: JobOwnerDep) -> JobOut:
     """Return the job: `status` (queued, running, succeeded, failed, cancelled), `progress`, then `result`."""
@@ -153,7 +157,6 @@ async def read_job(job_id: uuid.UUID, services: ServicesDep, owner: JobOwnerDep)
     response_model=JobOut,
     summary="Cancel a job",
     responses={**_NOT_FOUND, 409: {"model": ErrorOut, "description": "The job has finished already."}},
-    operation_id="cancel_job",
 )
 async def cancel_job(job_id: uuid.UUID, services: ServicesDep, owner: JobOwnerDep) -> JobOut:
     """Cancel a queued or running job; answer the cancelled job.
@@ -174,10 +177,9 @@ async def cancel_job(job_id: uuid.UUID, services: ServicesDep, owner: JobOwnerDe
     summary="The film a video job made (MP4 or GIF)",
     response_class=Response,
     responses={
-        200: {"content": {"video/mp4": {}, "image/gif": {}}, "description": "The film."},
+        200: {"content": {"video/mp4": BINARY, "image/gif": BINARY}, "description": "The film (bytes)."},
         404: {"model": ErrorOut, "description": "No such job (or another client's), or it has made no film (yet)."},
     },
-    operation_id="read_job_video",
 )
 async def read_job_video(job_id: uuid.UUID, services: ServicesDep, owner: JobOwnerDep) -> Response:
     """Return the film of a finished `video` job, from whichever replica is asked, until the job expires."""

@@ -16,6 +16,7 @@ from causalplan.service.api.routes.jobs import job_out, job_url, queue_job
 from causalplan.service.api.schemas.common import JOB_CLIENT_RESPONSES, JOB_LIMIT_RESPONSE, error_responses
 from causalplan.service.api.schemas.jobs import JobOut, SimulationJobIn, VideoJobIn
 from causalplan.service.api.schemas.plans import SimulationIn
+from causalplan.service.api.schemas.simulations import SimulationOut
 from causalplan.service.deps import ClientIdsDep, Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, plan_inputs
 from causalplan.service.owners import BearerDep, JobOwner, resolve_owner
@@ -31,7 +32,7 @@ router = APIRouter(
 
 _TOO_MUCH = {**JOB_LIMIT_RESPONSE, "description": f"Every planner worker is busy. {JOB_LIMIT_RESPONSE['description']}"}
 """The 429 of a simulation: the planner workers' queue, or a robot run's job over a limit."""
-_ONLY_PLANNED = ("picture", "robot", "include_pddl")
+_ONLY_PLANNED = ("picture", "robot", "include_pddl", "motors")
 """What a robot run's job does not take of a simulation's body (it films, or reports, the robot)."""
 
 
@@ -48,7 +49,9 @@ def queue_robot_run(body: SimulationIn, services: Services, owner: JobOwner) -> 
 @router.post(
     "",
     summary="Plan a model and simulate the plan (with the robot: a job, answered 202)",
+    response_model=None,  # two answers: declared below, each with its model
     responses={
+        200: {"model": SimulationOut, "description": "The plan, the simulator's report of it and the picture."},
         202: {
             "model": JobOut,
             "description": "With `robot`: the robot's run (and film) is queued as a job; follow `url` "
@@ -98,5 +101,6 @@ def create_simulation(
         inputs.time_limit,
         body.picture,
         lambda: inputs.store(services),
+        val=body.validate_plan,
     )
     return {**answer.data, "cached": answer.cached, "model_id": str(inputs.submission.record.id)}
