@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import ast
 import os
+import re
 from functools import cache
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -25,6 +28,68 @@ def pytest_configure(config: pytest.Config) -> None:
     cache = getattr(config, "cache", None)  # absent with -p no:cacheprovider: the default folder then
     if cache is not None:
         os.environ.setdefault("CAUSALPLAN_CACHE_DIR", str(cache.mkdir("causalplan-objects")))
+
+
+WHOLLY_SLOW = re.compile(r"^pytestmark = pytest\.mark\.slow\b", re.MULTILINE)
+
+
+def pytest_ignore_collect(collection_path: Path, config: pytest.Config) -> bool | None:
+    """In the fast lane (``-m "not slow"``), do not import the modules marked slow as a whole.
+
+    Each xdist worker would import them only to deselect every test: their imports and
+    module-level set-up (schemathesis builds a case per route, the browser and robot modules
+    load their libraries) cost each worker seconds.
+    """
+    fast_lane = config.getoption("markexpr", "").replace(" ", "") == "notslow"
+    if fast_lane and collection_path.suffix == ".py" and collection_path.name.startswith("test_"):
+        return WHOLLY_SLOW.search(collection_path.read_text(encoding="utf-8")) is not None or None
+    return None
+
+
+def _module_fixtures(tree: ast.Module) -> set[str]:
+    """Return the names of the module-scoped fixtures a test file (or fixtures file) defines."""
+    return {
+        node.name
+        for node in ast.walk(tree)
+        if isinstance(node, ast.FunctionDef)
+        for decorator in node.decorator_list
+        if isinstance(decorator, ast.Call)
+        and any(
+            keyword.arg == "scope" and isinstance(keyword.value, ast.Constant) and keyword.value.value == "module"
+            for keyword in decorator.keywords
+        )
+    }
+
+
+@cache
+def shares_a_module_fixture(path: Path) -> bool:
+    """Return whether a test of this file asks for a module-scoped fixture (most start an app)."""
+    shared = _module_fixtures(ast.parse((Path(__file__).parent / "service_fixtures.py").read_text(encoding="utf-8")))
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    names = shared | _module_fixtures(tree)
+    tests = [node for node in ast.walk(tree) if isinstance(node, ast.FunctionDef) and node.name.startswith("test_")]
+    return any({arg.arg for arg in test.args.args} & names for test in tests)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """Deal tests to xdist's workers one by one, but a file's together when they share a module-scoped fixture.
+
+    Such a fixture mostly starts an app (its planner workers, its database): dealt one by one,
+    a file's tests would make each worker start the file's app again. Only for ``--dist load``
+    (what ``-n`` means); another ``--dist`` keeps xdist's own scheduler.
+    """
+    if config.getoption("dist") != "load":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ByFileWhereShared(LoadScopeScheduling):  # type: ignore[misc]
+        def _split_scope(self, nodeid: str) -> str:
+            file = nodeid.split("::", 1)[0]
+            shared = file.endswith(".py") and shares_a_module_fixture(config.rootpath / file)
+            return file if shared else nodeid
+
+    return ByFileWhereShared(config, log)
 
 
 @cache

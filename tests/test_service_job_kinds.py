@@ -81,6 +81,7 @@ def test_a_video_job_films_the_robot_and_serves_the_film(kinds_client: TestClien
     assert served.content[4:8] == b"ftyp" and len(served.content) == result["video"]["bytes"]
 
 
+@pytest.mark.slow  # the robot films the lamp (the module's film), and a second replica serves it
 def test_another_replica_serves_the_film_from_the_database(kinds_database: str, film: dict[str, Any]) -> None:
     # An app with no runner on the same database: what another replica behind the load balancer is.
     with running_client(settings_for(kinds_database, planning_workers=1, job_runners=0), KEY_AUTH) as other:

@@ -17,7 +17,7 @@ from causalplan.objects.catalog import Catalog, load_catalog
 from causalplan.studies.analysis import analyse
 from causalplan.studies.misconceptions import misconceptions
 from causalplan.studies.statistics import wilson
-from causalplan.studies.trials import ExportError, trial_rows
+from causalplan.studies.trials import ExportError, read_study, trial_rows
 from causalplan.transfer.verdict import transfer_verdict
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -72,13 +72,13 @@ def synthetic_export(per_condition: int, seed: int) -> dict[str, Any]:
 
 @pytest.mark.slow
 def test_a_known_effect_is_found_in_the_right_direction_and_covered_by_the_intervals(catalog: Catalog) -> None:
-    analysis = analyse(trial_rows(synthetic_export(80, seed=7), catalog), catalog)
+    analysis = analyse(read_study(synthetic_export(80, seed=7), catalog), catalog)
     near = next(c for c in analysis.comparisons if c.name.startswith("near: same-category"))
     assert near.first_share.rate is not None and near.second_share.rate is not None
     assert near.first_share.rate > near.second_share.rate
     assert near.p_holm is not None and near.p_holm < 0.05
     assert near.odds_ratio > 1
-    for cell in analysis.cells:
+    for cell in analysis.rates:
         true_rate = CONDITIONS[cell.condition][1][cell.test_object]
         assert cell.share.low is not None and cell.share.high is not None
         assert cell.share.low <= true_rate <= cell.share.high, cell
@@ -135,7 +135,7 @@ def test_the_command_analyses_the_papers_two_participants(tmp_path: Path, catalo
     result = CliRunner().invoke(app, ["analyze", str(path), "--out", str(tmp_path / "out"), "--json"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.output)
-    assert data["cells"][0]["successes"] == 1 and data["cells"][0]["trials"] == 2
+    assert data["rates"][0]["transfers"] == 1 and data["rates"][0]["trials"] == 2
     assert data["failure_reasons"]["near"] == {"missing_function": 1, "unmodelled_function": 1}
     assert list(data["misconceptions"]) == ["failure"]
     with (tmp_path / "out" / "trials.csv").open(encoding="utf-8") as handle:
@@ -164,6 +164,6 @@ def test_an_export_with_a_bad_trial_names_it(catalog: Catalog, tmp_path: Path) -
 def test_excluded_participants_are_counted_but_not_analysed(catalog: Catalog) -> None:
     export = synthetic_export(5, seed=1)
     export["participants"] = [{"participant_id": "near-0", "excluded": True, "exclusion_reason": "comprehension"}]
-    analysis = analyse(trial_rows(export, catalog), catalog)
+    analysis = analyse(read_study(export, catalog), catalog)
     assert analysis.as_dict()["excluded_participants"] == ["near-0"]
     assert all(row.participant_id != "near-0" for row in analysis.analysed)

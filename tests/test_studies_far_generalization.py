@@ -23,7 +23,7 @@ from causalplan.studies.far_generalization import (
     relation_shares,
     template_conditions,
 )
-from causalplan.studies.trials import trial_rows
+from causalplan.studies.trials import Study, trial_rows
 from tests.service_fixtures import AUTH, error_of, running_client, settings_for, sqlite_url
 
 CATALOG = load_catalog()
@@ -87,7 +87,7 @@ def _analysed(knobs: dict[str, dict[str, float]], seed: int) -> tuple[dict[str, 
     lines = paper_population(far_generalization_conditions(CATALOG), CATALOG, 20, seed, knobs)
     rows = trial_rows(synthetic_export(lines, CATALOG), CATALOG)
     shares = {f"{span}, {kind}": share for (span, kind), share in relation_shares(rows, CATALOG).items()}
-    comparisons = {c.name: c for c in analyse(rows, CATALOG).comparisons}
+    comparisons = {c.name: c for c in analyse(Study(tuple(rows)), CATALOG).comparisons}
     return shares, comparisons  # type: ignore[return-value]
 
 

@@ -103,15 +103,19 @@ def test_results_and_exports_hold_every_trial_with_its_model_mapping_and_reasons
     assert results["rates"] == [
         {
             "condition": "near",
+            "training_span": "one category",
             "test_object": "flashlight",
             "generalization": "near",
             "trials": 2,
             "transfers": 1,
             "fails": 1,
             "undecided": 0,
+            "excluded": 0,
             "rate": 0.5,
+            "interval": pytest.approx([0.0945, 0.9055], abs=1e-4),
         }
     ]
+    assert results["rates_problem"] is None
     assert [p["progress"] for p in results["participants"]] == ["finished", "finished", "step 1, object 1 of 1"]
     works, fails = results["trials"]
     assert works["verdict"] == "transfers" and works["plan"] == [
@@ -193,7 +197,7 @@ def test_the_research_pages_need_the_token_as_a_cookie_or_a_bearer(storage_clien
     assert "Tutorial: no." in page.text and "No participant links yet." in page.text
     linked = storage_client.post(f"{made.headers['location']}/participants", data={"count": "2", "condition": ""})
     assert linked.status_code == 200 and linked.text.count('class="link-box"') == 2
-    chart = storage_client.get(f"{made.headers['location']}/chart.svg")
+    chart = storage_client.get(f"{made.headers['location']}/rates.svg")
     assert chart.headers["content-type"] == "image/svg+xml" and b"kerosene lamp" in chart.content
     incomplete = storage_client.post("/research/experiments", data={"name": "", "condition:0:name": "near"})
     assert incomplete.status_code == 422

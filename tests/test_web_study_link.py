@@ -18,7 +18,7 @@ from sqlalchemy.orm import Session
 
 from causalplan.cli import app
 from causalplan.service.pages.upkeep import purge
-from causalplan.service.storage.records import ArrivalRecord, ParticipantRecord, utc_now
+from causalplan.service.storage.records import ArrivalRecord, ParticipantRecord, TrialRecord, utc_now
 from tests.service_fixtures import AUTH, RESEARCH_TOKEN, running_client, services_of, settings_for, sqlite_url
 from tests.web_flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, post
 
@@ -213,17 +213,98 @@ def test_the_analyze_command_reads_the_export_of_a_real_run_and_skips_the_exclud
     assert result.exit_code == 0, result.output
     analysis = json.loads(result.output)
     assert analysis["trials"] == analysis["analysed_trials"] == 2  # the screened-out one never reached step 3
-    assert analysis["cells"][0]["successes"] == 2 and analysis["cells"][0]["test_object"] == "flashlight"
+    assert analysis["rates"][0]["transfers"] == 2 and analysis["rates"][0]["test_object"] == "flashlight"
     written = sorted(item.name for item in (tmp_path / "out").iterdir())
     assert written == ["analysis.json", "codebook.csv", "rates.png", "rates.svg", "trials.csv"]
     page = client.get(f"/research/experiments/{created['id']}", headers=AUTH)
     assert "2 of 2 trials analysed" in page.text and "1 participant(s) excluded" not in page.text
-    assert client.get(f"/research/experiments/{created['id']}/analysis.svg", headers=AUTH).text.count("<svg") == 1
+    assert client.get(f"/research/experiments/{created['id']}/rates.svg", headers=AUTH).text.count("<svg") == 1
     assert 'id="consensus-graph"' in page.text and "from the 2 participants' models" in page.text
     graph = client.get(f"/research/experiments/{created['id']}/consensus.svg", headers=AUTH)
     assert graph.status_code == 200, graph.text
     assert graph.headers["content-type"].startswith("image/svg+xml")
     assert graph.text.count("<svg") == 1
+
+
+def _table_rows(page: str, table_id: str) -> list[list[str]]:
+    """Return the text of each body row's cells of the page's table ``table_id``."""
+    table = page.split(f'id="{table_id}"', 1)[1].split("</table>", 1)[0]
+    body = table.split("<tbody>", 1)[1]
+    return [
+        [re.sub(r"<[^>]+>", "", cell).strip() for cell in re.findall(r"<td>(.*?)</td>", row, re.S)]
+        for row in body.split("</tr>")
+        if "<td>" in row
+    ]
+
+
+def _chart_texts(svg: str) -> list[str]:
+    # matplotlib writes each text of the chart (ticks, labels, counts, title) as a comment beside its glyphs.
+    return re.findall(r"<!-- (.*?) -->", svg, re.S)
+
+
+@pytest.mark.slow
+def test_the_page_the_api_and_analyze_show_one_rates_table_that_leaves_out_the_same_trials(
+    client: TestClient, tmp_path: Path
+) -> None:
+    created = experiment(client, tutorial=True)
+    recruiting(client, created["id"], comprehension_tries=1, too_fast_seconds=3600)
+    kept = {}
+    for pid in ("pid-works", "pid-fails", "pid-undecided"):
+        kept[pid] = join(client, created["id"], prolific(pid))
+        post(client, f"/p/{kept[pid]}/tutorial", {**TUTORIAL_ANSWERS, "rules": TUTORIAL_RULES})
+    age_participants(client, created["id"], minutes=120)  # these three took two hours: not too fast
+    complete(client, kept["pid-works"])
+    complete(client, kept["pid-fails"], {"chosen:batteries": "provide electricity"})
+    complete(client, kept["pid-undecided"])
+    too_fast = join(client, created["id"], prolific("pid-fast"))
+    post(client, f"/p/{too_fast}/tutorial", {**TUTORIAL_ANSWERS, "rules": TUTORIAL_RULES})
+    complete(client, too_fast)  # transferred, but excluded: finished within the hour
+    screened = join(client, created["id"], prolific("pid-screened"))
+    post(client, f"/p/{screened}/tutorial", {**WRONG_ANSWERS, "rules": TUTORIAL_RULES})  # no trial at all
+    export = exported(client, created["id"])
+    (timed_out,) = [trial for trial in export["trials"] if trial["participant_code"] == kept["pid-undecided"]]
+    with Session(services_of(client).engine) as session:  # as the service stores a planner that ran out of time
+        session.execute(
+            update(TrialRecord).where(TrialRecord.id == uuid.UUID(timed_out["trial_id"])).values(verdict="undecided")
+        )
+        session.commit()
+    path = tmp_path / "export.json"
+    path.write_text(json.dumps(exported(client, created["id"])), encoding="utf-8")
+    result = CliRunner().invoke(app, ["analyze", str(path), "--out", str(tmp_path / "out"), "--json"])
+    assert result.exit_code == 0, result.output
+    analysis = json.loads(result.output)
+    left_out = (
+        "2 of 4 trials analysed; left out: 1 trial of 2 participants excluded by screening (comprehension 1, "
+        "too_fast 1); 1 undecided trial (the planner could not decide in time)."
+    )
+    assert analysis["left_out"] == left_out
+    (rate,) = analysis["rates"]
+    assert {name: rate[name] for name in ("trials", "transfers", "fails", "undecided", "excluded", "rate")} == {
+        "trials": 2,
+        "transfers": 1,
+        "fails": 1,
+        "undecided": 1,
+        "excluded": 1,
+        "rate": 0.5,
+    }
+
+    results = client.get(f"/v1/experiments/{created['id']}/results", headers=AUTH).json()
+    assert results["rates"] == analysis["rates"]
+    page = client.get(f"/research/experiments/{created['id']}", headers=AUTH).text
+    assert left_out in page
+    low, high = rate["interval"]
+    assert _table_rows(page, "rates") == [
+        ["near", "one category", "flashlight", "near", "1/2", "1", "50%", f"{low:.0%}\u2013{high:.0%}", "1", "1"]
+    ]
+    rates_and_analysis = page.split('id="results"', 1)[1].split('id="consensus"', 1)[0]  # the crowd's graph follows
+    charts = re.findall(r'<img class="plot" id="([^"]+)" src="([^"]+)"', rates_and_analysis)
+    assert charts == [("rates-chart", f"/research/experiments/{created['id']}/rates.svg")]
+    drawn = client.get(charts[0][1], headers=AUTH)
+    assert drawn.headers["content-type"] == "image/svg+xml"
+    written = (tmp_path / "out" / "rates.svg").read_text(encoding="utf-8")
+    assert _chart_texts(drawn.text) == _chart_texts(written) and "1/2" in _chart_texts(written)
+    for gone in ("chart.svg", "analysis.svg"):  # the two charts drawn before, each counting differently
+        assert client.get(f"/research/experiments/{created['id']}/{gone}", headers=AUTH).status_code == 404
 
 
 def test_the_crowds_model_waits_for_two_models(client: TestClient) -> None:

@@ -49,14 +49,14 @@ def analyze(export: Path, out: Path, near_misses: bool, as_json: bool, catalog: 
     from rich.markup import escape
     from rich.table import Table
 
-    from causalplan.studies.analysis import analyse
+    from causalplan.studies.analysis import analyse_export
     from causalplan.studies.outputs import write_outputs
-    from causalplan.studies.trials import read_export, trial_rows
+    from causalplan.studies.trials import read_export
 
     objects = catalog_from(catalog)
     with exit_on_error():
         data = read_export(export)
-        analysis = analyse(trial_rows(data, objects), objects)
+        analysis = analyse_export(data, objects)
     with writing(out, "write to"):
         written = write_outputs(analysis, out)
     misses = None
@@ -77,20 +77,22 @@ def analyze(export: Path, out: Path, near_misses: bool, as_json: bool, catalog: 
         "generalization",
         "transferred",
         "rate (95% CI)",
-        "undecided",
-        title=f"{len(analysis.analysed)} analysed trials from {export}",
+        "left out: undecided",
+        "left out: excluded",
+        title=f"Transfer rates from {export}: {analysis.table.left_out.says()}",
     )
-    for cell in analysis.cells:
-        share = cell.share
-        rate = "-" if share.rate is None else f"{share.rate:.0%} ({share.low:.0%}-{share.high:.0%})"
+    for rate in analysis.rates:
+        share = rate.share
+        shown = "-" if share.rate is None else f"{share.rate:.0%} ({share.low:.0%}-{share.high:.0%})"
         table.add_row(
-            escape(cell.condition),
-            cell.training_span,
-            cell.test_object,
-            cell.generalization,
-            f"{share.successes}/{share.trials}",
-            rate,
-            str(cell.undecided),
+            escape(rate.condition),
+            rate.training_span or "",
+            rate.test_object,
+            rate.generalization or "",
+            f"{rate.transfers}/{rate.trials}",
+            shown,
+            str(rate.undecided),
+            str(rate.excluded),
         )
     console.print(table)
     for condition, reasons in analysis.reasons.items():

@@ -6,6 +6,7 @@ The pages and ``/v1/experiments`` call the same functions, so both show the same
 from __future__ import annotations
 
 import tempfile
+from collections.abc import Sequence
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -25,9 +26,9 @@ from causalplan.service.api.schemas.experiments import (
 from causalplan.service.responses import SafeJSONResponse, csv_bytes
 from causalplan.service.storage import arrivals
 from causalplan.service.storage import experiments as store
-from causalplan.service.storage.experiments import ParticipantJourney
+from causalplan.service.storage.experiments import ParticipantJourney, StoredTrial
 from causalplan.service.storage.records import ExperimentRecord, ParticipantRecord
-from causalplan.studies.analysis import Analysis, analyse
+from causalplan.studies.analysis import Analysis, analyse_export
 from causalplan.studies.design import Design, read_design
 from causalplan.studies.errors import InvalidExperimentError
 from causalplan.studies.export import (
@@ -38,9 +39,9 @@ from causalplan.studies.export import (
     trial_dict,
 )
 from causalplan.studies.far_generalization import DesignError, template_conditions
+from causalplan.studies.rates import RateTable, rate_table
 from causalplan.studies.recruitment import Recruitment, read_quotas, read_recruitment
-from causalplan.studies.results import Rate, transfer_rates
-from causalplan.studies.trials import ExportError, trial_rows
+from causalplan.studies.trials import ExportError, read_study
 
 
 def create(session: Session, catalog: Catalog, body: ExperimentIn) -> ExperimentRecord:
@@ -106,16 +107,24 @@ def participant_out(participant: ParticipantRecord, catalog: Catalog, request: R
     return ParticipantOut.model_validate({**stored, **worked_out})
 
 
-def results(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> dict[str, Any]:
-    """Return an experiment's participants, transfer rates and trials (what the results page shows)."""
-    participants = store.participants_of(session, experiment.id)
-    trials = store.trials_of(session, experiment.id)
-    rates: list[Rate] = transfer_rates(Design.from_dict(experiment.design), trials, catalog)
+def _export(
+    catalog: Catalog,
+    experiment: ExperimentRecord,
+    request: Request,
+    participants: Sequence[ParticipantRecord],
+    trials: Sequence[StoredTrial],
+    platform_ids: str,
+) -> dict[str, Any]:
     return {
-        "experiment": experiment_out(experiment, len(participants)),
-        "participants": [participant_out(participant, catalog, request) for participant in participants],
-        "rates": [rate.as_dict() for rate in rates],
-        "trials": [trial_dict(stored, catalog) for stored in trials],
+        "exported_at": datetime.now(UTC).isoformat(),
+        "experiment": experiment_dict(experiment),
+        "participants": [
+            participant_dict(
+                participant, progress(participant, catalog), participant_link(request, participant), platform_ids
+            )
+            for participant in participants
+        ],
+        "trials": [trial_dict(trial, catalog) for trial in trials],
     }
 
 
@@ -123,21 +132,37 @@ def export_data(
     session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request, platform_ids: str = "plain"
 ) -> dict[str, Any]:
     """Return every raw record of an experiment as the JSON export holds them (``causalplan analyze`` reads it)."""
-    participants = [
-        participant_dict(
-            participant, progress(participant, catalog), participant_link(request, participant), platform_ids
-        )
-        for participant in store.participants_of(session, experiment.id)
-    ]
-    stored = store.trials_of(session, experiment.id)
-    rates = transfer_rates(Design.from_dict(experiment.design), stored, catalog)
+    participants = store.participants_of(session, experiment.id)
+    return _export(catalog, experiment, request, participants, store.trials_of(session, experiment.id), platform_ids)
+
+
+def results(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> dict[str, Any]:
+    """Return an experiment's participants, transfer rates and trials.
+
+    The rates are ``causalplan analyze``'s of the experiment's export (``rates.rate_table``).
+    """
+    participants = store.participants_of(session, experiment.id)
+    data = _export(catalog, experiment, request, participants, store.trials_of(session, experiment.id), "omit")
+    table = _rates(data, catalog)
     return {
-        "exported_at": datetime.now(UTC).isoformat(),
-        "experiment": experiment_dict(experiment),
-        "rates": [rate.as_dict() for rate in rates],
-        "participants": participants,
-        "trials": [trial_dict(trial, catalog) for trial in stored],
+        "experiment": experiment_out(experiment, len(participants)),
+        "participants": [participant_out(participant, catalog, request) for participant in participants],
+        "rates": [] if isinstance(table, str) else [rate.as_dict() for rate in table.rates],
+        "rates_problem": table if isinstance(table, str) else None,
+        "trials": data["trials"],
     }
+
+
+def _rates(data: dict[str, Any], catalog: Catalog) -> RateTable | str:
+    try:
+        return rate_table(read_study(data, catalog), catalog)
+    except (ExportError, UnknownObjectError) as exc:
+        return exc.message
+
+
+def rates_of(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> RateTable | str:
+    """Return the experiment's rates table (``causalplan analyze``'s of its export), or why it cannot be made."""
+    return _rates(export_data(session, catalog, experiment, request, platform_ids="omit"), catalog)
 
 
 def export(
@@ -175,7 +200,7 @@ def analysis_of(session: Session, catalog: Catalog, experiment: ExperimentRecord
     """Return the study's analysis (``causalplan analyze`` on its export), or why it cannot be made."""
     data = export_data(session, catalog, experiment, request, platform_ids="omit")
     try:
-        return analyse(trial_rows(data, catalog), catalog)
+        return analyse_export(data, catalog)
     except (ExportError, UnknownObjectError) as exc:
         return exc.message
 
@@ -204,11 +229,6 @@ def consensus_svg(session: Session, catalog: Catalog, experiment: ExperimentReco
     with tempfile.TemporaryDirectory() as folder:  # matplotlib writes the files; the SVG is read back
         paths = draw_consensus(consensus, dict(consensus.models), Path(folder))
         return next(path for path in paths if path.suffix == ".svg").read_bytes()
-
-
-def rates_of(session: Session, catalog: Catalog, experiment: ExperimentRecord) -> list[Rate]:
-    """Return an experiment's transfer rates per condition and test object."""
-    return transfer_rates(Design.from_dict(experiment.design), store.trials_of(session, experiment.id), catalog)
 
 
 def public_link(request: Request, experiment: ExperimentRecord) -> str:

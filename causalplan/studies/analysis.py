@@ -3,9 +3,10 @@
 The paper predicts: trained on one category, models transfer more to a test object of that
 category than to one of the other (near beats far); trained on both categories, they transfer
 to both. ``analyse`` gives the transfer rate of every condition x test object with a Wilson
-interval, Fisher's exact tests of those predictions (Holm-corrected over the family), a
-logistic GEE with the participant as cluster, failure reasons per condition, the paper's
-misconception per participant, and the conclusions in plain words with the sample behind each.
+interval (the one rates table, ``rates.rate_table``), Fisher's exact tests of those predictions
+(Holm-corrected over the family), a logistic GEE with the participant as cluster, failure
+reasons per condition, the paper's misconception per participant, and the conclusions in plain
+words with the sample behind each.
 A trial's outcome is 1 when its model transferred and 0 when it failed or was invalid;
 undecided trials (the planner timed out) and excluded participants are counted, not analysed.
 """
@@ -13,46 +14,18 @@ undecided trials (the planner timed out) and excluded participants are counted, 
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from causalplan.objects.catalog import Catalog
-from causalplan.studies.far_generalization import BOTH_CATEGORIES, ONE_CATEGORY, prediction_tests, span_of
+from causalplan.studies.far_generalization import BOTH_CATEGORIES, ONE_CATEGORY, prediction_tests
 from causalplan.studies.misconceptions import Misconception, misconceptions
-from causalplan.studies.statistics import (
-    ClusteredModel,
-    Comparison,
-    Proportion,
-    clustered_logistic,
-    fisher,
-    holm,
-    wilson,
-)
-from causalplan.studies.trials import TrialRow
+from causalplan.studies.rates import Rate, RateTable, rate_table, share, training_spans
+from causalplan.studies.statistics import ClusteredModel, Comparison, Proportion, clustered_logistic, fisher, holm
+from causalplan.studies.trials import Study, TrialRow, read_study
 
 SIGNIFICANCE = 0.05
-
-
-@dataclass(frozen=True)
-class Cell:
-    """The transfer rate of one condition on one test object."""
-
-    condition: str
-    training_span: str
-    test_object: str
-    generalization: str
-    share: Proportion
-    undecided: int
-
-    def as_dict(self) -> dict[str, object]:
-        return {
-            "condition": self.condition,
-            "training_span": self.training_span,
-            "test_object": self.test_object,
-            "generalization": self.generalization,
-            **self.share.as_dict(),
-            "undecided": self.undecided,
-        }
 
 
 @dataclass(frozen=True)
@@ -60,7 +33,7 @@ class Analysis:
     """Everything ``analyse`` computed; ``as_dict`` is the JSON the command writes."""
 
     rows: tuple[TrialRow, ...]
-    cells: tuple[Cell, ...]
+    table: RateTable
     comparisons: tuple[Comparison, ...]
     clustered: ClusteredModel
     reasons: dict[str, dict[str, int]]
@@ -68,17 +41,24 @@ class Analysis:
     conclusions: tuple[str, ...]
 
     @property
+    def rates(self) -> tuple[Rate, ...]:
+        return self.table.rates
+
+    @property
     def analysed(self) -> list[TrialRow]:
         return [row for row in self.rows if not row.excluded and row.outcome is not None]
 
     def as_dict(self) -> dict[str, object]:
-        excluded = sorted({row.participant_id for row in self.rows if row.excluded})
+        left_out = self.table.left_out
         return {
-            "trials": len(self.rows),
-            "analysed_trials": len(self.analysed),
-            "undecided_trials": sum(1 for row in self.rows if row.outcome is None and not row.excluded),
-            "excluded_participants": excluded,
-            "cells": [cell.as_dict() for cell in self.cells],
+            "trials": left_out.trials,
+            "analysed_trials": left_out.analysed_trials,
+            "undecided_trials": left_out.undecided_trials,
+            "excluded_trials": left_out.excluded_trials,
+            "excluded_participants": sorted(left_out.excluded_participants),
+            "exclusion_reasons": left_out.reasons(),
+            "left_out": left_out.says(),
+            "rates": [rate.as_dict() for rate in self.rates],
             "comparisons": [comparison.as_dict() for comparison in self.comparisons],
             "clustered_model": self.clustered.as_dict(),
             "failure_reasons": self.reasons,
@@ -87,32 +67,6 @@ class Analysis:
             },
             "conclusions": list(self.conclusions),
         }
-
-
-def training_spans(rows: Sequence[TrialRow], catalog: Catalog) -> dict[str, str]:
-    """Return, per condition, whether its training objects come from one category or from both."""
-    categories: dict[str, set[str]] = {}
-    for row in rows:
-        categories.setdefault(row.condition, set()).update(catalog.get(o).category for o in row.training_objects)
-    return {condition: span_of(found) for condition, found in categories.items()}
-
-
-def _share(rows: Sequence[TrialRow]) -> Proportion:
-    return wilson(sum(row.outcome or 0 for row in rows), len(rows))
-
-
-def _cells(rows: Sequence[TrialRow], spans: dict[str, str]) -> list[Cell]:
-    cells = []
-    for condition in dict.fromkeys(row.condition for row in rows):
-        for test in sorted({row.test_object for row in rows if row.condition == condition}):
-            mine = [row for row in rows if row.condition == condition and row.test_object == test]
-            decided = [row for row in mine if row.outcome is not None]
-            cells.append(
-                Cell(
-                    condition, spans[condition], test, mine[0].generalization, _share(decided), len(mine) - len(decided)
-                )
-            )
-    return cells
 
 
 def _comparisons(rows: Sequence[TrialRow], spans: dict[str, str]) -> list[Comparison]:
@@ -128,8 +82,8 @@ def _comparisons(rows: Sequence[TrialRow], spans: dict[str, str]) -> list[Compar
                 found.append(
                     fisher(
                         f"{condition}: same-category vs other-category test objects",
-                        ("same category", _share(same)),
-                        ("other category", _share(other)),
+                        ("same category", share(same)),
+                        ("other category", share(other)),
                         "greater",
                     )
                 )
@@ -140,8 +94,8 @@ def _comparisons(rows: Sequence[TrialRow], spans: dict[str, str]) -> list[Compar
                 found.append(
                     fisher(
                         f"{condition}: {first} vs {second}",
-                        (first, _share([row for row in mine if row.test_object == first])),
-                        (second, _share([row for row in mine if row.test_object == second])),
+                        (first, share([row for row in mine if row.test_object == first])),
+                        (second, share([row for row in mine if row.test_object == second])),
                         "two-sided",
                     )
                 )
@@ -155,10 +109,10 @@ def _comparisons(rows: Sequence[TrialRow], spans: dict[str, str]) -> list[Compar
                 found.append(
                     fisher(
                         f"{test}: {condition} vs {other_condition}",
-                        (condition, _share([row for row in mine if row.test_object == test])),
+                        (condition, share([row for row in mine if row.test_object == test])),
                         (
                             other_condition,
-                            _share([r for r in rows if r.condition == other_condition and r.test_object == test]),
+                            share([r for r in rows if r.condition == other_condition and r.test_object == test]),
                         ),
                         "greater",
                     )
@@ -166,10 +120,13 @@ def _comparisons(rows: Sequence[TrialRow], spans: dict[str, str]) -> list[Compar
     return holm(found)
 
 
-def _percent(share: Proportion) -> str:
-    if share.rate is None or share.low is None or share.high is None:
+def _percent(proportion: Proportion) -> str:
+    if proportion.rate is None or proportion.low is None or proportion.high is None:
         return "no trials"
-    return f"{share.successes}/{share.trials} ({share.rate:.0%}, 95% CI {share.low:.0%}-{share.high:.0%})"
+    return (
+        f"{proportion.successes}/{proportion.trials} ({proportion.rate:.0%}, "
+        f"95% CI {proportion.low:.0%}-{proportion.high:.0%})"
+    )
 
 
 def _conclusion(comparison: Comparison) -> str:
@@ -202,8 +159,9 @@ def _misconceptions(rows: Sequence[TrialRow], catalog: Catalog) -> dict[str, tup
     return {participant: items for participant, items in found.items() if items}
 
 
-def analyse(rows: Sequence[TrialRow], catalog: Catalog) -> Analysis:
+def analyse(study: Study, catalog: Catalog) -> Analysis:
     """Return the study's analysis: rates, tests, the clustered model, reasons, misconceptions, conclusions."""
+    rows = study.rows
     included = [row for row in rows if not row.excluded]
     decided = [row for row in included if row.outcome is not None]
     spans = training_spans(included, catalog)
@@ -242,6 +200,9 @@ def analyse(rows: Sequence[TrialRow], catalog: Catalog) -> Analysis:
             f"{len(found)} of {len({row.participant_id for row in included})} participants made a function the true "
             "mechanism does not need a necessary cause (the paper's 'diffuse light' misconception)."
         )
-    return Analysis(
-        tuple(rows), tuple(_cells(included, spans)), tuple(comparisons), clustered, reasons, found, tuple(conclusions)
-    )
+    return Analysis(rows, rate_table(study, catalog), tuple(comparisons), clustered, reasons, found, tuple(conclusions))
+
+
+def analyse_export(export: Mapping[str, Any], catalog: Catalog) -> Analysis:
+    """Return the analysis of an experiment export (``causalplan analyze`` and the research page alike)."""
+    return analyse(read_study(export, catalog), catalog)

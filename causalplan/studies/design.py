@@ -11,6 +11,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from causalplan.causal.labels import closest, display_label, has_control_characters, normalize_label
+from causalplan.errors import UnknownObjectError
 from causalplan.objects.catalog import Catalog
 from causalplan.studies.errors import InvalidExperimentError
 from causalplan.transfer.generalization import near_or_far
@@ -166,3 +167,11 @@ def read_design(
 def generalization(training: Sequence[str], test: str, catalog: Catalog) -> str:
     """Return ``near`` when the test object shares a category with a training object, else ``far``."""
     return near_or_far((catalog.get(object_id).category for object_id in training), catalog.get(test).category)
+
+
+def generalization_of(training: Sequence[str], test: str, catalog: Catalog) -> str | None:
+    """Return ``near`` or ``far`` for a test object after these training objects (None: the catalog lost one)."""
+    try:
+        return generalization(training, test, catalog)
+    except UnknownObjectError:  # the catalog no longer has an object the experiment used
+        return None

@@ -12,9 +12,9 @@ from datetime import datetime
 from typing import Any, Protocol
 
 from causalplan.objects.catalog import Catalog
+from causalplan.studies.design import generalization_of
 from causalplan.studies.journey import as_utc
 from causalplan.studies.recruitment import platform_id_view
-from causalplan.studies.results import generalization_of
 
 
 class ExportedExperiment(Protocol):

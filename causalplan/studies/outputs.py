@@ -1,4 +1,4 @@
-"""What ``causalplan analyze`` writes: a tidy CSV with its codebook, the JSON of everything, the plot."""
+"""What ``causalplan analyze`` writes: a tidy CSV with its codebook, the JSON of everything, the rates chart."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from causalplan.studies.analysis import Analysis
+from causalplan.studies.rates import rates_chart
 from causalplan.studies.trials import TrialRow
 
 # One entry per column of trials.csv: (name, type, description). The codebook is written from it.
@@ -33,14 +34,14 @@ CODEBOOK: tuple[tuple[str, str, str], ...] = (
 
 def tidy_row(row: TrialRow, analysis: Analysis) -> dict[str, object]:
     """Return one trial as a CSV row with the codebook's columns."""
-    spans = {cell.condition: cell.training_span for cell in analysis.cells}
+    spans = {rate.condition: rate.training_span for rate in analysis.rates}
     found = analysis.misconceptions.get(row.participant_id, ())
     return {
         "trial_id": row.trial_id,
         "participant_id": row.participant_id,
         "condition": row.condition,
         "training_objects": "+".join(row.training_objects),
-        "training_span": spans.get(row.condition, ""),
+        "training_span": spans.get(row.condition) or "",
         "test_object": row.test_object,
         "test_category": row.test_category,
         "trained_category": int(row.trained_category),
@@ -56,45 +57,6 @@ def tidy_row(row: TrialRow, analysis: Analysis) -> dict[str, object]:
     }
 
 
-def plot(analysis: Analysis, path: Path) -> None:
-    """Draw the transfer rate of each condition on each test object with its 95% Wilson interval."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    tests = sorted({cell.test_object for cell in analysis.cells})
-    conditions = list(dict.fromkeys(cell.condition for cell in analysis.cells))
-    figure = Figure(figsize=(max(5.0, 1.8 * len(tests) + 2.0), 3.8))
-    FigureCanvasAgg(figure)
-    axes = figure.add_subplot()
-    width = 0.6 / max(1, len(conditions))
-    for index, condition in enumerate(conditions):
-        shift = (index - (len(conditions) - 1) / 2) * width
-        cells = [cell for cell in analysis.cells if cell.condition == condition and cell.share.rate is not None]
-        xs = [tests.index(cell.test_object) + shift for cell in cells]
-        rates = [100 * (cell.share.rate or 0.0) for cell in cells]
-        # Wilson bounds can miss a rate of 0 or 1 by a rounding error; a bar is never negative.
-        below = [max(0.0, 100 * ((cell.share.rate or 0.0) - (cell.share.low or 0.0))) for cell in cells]
-        above = [max(0.0, 100 * ((cell.share.high or 0.0) - (cell.share.rate or 0.0))) for cell in cells]
-        axes.errorbar(xs, rates, yerr=[below, above], fmt="o", capsize=4, label=condition)
-        for x, rate, cell in zip(xs, rates, cells, strict=True):
-            axes.annotate(
-                f"{cell.share.successes}/{cell.share.trials}",
-                (x, rate),
-                xytext=(6, -3),
-                textcoords="offset points",
-                fontsize=8,
-            )
-    axes.set_xticks(range(len(tests)), [test.replace("_", " ") for test in tests])
-    axes.set_xlim(-0.6, len(tests) - 0.4)
-    axes.set_ylim(0, 105)
-    axes.set_ylabel("models that transfer (%)")
-    axes.set_title("Transfer rate per condition and test object, with 95% Wilson intervals", fontsize=9)
-    axes.spines[["top", "right"]].set_visible(False)
-    if conditions:
-        axes.legend(title="condition", fontsize=8, title_fontsize=8, frameon=False, loc="lower left")
-    figure.savefig(path, bbox_inches="tight", dpi=150 if path.suffix == ".png" else None)
-
-
 def write_outputs(analysis: Analysis, folder: Path) -> list[Path]:
     """Write trials.csv, codebook.csv, analysis.json, rates.png and rates.svg; return their paths."""
     folder.mkdir(parents=True, exist_ok=True)
@@ -108,6 +70,6 @@ def write_outputs(analysis: Analysis, folder: Path) -> list[Path]:
         codebook.writerow(["column", "type", "description"])
         codebook.writerows(CODEBOOK)
     written[2].write_text(json.dumps(analysis.as_dict(), indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
-    plot(analysis, written[3])
-    plot(analysis, written[4])
+    written[3].write_bytes(rates_chart(analysis.table, "png"))
+    written[4].write_bytes(rates_chart(analysis.table, "svg"))
     return written

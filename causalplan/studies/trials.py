@@ -16,6 +16,7 @@ from typing import Any
 
 from causalplan.errors import CausalPlanError, UnknownObjectError
 from causalplan.objects.catalog import Catalog
+from causalplan.studies.design import Design
 from causalplan.transfer.generalization import near_or_far
 
 VERDICTS = ("transfers", "fails", "invalid", "undecided")
@@ -81,6 +82,16 @@ def _reason_codes(reasons: object, where: str) -> tuple[str, ...]:
     return tuple(codes)
 
 
+@dataclass(frozen=True)
+class Study:
+    """What an export gives the analysis: its trials, its design when it has one, who was screened out."""
+
+    rows: tuple[TrialRow, ...]
+    design: Design | None = None
+    exclusions: Mapping[str, str] | None = None
+    """Participant id -> why they were excluded, those without trials too (None: only what the rows say)."""
+
+
 def _exclusions(participants: object) -> dict[str, str]:
     """Return the participants screened out, with their reason (an export may not say any)."""
     if not isinstance(participants, list):
@@ -139,6 +150,27 @@ def trial_rows(export: Mapping[str, Any], catalog: Catalog) -> list[TrialRow]:
             )
         )
     return rows
+
+
+def _design(experiment: object) -> Design | None:
+    """Return the export's design (None when it has none, as a synthetic or hand-made export may not)."""
+    design = experiment.get("design") if isinstance(experiment, dict) else None
+    if design is None:
+        return None
+    try:
+        return Design.from_dict(design)
+    except (KeyError, TypeError, AttributeError) as exc:
+        raise ExportError(
+            "experiment.design must hold conditions, each with a name, training and test objects.",
+            details={"at": "experiment.design"},
+        ) from exc
+
+
+def read_study(export: Mapping[str, Any], catalog: Catalog) -> Study:
+    """Return the export's trials as rows with its design and exclusions; raise ExportError as ``trial_rows`` does."""
+    return Study(
+        tuple(trial_rows(export, catalog)), _design(export.get("experiment")), _exclusions(export.get("participants"))
+    )
 
 
 def read_export(path: Path) -> dict[str, Any]:

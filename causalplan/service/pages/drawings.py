@@ -5,20 +5,18 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any
 
 from fastapi import Response
 
 from causalplan.causal.diagram import diagram_svg
 from causalplan.causal.model import CausalModel
-from causalplan.causal.render import DRAW_LOCK
 from causalplan.errors import CausalPlanError
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.api.routes.models import SVG_SECURITY_HEADERS
 from causalplan.service.deps import Services
 from causalplan.service.pages import pictures
-from causalplan.studies.results import Rate, chart_svg
 
 logger = logging.getLogger(__name__)
 
@@ -49,12 +47,6 @@ def graph_svg(services: Services, key: str, read: Callable[[], CausalModel | Non
         return {key: diagram_svg(model)} if model is not None else {}
 
     return services.caches.page_graphs.get(key, draw)
-
-
-def rates_chart(rates: Sequence[Rate]) -> bytes:
-    """Return the bar chart of an experiment's transfer rates (SVG)."""
-    with DRAW_LOCK:  # one lock for every matplotlib drawing in the app
-        return chart_svg(rates)
 
 
 def _picture_key(services: Services, *names: str) -> str:

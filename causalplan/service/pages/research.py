@@ -6,9 +6,7 @@ sets an HttpOnly cookie (see ``auth``).
 
 from __future__ import annotations
 
-import tempfile
 import uuid
-from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request, Response
@@ -20,14 +18,14 @@ from causalplan.service.api.schemas.experiments import ExperimentIn, Recruitment
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep, check_research_token
 from causalplan.service.errors import InvalidRequestError, TooManyAttemptsError
 from causalplan.service.pages.auth import ResearchPageDep, sign_in, sign_out
-from causalplan.service.pages.drawings import fresh_svg, rates_chart
+from causalplan.service.pages.drawings import fresh_svg
 from causalplan.service.pages.forms import Form, read_form
 from causalplan.service.pages.templating import PageRoute, redirect, render
 from causalplan.service.storage import experiments as store
 from causalplan.service.storage.records import ExperimentRecord
 from causalplan.settings import Settings
 from causalplan.studies.errors import InvalidExperimentError, InvalidRecruitmentError
-from causalplan.studies.outputs import plot
+from causalplan.studies.rates import rates_chart
 from causalplan.studies.recruitment import DEMOGRAPHICS
 
 router = APIRouter(prefix="/research", route_class=PageRoute, include_in_schema=False)
@@ -252,20 +250,16 @@ async def set_recruitment(
     return redirect(f"/research/experiments/{experiment_id}#recruiting")
 
 
-@router.get("/experiments/{experiment_id}/analysis.svg")
-def analysis_plot(
+@router.get("/experiments/{experiment_id}/rates.svg")
+def rates_svg(
     request: Request, experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep
 ) -> Response:
-    """The transfer rates with their 95% Wilson intervals, drawn by ``causalplan analyze``'s own plot."""
+    """The chart of the rates table: ``causalplan analyze``'s rates.svg of the experiment's export."""
     experiment = store.get_experiment(session, experiment_id)
-    analysis = experiments.analysis_of(session, catalog, experiment, request)
-    if isinstance(analysis, str):
-        raise InvalidRequestError(f"The analysis cannot be drawn: {analysis}")
-    with tempfile.TemporaryDirectory() as folder:  # matplotlib writes the file; it is only read back
-        path = Path(folder) / "rates.svg"
-        plot(analysis, path)
-        svg = path.read_bytes()
-    return fresh_svg(svg)
+    table = experiments.rates_of(session, catalog, experiment, request)
+    if isinstance(table, str):
+        raise InvalidRequestError(f"The rates cannot be drawn: {table}")
+    return fresh_svg(rates_chart(table))
 
 
 @router.get("/experiments/{experiment_id}/consensus.svg")
@@ -289,13 +283,6 @@ async def make_links(request: Request, experiment_id: uuid.UUID, _: ResearchPage
     count = int(count_text) if count_text.isdigit() else 0
     store.add_participants(session, experiment, count, condition or None)
     return redirect(f"/research/experiments/{experiment_id}#participants")
-
-
-@router.get("/experiments/{experiment_id}/chart.svg")
-def chart(experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep) -> Response:
-    experiment = store.get_experiment(session, experiment_id)
-    svg = rates_chart(experiments.rates_of(session, catalog, experiment))
-    return fresh_svg(svg)
 
 
 @router.get("/experiments/{experiment_id}/export")

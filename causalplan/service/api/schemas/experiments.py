@@ -176,14 +176,19 @@ class ParticipantsOut(OutputModel):
 
 
 class RateOut(OutputModel):
+    """One condition on one test object, counted as ``causalplan analyze`` counts: the analysed trials."""
+
     condition: str
+    training_span: str | None = Field(description="'one category' or 'both categories' (null: an object is lost).")
     test_object: str
     generalization: str | None
-    trials: int
+    trials: int = Field(description="Analysed trials: decided, of participants screening kept.")
     transfers: int
-    fails: int
-    undecided: int
+    fails: int = Field(description="Analysed trials whose model did not transfer (fails or invalid).")
+    undecided: int = Field(description="Left out: trials the planner could not decide in time.")
+    excluded: int = Field(description="Left out: trials of participants excluded by screening.")
     rate: float | None = Field(description="transfers / trials (null without trials).")
+    interval: list[float | None] = Field(description="The rate's 95% Wilson interval (nulls without trials).")
 
 
 class TrialRowOut(OutputModel):
@@ -211,6 +216,7 @@ class ResultsOut(OutputModel):
     experiment: ExperimentOut
     participants: list[ParticipantOut]
     rates: list[RateOut]
+    rates_problem: str | None = Field(description="Why the rates cannot be computed (null: they are).")
     trials: list[TrialRowOut]
 
 
