@@ -2,19 +2,20 @@
 
     python benchmarks/player.py [--repeat K]
 
-Starts the service (uvicorn in a thread, a temporary SQLite database, two planner workers),
-and for each of four participants' models (``browser.py``'s cases) shows the robot's plan on
-step 2, then clicks "Watch the robot" in a fresh page with the browser's cache off (a first
-visit: three.js, urdf-loader and the Panda's meshes are fetched too, while the robot works
-out its motions). The page's own clock gives the time from the click to the player's first
-drawn frame, and the resource timing the wait for ``POST /p/<code>/films/playback`` (the
-robot's run and the parts' tracks, in a planner worker). The reference, measured in the same
-run on the same plan: the robot's run itself, ``simulate_plan(obj, steps, robot=True)`` in
-this process, with no film and no tracks: its first run here (the process warmed on another
-plan), as a worker runs a plan it has not seen; the median of ``--repeat`` more is shown too. The issue's
-target: the first frame within 2x the robot's run. First each of the two workers runs the robot
-once, at the same time, on a plan not timed (the kerosene lamp's) (their imports: a long-running service's workers have
-done so), reported apart. Needs Chromium at /usr/bin/chromium.
+Starts the service (``browser.served``: uvicorn in a thread; a temporary SQLite database, two
+planner workers), and for each of four participants' models (``browser.py``'s cases) shows the
+robot's plan on step 2, then clicks "Watch the robot" in a fresh page with the browser's cache
+off (a first visit: three.js, urdf-loader and the Panda's meshes are fetched too, while the
+robot works out its motions). The page's own clock gives the time from the click to the
+player's first drawn frame, and the resource timing the wait for ``POST
+/p/<code>/films/playback`` (the robot's run, recording the parts' tracks as it goes, in a
+planner worker). The reference, measured in the same run on the same plan: the robot's run
+itself, ``simulate_plan(obj, steps, robot=True)`` in this process, with no film and no tracks:
+its first run here (the process warmed on another plan), as a worker runs a plan it has not
+seen; the median of ``--repeat`` more is shown too. The issue's target: the first frame within
+2x the robot's run. First each of the two workers runs the robot once, at the same time, on a
+plan not timed (the kerosene lamp's), reported apart (their imports: a long-running service's
+workers have done so). Needs Chromium at /usr/bin/chromium.
 """
 
 from __future__ import annotations
@@ -28,8 +29,7 @@ import time
 from pathlib import Path
 
 import httpx
-import uvicorn
-from browser import CASES, CHROMIUM, CHROMIUM_ARGS, TOKEN, Case, free_port, open_step2, participant
+from browser import CASES, CHROMIUM, CHROMIUM_ARGS, TOKEN, Case, open_step2, participant, served
 from playwright.sync_api import Browser
 
 from causalplan.objects.catalog import load_catalog
@@ -111,19 +111,8 @@ def warm_up(http: httpx.Client, cases: tuple[Case, ...]) -> list[float]:
     return took
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--repeat", type=int, default=2, help="timed robot runs per plan for the reference")
-    args = parser.parse_args()
-    folder = Path(tempfile.mkdtemp(prefix="causalplan-player-"))
-    settings = Settings(database_url=f"sqlite:///{folder / 'bench.sqlite3'}", research_token=TOKEN, planning_workers=2)
-    app = create_app(settings)
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=free_port(), log_level="warning"))
-    thread = threading.Thread(target=server.run, name="uvicorn", daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.01)
-    base = f"http://127.0.0.1:{server.config.port}"
+def measure(base: str, repeat: int) -> tuple[list[tuple[str, int, float, float, float, float]], list[float]]:
+    """Return per timed plan (name, steps, robot run, again, request, first frame; ms) and the workers' warm-ups."""
     from playwright.sync_api import sync_playwright
 
     rows = []
@@ -136,12 +125,21 @@ def main() -> int:
         for case in TIMED:
             code = participant(http, case)
             (plan,) = http.post(f"/p/{code}/plan", json={"rules": case.rules}).json()["plans"]
-            reference, again = robot_run_ms(case, plan["fits"], args.repeat)
+            reference, again = robot_run_ms(case, plan["fits"], repeat)
             first_frame, request = click(browser, base, code, case)
             rows.append((case.name, len(plan["fits"]), reference, again, request, first_frame))
         browser.close()
-    server.should_exit = True
-    thread.join(30)
+    return rows, warm
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeat", type=int, default=2, help="timed robot runs per plan for the reference")
+    args = parser.parse_args()
+    folder = Path(tempfile.mkdtemp(prefix="causalplan-player-"))
+    settings = Settings(database_url=f"sqlite:///{folder / 'bench.sqlite3'}", research_token=TOKEN, planning_workers=2)
+    with served(create_app(settings)) as base:
+        rows, warm = measure(base, args.repeat)
 
     print("warm-up (each worker's first robot run: its imports), ms: " + ", ".join(f"{ms:.0f}" for ms in warm))
     columns = f"{'steps':>5} {'robot run':>10} {'again':>6} {'request':>8} {'first frame':>12} {'ratio':>6}"
