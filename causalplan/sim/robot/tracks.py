@@ -74,9 +74,8 @@ def run_tracks(
     segment's ``held`` says which part rode in the gripper and where. ``panda`` is posed at the
     held segments' commands and put back as it was.
     """
-    planned = [segment for segment in waypoints.segments if segment.positions]
-    if len(planned) != len(commands.segments):
-        raise ValueError(f"{len(planned)} planned segments, but {len(commands.segments)} timed ones")
+    planned = [segment for segment in waypoints.segments if segment.positions]  # as time_parameterize skips
+    assert len(planned) == len(commands.segments), "each planned segment with positions is one timed segment"
     frames = Keyframes.at_rest(homes)
     saved, fingers = panda.configuration, panda.fingers
     holding: str | None = None
