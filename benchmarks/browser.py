@@ -27,6 +27,8 @@ import statistics
 import tempfile
 import threading
 import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -34,6 +36,7 @@ from typing import Any
 
 import httpx
 import uvicorn
+from fastapi import FastAPI
 from playwright.sync_api import Page, sync_playwright
 
 from causalplan.service.main import create_app
@@ -161,6 +164,23 @@ def free_port() -> int:
         return port
 
 
+@contextmanager
+def served(app: FastAPI) -> Iterator[str]:
+    """Run ``app`` with uvicorn in a thread on a free loopback port; yield its base URL, and stop it after."""
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=free_port(), log_level="warning"))
+    thread = threading.Thread(target=server.run, name="uvicorn", daemon=True)
+    thread.start()
+    while not server.started:
+        if not thread.is_alive():
+            raise RuntimeError("uvicorn did not start")
+        time.sleep(0.01)
+    try:
+        yield f"http://127.0.0.1:{server.config.port}"
+    finally:
+        server.should_exit = True
+        thread.join(30)
+
+
 def participant(http: httpx.Client, case: Case) -> str:
     """Make a participant of a one-condition experiment on the case's object and do step 1; return the code."""
     auth = {"Authorization": f"Bearer {TOKEN}"}
@@ -204,50 +224,15 @@ def main() -> None:
     folder = Path(tempfile.mkdtemp(prefix="causalplan-browser-"))
     settings = Settings(database_url=f"sqlite:///{folder / 'bench.sqlite3'}", research_token=TOKEN, planning_workers=2)
     app = create_app(settings)
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=free_port(), log_level="warning"))
-    thread = threading.Thread(target=server.run, name="uvicorn", daemon=True)
     began = time.perf_counter()
-    thread.start()
-    while not server.started:
-        time.sleep(0.01)
-    up = time.perf_counter() - began
-    while app.state.upkeep.drawn_ahead is None:
-        time.sleep(0.05)
-    ahead_seconds = time.perf_counter() - began
-    base = f"http://127.0.0.1:{server.config.port}"
-    drawn = app.state.upkeep.drawn_ahead
-    print(f"server up in {up:.2f} s; {drawn} plan pictures drawn ahead, done {ahead_seconds:.1f} s after start")
-
-    clicks: dict[str, list[float]] = {}
-    plans: dict[str, list[float]] = {}
-    cold: dict[str, float] = {}
-    pages: dict[str, Page] = {}
-    codes: dict[str, str] = {}
-    with httpx.Client(base_url=base, timeout=60) as http, sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        context = browser.new_context()
-        for case in CASES:
-            page = context.new_page()
-            devtools = context.new_cdp_session(page)
-            devtools.send("Network.enable")
-            devtools.send("Network.setCacheDisabled", {"cacheDisabled": True})
-            codes[case.name] = participant(http, case)
-            open_step2(page, base, codes[case.name], case.rules)
-            timed(page.evaluate(CLICK_TO_PICTURE))  # a first, untimed click: the page's first script and image paths
-            pages[case.name] = page
-        for _ in range(args.rounds):
-            for case in CASES:
-                page = pages[case.name]
-                open_step2(page, base, codes[case.name], case.rules)
-                plans.setdefault(case.name, []).append(page.evaluate(PLAN_ONLY, case.rules))
-                clicks.setdefault(case.name, []).append(timed(page.evaluate(CLICK_TO_PICTURE)))
-        for case in CASES:  # the reference: a picture nobody drew ahead
-            open_step2(pages[case.name], base, codes[case.name], case.rules)
-            app.state.services.caches.plan_pictures.clear()
-            cold[case.name] = timed(pages[case.name].evaluate(CLICK_TO_PICTURE))
-        browser.close()
-    server.should_exit = True
-    thread.join(30)
+    with served(app) as base:
+        up = time.perf_counter() - began
+        while app.state.upkeep.drawn_ahead is None:
+            time.sleep(0.05)
+        ahead_seconds = time.perf_counter() - began
+        drawn = app.state.upkeep.drawn_ahead
+        print(f"server up in {up:.2f} s; {drawn} plan pictures drawn ahead, done {ahead_seconds:.1f} s after start")
+        plans, clicks, cold = measure(base, args.rounds, app.state.services.caches.plan_pictures.clear)
 
     print(f"\n{'model':34} {'plan only':>11} {'click->picture':>15} {'not drawn ahead':>16}   (medians, ms)")
     for case in CASES:
@@ -267,6 +252,41 @@ def main() -> None:
     print(f"target: click to picture <= {TARGET_RATIO:g}x plan only: {ratio:.2f}x  {verdict}")
     machine: dict[str, Any] = {"cpus": os.cpu_count(), "python": platform.python_version()}
     print(f"run {datetime.now(UTC):%Y-%m-%d %H:%M} UTC, {platform.machine()} {machine}")
+
+
+def measure(
+    base: str, rounds: int, forget_plan_pictures: Callable[[], None]
+) -> tuple[dict[str, list[float]], dict[str, list[float]], dict[str, float]]:
+    """Return, per model, the plan-only and click-to-picture milliseconds of each round, and the one not drawn ahead."""
+    clicks: dict[str, list[float]] = {}
+    plans: dict[str, list[float]] = {}
+    cold: dict[str, float] = {}
+    pages: dict[str, Page] = {}
+    codes: dict[str, str] = {}
+    with httpx.Client(base_url=base, timeout=60) as http, sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        context = browser.new_context()
+        for case in CASES:
+            page = context.new_page()
+            devtools = context.new_cdp_session(page)
+            devtools.send("Network.enable")
+            devtools.send("Network.setCacheDisabled", {"cacheDisabled": True})
+            codes[case.name] = participant(http, case)
+            open_step2(page, base, codes[case.name], case.rules)
+            timed(page.evaluate(CLICK_TO_PICTURE))  # a first, untimed click: the page's first script and image paths
+            pages[case.name] = page
+        for _ in range(rounds):
+            for case in CASES:
+                page = pages[case.name]
+                open_step2(page, base, codes[case.name], case.rules)
+                plans.setdefault(case.name, []).append(page.evaluate(PLAN_ONLY, case.rules))
+                clicks.setdefault(case.name, []).append(timed(page.evaluate(CLICK_TO_PICTURE)))
+        for case in CASES:  # the reference: a picture nobody drew ahead
+            open_step2(pages[case.name], base, codes[case.name], case.rules)
+            forget_plan_pictures()
+            cold[case.name] = timed(pages[case.name].evaluate(CLICK_TO_PICTURE))
+        browser.close()
+    return plans, clicks, cold
 
 
 if __name__ == "__main__":

@@ -128,6 +128,10 @@ def test_results_and_exports_hold_every_trial_with_its_model_mapping_and_reasons
     }
     assert [r["code"] for r in fails["reasons"]] == ["missing_function", "missing_function", "unmodelled_function"]
     assert fails["model"]["rules"][1] == "electricity flows AND turn electricity into light CAUSES light"
+    page = storage_client.get(f"/research/experiments/{created['id']}", headers=AUTH).text
+    # "Watch the robot" for the trial with a plan only: its test object and fits, for research.js's player.
+    assert page.count('class="watch-robot"') == 1 and '<script type="module" src="/web/static/research.js">' in page
+    assert """data-object="flashlight" data-fits='["batteries_into_bay", "head_onto_case"]'""" in page
 
     exported = storage_client.get(f"/v1/experiments/{created['id']}/export", headers=AUTH)
     assert exported.headers["content-disposition"].startswith('attachment; filename="causalplan-experiment-')

@@ -205,6 +205,7 @@ def simulate_plan(
     robot: bool = False,
     safety_factor: float = DEFAULT_SAFETY_FACTOR,
     motors: bool = False,
+    tracks: bool = False,
     video: bool = False,
     video_size: tuple[int, int] = VIDEO_SIZE,
     on_frame: Callable[[int], None] | None = None,
@@ -217,8 +218,9 @@ def simulate_plan(
     Panda carry out every step (its planned waypoints are the report's ``trajectory``, its
     motor commands, within the datasheet's limits times ``safety_factor``, its
     ``motor_commands``); ``motors`` then plays them through the Panda's joint motors in a fresh
-    scene (the report's ``motors``); ``video`` films the robot (the report's ``video`` frames,
-    ``video_size`` pixels; ``on_frame`` hears of every frame drawn). Raises
+    scene (the report's ``motors``); ``tracks`` keeps every part's pose over the motor commands
+    (the report's ``tracks``, which the browser's player draws); ``video`` films the robot (the
+    report's ``video`` frames, ``video_size`` pixels; ``on_frame`` hears of every frame drawn). Raises
     LimitViolationError (``limit_violation``) when no motor commands keep within the limits.
     """
     obj = target.obj if isinstance(target, PlanningTask) else target
@@ -234,7 +236,7 @@ def simulate_plan(
         recorder = VideoRecorder(scene, design, obj.name, video_size, on_frame) if video else None
         mover: Mover
         if robot:
-            mover = PandaMovesThem(scene, recorder.observe if recorder else None, safety_factor)
+            mover = PandaMovesThem(scene, recorder.observe if recorder else None, safety_factor, tracks)
         else:
             mover = PartsMoveThemselves(scene, Arm(scene) if arm else None)
         run = _Run(obj, scene, homes, {obj.base}, mover)
@@ -292,6 +294,7 @@ def simulate_plan(
         motor_commands=commands,
         motors=motor_run,
         placed=mover.placed,
+        tracks=mover.tracks,
         video=tuple(recorder.frames) if recorder else (),
     )
 

@@ -22,6 +22,7 @@ from causalplan.sim.robot.arm import Arm, reach_step
 from causalplan.sim.scene import Scene
 
 if TYPE_CHECKING:
+    from causalplan.sim.robot.tracks import PartTrack
     from causalplan.sim.robot.trajectory import Trajectory, Waypoints
 
 
@@ -75,6 +76,10 @@ class Mover(Protocol):
     def commands(self) -> Trajectory | None:
         """The motor commands (the waypoints time-parameterized), once a robot's run is finished."""
 
+    @property
+    def tracks(self) -> dict[str, PartTrack]:
+        """Every part's pose over the motor commands, when a robot's run was asked to keep them."""
+
 
 @dataclass
 class PartsMoveThemselves:
@@ -113,3 +118,7 @@ class PartsMoveThemselves:
     @property
     def commands(self) -> Trajectory | None:
         return None
+
+    @property
+    def tracks(self) -> dict[str, PartTrack]:
+        return {}

@@ -10,6 +10,7 @@ from causalplan.sim.outcomes import Check, Picture, RequirementCheck, StepReport
 if TYPE_CHECKING:
     from causalplan.sim.poses import Pose
     from causalplan.sim.robot.motors import MotorRun
+    from causalplan.sim.robot.tracks import PartTrack
     from causalplan.sim.robot.trajectory import Trajectory, Waypoints
 
 
@@ -44,6 +45,8 @@ class SimulationReport:
     """Where the robot let go of each part it joined (``robot`` runs only), before the assembly settled."""
     video: tuple[Picture, ...] = field(default=(), compare=False)
     """Frames of the robot at work (``robot`` runs with a video only)."""
+    tracks: dict[str, PartTrack] = field(default_factory=dict, compare=False)
+    """Every part's pose over the motor commands (``robot`` runs with ``tracks`` only), for the browser's player."""
 
     @property
     def failed_step(self) -> StepReport | None:

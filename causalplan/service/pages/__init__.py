@@ -10,7 +10,8 @@ Served by the service's app (``main.create_app`` includes ``routers()``):
   plan), step 3 (each test object's parts mapped to the model's functions, and the verdict),
   and their small JSON endpoints (saving drafts, checking rules, planning, pictures);
 * ``/research/...`` the research pages (sign in with the research token): define experiments,
-  make participant links, follow progress, see transfer rates and trials, export;
+  make participant links, follow progress, see transfer rates and trials (and watch the robot
+  carry out a trial's plan in 3D), export;
 
 ``/v1/experiments``, the same for programs (bearer token), is part of the JSON API
 (``service.api.routes.experiments``).
@@ -34,6 +35,7 @@ def routers() -> list[APIRouter]:
         participant_api,
         participant_explain,
         research,
+        research_robot,
         robot_films,
         study_link,
         upkeep,
@@ -49,5 +51,6 @@ def routers() -> list[APIRouter]:
         participant_api.router,
         participant_explain.router,
         robot_films.router,
+        research_robot.router,
         research.router,
     ]

@@ -77,32 +77,41 @@ def _out(code: str, job: JobRecord) -> FilmOut:
     )
 
 
+def check_fits(obj: AssemblyObject, fits: list[str]) -> None:
+    """Refuse (``InvalidRequestError``) a fit that is not one of ``obj``'s."""
+    known = {fit.id for fit in obj.fits}
+    unknown = [fit for fit in fits if fit not in known]
+    if unknown:
+        raise InvalidRequestError(
+            f"The {obj.name} has no fit '{unknown[0]}'.", details={"fit": unknown[0], "fits": sorted(known)}
+        )
+
+
 def _training_object(body: FilmIn, journey: ParticipantJourney) -> AssemblyObject:
     """Return the training object ``body`` names, once its fits are the object's."""
     obj = next((o for o in journey.training if o.id == body.object), None)
     if obj is None:
         raise NotFoundError(f"'{body.object}' is not one of your objects in this step.")
-    known = {fit.id for fit in obj.fits}
-    unknown = [fit for fit in body.fits if fit not in known]
-    if unknown:
-        raise InvalidRequestError(
-            f"The {obj.name} has no fit '{unknown[0]}'.", details={"fit": unknown[0], "fits": sorted(known)}
-        )
+    check_fits(obj, body.fits)
     return obj
+
+
+def playback_response(obj: AssemblyObject, fits: list[str], services: Services) -> Response:
+    """Return the robot's run of ``fits`` on ``obj`` for a page's 3D player, run in a planner worker.
+
+    The robot's run alone (no film): ``sim.robot.playback``'s document, plus ``outcome``
+    (whether it carried out the plan), as the worker encoded it.
+    """
+    args = (obj.id, tuple(fits), tuple(services.settings.catalog_folders))
+    document = services.pool.run(robot_playback_job, args, services.settings.robot_seconds)
+    return Response(document, media_type="application/json")
 
 
 @router.post("/playback")
 def robot_playback(body: FilmIn, code: str, journey: JourneyDep, services: ServicesDep) -> Response:
-    """Return the robot's run of ``fits`` for the page's 3D player: motor commands and the parts' tracks.
-
-    The robot's run alone (no film) in a planner worker: what the page plays at once
-    (``sim.robot.playback``'s document, plus ``outcome``: whether it carried out the plan).
-    """
+    """Return the robot's run of ``fits`` for the page's 3D player: motor commands and the parts' tracks."""
     del code
-    obj = _training_object(body, journey)
-    args = (obj.id, tuple(body.fits), tuple(services.settings.catalog_folders))
-    document = services.pool.run(robot_playback_job, args, services.settings.robot_seconds)
-    return Response(document, media_type="application/json")
+    return playback_response(_training_object(body, journey), body.fits, services)
 
 
 @router.post("", response_model=FilmOut)

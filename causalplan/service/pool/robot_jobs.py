@@ -139,14 +139,15 @@ def robot_playback_job(object_id: str, fit_ids: tuple[str, ...], catalog_folders
     """Return the browser player's document of the robot making ``fit_ids`` of the object, as JSON (in a worker).
 
     ``sim.robot.playback``'s document plus ``"outcome"``: whether the robot carried out the plan,
-    or why not. Encoded here: the app passes the bytes on, unlike a dict of thousands of lists.
+    or why not. The run records the parts' tracks as it goes (one scene, not a second for a
+    replay). Encoded here: the app passes the bytes on, unlike a dict of thousands of lists.
     """
     from causalplan.service.pool.catalog import worker_catalog
+    from causalplan.sim import RenderMode, simulate_plan
     from causalplan.sim.robot.playback import playback
-    from causalplan.transfer.robot_verdict import robot_run
 
     obj = worker_catalog(catalog_folders).get(object_id)
     steps = steps_of(obj, fit_ids)
-    report = robot_run(obj, tuple(steps))
+    report = simulate_plan(obj, steps, render=RenderMode.NONE, robot=True, tracks=True)
     document = {**playback(obj, steps, report), "outcome": robot_outcome(report)}
     return json.dumps(document, separators=(",", ":")).encode()

@@ -219,9 +219,10 @@ class _Driver:
                 self.scene.bodies[held.part], [0, 0, 0], [0, 0, 0], physicsClientId=self.scene.client
             )
             return
-        request = next((r for r in self.requests if r.moving == held.part), None)
+        # The step that held it, not the first to move it: a match may light one wick, then another.
+        request = self.requests[held.step - 1] if 0 < held.step <= len(self.requests) else None
         self._collide(held.part, True)
-        if request is None:
+        if request is None or request.moving != held.part:
             return
         motion = MOTIONS[request.action]
         pair = step_connectors(self.obj, request, self.joints)

@@ -2,25 +2,31 @@
 
 One JSON document (``playback(obj, steps, report)``)::
 
-    {"format": "causalplan-playback/1", "object": id, "name": name, "seconds": s,
+    {"format": "causalplan-playback/2", "object": id, "name": name, "seconds": s,
      "robot": {"model": "panda", "base_position": [x, y, z]},
-     "trajectory": {... the motor commands as ``simulate --robot --trajectory`` writes them, but each
-                    point without its velocities and accelerations (a third of the size; the
-                    player needs the positions and the gripper's width at their times) ...},
+     "trajectory": {"robot": "panda", "joints": [7 names], "gripper_joints": [2 names],
+                    "times": [s], "positions": [[7 angles]], "gripper_widths": [m],
+                    "segments": [{"step", "kind", "gripper", "first", "last"}]},
      "parts": [{"id", "name", "shapes": [{"kind", "size", "position", "rotation", "color"}],
                 "light": [shapes], "track": {"times": [s], "poses": [[x, y, z, qx, qy, qz, qw]]}}],
      "assembled": {part: [x, y, z, qx, qy, qz, qw]}}
 
-Poses are a part's frame in the simulator's world (metres, z up; quaternions x, y, z, w);
-shapes are in the part's frame, as the catalog gives them (``Shape``). ``assembled`` is where
-the robot's run let each part go (``SimulationReport.placed``): the player's last frame must
-put the parts there.
+``trajectory`` is the motor commands (every point of ``simulate --robot --trajectory``'s file)
+by column, without the velocities and accelerations the player does not need: ``times[k]``,
+``positions[k]`` and ``gripper_widths[k]`` are point ``k``. Poses are a part's frame in the
+simulator's world (metres, z up; quaternions x, y, z, w); shapes are in the part's frame, as the
+catalog gives them (``Shape``). ``assembled`` is where the robot's run let each part go
+(``SimulationReport.placed``): the player's last frame must put the parts there.
+
+Numbers are rounded to what the eye can see, which halves the document: the player draws
+480 by 360 pixels of a scene about a metre and a half wide, a pixel being some 3 mm. Joint angles
+keep 1e-4 rad (at the Panda's reach of about a metre, 0.1 mm at the gripper), lengths 0.1 mm,
+quaternion components 1e-4 (under 0.02° of turn), times 0.1 ms (the commands are 100 a second).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Iterable, Sequence
 
 from causalplan.errors import CausalPlanError
 from causalplan.objects.model import AssemblyObject, Shape
@@ -31,8 +37,11 @@ from causalplan.sim.poses import Pose
 from causalplan.sim.report import SimulationReport
 from causalplan.sim.robot.panda import BASE_POSITION
 from causalplan.sim.robot.replay import part_tracks
+from causalplan.sim.robot.trajectory import Trajectory
 
-FORMAT = "causalplan-playback/1"
+FORMAT = "causalplan-playback/2"
+DIGITS = 4
+"""Decimals kept of every number the player reads (radians, metres, seconds, quaternion components)."""
 
 
 class NoMotorCommandsError(CausalPlanError):
@@ -41,16 +50,26 @@ class NoMotorCommandsError(CausalPlanError):
     code = "no_motor_commands"
 
 
+def _rounded(values: Iterable[float]) -> list[float]:
+    return [round(value, DIGITS) for value in values]
+
+
 def pose_list(pose: Pose) -> list[float]:
-    """Return a pose as [x, y, z, qx, qy, qz, qw] (to a tenth of a millimetre, and of a micro-unit)."""
-    return [round(value, 5) for value in pose.position] + [round(value, 6) for value in pose.orientation]
+    """Return a pose as [x, y, z, qx, qy, qz, qw], rounded as the player reads it (``DIGITS``)."""
+    return _rounded((*pose.position, *pose.orientation))
 
 
-def _positions_only(trajectory: dict[str, Any]) -> dict[str, Any]:
-    points = [
-        {key: point[key] for key in ("time_from_start", "positions", "gripper_width")} for point in trajectory["points"]
-    ]
-    return {**trajectory, "points": points}
+def _commands(trajectory: Trajectory) -> dict[str, object]:
+    points = trajectory.points
+    return {
+        "robot": trajectory.limits.model,
+        "joints": list(trajectory.limits.joints),
+        "gripper_joints": list(trajectory.limits.gripper_joints),
+        "times": _rounded(point.time for point in points),
+        "positions": [_rounded(point.positions) for point in points],
+        "gripper_widths": _rounded(point.gripper_width for point in points),
+        "segments": [segment.as_dict() for segment in trajectory.segments],
+    }
 
 
 def _shape(shape: Shape) -> dict[str, object]:
@@ -66,29 +85,30 @@ def _shape(shape: Shape) -> dict[str, object]:
 def playback(
     obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], report: SimulationReport
 ) -> dict[str, object]:
-    """Return the browser player's document of the robot's run ``report`` of ``steps`` on ``obj``."""
+    """Return the browser player's document of the robot's run ``report`` of ``steps`` on ``obj``.
+
+    The parts' tracks are those the run recorded (``simulate_plan(..., tracks=True)``); a run
+    made without them has them rebuilt from its motor commands in a fresh scene (``replay``).
+    """
     commands = report.motor_commands
     if commands is None or not commands.points:
         raise NoMotorCommandsError(f"The run of the {obj.name} has no motor commands to play.")
-    tracks = part_tracks(obj, steps, commands)
+    tracks = report.tracks or part_tracks(obj, steps, commands)
     parts = solids(obj)
     return {
         "format": FORMAT,
         "object": obj.id,
         "name": obj.name,
-        "seconds": round(commands.seconds, 6),
+        "seconds": round(commands.seconds, DIGITS),
         "robot": {"model": commands.limits.model, "base_position": list(BASE_POSITION)},
-        "trajectory": _positions_only(commands.as_dict()),
+        "trajectory": _commands(commands),
         "parts": [
             {
                 "id": part,
                 "name": parts[part].name,
                 "shapes": [_shape(shape) for shape in parts[part].shapes],
                 "light": [_shape(shape) for shape in parts[part].light],
-                "track": {
-                    "times": [round(time, 6) for time in track.times],
-                    "poses": list(map(pose_list, track.poses)),
-                },
+                "track": {"times": _rounded(track.times), "poses": list(map(pose_list, track.poses))},
             }
             for part, track in tracks.items()
         ],

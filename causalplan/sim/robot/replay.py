@@ -4,13 +4,13 @@ Nothing of the original run is used but the object, the plan (which lays the par
 the table) and the motor commands: when the gripper closes, the part between its fingers
 rides along; when it opens, the part stays where it is. The poses where parts were let go
 are what the replay returns, to compare with the run's ``SimulationReport.placed``; every
-part's pose over time (``part_tracks``) is what the browser's robot player draws.
+part's pose over time (``part_tracks``) is what the run itself records for the browser's
+player (``sim.robot.tracks``), rebuilt here from the file alone.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.planners.result import PlanStep
@@ -19,13 +19,12 @@ from causalplan.sim.layout import ROBOT_ROW_GAP, layout
 from causalplan.sim.plan_steps import StepRequest, check_steps
 from causalplan.sim.poses import Pose
 from causalplan.sim.robot.panda import FINGER_JOINTS, FINGER_OPEN, Panda
+from causalplan.sim.robot.tracks import Keyframes, PartTrack, carried_indexes
 from causalplan.sim.robot.trajectory import Trajectory
 from causalplan.sim.scene import Scene
 
 GRASP_REACH = 0.02
 """Metres from each finger within which a part counts as between the fingers."""
-TRACK_EVERY = 4
-"""A held part's pose is kept at every 4th motor command (25 a second) and at each segment's end."""
 
 
 def _part_between_fingers(scene: Scene, panda: Panda) -> str | None:
@@ -45,20 +44,6 @@ def _part_between_fingers(scene: Scene, panda: Panda) -> str | None:
     return nearest[1] if nearest else None
 
 
-@dataclass(frozen=True)
-class PartTrack:
-    """Where a part's frame is while the motor commands play: ``poses[k]`` from ``times[k]`` seconds on.
-
-    Between two keyframes the part moves smoothly (the gripper's points are 100 a second);
-    after the last one it stays put. ``released`` says whether the robot ever let it go.
-    """
-
-    part_id: str
-    times: tuple[float, ...]
-    poses: tuple[Pose, ...]
-    released: bool
-
-
 def part_tracks(
     obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], trajectory: Trajectory
 ) -> dict[str, PartTrack]:
@@ -66,15 +51,7 @@ def part_tracks(
     requests = check_steps(steps, obj)
     parts = solids(obj)
     homes, _ = layout(obj, parts, requests, ROBOT_ROW_GAP)
-    keys: dict[str, list[tuple[float, Pose]]] = {part: [(0.0, pose)] for part, pose in homes.items()}
-    released: set[str] = set()
-
-    def keep(part: str, time: float, pose: Pose) -> None:
-        track = keys[part]
-        if track[-1][0] >= time:  # consecutive segments share their joining point
-            track.pop()
-        track.append((time, pose))
-
+    frames = Keyframes.at_rest(homes)
     with Scene(parts, drawn=False) as scene:
         for part, pose in homes.items():
             scene.add_part(part, pose, dynamic=False)
@@ -87,23 +64,20 @@ def part_tracks(
                 between = _part_between_fingers(scene, panda)
                 if between is not None:
                     held = (between, panda.gripper_pose().inverse() * scene.pose(between))
-                    keep(between, first.time, scene.pose(between))
+                    frames.keep(between, first.time, scene.pose(between))
             elif segment.gripper == "open" and held is not None:
-                released.add(held[0])
+                frames.released.add(held[0])
                 held = None
             if held is None:
                 continue  # nothing rides along: the next segment's first point is all that matters
             part, offset = held
-            for index in (*range(segment.first, segment.last, TRACK_EVERY), segment.last):
+            for index in carried_indexes(segment.first, segment.last):
                 point = trajectory.points[index]
                 panda.set(point.positions)
                 pose = panda.gripper_pose() * offset
                 scene.place(part, pose)
-                keep(part, point.time, pose)
-    return {
-        part: PartTrack(part, tuple(time for time, _ in track), tuple(pose for _, pose in track), part in released)
-        for part, track in keys.items()
-    }
+                frames.keep(part, point.time, pose)
+    return frames.tracks()
 
 
 def replay(obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], trajectory: Trajectory) -> dict[str, Pose]:

@@ -126,9 +126,15 @@ class Robot:
 
     # --- writing commands --------------------------------------------------------------------
 
+    def _riding(self) -> tuple[str, Pose] | None:
+        """Return the held part and its pose in the gripper's frame (what a segment carries), if any."""
+        return None if self.held is None else (self.held.part, self.held.grasp.inverse())
+
     def _command(self, kind: str, gripper: Gripper, positions: Sequence[Configuration]) -> None:
         fingers = FINGER_OPEN if gripper == "open" else None
-        segment = Segment(self.step, kind, gripper, 2 * (self.panda.fingers if fingers is None else fingers))
+        segment = Segment(
+            self.step, kind, gripper, 2 * (self.panda.fingers if fingers is None else fingers), held=self._riding()
+        )
         self.waypoints.segments.append(segment)
         for position in positions:
             self.panda.set(position, fingers)
@@ -142,7 +148,7 @@ class Robot:
         start, end = self.panda.fingers, FINGER_OPEN if gripper == "open" else max(0.0, width / 2)
         if on is not None:
             end = 0.0
-        segment = Segment(self.step, kind, gripper, 2 * end)
+        segment = Segment(self.step, kind, gripper, 2 * end, held=self._riding())
         self.waypoints.segments.append(segment)
         for k in range(1, CLOSE_POSITIONS + 1):
             self.panda.set(self.panda.configuration, start + (end - start) * k / CLOSE_POSITIONS)

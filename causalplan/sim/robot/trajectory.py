@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from typing import Literal, cast
 
 from causalplan.errors import CausalPlanError
+from causalplan.sim.poses import Pose
 from causalplan.sim.robot.limits import RobotLimits, robot_limits
 from causalplan.sim.robot.panda import Configuration
 
@@ -53,6 +54,8 @@ class Segment:
     gripper: Gripper
     width: float
     positions: list[Configuration] = field(default_factory=list)
+    held: tuple[str, Pose] | None = None
+    """The part riding in the gripper all along, and its pose in the gripper's frame (the player's tracks)."""
 
 
 @dataclass

@@ -1,7 +1,7 @@
 // The robot player: plays the robot's run in 3D from its timed motor commands, at once.
 //
 // The page gets one JSON document (POST /p/<code>/films/playback, `sim.robot.playback`): the motor
-// commands (joint positions and the gripper's width at times from the start) and, per part, its
+// commands by column (times from the start, joint positions, the gripper's width) and, per part, its
 // shapes from the catalog and its pose over time. The Panda is pybullet_data's URDF with its light
 // (collision) meshes, posed by urdf-loader; the parts are drawn from their shapes. Frames are in the
 // simulator's world: metres, z up, quaternions x, y, z, w.
@@ -81,8 +81,9 @@ function fraction(times, k, t) {
 
 // Build the player in `container` for the run `run`; it starts playing once the Panda is loaded.
 export async function createPlayer(container, run) {
-  const points = run.trajectory.points;
-  const pointTimes = points.map(function (point) { return point.time_from_start; });
+  const pointTimes = run.trajectory.times;
+  const positions = run.trajectory.positions;
+  const widths = run.trajectory.gripper_widths;
   const joints = run.trajectory.joints;
   const fingers = run.trajectory.gripper_joints;
   const seconds = run.seconds;
@@ -143,7 +144,7 @@ export async function createPlayer(container, run) {
   container.append(renderer.domElement, bar);
 
   let time = 0;
-  let playing = true;
+  let playing = false;
   let frames = 0;
   let last = null;
   const posed = {};
@@ -151,12 +152,13 @@ export async function createPlayer(container, run) {
   function pose(t) {
     const k = before(pointTimes, t);
     const f = fraction(pointTimes, k, t);
-    const a = points[k];
-    const b = points[Math.min(k + 1, points.length - 1)];
+    const next = Math.min(k + 1, pointTimes.length - 1);
+    const a = positions[k];
+    const b = positions[next];
     joints.forEach(function (name, j) {
-      robot.setJointValue(name, a.positions[j] + f * (b.positions[j] - a.positions[j]));
+      robot.setJointValue(name, a[j] + f * (b[j] - a[j]));
     });
-    const width = a.gripper_width + f * (b.gripper_width - a.gripper_width);
+    const width = widths[k] + f * (widths[next] - widths[k]);
     fingers.forEach(function (name) { robot.setJointValue(name, width / 2); }); // each finger opens half
     parts.forEach(function (part) {
       const i = before(part.times, t);
@@ -175,41 +177,78 @@ export async function createPlayer(container, run) {
     clock.textContent = time.toFixed(1) + " / " + seconds.toFixed(1) + " s";
   }
 
+  // Frames are drawn while the run plays, and once after each change while it rests (a paused
+  // player leaves the page's processor alone).
+  let looping = false;
+  let asked = false;
+
+  function draw() {
+    pose(time);
+    renderer.render(scene, camera);
+    frames += 1;
+    if (frames === 1) container.dataset.firstFrame = String(performance.now());
+    show();
+  }
+
   function frame(now) {
     if (playing && last !== null) {
       time = Math.min(seconds, time + (Number(speed.value) * (now - last)) / 1000);
       if (time >= seconds) playing = false;
     }
     last = now;
-    pose(time);
-    renderer.render(scene, camera);
-    frames += 1;
-    if (frames === 1) container.dataset.firstFrame = String(performance.now());
+    draw();
+    if (playing) {
+      requestAnimationFrame(frame);
+    } else {
+      looping = false;
+    }
+  }
+
+  function play() {
+    playing = true;
     show();
+    if (looping) return;
+    looping = true;
+    last = null;
     requestAnimationFrame(frame);
   }
 
-  button.addEventListener("click", function () {
-    if (!playing && time >= seconds) time = 0;
-    playing = !playing;
+  function redraw() {
     show();
+    if (looping || asked) return;
+    asked = true;
+    requestAnimationFrame(function () {
+      asked = false;
+      if (!looping) draw();
+    });
+  }
+
+  button.addEventListener("click", function () {
+    if (playing) {
+      playing = false;
+      show();
+      return;
+    }
+    if (time >= seconds) time = 0;
+    play();
   });
   timeline.addEventListener("input", function () {
     time = Number(timeline.value);
     playing = false;
-    show();
+    redraw();
   });
+  controls.addEventListener("change", redraw); // the view turned by dragging
 
   const player = {
     // What is shown: the time, whether it plays, frames drawn, and every part's pose [x, y, z, qx, qy, qz, qw].
     state: function () {
       return { time: time, seconds: seconds, playing: playing, frames: frames, parts: posed };
     },
-    seek: function (t) { time = Math.max(0, Math.min(seconds, t)); playing = false; show(); },
-    play: function () { playing = true; show(); },
+    seek: function (t) { time = Math.max(0, Math.min(seconds, t)); playing = false; redraw(); },
+    play: play,
     pause: function () { playing = false; show(); },
   };
   container.player = player;
-  requestAnimationFrame(frame);
+  play();
   return player;
 }
