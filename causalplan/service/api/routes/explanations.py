@@ -20,7 +20,7 @@ router = APIRouter(
 )
 
 
-@router.post("", response_model=ExplanationOut, summary="Explain a plan")
+@router.post("", response_model=ExplanationOut, response_model_exclude_unset=True, summary="Explain a plan")
 def create_explanation(body: ExplanationIn, services: ServicesDep, client: ClientIdsDep) -> dict[str, Any]:
     """Plan the model, then say why a step is there (`why`) and why not another plan (`why_not`).
 

@@ -20,7 +20,7 @@ router = APIRouter(
 )
 
 
-@router.post("", response_model=PlanOut, summary="Plan a model")
+@router.post("", response_model=PlanOut, response_model_exclude_unset=True, summary="Plan a model")
 def create_plan(body: PlanIn, services: ServicesDep, client: ClientIdsDep) -> dict[str, Any]:
     """Plan how to assemble the object so the model's goal holds, and replay the plan on it.
 

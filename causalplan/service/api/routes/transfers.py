@@ -24,7 +24,9 @@ router = APIRouter(
 )
 
 
-@router.post("", response_model=TransferOut, summary="Test whether a model transfers")
+@router.post(
+    "", response_model=TransferOut, response_model_exclude_unset=True, summary="Test whether a model transfers"
+)
 def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDep) -> TransferOut:
     """Plan the model on the mapping's object and say whether it transfers, and why or why not.
 
