@@ -28,7 +28,7 @@ from collections.abc import Callable
 from concurrent.futures import CancelledError, Future, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
-from multiprocessing.queues import SimpleQueue
+from multiprocessing.connection import Connection
 from typing import Any, TypeVar
 
 from pebble import CONSTS, ProcessExpired, ProcessPool
@@ -49,6 +49,8 @@ logger = logging.getLogger(__name__)
 T = TypeVar("T")
 
 START_SECONDS = 60.0
+CLOSED = "closed"
+"""What the pool tells its own listener when it closes."""
 STOP_POLL_SECONDS = 0.02
 """How often a call with a ``stop`` event looks at it while its worker works."""
 KILL_WAIT_SECONDS = CONSTS.term_timeout + 2.0
@@ -93,11 +95,11 @@ class PlannerPool:
         self._hellos = 0
         self._seconds_per_job = 0.05  # moving average, for Retry-After
         self._workers: set[int] = set()
-        self._started: dict[int, int] = {}  # run -> the pid of the worker that took it
+        self._started: dict[int, int | None] = {}  # a run in progress -> the pid of the worker that took it
         self._futures: set[Future[Any]] = set()
         self._runs = itertools.count(1)
         self._pebble: ProcessPool | None = None
-        self._messages: SimpleQueue[Message] | None = None
+        self._messages: tuple[Connection, Connection] | None = None  # the workers' pipe: (read, write)
         self._closed = False
         self._start_lock = threading.Lock()
         self._build_lock = threading.Lock()
@@ -116,8 +118,8 @@ class PlannerPool:
     def _start(self) -> None:
         for folder in remove_stale_folders():
             logger.info("removed %s, left by a planner worker that was killed", folder)
-        self._messages = _CONTEXT.SimpleQueue()
-        threading.Thread(target=self._listen, args=(self._messages,), name="causalplan-pool", daemon=True).start()
+        self._messages = _CONTEXT.Pipe(duplex=False)
+        threading.Thread(target=self._listen, args=(self._messages[0],), name="causalplan-pool", daemon=True).start()
         pebble = self._pebble_pool()
         deadline = time.monotonic() + START_SECONDS
         with self._lock:
@@ -132,7 +134,8 @@ class PlannerPool:
 
     def _new_pebble(self) -> ProcessPool:
         environment = dict(os.environ)
-        args = (os.getpid(), environment, self.memory_mb, self._messages, False)
+        writer = self._messages[1] if self._messages is not None else None
+        args = (os.getpid(), environment, self.memory_mb, writer, False)
         return ProcessPool(self.size, initializer=worker.initialize, initargs=args, context=_CONTEXT)
 
     def _pebble_pool(self) -> ProcessPool:
@@ -151,20 +154,23 @@ class PlannerPool:
             self._pebble = pebble
             return pebble
 
-    def _listen(self, messages: SimpleQueue[Message]) -> None:
+    def _listen(self, messages: Connection) -> None:
         """Read the workers' messages (hello, started) until the pool closes."""
         while True:
             try:
-                kind, pid, run = messages.get()
-            except (EOFError, OSError, ValueError):
+                message: Message = messages.recv()
+            except (EOFError, OSError):
+                messages.close()
                 return
+            kind, pid, run = message
             with self._lock:
                 if kind == READY:
                     self._hellos += 1
                     self._workers.add(pid)
-                elif kind == STARTED:
+                elif kind == STARTED and run in self._started:  # not a run that has ended meanwhile
                     self._started[run] = pid
-                else:  # the pool closed
+                elif kind == CLOSED:
+                    messages.close()
                     return
                 self._lock.notify_all()
 
@@ -259,6 +265,8 @@ class PlannerPool:
         stop: threading.Event | None,
     ) -> Any:
         run = next(self._runs)
+        with self._lock:
+            self._started[run] = None
         started = time.perf_counter()
         future = self._schedule(run, function, args, timeout)
         failure: Exception | None = None
@@ -329,7 +337,7 @@ class PlannerPool:
         future.cancel()
         deadline = time.monotonic() + KILL_WAIT_SECONDS
         with self._lock:
-            self._lock.wait_for(lambda: run in self._started, timeout=CONSTS.sleep_unit * 5)
+            self._lock.wait_for(lambda: self._started.get(run) is not None, timeout=CONSTS.sleep_unit * 5)
             pid = self._started.get(run)
         while pid is not None and is_running(pid) and time.monotonic() < deadline:
             time.sleep(0.01)
@@ -360,8 +368,11 @@ class PlannerPool:
             future.cancel()
         if pebble is not None:
             _shut(pebble)
-        if self._messages is not None:
-            self._messages.put(("closed", 0, 0))
+        with self._lock:
+            pipe, self._messages = self._messages, None
+        if pipe is not None:
+            pipe[1].send((CLOSED, 0, 0))
+            pipe[1].close()
         remove_stale_folders()
 
 

@@ -27,7 +27,7 @@ import sys
 import tempfile
 import traceback
 from collections.abc import Callable
-from multiprocessing.queues import SimpleQueue
+from multiprocessing.connection import Connection
 from pathlib import Path
 from types import FrameType
 from typing import Any
@@ -46,8 +46,10 @@ Message = tuple[str, int, int]
 READY = "ready"
 STARTED = "started"
 
-_messages: list[SimpleQueue[Message]] = []
-"""The app's queue of this worker's messages (none for a probe's throwaway process)."""
+_messages: list[Connection] = []
+"""Where this worker's messages go: a pipe to the app, shared by its workers without a lock (a
+message is one write of less than ``PIPE_BUF``, which the kernel keeps whole), so a worker
+killed while it writes leaves no lock held. None for a probe's throwaway process."""
 
 
 def is_running(pid: int) -> bool:
@@ -80,7 +82,7 @@ def initialize(
     app_pid: int,
     environment: dict[str, str],
     memory_mb: int,
-    messages: SimpleQueue[Message] | None,
+    messages: Connection | None,
     quiet: bool,
 ) -> None:
     """Make this process a warm planner worker of app ``app_pid``; say hello on ``messages``."""
@@ -102,7 +104,7 @@ def initialize(
     gc.freeze()  # what the worker imported stays: its collections then skip all of it
     if messages is not None:
         _messages.append(messages)
-        messages.put((READY, os.getpid(), 0))
+        messages.send((READY, os.getpid(), 0))
 
 
 def _stop(folder: Path, number: int, _frame: FrameType | None) -> None:
@@ -116,7 +118,7 @@ def _stop(folder: Path, number: int, _frame: FrameType | None) -> None:
 def run_job(run: int, function: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, ...]:
     """Say this worker took job ``run``; return the reply: its value, its ``CausalPlanError``, or a bug's traceback."""
     for messages in _messages:
-        messages.put((STARTED, os.getpid(), run))
+        messages.send((STARTED, os.getpid(), run))
     try:
         return ("ok", function(*args))
     except CausalPlanError as exc:
