@@ -54,7 +54,8 @@ CLOSED = "closed"
 STOP_POLL_SECONDS = 0.02
 """How often a call with a ``stop`` event looks at it while its worker works."""
 KILL_WAIT_SECONDS = CONSTS.term_timeout + 2.0
-"""How long a stopped call waits for pebble to kill its worker (SIGTERM, then SIGKILL after ``term_timeout``)."""
+"""How long a stopped call waits for its job to reach a worker, then for pebble to kill that worker
+(SIGTERM, then SIGKILL after ``term_timeout``)."""
 _CONTEXT = multiprocessing.get_context("forkserver")
 _CONTEXT.set_forkserver_preload([worker.__name__])  # each worker forks with the planners imported
 
@@ -333,12 +334,19 @@ class PlannerPool:
             ) from None
 
     def _kill(self, future: Future[Any], run: int) -> None:
-        """Cancel ``future`` (pebble then kills its worker); wait until that worker is dead."""
-        future.cancel()
+        """Cancel ``future`` once a worker has it (pebble then kills that worker); wait until the worker is dead.
+
+        A job on its way to a worker is let arrive first: cancelled on the way, it would still
+        be run by the worker that takes it, until pebble kills that one too.
+        """
         deadline = time.monotonic() + KILL_WAIT_SECONDS
         with self._lock:
-            self._lock.wait_for(lambda: self._started.get(run) is not None, timeout=CONSTS.sleep_unit * 5)
+            while self._started.get(run) is None and not future.done() and time.monotonic() < deadline:
+                self._lock.wait(STOP_POLL_SECONDS)
             pid = self._started.get(run)
+        if not future.cancel():  # it has just ended: no worker to kill
+            return
+        deadline = time.monotonic() + KILL_WAIT_SECONDS
         while pid is not None and is_running(pid) and time.monotonic() < deadline:
             time.sleep(0.01)
         remove_stale_folders()
@@ -346,7 +354,7 @@ class PlannerPool:
     def run_isolated(self, function: Callable[..., T], args: tuple[Any, ...], timeout: float) -> T:
         """Run one job in a fresh worker process that exits afterwards (for probes that import a lot)."""
         initargs = (os.getpid(), dict(os.environ), self.memory_mb, None, True)
-        pebble = ProcessPool(1, max_tasks=1, initializer=worker.initialize, initargs=initargs, context=_CONTEXT)
+        pebble = ProcessPool(1, initializer=worker.initialize, initargs=initargs, context=_CONTEXT)
         try:
             reply = pebble.schedule(worker.run_job, (0, function, args), timeout=timeout).result()
         except TimeoutError:
