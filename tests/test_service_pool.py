@@ -339,8 +339,8 @@ def test_a_job_that_cannot_be_sent_fails_alone_and_the_pool_keeps_its_workers(tw
 
 
 def test_a_worker_that_dies_before_taking_its_job_hands_it_to_its_replacement() -> None:
-    # The CI flake: a worker killed while idle was still exiting (alive to poll, its socket open)
-    # when a request took it. Stopped, it stays in that state until it is killed mid-hand-over.
+    # A stopped worker cannot take the job sent to it; killed then, with no job begun, pebble takes
+    # its whole pool for broken: the job must still be answered, by a new worker.
     with bare_pool(1) as pool:
         [pid] = pool.worker_pids()
         os.kill(pid, signal.SIGSTOP)

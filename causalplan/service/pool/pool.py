@@ -265,9 +265,10 @@ class PlannerPool:
         meanwhile: Callable[[], None] | None,
         stop: threading.Event | None,
     ) -> Any:
-        run = next(self._runs)
-        with self._lock:
-            self._started[run] = None
+        run = next(self._runs) if stop is not None else None  # only a stoppable run needs to know its worker
+        if run is not None:
+            with self._lock:
+                self._started[run] = None
         started = time.perf_counter()
         future = self._schedule(run, function, args, timeout)
         failure: Exception | None = None
@@ -286,7 +287,8 @@ class PlannerPool:
             raise WorkerCrashedError("No planner worker could take this request; try again.") from None
         finally:
             with self._lock:
-                self._started.pop(run, None)
+                if run is not None:
+                    self._started.pop(run, None)
                 self._futures.discard(future)
         with self._lock:
             self._completed += 1
@@ -295,7 +297,9 @@ class PlannerPool:
             raise failure
         return _unwrap(reply)
 
-    def _schedule(self, run: int, function: Callable[..., Any], args: tuple[Any, ...], timeout: float) -> Future[Any]:
+    def _schedule(
+        self, run: int | None, function: Callable[..., Any], args: tuple[Any, ...], timeout: float
+    ) -> Future[Any]:
         pebble = self._pebble_pool()
         try:
             future: Future[Any] = pebble.schedule(worker.run_job, (run, function, args), timeout=timeout)
@@ -305,9 +309,11 @@ class PlannerPool:
             self._futures.add(future)
         return future
 
-    def _reply(self, future: Future[Any], run: int, timeout: float, stop: threading.Event | None) -> tuple[Any, ...]:
+    def _reply(
+        self, future: Future[Any], run: int | None, timeout: float, stop: threading.Event | None
+    ) -> tuple[Any, ...]:
         """Return the worker's reply to ``run``; kill its worker when ``stop`` is set (RunStoppedError)."""
-        while stop is not None and not wait([future], STOP_POLL_SECONDS).done:
+        while run is not None and stop is not None and not wait([future], STOP_POLL_SECONDS).done:
             if stop.is_set():
                 self._kill(future, run)
                 raise RunStoppedError
@@ -356,7 +362,7 @@ class PlannerPool:
         initargs = (os.getpid(), dict(os.environ), self.memory_mb, None, True)
         pebble = ProcessPool(1, initializer=worker.initialize, initargs=initargs, context=_CONTEXT)
         try:
-            reply = pebble.schedule(worker.run_job, (0, function, args), timeout=timeout).result()
+            reply = pebble.schedule(worker.run_job, (None, function, args), timeout=timeout).result()
         except TimeoutError:
             raise PlanningTimeoutError(f"The probe did not finish within {timeout:g} s.") from None
         except (ProcessExpired, BrokenProcessPool):

@@ -4,7 +4,8 @@
 what a worker does for itself. Its start (``initialize``) takes the app's environment (a fork
 server's worker would otherwise have the server's, from when it started), sets the memory
 limit, makes the worker's temp folder (its TMPDIR), imports and warms the planners once, and
-says hello with its pid. Each job (``run_job``) first says which worker took it, then answers
+says hello with its pid. Each job that may be stopped first says which worker took it; each
+(``run_job``) answers
 ``("ok", value)``, ``("error", code, message, details)`` for a ``CausalPlanError``, or
 ``("crash", text)`` for anything else (an exception of ours might not unpickle in the app).
 
@@ -115,10 +116,14 @@ def _stop(folder: Path, number: int, _frame: FrameType | None) -> None:
     os._exit(128 + number)
 
 
-def run_job(run: int, function: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, ...]:
-    """Say this worker took job ``run``; return the reply: its value, its ``CausalPlanError``, or a bug's traceback."""
-    for messages in _messages:
-        messages.send((STARTED, os.getpid(), run))
+def run_job(run: int | None, function: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, ...]:
+    """Return the reply: the job's value, its ``CausalPlanError``, or a bug's traceback.
+
+    ``run``: the number of a job that may be stopped, whose caller must know which worker took it.
+    """
+    if run is not None:
+        for messages in _messages:
+            messages.send((STARTED, os.getpid(), run))
     try:
         return ("ok", function(*args))
     except CausalPlanError as exc:
