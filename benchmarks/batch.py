@@ -130,16 +130,16 @@ def write_trials(path: Path, count: int, seed: int) -> None:
 
 def plain_path(path: Path, sample: int) -> tuple[float, dict[str, str]]:
     """Judge the first ``sample`` trials one by one with every cache emptied; return (trials/s, verdicts)."""
+    from causalplan import caches
     from causalplan.objects.catalog import load_catalog
     from causalplan.transfer.batch import evaluate_trial, read_trials
-    from causalplan.transfer.verdict import clear_caches
 
     catalog = load_catalog()
     trials = list(read_trials(path))[:sample]
     verdicts: dict[str, str] = {}
     started = time.perf_counter()
     for trial in trials:
-        clear_caches()
+        caches.fresh()
         verdicts[trial.id] = evaluate_trial(trial, catalog, "auto", 30.0, True).verdict.verdict.value
     return len(trials) / (time.perf_counter() - started), verdicts
 

@@ -37,7 +37,6 @@ import uvicorn
 from playwright.sync_api import Page, sync_playwright
 
 from causalplan.service.main import create_app
-from causalplan.service.pages.drawings import forget_plan_pictures
 from causalplan.settings import Settings
 
 CHROMIUM = "/usr/bin/chromium"
@@ -244,7 +243,7 @@ def main() -> None:
                 clicks.setdefault(case.name, []).append(timed(page.evaluate(CLICK_TO_PICTURE)))
         for case in CASES:  # the reference: a picture nobody drew ahead
             open_step2(pages[case.name], base, codes[case.name], case.rules)
-            forget_plan_pictures()
+            app.state.services.caches.plan_pictures.clear()
             cold[case.name] = timed(pages[case.name].evaluate(CLICK_TO_PICTURE))
         browser.close()
     server.should_exit = True

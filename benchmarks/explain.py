@@ -30,6 +30,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from causalplan import caches  # noqa: E402
 from causalplan.causal.model import CausalModel, Labelling  # noqa: E402
 from causalplan.explain.explanation import explain_plan  # noqa: E402
 from causalplan.explain.repair import search_repairs  # noqa: E402
@@ -37,7 +38,7 @@ from causalplan.inputs import load_mapping, load_model  # noqa: E402
 from causalplan.objects.catalog import Catalog, load_catalog  # noqa: E402
 from causalplan.pddl.task import build_task, catalog_task  # noqa: E402
 from causalplan.planners.pipeline import plan_task  # noqa: E402
-from causalplan.transfer.verdict import clear_caches, evaluate_transfer  # noqa: E402
+from causalplan.transfer.verdict import evaluate_transfer  # noqa: E402
 
 WHY_NOT_TARGET = 3.0
 REPAIR_TARGET = 50.0
@@ -49,7 +50,7 @@ def cold_median(action: Callable[[], object], rounds: int) -> float:
     """Return the median seconds of ``action`` with every cache emptied before each run."""
     times = []
     for _ in range(rounds):
-        clear_caches()
+        caches.fresh()
         started = time.perf_counter()
         action()
         times.append(time.perf_counter() - started)

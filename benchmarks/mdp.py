@@ -25,9 +25,9 @@ from typing import TypeVar
 from rich.console import Console
 from rich.table import Table
 
+from causalplan import caches
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.pddl.task import PlanningTask
-from causalplan.planners import fd
 from causalplan.planners.fd.solve import DEFAULT_TIME_LIMIT
 from causalplan.planners.mdp import Optimality, relevant_fits
 from causalplan.planners.mdp.objective import solve_for
@@ -46,7 +46,7 @@ def with_probabilities(task: PlanningTask, seed: int) -> PlanningTask:
 
 def fresh_plan(task: PlanningTask, planner: str) -> PlanResult:
     """Plan without Fast Downward's answer cache, so every timed run is a real solve."""
-    fd.clear_solve_cache()
+    caches.current().fd_answers.clear()
     return plan_task(task, planner, 60.0, val=False)
 
 

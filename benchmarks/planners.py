@@ -61,6 +61,10 @@ try:
 except ImportError:  # the code before planners/fd/ (it reads CAUSALPLAN_SEARCH_PRESTART)
     from causalplan.planners import fast_downward as fd
     fd.prestart()
+try:
+    from causalplan.caches import fresh as forget_answers
+except ImportError:  # the code before causalplan/caches.py
+    forget_answers = fd.clear_solve_cache
 
 examples, cases, rounds, gap = Path(sys.argv[1]), json.loads(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4])
 catalog = load_catalog()
@@ -73,7 +77,7 @@ for task in tasks:
     plan_task(task, "fd")
 seconds = []
 for index in range(rounds * len(tasks)):
-    fd.clear_solve_cache()
+    forget_answers()
     time.sleep(gap)
     started = time.perf_counter()
     assert plan_task(tasks[index % len(tasks)], "fd").has_plan
@@ -127,7 +131,7 @@ def main() -> int:
     parser.add_argument("--gap", type=float, default=0.02, help="seconds between solves, as between requests")
     parser.add_argument("--output", type=Path, default=ROOT / "benchmarks" / "results" / "planners.json")
     args = parser.parse_args()
-    from causalplan.planners import fd, val
+    from causalplan import caches
     from causalplan.planners.pipeline import plan_task
     from causalplan.planners.up_problem import solve_with_up
 
@@ -141,8 +145,7 @@ def main() -> int:
         for task in tasks:
             for kind in kinds:
                 if kind.startswith("cold"):
-                    fd.clear_solve_cache()
-                    val.clear_verdicts()
+                    caches.fresh()
                 time.sleep(args.gap)
                 started = time.perf_counter()
                 if kind == "unified-planning":

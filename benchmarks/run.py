@@ -30,11 +30,11 @@ from typing import Any
 from rich.console import Console
 from rich.table import Table
 
+from causalplan import caches
 from causalplan.comparison.synthetic import MAX_PARTS, MIN_PARTS, synthetic_task
 from causalplan.inputs import load_model
 from causalplan.objects.catalog import load_catalog
 from causalplan.pddl.task import PlanningTask, build_task
-from causalplan.planners import fd
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.replay import replay
 from causalplan.planners.up_problem import solve_with_up
@@ -91,7 +91,7 @@ Run = Callable[[], tuple[str, int | None, bool | None, dict[str, float], str]]
 def ours(task: PlanningTask) -> Run:
     def run() -> tuple[str, int | None, bool | None, dict[str, float], str]:
         # A real solve, not a remembered answer, on an object parsed afresh (as the first model on it)
-        fd.clear_solve_cache()
+        caches.current().fd_answers.clear()
         result = plan_task(task, "fd", time_limit=OUR_TIME_LIMIT)
         valid = result.valid_under_model and result.valid_under_true_mechanism if result.has_plan else None
         return result.status.value, len(result.steps) if result.has_plan else None, valid, result.timing, result.message

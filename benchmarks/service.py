@@ -128,7 +128,7 @@ def paper_tasks() -> list[PlanningTask]:
 
 def in_process_latencies(requests: int, planner: str) -> tuple[list[float], float]:
     """Solve the desk-lamp task ``requests`` times with ``plan_task`` (after a warm-up); return times and wall."""
-    from causalplan.planners import fd
+    from causalplan import caches
     from causalplan.planners.pipeline import plan_task
 
     tasks = paper_tasks()
@@ -136,7 +136,7 @@ def in_process_latencies(requests: int, planner: str) -> tuple[list[float], floa
     seconds = []
     started = time.perf_counter()
     for index in range(requests):
-        fd.clear_solve_cache()  # every solve a real one, as for a model never seen
+        caches.current().fd_answers.clear()  # every solve a real one, as for a model never seen
         solve_started = time.perf_counter()
         result = plan_task(tasks[index % len(tasks)], planner)
         seconds.append(time.perf_counter() - solve_started)

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from causalplan import caches
+from causalplan.caches import Caches
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.inputs import load_mapping, load_model
 from causalplan.objects.catalog import Catalog, load_catalog
@@ -58,9 +60,6 @@ def example_mapping(relative: str, catalog: Catalog) -> Labelling:
 
 
 @pytest.fixture(autouse=True)
-def _fresh_solve_cache() -> None:
-    """Start every test with FD's answers and VAL's verdicts forgotten, so runs are real unless a test repeats them."""
-    from causalplan.planners import fd, val
-
-    fd.clear_solve_cache()
-    val.clear_verdicts()
+def process_caches() -> Caches:
+    """Give every test an empty owner of the process's caches, so runs are real unless a test repeats them."""
+    return caches.fresh()

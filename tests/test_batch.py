@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 from click.testing import CliRunner
 
+from causalplan import caches
 from causalplan.cli import app
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.errors import InputFileError
@@ -24,7 +25,7 @@ from causalplan.transfer.batch import (
     read_trials,
     run_batch,
 )
-from causalplan.transfer.verdict import Verdict, clear_caches
+from causalplan.transfer.verdict import Verdict
 from tests.conftest import EXAMPLES, example_mapping, example_model
 from tests.test_pipeline import PAPER_PLANS
 
@@ -35,7 +36,7 @@ def test_the_batch_gives_exactly_the_verdicts_of_one_trial_at_a_time(catalog: Ca
     trials = list(read_trials(TRIALS))
     fast = run_batch(trials, catalog)
     for trial, result in zip(trials, fast, strict=True):
-        clear_caches()
+        caches.fresh()
         plain = evaluate_trial(trial, catalog, "auto", 30.0, True)
         assert result.verdict.as_dict()["verdict"] == plain.verdict.as_dict()["verdict"], trial.id
         assert result.verdict.as_dict()["reasons"] == plain.verdict.as_dict()["reasons"], trial.id
@@ -135,7 +136,7 @@ def test_cached_plans_equal_fresh_plans_on_random_synthetic_tasks(seed: int) -> 
     task = synthetic_task(6 + 7 * seed, seed)
     fresh = plan_task(task, "fd")
     assert plan_task(task, "fd").steps == fresh.steps
-    clear_caches()
+    caches.fresh()
     assert plan_task(task, "fd").steps == fresh.steps
 
 

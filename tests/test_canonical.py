@@ -6,6 +6,7 @@ from dataclasses import replace
 
 import pytest
 
+from causalplan import caches
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import read_model
 from causalplan.comparison.synthetic import synthetic_object, synthetic_task
@@ -212,7 +213,7 @@ def test_plans_of_one_schema_are_those_of_the_per_primitive_form(config: str, us
     for name, task in tasks.items():
         compiled = canonical_pddl(task)
         assert compiled is not None
-        fd.clear_solve_cache()
+        caches.current().fd_answers.clear()
         one = fd.solve(compiled.domain, compiled.problem, fd.CONFIGS[config])
         per_primitive = fd.solve(*_per_primitive_form(task), fd.CONFIGS[config])
         assert one.status is per_primitive.status, name

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from causalplan import caches
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import read_model
 from causalplan.inputs import load_mapping, load_model
@@ -272,7 +273,6 @@ def test_a_solve_off_the_main_thread_translates_in_its_own_process_under_the_dea
 
 def test_solves_work_when_the_process_has_more_than_1024_open_files(catalog: Catalog) -> None:
     """A busy server holds many sockets: waiting for a translator or a search must not use select()."""
-    fd.clear_solve_cache()
     compiled = compile_task(build_task(example_model("near/candle.yaml", catalog), catalog.get("candle")))
     held: list[int] = []
     try:
@@ -345,11 +345,8 @@ def test_every_example_solves_the_same_in_canonical_and_readable_form(user_catal
 
 def test_answers_are_kept_and_none_when_told_to_keep_none(catalog: Catalog) -> None:
     compiled = compile_task(build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.get("desk_lamp")))
-    try:
-        solve(compiled.domain, compiled.problem, CONFIGS["fd"])
-        assert set(solve(compiled.domain, compiled.problem, CONFIGS["fd"]).timing) == {"cached"}
-        fd.keep_answers(0)
-        solve(compiled.domain, compiled.problem, CONFIGS["fd"])
-        assert set(solve(compiled.domain, compiled.problem, CONFIGS["fd"]).timing) == {"translate", "search"}
-    finally:
-        fd.keep_answers(fd.SOLVE_CACHE_SIZE)
+    solve(compiled.domain, compiled.problem, CONFIGS["fd"])
+    assert set(solve(compiled.domain, compiled.problem, CONFIGS["fd"]).timing) == {"cached"}
+    caches.fresh({"fd_answers": 0})
+    solve(compiled.domain, compiled.problem, CONFIGS["fd"])
+    assert set(solve(compiled.domain, compiled.problem, CONFIGS["fd"]).timing) == {"translate", "search"}

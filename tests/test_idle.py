@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from causalplan import caches
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import build_task
 from causalplan.pddl.writer import compile_task
@@ -69,7 +70,7 @@ def test_the_limits_apply_to_a_process_started_ahead() -> None:
         assert time.monotonic() < deadline
         time.sleep(0.005)
     assert fd.solve(compiled.domain, compiled.problem, CONFIGS["fd-opt"], time_limit=1.0).status is PlanStatus.TIMEOUT
-    fd.clear_solve_cache()
+    caches.current().fd_answers.clear()
     low = fd.solve(compiled.domain, compiled.problem, CONFIGS["fd-opt"], time_limit=60, memory_limit_mb=15)
     assert low.status is PlanStatus.OUT_OF_MEMORY
 

@@ -18,7 +18,7 @@ from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners.mdp import MdpSolution, solve_mdp_search
 from causalplan.planners.mdp.model import compile_mdp
 from causalplan.planners.mdp.search import decide
-from causalplan.planners.rddl import RddlTask, export_rddl
+from causalplan.planners.rddl import RddlTask, _names, export_rddl
 from tests.conftest import EXAMPLES, example_mapping, example_model
 
 EPISODES = 2000
@@ -129,3 +129,10 @@ def test_export_rddl_writes_a_domain_and_an_instance(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     assert (tmp_path / "domain.rddl").read_text().startswith("domain causalplan_desk_lamp {")
     assert "non-fluents nf_causalplan_desk_lamp" in (tmp_path / "instance.rddl").read_text()
+
+
+def test_made_up_names_never_take_a_kept_id() -> None:
+    names = _names(("if", "part_1", "x-y", "Part_2"), "part")
+    assert names["part_1"] == "part_1" and names["Part_2"] == "Part_2"
+    assert len({name.lower() for name in names.values()}) == 4
+    assert names["if"] == "part_3" and names["x-y"] == "part_4"

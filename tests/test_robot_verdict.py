@@ -2,13 +2,24 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import imageio.v3 as iio
 import numpy as np
 import pytest
 
+from causalplan.caches import Caches
 from causalplan.inputs import load_mapping, load_model
 from causalplan.objects.catalog import load_catalog
-from causalplan.transfer.robot_verdict import ROBOT_CANNOT_EXECUTE, robot_transfer_verdict, robot_video
+from causalplan.planners.result import PlanStep
+from causalplan.sim.outcomes import Failure
+from causalplan.transfer.robot_verdict import (
+    ROBOT_CANNOT_EXECUTE,
+    robot_reason,
+    robot_run,
+    robot_transfer_verdict,
+    robot_video,
+)
 from causalplan.transfer.verdict import Verdict, transfer_verdict
 from tests.conftest import EXAMPLES, builtin_catalog
 from tests.sim_fixtures import PEG_BOARD, parsed_object, steps
@@ -40,6 +51,16 @@ def test_a_plan_the_robot_carries_out_still_transfers() -> None:
     assert verdict.simulation is not None and verdict.simulation.robot and verdict.simulation.produces_goal
 
 
+def test_a_planners_steps_and_the_requests_for_them_are_one_robot_run(process_caches: Caches) -> None:
+    """The run is kept by the checked steps: a step's sentence, or its being a planner's, is not part of the key."""
+    board = parsed_object(PEG_BOARD)
+    planned = (PlanStep("insert", ("thin_peg", "board"), "thin_peg_into_hole", "Insert the thin peg into the board."),)
+    first = robot_run(board, planned)
+    assert robot_run(board, steps("insert thin_peg board thin_peg_into_hole")) is first
+    assert robot_run(board, [planned[0]]) is first  # a list of the same steps too
+    assert process_caches.stats()["robot_runs"] == {"size": 256, "entries": 1, "hits": 2, "misses": 1}
+
+
 def test_the_film_of_the_robot_is_an_mp4_or_a_gif_of_every_frame() -> None:
     board = parsed_object(PEG_BOARD)
     plan = steps("insert thin_peg board thin_peg_into_hole")
@@ -64,3 +85,16 @@ def test_the_last_frames_show_the_light_when_the_goal_is_produced() -> None:
 
     assert glowing(0) == 0
     assert glowing(-1) > 20
+
+
+def test_a_run_the_motors_cannot_follow_is_a_reason_naming_their_step_and_code() -> None:
+    desk_lamp = builtin_catalog().get("desk_lamp")
+    screw = PlanStep("screw", ("light_bulb", "base_with_cables"), "bulb_into_socket", "Screw the bulb in.")
+    driven = robot_run(desk_lamp, (screw,), motors=True)
+    assert driven.motors is not None and robot_reason(driven) is None
+    slipped = dataclasses.replace(
+        driven, motors=dataclasses.replace(driven.motors, failure=Failure.GRASP_SLIPPED, step=1, message="it slid")
+    )
+    reason = robot_reason(slipped)
+    assert reason is not None and reason.code == ROBOT_CANNOT_EXECUTE
+    assert reason.labels == ("step 1", "grasp_slipped") and "motors" in reason.message

@@ -233,11 +233,11 @@ def test_the_caches_stay_bounded(tmp_path: Path) -> None:
             for i in range(4)
         ]
         first = [post_plan(client, body) for body in bodies]
-        assert len(services.cache) == 2
+        assert len(services.caches.answers) == 2
         again = post_plan(client, bodies[0])  # dropped from the cache: planned again
         assert again["cached"] is False and answer_of(again) == answer_of(first[0])
         assert post_plan(client, bodies[0])["cached"] is True
-        assert len(services.cache) == 2
+        assert len(services.caches.answers) == 2
 
 
 def test_answers_come_out_as_copies_and_the_cache_keeps_the_recently_used() -> None:

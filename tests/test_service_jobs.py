@@ -212,6 +212,7 @@ def test_a_simulation_job_gives_the_simulation_and_its_picture(jobs_client: Test
     assert job["status"] == "succeeded", job
     result = job["result"]
     assert result["planning"]["status"] == "solved"
+    assert result["planning"]["validated_by"] == {"replay": "valid", "val": "valid"}  # VAL by default, as plans
     assert result["simulation"]["produces_goal"] is True
     assert result["image"].startswith("data:image/png;base64,")
     uuid.UUID(result["model_id"])

@@ -208,7 +208,7 @@ def test_a_planner_timeout_is_an_answer_and_is_not_cached(client: TestClient) ->
     assert client.post("/v1/plans", json=timed_out).json()["cached"] is False
     again = client.post("/v1/plans", json={"model": model, "planner": "fd"}).json()
     assert again["status"] == "solved" and again["cached"] is False
-    assert services_of(client).cache.stats()["entries"] >= 1
+    assert services_of(client).caches.answers.stats()["entries"] >= 1
 
 
 def test_the_exact_mdp_at_the_smallest_time_limit_is_an_answer(client: TestClient) -> None:

@@ -75,6 +75,19 @@ def test_the_robot_builds_the_desk_lamp_as_a_job_and_its_mp4_can_be_fetched(robo
 
 
 @pytest.mark.slow
+def test_a_robot_job_is_driven_by_the_motors_unless_asked_not_to(robot_client: TestClient) -> None:
+    driven = finished(robot_client, _queued(robot_client, {"model": DESK_LAMP, "robot": True})["url"], 300.0)
+    answer = driven["result"]
+    assert answer["robot"] == {"carried_out": True, "reason": None}
+    motors = answer["simulation"]["robot"]["motors"]  # as `causalplan simulate --robot` reports them
+    assert motors["failure"] is None and motors["grasp_slipped"] is False
+    assert motors["tracking"]["max_joint_error_rad"] <= motors["tracking"]["tolerance_rad"]
+    body = {"model": DESK_LAMP, "robot": True, "motors": False}
+    kinematic = finished(robot_client, _queued(robot_client, body)["url"], 300.0)["result"]
+    assert kinematic["robot"]["carried_out"] is True and "motors" not in kinematic["simulation"]["robot"]
+
+
+@pytest.mark.slow
 def test_a_plan_the_robot_cannot_carry_out_names_the_step_and_the_code(robot_client: TestClient) -> None:
     job = _queued(robot_client, {"model": _walled_plate(), "robot": True})
     assert job["kind"] == "simulation"

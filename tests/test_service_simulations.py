@@ -34,3 +34,12 @@ def test_an_invalid_model_is_a_422_with_the_cli_codes(client: TestClient) -> Non
     broken = {**DESK_LAMP, "rules": ["provide electricity light"]}
     response = client.post("/v1/simulations", json={"model": broken})
     assert "missing_causes_keyword" in str(error_of(response, 422))
+
+
+def test_val_checks_the_simulated_plan_by_default_as_plans_do(client: TestClient) -> None:
+    checked = client.post("/v1/simulations", json={"model": DESK_LAMP, "picture": False})
+    plain = client.post("/v1/simulations", json={"model": DESK_LAMP, "picture": False, "validate": False})
+    assert plain.status_code == checked.status_code == 200, checked.text
+    assert checked.json()["planning"]["validated_by"] == {"replay": "valid", "val": "valid"}
+    assert plain.json()["planning"]["validated_by"] == {"replay": "valid"}
+    assert checked.json()["simulation"]["produces_goal"] is True

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from causalplan import caches
 from causalplan.causal.graph import goal_holds
 from causalplan.causal.validation import ObjectSummary, validate_model
 from causalplan.comparison.synthetic import (
@@ -95,7 +96,7 @@ def _index_order_plan(task: PlanningTask) -> tuple[tuple[str, tuple[str, ...]], 
 
 def test_the_same_size_and_seed_give_the_same_object_and_model() -> None:
     first = synthetic_object(30, seed=4)
-    synthetic_object.cache_clear()
+    caches.current().synthetic_objects.clear()
     second = synthetic_object(30, seed=4)
     assert first == second and first is not second
     assert synthetic_model(first, seed=4) == synthetic_model(second, seed=4)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from causalplan import caches
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners import val
@@ -104,7 +105,6 @@ def test_a_verdict_is_kept_by_task_key_so_other_wordings_of_one_task_run_val_onc
 
 
 def test_a_verdict_is_kept_so_a_repeated_plan_runs_val_once(monkeypatch: pytest.MonkeyPatch) -> None:
-    val.clear_verdicts()
     runs: list[str] = []
     real = val._run_validate
 
@@ -140,6 +140,6 @@ def test_plan_task_with_val_says_so_and_a_plan_val_rejects_is_never_returned(
         return replace(compiled, problem=compiled.problem.replace("(:goal (n-light))", "(:goal (not (n-light)))"))
 
     monkeypatch.setattr(pipeline, "compile_task", negated_goal)
-    val.clear_verdicts()  # the verdict is kept by canonical form, which the wrong goal leaves as it was
+    caches.current().val_verdicts.clear()  # kept by canonical form, which the wrong goal leaves as it was
     with pytest.raises(PlanRejectedError, match="Goal not satisfied"):
         plan_task(task, "fd", val=True)

@@ -9,7 +9,7 @@ from fastapi.testclient import TestClient
 
 from causalplan.causal.graph import goal_holds
 from causalplan.service.pages import ahead
-from causalplan.service.pages.drawings import forget_plan_pictures, is_plan_picture_kept
+from causalplan.service.pages.drawings import is_plan_picture_kept
 from tests.conftest import builtin_catalog
 from tests.service_fixtures import services_of
 from tests.web_flows import LAMP_FUNCTIONS, LAMP_RULES, new_participant, post
@@ -45,7 +45,7 @@ def test_drawn_ahead_the_participants_plan_picture_is_kept_before_they_ask(clien
     post(client, f"/p/{code}/step1/1", LAMP_FUNCTIONS)
     (plan,) = client.post(f"/p/{code}/plan", json={"rules": LAMP_RULES}).json()["plans"]
     fits = tuple(str(plan["picture_url"]).split("fits=")[1].split(","))
-    forget_plan_pictures()
+    services.caches.plan_pictures.clear()
     assert not is_plan_picture_kept(services, lamp, fits)
     assert ahead.draw_ahead(services, [lamp], threading.Event()) >= 1
     assert is_plan_picture_kept(services, lamp, fits)

@@ -26,8 +26,9 @@ from __future__ import annotations
 import math
 import random
 from dataclasses import dataclass
-from functools import lru_cache
 
+from causalplan import caches
+from causalplan.caches import BoundedCache
 from causalplan.causal.diagnostics import Location
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.causal.rules import Rule, parse_rule
@@ -95,9 +96,16 @@ def object_id(n_parts: int, seed: int) -> str:
     return f"synthetic_{n_parts}_{seed}"
 
 
-@lru_cache(maxsize=64)
 def synthetic_object(n_parts: int, seed: int = 0) -> AssemblyObject:
-    """Return the seeded synthetic object with ``n_parts`` parts (same arguments, same object)."""
+    """Return the seeded synthetic object with ``n_parts`` parts (same arguments, same object).
+
+    Kept by size and seed (the process's ``synthetic_objects`` cache).
+    """
+    kept: BoundedCache[tuple[int, int], AssemblyObject] = caches.current().synthetic_objects
+    return kept.get_or_make((n_parts, seed), lambda: _grown(n_parts, seed))
+
+
+def _grown(n_parts: int, seed: int) -> AssemblyObject:
     if not MIN_PARTS <= n_parts <= MAX_PARTS:
         raise ValueError(f"a synthetic object has {MIN_PARTS} to {MAX_PARTS} parts, not {n_parts}")
     rng = random.Random(f"object/{n_parts}/{seed}")

@@ -8,16 +8,23 @@ benchmarks/RESULTS.md for the measured comparison).
 from __future__ import annotations
 
 from collections.abc import Iterable
-from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
 
+from causalplan import caches
+from causalplan.caches import BoundedCache
+
 Vector = npt.NDArray[np.float64]
 
 
-@lru_cache(maxsize=4096)
 def _embedding(text: str) -> Vector:
+    """Return the unit-length embedding of ``text``, kept (the process's ``label_embeddings`` cache)."""
+    kept: BoundedCache[str, Vector] = caches.current().label_embeddings
+    return kept.get_or_make(text, lambda: _embedded(text))
+
+
+def _embedded(text: str) -> Vector:
     from static_model import get_embeddings
 
     vector = np.asarray(get_embeddings([text])[0], dtype=np.float64)

@@ -45,12 +45,25 @@ class RddlTask:
 
 
 def _names(ids: tuple[str, ...], prefix: str) -> dict[str, str]:
-    return {
-        identifier: identifier
-        if _IDENTIFIER.match(identifier) and identifier.lower() not in _RESERVED
-        else f"{prefix}_{number}"
-        for number, identifier in enumerate(ids, start=1)
-    }
+    """Keep each id that is a plain RDDL identifier; name the others ``{prefix}_{n}``, never twice.
+
+    A kept id can look like a made-up name (a part called ``part_2``), so the made-up names skip
+    every name already taken, compared without case.
+    """
+    kept = {identifier for identifier in ids if _IDENTIFIER.match(identifier) and identifier.lower() not in _RESERVED}
+    taken = {identifier.lower() for identifier in kept}
+    names: dict[str, str] = {}
+    number = 0
+    for identifier in ids:
+        if identifier in kept:
+            names[identifier] = identifier
+            continue
+        number += 1
+        while f"{prefix}_{number}" in taken:
+            number += 1
+        names[identifier] = f"{prefix}_{number}"
+        taken.add(names[identifier])
+    return names
 
 
 def _real(value: float) -> str:

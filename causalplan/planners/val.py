@@ -4,13 +4,13 @@
 its ``libVAL.so``) runs in a private folder under the limits of ``processes``. It reads
 ``:derived`` predicates, which no Python validator here does, so it checks the plan against
 the person's rules as written (one derived clause per rule), not the canonical form FD solved.
-Verdicts are cached by task and plan; the pipeline names a task by its canonical form (the
-answer cache's key), so a batch runs VAL once per distinct plan, not once per wording.
+Verdicts are kept (the process's ``val_verdicts`` cache) by task and plan; the pipeline names a
+task by its canonical form (the answer cache's key), so a batch runs VAL once per distinct
+plan, not once per wording.
 """
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
@@ -18,14 +18,13 @@ from functools import cache
 from importlib.util import find_spec
 from pathlib import Path
 
-from cachetools import LRUCache
-
+from causalplan import caches
+from causalplan.caches import BoundedCache
 from causalplan.errors import CausalPlanError, PlannerUnavailableError
 from causalplan.planners import processes
 
 TIME_LIMIT = 10.0
 MEMORY_LIMIT_MB = 1024
-VERDICTS_KEPT = 1024
 _ADVICE_STARTS = ("Plan failed to execute", "Goal not satisfied", "Bad plan description", "Bad problem", "Bad domain")
 _ADVICE_ENDS = ("Failed plans:", "Successful plans:")
 
@@ -103,8 +102,8 @@ def _run_validate(domain: str, problem: str, plan: str) -> ValReport:
     return ValReport(ValVerdict.ERROR, f"VAL exit code {run.returncode}: {_words(run.output)}")
 
 
-_verdicts: LRUCache[tuple[Hashable, str], ValReport] = LRUCache(maxsize=VERDICTS_KEPT)
-_verdicts_lock = threading.Lock()
+def _verdicts() -> BoundedCache[tuple[Hashable, str], ValReport]:
+    return caches.current().val_verdicts
 
 
 def validate(
@@ -117,15 +116,9 @@ def validate(
     """
     plan = plan_text(actions)
     key = (task_key if task_key is not None else (domain, problem), plan)
-    with _verdicts_lock:
-        known = _verdicts.get(key)
-    if known is not None:
-        return known
-    report = _run_validate(domain, problem, plan)
-    if report.verdict is not ValVerdict.ERROR:
-        with _verdicts_lock:
-            _verdicts[key] = report
-    return report
+    return _verdicts().get_or_make(
+        key, lambda: _run_validate(domain, problem, plan), keep=lambda report: report.verdict is not ValVerdict.ERROR
+    )
 
 
 def check(
@@ -140,9 +133,3 @@ def check(
     if report.verdict is ValVerdict.ERROR:
         raise ValidatorError(f"VAL could not check the plan: {report.words}", details={"val": report.words})
     return report.verdict
-
-
-def clear_verdicts() -> None:
-    """Forget every cached verdict (benchmarks that time real runs use it)."""
-    with _verdicts_lock:
-        _verdicts.clear()

@@ -10,14 +10,12 @@ from __future__ import annotations
 import hashlib
 import json
 import pickle
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from cachetools import LRUCache
-
+from causalplan.caches import BoundedCache
 from causalplan.causal.labels import display_label
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.limits import LimitExceededError
@@ -44,37 +42,32 @@ class ResultCache:
 
     def __init__(self, size: int) -> None:
         self.size = size
-        self._pickles: LRUCache[str, bytes] = LRUCache(maxsize=max(size, 1))
-        self._lock = threading.Lock()
-        self.hits = 0
-        self.misses = 0
+        self._pickles: BoundedCache[str, bytes] = BoundedCache(size)
 
     def get(self, key: str) -> dict[str, Any] | None:
         """Return a copy of the answer kept for ``key``, or None."""
-        with self._lock:
-            data = self._pickles.get(key)
-            if data is None:
-                self.misses += 1
-                return None
-            self.hits += 1
+        data = self._pickles.get(key)
+        if data is None:
+            return None
         answer: dict[str, Any] = pickle.loads(data)  # our own bytes, never a client's
         return answer
 
     def put(self, key: str, value: dict[str, Any]) -> None:
         """Keep a copy of ``value`` for ``key`` (not when the cache is off or the answer is too large)."""
         data = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
-        if self.size > 0 and len(data) <= MAX_ANSWER_BYTES:
-            with self._lock:
-                self._pickles[key] = data
+        if len(data) <= MAX_ANSWER_BYTES:
+            self._pickles.put(key, data)
+
+    def clear(self) -> None:
+        """Forget every kept answer."""
+        self._pickles.clear()
 
     def __len__(self) -> int:
-        with self._lock:
-            return len(self._pickles)
+        return len(self._pickles)
 
     def stats(self) -> dict[str, int]:
         """Return the size, entries, hits and misses."""
-        with self._lock:
-            return {"size": self.size, "entries": len(self._pickles), "hits": self.hits, "misses": self.misses}
+        return self._pickles.stats()
 
 
 def catalog_key(catalog: Catalog) -> str:
@@ -264,11 +257,12 @@ class Answerer:
         time_limit: float,
         picture: bool,
         meanwhile: Callable[[], None] | None = None,
+        val: bool = False,
     ) -> Answer:
-        """Return the plan and its simulation report (and picture)."""
-        key = self.key(f"simulate:{picture}", model, mapping, planner, time_limit)
+        """Return the plan and its simulation report (and picture); ``val``: VAL checks the plan too."""
+        key = self.key(f"simulate:{picture}" + (":val" if val else ""), model, mapping, planner, time_limit)
         seconds = time_limit + self.settings.solve_grace_seconds + SIMULATION_SECONDS
-        args = (*self._args(model, mapping, planner, time_limit), picture)
+        args = (*self._args(model, mapping, planner, time_limit), picture, False, val)
         return self._answer(key, jobs.simulate_job, args, seconds, _is_final_simulation, meanwhile)
 
 

@@ -15,7 +15,8 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import Session
 
 from causalplan.objects.catalog import Catalog
-from causalplan.service.answers import Answerer, ResultCache
+from causalplan.service.answers import Answerer
+from causalplan.service.caches import ServiceCaches
 from causalplan.service.errors import NotAuthenticatedError, ParticipantIdReservedError, ResearchDisabledError
 from causalplan.service.pool.pool import PlannerPool
 from causalplan.service.storage.crud import PAGE_SESSION_PREFIX, ClientIds
@@ -47,7 +48,8 @@ class Services:
     catalog: Catalog
     engine: Engine
     pool: PlannerPool
-    cache: ResultCache
+    caches: ServiceCaches
+    """The app's caches (answers, drawings): a new app's are empty."""
     revision: str
     catalog_key: str
     """The catalog's fingerprint, part of every answer's cache key."""
@@ -65,7 +67,7 @@ class Services:
     @property
     def answers(self) -> Answerer:
         """Return what answers valid requests (from the cache or a worker)."""
-        return Answerer(self.cache, self.pool, self.settings, self.catalog_key)
+        return Answerer(self.caches.answers, self.pool, self.settings, self.catalog_key)
 
 
 # Dependencies that do not block are `async def`: FastAPI runs a plain `def` dependency in a

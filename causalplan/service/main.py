@@ -19,6 +19,7 @@ import anyio.to_thread
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import RedirectResponse, Response
+from fastapi.routing import APIRoute
 from fastapi_offline import FastAPIOffline
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.routing import BaseRoute, Match
@@ -26,7 +27,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import load_catalog
-from causalplan.service.answers import ResultCache, catalog_key
+from causalplan.service.answers import catalog_key
 from causalplan.service.api.routes import (
     experiments,
     explanations,
@@ -40,6 +41,7 @@ from causalplan.service.api.routes import (
     transfers,
 )
 from causalplan.service.api.schemas.common import error_responses
+from causalplan.service.caches import ServiceCaches
 from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
 from causalplan.service.jobs.runner import JobRunner
@@ -82,7 +84,7 @@ def start_services(settings: Settings) -> Services:
         catalog,
         engine,
         pool,
-        ResultCache(settings.cache_size),
+        ServiceCaches.of(settings),
         revision,
         catalog_key=catalog_key(catalog),
         failed_attempts=FailedAttempts(
@@ -317,6 +319,15 @@ async def handle_http_error(request: Request, exc: Exception) -> Response:
     return _error_response(code, message, exc.status_code, headers=headers)
 
 
+def operation_id(route: APIRoute) -> str:
+    """Return a route's OpenAPI operation id: its name (``create_plan``), the method name a generated client gets.
+
+    FastAPI's default adds the path and method (``create_plan_v1_plans_post``), which changes when
+    a path does; names are stable and ``tests/test_service_openapi.py`` checks they are unique.
+    """
+    return route.name
+
+
 def create_app(settings: Settings | None = None) -> FastAPI:
     """Return the service's ASGI app (settings from the environment when none are given)."""
     settings = settings or Settings()
@@ -352,6 +363,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         default_response_class=SafeJSONResponse,
         responses=error_responses(413, 422),
         redirect_slashes=False,
+        generate_unique_id_function=operation_id,
     )
     app.add_exception_handler(CausalPlanError, handle_causalplan_error)
     app.add_exception_handler(RequestValidationError, handle_validation_error)

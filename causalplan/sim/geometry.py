@@ -14,6 +14,8 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+from causalplan import caches
+from causalplan.caches import BoundedCache
 from causalplan.objects.model import AssemblyObject, Part, Shape, Vector
 from causalplan.sim.poses import Pose, about_axis, add, from_rpy, multiply, rotate, scale, shortest_arc
 
@@ -163,12 +165,17 @@ def solid_of(part: Part, index: int, moving: set[tuple[str, str]]) -> Solid:
     )
 
 
-@functools.lru_cache(maxsize=64)
 def solids(obj: AssemblyObject) -> dict[str, Solid]:
     """Return every part of ``obj`` as a solid, by part id.
 
-    Cached, since objects are immutable: callers share the dict and must not change it.
+    Kept (the process's ``solids`` cache), since objects are immutable: callers share the dict
+    and must not change it.
     """
+    kept: BoundedCache[AssemblyObject, dict[str, Solid]] = caches.current().solids
+    return kept.get_or_make(obj, lambda: _solids(obj))
+
+
+def _solids(obj: AssemblyObject) -> dict[str, Solid]:
     moving = {(fit.moving_part, fit.moving_connector) for fit in obj.fits}
     return {part.id: solid_of(part, index, moving) for index, part in enumerate(obj.parts)}
 

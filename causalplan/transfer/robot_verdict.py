@@ -8,11 +8,12 @@ cannot carry out fails with the reason ``robot_cannot_execute``, naming the step
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import replace
-from functools import lru_cache
 from typing import TYPE_CHECKING
 
+from causalplan import caches
+from causalplan.caches import BoundedCache
 from causalplan.causal.diagnostics import Severity
 from causalplan.objects.model import AssemblyObject
 from causalplan.planners.fd import DEFAULT_TIME_LIMIT
@@ -31,10 +32,6 @@ if TYPE_CHECKING:
 ROBOT_CANNOT_EXECUTE = "robot_cannot_execute"
 
 
-VIDEO_CACHE_SIZE = 16
-"""Films kept per process: the robot and its plan are deterministic, so one film per object and plan."""
-
-
 def robot_video(
     obj: AssemblyObject,
     steps: Sequence[StepRequest | PlanStep],
@@ -43,15 +40,18 @@ def robot_video(
 ) -> tuple[bytes, SimulationReport]:
     """Return a film of the robot carrying out ``steps`` (".mp4" or ".gif" bytes) and the run's report.
 
-    Films are cached per object, plan, format and size (the run is deterministic). Raises
-    PlanInputError for steps that do not belong to the object, VideoError for another format.
+    Films are kept per object, checked plan, format and size (the run is deterministic; the
+    process's ``robot_films`` cache). Raises PlanInputError for steps that do not belong to the
+    object, VideoError for another format.
     """
-    if suffix.lower() not in VIDEO_FORMATS:
+    suffix = suffix.lower()
+    if suffix not in VIDEO_FORMATS:
         raise VideoError(f"A video is written as {' or '.join(VIDEO_FORMATS)}, not '{suffix}'.")
-    return _filmed(obj, check_steps(steps, obj), suffix.lower(), size)
+    checked = check_steps(steps, obj)
+    films: BoundedCache[tuple[Hashable, ...], tuple[bytes, SimulationReport]] = caches.current().robot_films
+    return films.get_or_make((obj, checked, suffix, size), lambda: _filmed(obj, checked, suffix, size))
 
 
-@lru_cache(maxsize=VIDEO_CACHE_SIZE)
 def _filmed(
     obj: AssemblyObject, steps: tuple[StepRequest, ...], suffix: str, size: tuple[int, int]
 ) -> tuple[bytes, SimulationReport]:
@@ -59,18 +59,32 @@ def _filmed(
     return encode(report.video, suffix), report
 
 
-@lru_cache(maxsize=256)
-def robot_run(obj: AssemblyObject, steps: tuple[PlanStep | StepRequest, ...]) -> SimulationReport:
-    """Return the robot's run of ``steps`` on ``obj``, without pictures.
+def robot_run(obj: AssemblyObject, steps: Sequence[PlanStep | StepRequest], motors: bool = False) -> SimulationReport:
+    """Return the robot's run of ``steps`` on ``obj``, without pictures; ``motors``: driven by its motors too.
 
-    Deterministic, so cached: a batch judges the same plan on the same object many times.
+    Deterministic, so kept (the process's ``robot_runs`` cache) by the object and the checked
+    steps: a batch judges the same plan on the same object many times, and a planner's step
+    and the request for it are one step. PlanInputError for steps that do not belong to ``obj``.
     """
-    return simulate_plan(obj, steps, render=RenderMode.NONE, robot=True)
+    checked = check_steps(steps, obj)
+    runs: BoundedCache[tuple[Hashable, ...], SimulationReport] = caches.current().robot_runs
+    return runs.get_or_make(
+        (obj, checked, motors),
+        lambda: simulate_plan(obj, checked, render=RenderMode.NONE, robot=True, motors=motors),
+    )
 
 
 def robot_reason(report: SimulationReport) -> Reason | None:
     """Return why the robot could not carry out the plan of ``report`` (None when it could)."""
     failed = report.failed_step
+    motors = report.motors
+    if failed is None and report.produces_goal and motors is not None and motors.failure is not None:
+        code = motors.failure.value
+        message = f"Driven by its motors, the robot cannot carry out step {motors.step}: {code}: {motors.message}."
+        return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, (f"step {motors.step}", code))
+    if failed is None and report.produces_goal and motors is not None and not motors.produces_goal:
+        message = f"Driven by its motors, the robot carried out every step, but built no {report.goal}."
+        return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, ("motors",))
     if failed is None and report.produces_goal:
         return None
     if failed is None:

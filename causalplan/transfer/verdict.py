@@ -9,18 +9,19 @@ carries) is decided without it, and the verdict says so in ``decided_by``.
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from dataclasses import asdict, dataclass, field
 from enum import StrEnum
-from functools import lru_cache
 from typing import TYPE_CHECKING
 
+from causalplan import caches
+from causalplan.caches import BoundedCache
 from causalplan.causal.diagnostics import Report, Severity
 from causalplan.causal.graph import goal_holds
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject
 from causalplan.pddl.task import build_task
-from causalplan.planners import fd
 from causalplan.planners.fd import DEFAULT_TIME_LIMIT
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult, PlanStatus, PlanStep
@@ -188,21 +189,14 @@ def transfer_verdict(
     )
 
 
-def clear_caches() -> None:
-    """Forget the planner's cached answers and the cached simulations, so verdicts are computed afresh."""
-    from causalplan.planners import val
-
-    fd.clear_solve_cache()
-    val.clear_verdicts()
-    _simulated.cache_clear()
-
-
-@lru_cache(maxsize=256)
 def _simulated(obj: AssemblyObject, steps: tuple[PlanStep, ...]) -> SimulationReport:
-    """Return the simulator's report of ``steps`` on ``obj`` (deterministic, so cached)."""
+    """Return the simulator's report of ``steps`` on ``obj`` (deterministic, so kept by object and checked steps)."""
     from causalplan.sim import RenderMode, simulate_plan  # PyBullet loads only when a plan is simulated
+    from causalplan.sim.plan_steps import check_steps
 
-    return simulate_plan(obj, steps, render=RenderMode.NONE)
+    kept: BoundedCache[tuple[Hashable, ...], SimulationReport] = caches.current().simulations
+    checked = check_steps(steps, obj)
+    return kept.get_or_make((obj, checked), lambda: simulate_plan(obj, checked, render=RenderMode.NONE))
 
 
 def evaluate_transfer(

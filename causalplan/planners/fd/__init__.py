@@ -6,9 +6,6 @@ from causalplan.planners.fd.search import parse_plan, search_binary, use_search_
 from causalplan.planners.fd.solve import (
     DEFAULT_MEMORY_LIMIT_MB,
     DEFAULT_TIME_LIMIT,
-    SOLVE_CACHE_SIZE,
-    clear_solve_cache,
-    keep_answers,
     prestart,
     solve,
 )
@@ -18,11 +15,8 @@ __all__ = [
     "CONFIGS",
     "DEFAULT_MEMORY_LIMIT_MB",
     "DEFAULT_TIME_LIMIT",
-    "SOLVE_CACHE_SIZE",
     "ExitCode",
     "SearchConfig",
-    "clear_solve_cache",
-    "keep_answers",
     "parse_plan",
     "prestart",
     "search_binary",

@@ -2,18 +2,18 @@
 
 Each solve has its own private folder: the PDDL, the SAS task and the plan live there and go
 with it. FD is deterministic, so definite answers (a plan, or proof there is none) are kept in
-an LRU cache keyed by the exact PDDL texts and the search configuration.
+the process's ``fd_answers`` cache (``causalplan.caches``) by the exact PDDL texts and the
+search configuration.
 """
 
 from __future__ import annotations
 
 import contextlib
-import threading
 import time
 from dataclasses import replace
 
-from cachetools import LRUCache
-
+from causalplan import caches
+from causalplan.caches import BoundedCache
 from causalplan.errors import PlannerUnavailableError
 from causalplan.planners import processes
 from causalplan.planners.fd import idle
@@ -26,18 +26,10 @@ from causalplan.planners.result import PlanStatus, SearchOutcome
 
 DEFAULT_TIME_LIMIT = 30.0
 DEFAULT_MEMORY_LIMIT_MB = 2048
-SOLVE_CACHE_SIZE = 512
-"""How many answers are kept in memory by default (least recently used first out)."""
-
-_answers: list[LRUCache[tuple[str, str, str], SearchOutcome]] = [LRUCache(maxsize=SOLVE_CACHE_SIZE)]
-"""The answer cache, in a list so ``keep_answers`` can replace it without a ``global`` statement."""
-_answers_lock = threading.Lock()  # cachetools' caches are not thread-safe
 
 
-def keep_answers(count: int) -> None:
-    """Keep at most ``count`` answers from now on (0: none, every solve runs FD); forgets those kept."""
-    with _answers_lock:
-        _answers[0] = LRUCache(maxsize=count)
+def _answers() -> BoundedCache[tuple[str, str, str], SearchOutcome]:
+    return caches.current().fd_answers
 
 
 def _tail(output: str, lines: int = 8) -> str:
@@ -101,17 +93,15 @@ def solve(
 
     A repeated task gets its cached answer (``timing`` then has only ``cached``).
     """
+    answers = _answers()
     key = (config.search, domain, problem)
     started = time.perf_counter()
-    with _answers_lock:
-        known = _answers[0].get(key)
+    known = answers.get(key)
     if known is not None:
         return replace(known, timing={"cached": time.perf_counter() - started})
     outcome = _solve_uncached(domain, problem, config, time_limit, memory_limit_mb)
     if outcome.status.is_final():
-        with _answers_lock:
-            if _answers[0].maxsize > 0:
-                _answers[0][key] = outcome
+        answers.put(key, outcome)
     return outcome
 
 
@@ -119,9 +109,3 @@ def prestart(config: SearchConfig) -> None:
     """Keep a search process for ``config`` started ahead from now on (a service worker calls it once)."""
     with contextlib.suppress(PlannerUnavailableError):  # the solve that needs it reports that
         idle.prestart(search_command(config.search))
-
-
-def clear_solve_cache() -> None:
-    """Forget every cached answer (tests and benchmarks that time real runs use it)."""
-    with _answers_lock:
-        _answers[0].clear()

@@ -158,6 +158,8 @@ def prepare_simulation(body: SimulationJobIn, services: Services) -> SimulationR
         time_limit=inputs.time_limit,
         picture=body.picture,
         robot=body.robot,
+        validate=body.validate_plan,
+        motors=body.motors,
     )
 
 
@@ -177,6 +179,8 @@ def run_simulation_job(request: SimulationRequest, services: Services, progress:
         tuple(services.settings.catalog_folders),
         body.picture,
         body.robot,
+        body.validate_plan,
+        body.motors,
     )
     timeout = inputs.time_limit + services.settings.solve_grace_seconds
     if body.robot:

@@ -58,6 +58,10 @@ class SimulationRequest(_StoredPlan):
 
     picture: bool
     robot: bool
+    validate_plan: bool = Field(default=False, alias="validate")
+    """VAL checks the plan; jobs stored before VAL was asked for ran without it."""
+    motors: bool = False
+    """The robot's run is driven by its motors too; jobs stored before that ran without them."""
 
 
 class ConsensusRequest(_Counted):

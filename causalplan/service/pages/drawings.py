@@ -18,7 +18,6 @@ from causalplan.objects.model import AssemblyObject
 from causalplan.service.api.routes.models import SVG_SECURITY_HEADERS
 from causalplan.service.deps import Services
 from causalplan.service.pages import pictures
-from causalplan.service.pages.pictures import PictureCache
 from causalplan.studies.results import Rate, chart_svg
 
 logger = logging.getLogger(__name__)
@@ -33,28 +32,23 @@ def fresh_svg(svg: bytes) -> Response:
     return Response(svg, media_type="image/svg+xml", headers={**SVG_HEADERS, "Cache-Control": "no-store"})
 
 
-_graphs = PictureCache(256)
-_part_pictures = PictureCache(512)
-_plan_pictures = PictureCache(256)
-
-
 def document_key(document: dict[str, Any]) -> str:
     """Return a short hash of a model document (what its graph is cached under, and its URL's version)."""
     text = json.dumps(document, sort_keys=True, ensure_ascii=False)
     return hashlib.sha256(text.encode("utf-8", "replace")).hexdigest()[:16]
 
 
-def graph_svg(key: str, read: Callable[[], CausalModel | None]) -> bytes | None:
+def graph_svg(services: Services, key: str, read: Callable[[], CausalModel | None]) -> bytes | None:
     """Return the causal graph of the model ``read`` gives as the pages' SVG (None when it gives none).
 
-    Drawn once per ``key`` (see ``document_key``): a graph kept already needs no reading.
+    Drawn once per ``key`` (see ``document_key``) and app: a graph kept already needs no reading.
     """
 
     def draw() -> dict[str, bytes]:
         model = read()
         return {key: diagram_svg(model)} if model is not None else {}
 
-    return _graphs.get(key, draw)
+    return services.caches.page_graphs.get(key, draw)
 
 
 def rates_chart(rates: Sequence[Rate]) -> bytes:
@@ -77,7 +71,7 @@ def part_picture(services: Services, obj: AssemblyObject, part_id: str) -> tuple
         return {_picture_key(services, obj.id, part): png for part, png in drawn.items()}
 
     try:
-        png = _part_pictures.get(_picture_key(services, obj.id, part_id), draw)
+        png = services.caches.part_pictures.get(_picture_key(services, obj.id, part_id), draw)
     except CausalPlanError as exc:  # busy, crashed, or no simulator: a drawing now, the picture next time
         logger.info("no picture of %s.%s: %s", obj.id, part_id, exc.message)
         png = None
@@ -86,14 +80,9 @@ def part_picture(services: Services, obj: AssemblyObject, part_id: str) -> tuple
     return png, "image/png"
 
 
-def forget_plan_pictures() -> None:
-    """Forget every kept picture of a plan (the next request for one draws it again)."""
-    _plan_pictures.clear()
-
-
 def is_plan_picture_kept(services: Services, obj: AssemblyObject, fit_ids: tuple[str, ...]) -> bool:
     """Return whether the picture of ``obj`` after the plan making ``fit_ids`` is drawn and kept already."""
-    return _plan_pictures.has(_picture_key(services, obj.id, *fit_ids))
+    return services.caches.plan_pictures.has(_picture_key(services, obj.id, *fit_ids))
 
 
 def plan_picture(services: Services, obj: AssemblyObject, fit_ids: tuple[str, ...]) -> bytes:
@@ -104,6 +93,6 @@ def plan_picture(services: Services, obj: AssemblyObject, fit_ids: tuple[str, ..
     def draw() -> dict[str, bytes]:
         return {key: services.pool.run(pictures.assembly_picture_job, (obj.id, fit_ids, folders), PICTURE_SECONDS)}
 
-    png = _plan_pictures.get(key, draw)
+    png = services.caches.plan_pictures.get(key, draw)
     assert png is not None
     return png

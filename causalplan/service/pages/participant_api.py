@@ -139,6 +139,7 @@ NOTHING_TO_DRAW = (
 @router.get("/graph.svg")
 def graph(
     journey: JourneyDep,
+    services: ServicesDep,
     catalog: CatalogDep,
     settings: SettingsDep,
     practice: Annotated[bool, Query()] = False,
@@ -156,7 +157,8 @@ def graph(
         model = journey.draft_model()
     svg = None
     if model is not None:
-        svg = graph_svg(document_key(model.merged_document()), lambda: check_model(model, catalog, settings).model)
+        key = document_key(model.merged_document())
+        svg = graph_svg(services, key, lambda: check_model(model, catalog, settings).model)
     return fresh_svg(svg or NOTHING_TO_DRAW)
 
 

@@ -1,9 +1,10 @@
 """Pictures for the pages, drawn by the simulator: each part of an object, and an object after a plan.
 
 The jobs here run in a planner worker process (PyBullet never loads in the web server);
-``PictureCache`` keeps what they drew in the server, since a picture runs the simulator and
-the same pictures are asked for again and again. When the simulator cannot draw (busy,
-missing), ``drawing`` gives a plain picture with the part's name instead.
+``PictureCache`` keeps what they drew in the server (the app's caches, ``service.caches``),
+since a picture runs the simulator and the same pictures are asked for again and again. When
+the simulator cannot draw (busy, missing), ``drawing`` gives a plain picture with the part's
+name instead.
 """
 
 from __future__ import annotations
@@ -13,8 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-from cachetools import LRUCache
-
+from causalplan.caches import BoundedCache
 from causalplan.service.pool.catalog import worker_catalog
 
 PART_PICTURE_SIZE = (320, 240)
@@ -65,22 +65,24 @@ def drawing(name: str, width: int = PART_PICTURE_SIZE[0], height: int = PART_PIC
 
 
 class PictureCache:
-    """The ``size`` pictures last used (``cachetools.LRUCache``); one drawing per key at a time (others wait)."""
+    """The ``size`` pictures last used (a ``BoundedCache``); one drawing per key at a time (others wait)."""
 
     def __init__(self, size: int) -> None:
-        self._pictures: LRUCache[str, bytes] = LRUCache(max(size, 1))
+        self._pictures: BoundedCache[str, bytes] = BoundedCache(size)
         self._lock = threading.Lock()
         self._drawing: dict[str, threading.Lock] = {}
 
     def clear(self) -> None:
         """Forget every kept picture (the next request for one draws it again)."""
-        with self._lock:
-            self._pictures.clear()
+        self._pictures.clear()
+
+    def stats(self) -> dict[str, int]:
+        """Return the size, pictures kept, hits and misses."""
+        return self._pictures.stats()
 
     def has(self, key: str) -> bool:
         """Return whether the picture of ``key`` is kept (without making it the last used)."""
-        with self._lock:
-            return key in self._pictures
+        return self._pictures.has(key)
 
     def get(self, key: str, draw: Callable[[], dict[str, bytes]]) -> bytes | None:
         """Return the picture of ``key``; ``draw`` makes it (and maybe others) when it is not kept yet.
@@ -88,21 +90,18 @@ class PictureCache:
         Returns None when ``draw`` did not make ``key``. Errors of ``draw`` go to the caller,
         and nothing is kept, so the next request tries again.
         """
-        with self._lock:  # cachetools' caches are not thread-safe, and a read reorders an LRU
-            picture = self._pictures.get(key)
+        picture = self._pictures.get(key)
         if picture is not None:
             return picture
         with self._lock:
             drawing_lock = self._drawing.setdefault(key, threading.Lock())
         with drawing_lock:
-            with self._lock:
-                picture = self._pictures.get(key)
+            picture = self._pictures.get(key)
             if picture is not None:  # drawn while this request waited
                 return picture
             try:
                 drawn = draw()
-                with self._lock:
-                    self._pictures.update(drawn)
+                self._pictures.update(drawn)
             finally:
                 with self._lock:
                     self._drawing.pop(key, None)

@@ -13,6 +13,7 @@ from importlib import metadata
 from importlib.util import find_spec
 from pathlib import Path
 
+from causalplan import caches
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.errors import CausalPlanError
 from causalplan.pddl.task import catalog_task
@@ -35,7 +36,7 @@ def warm_up() -> None:
     settings = Settings()
     if settings.fd_binary is not None:
         fd.use_search_binary(settings.fd_binary)
-    fd.keep_answers(settings.solve_cache_size)
+    caches.fresh({"fd_answers": settings.solve_cache_size})  # this worker's own, sized by the settings
     with suppress(Exception):  # a translator that cannot run says so in the answers (and /health)
         importlib.import_module("fast_downward.translate.main")
     fd.prestart(fd.CONFIGS["fd"])  # the default search, waiting for its first task
@@ -140,13 +141,17 @@ def simulate_job(
     catalog_folders: tuple[Path, ...],
     picture: bool,
     robot: bool = False,
+    val: bool = False,
+    motors: bool = False,
 ) -> dict[str, object]:
     """Plan ``model`` (on the mapping's object), run the plan in the physics simulator.
 
     Returns the plan (as ``causalplan plan --json``), the simulator's report and, when asked,
     the picture of the final assembly as a PNG data URL. With ``robot`` the Panda carries out
     the plan (``robot``: whether it could, and why not); its film is a ``video`` job's
-    (``service.jobs.video``), so ``video`` is None here.
+    (``service.jobs.video``), so ``video`` is None here. ``val``: VAL checks the plan too, as
+    in ``plan_job``; ``motors``: with ``robot``, the motor commands are also
+    driven through the Panda's joint motors in physics (``simulation.robot.motors``).
     """
     import base64
 
@@ -156,12 +161,12 @@ def simulate_job(
 
     task = catalog_task(model, worker_catalog(catalog_folders), mapping)
     target = task.obj
-    result = pipeline.plan_task(task, planner, time_limit)
+    result = pipeline.plan_task(task, planner, time_limit, val=val)
     data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "image": None}
     if not result.has_plan:
         return data
     if robot:
-        report = robot_run(target, tuple(result.steps))
+        report = robot_run(target, tuple(result.steps), motors)
         data.update(simulation=report.as_dict(), robot=robot_outcome(report), video=None)
         return data  # no still picture with the robot (its film is a video job's)
     report = simulate_plan(target, result.steps, render=RenderMode.FINAL if picture else RenderMode.NONE)

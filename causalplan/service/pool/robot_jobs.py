@@ -120,14 +120,17 @@ def robot_outcome(report: SimulationReport) -> dict[str, object]:
     reason = robot_reason(report)
     if reason is None:
         return {"carried_out": True, "reason": None}
-    failed = report.failed_step
+    failed, motors = report.failed_step, report.motors
+    step, failure = (failed.number, failed.failure) if failed is not None else (None, None)
+    if failed is None and motors is not None:  # the steps passed; the motors did not
+        step, failure = motors.step, motors.failure
     return {
         "carried_out": False,
         "reason": {
             "code": reason.code,
             "message": reason.message,
-            "step": failed.number if failed is not None else None,
-            "failure": failed.failure.value if failed is not None and failed.failure else None,
+            "step": step,
+            "failure": failure.value if failure is not None else None,
         },
     }
 

@@ -13,6 +13,7 @@ from fastapi import APIRouter, Query, Request, Response
 from causalplan.service import experiments
 from causalplan.service.api.schemas.common import RESEARCH_ERROR_RESPONSES, error_responses
 from causalplan.service.api.schemas.experiments import (
+    ExperimentExportOut,
     ExperimentIn,
     ExperimentOut,
     LinksIn,
@@ -93,7 +94,7 @@ def list_participants(
 
 
 @router.get("/{experiment_id}/results", response_model=ResultsOut, summary="Results", responses=error_responses(404))
-def read_results(
+def read_experiment_results(
     experiment_id: uuid.UUID, _: ResearchAccessDep, session: SessionDep, catalog: CatalogDep, request: Request
 ) -> ResultsOut:
     """Return participants and progress, transfer rates per condition and test object, and every trial."""
@@ -106,13 +107,14 @@ def read_results(
     summary="Export the raw data",
     responses={
         200: {
-            "content": {"application/json": {}, "text/csv": {"schema": {"type": "string"}}},
+            "model": ExperimentExportOut,
+            "content": {"text/csv": {"schema": {"type": "string"}}},
             "description": "JSON (everything) or CSV (one table).",
         },
         **error_responses(404),
     },
 )
-def export(
+def export_experiment(
     experiment_id: uuid.UUID,
     _: ResearchAccessDep,
     session: SessionDep,

@@ -113,7 +113,7 @@ def jobs_health(services: Services) -> JobsHealthOut:
 
 
 @router.get("/health", response_model=HealthOut, summary="Is the service able to plan and store?")
-def health(services: ServicesDep) -> HealthOut:
+def read_health(services: ServicesDep) -> HealthOut:
     """Report the planner registry, Fast Downward, optional backends that failed to import, the
     database, free space, the worker pools (interactive requests', jobs'), the jobs (queued and
     running across replicas, this replica's runners), the cache and the request limits.
@@ -142,7 +142,7 @@ def health(services: ServicesDep) -> HealthOut:
         pool=services.pool.stats().as_dict(),
         job_pool=services.job_pool.stats().as_dict(),
         jobs=jobs_health(services),
-        cache=services.cache.stats(),
+        cache=services.caches.answers.stats(),
         limits={
             "max_body_bytes": settings.max_body_bytes,
             "max_label_length": settings.max_label_length,

@@ -12,7 +12,7 @@ from typing import Annotated, Any
 import anyio.to_thread
 from fastapi import APIRouter, Body, Response
 
-from causalplan.service.api.schemas.common import ErrorOut, error_responses
+from causalplan.service.api.schemas.common import BINARY, ErrorOut, error_responses
 from causalplan.service.api.schemas.jobs import JOB_EXAMPLES, JobBody, JobIn, JobOut
 from causalplan.service.deps import Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute
@@ -82,7 +82,6 @@ def job_out(record: JobRecord) -> JobOut:
         **error_responses(404, 413, 422),
         429: {"model": ErrorOut, "description": "The service holds as many unfinished jobs as it takes."},
     },
-    operation_id="create_job",
 )
 async def create_job(
     body: Annotated[JobIn, Body(openapi_examples=JOB_EXAMPLES)], services: ServicesDep, response: Response
@@ -117,7 +116,6 @@ def queue_job(body: JobBody, services: Services) -> JobRecord:
     response_model=JobOut,
     summary="A job's status, progress and result",
     responses=_NOT_FOUND,
-    operation_id="read_job",
 )
 async def read_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
     """Return the job: `status` (queued, running, succeeded, failed, cancelled), `progress`, then `result`."""
@@ -129,7 +127,6 @@ async def read_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
     response_model=JobOut,
     summary="Cancel a job",
     responses={**_NOT_FOUND, 409: {"model": ErrorOut, "description": "The job has finished already."}},
-    operation_id="cancel_job",
 )
 async def cancel_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
     """Cancel a queued or running job; answer the cancelled job.
@@ -149,10 +146,9 @@ async def cancel_job(job_id: uuid.UUID, services: ServicesDep) -> JobOut:
     summary="The film a video job made (MP4 or GIF)",
     response_class=Response,
     responses={
-        200: {"content": {"video/mp4": {}, "image/gif": {}}, "description": "The film."},
+        200: {"content": {"video/mp4": BINARY, "image/gif": BINARY}, "description": "The film (bytes)."},
         404: {"model": ErrorOut, "description": "No such job, it has expired, or it has made no film (yet)."},
     },
-    operation_id="read_job_video",
 )
 async def read_job_video(job_id: uuid.UUID, services: ServicesDep) -> Response:
     """Return the film of a finished `video` job, from whichever replica is asked, until the job expires."""

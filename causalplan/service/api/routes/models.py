@@ -7,7 +7,6 @@ import uuid
 from pathlib import Path
 from typing import Annotated, Literal
 
-from cachetools import LRUCache
 from fastapi import APIRouter, Body, Query, Request, Response
 
 from causalplan.causal.documents import SourceMap
@@ -16,7 +15,7 @@ from causalplan.causal.render import DRAW_LOCK
 from causalplan.inputs import model_from_data
 from causalplan.service.api.schemas.common import ErrorOut, ModelDocument, error_responses
 from causalplan.service.api.schemas.models import GraphOut, ModelLinks, ModelOut, ModelView
-from causalplan.service.deps import CatalogDep, ClientIdsDep, ServicesDep, SessionDep, client_address
+from causalplan.service.deps import CatalogDep, ClientIdsDep, Services, ServicesDep, SessionDep, client_address
 from causalplan.service.documents import StrictJSONRoute, first_errors, read_model
 from causalplan.service.errors import InvalidModelError, TooManyModelsError
 from causalplan.service.responses import SafeJSONResponse
@@ -27,9 +26,6 @@ from causalplan.service.storage.throttle import PerMinute
 router = APIRouter(
     prefix="/v1/models", tags=["models"], responses=error_responses(403, 404, 503), route_class=StrictJSONRoute
 )
-
-SVG_CACHE_SIZE = 128
-_svg_cache: LRUCache[str, bytes] = LRUCache(SVG_CACHE_SIZE)  # by model id: stored models never change
 
 SVG_SECURITY_HEADERS = {"Content-Security-Policy": "default-src 'none'; style-src 'unsafe-inline'"}
 
@@ -98,13 +94,15 @@ def _drawable(record: ModelRecord, catalog: CatalogDep) -> CausalModel:
     return loaded.model
 
 
-def _svg(model_id: uuid.UUID, model: CausalModel) -> bytes:
+def _svg(services: Services, model_id: uuid.UUID, model: CausalModel) -> bytes:
+    """Return the model's drawing, kept by model id (a stored model never changes)."""
     import matplotlib
 
     from causalplan.causal.render import draw
 
+    kept = services.caches.model_graphs
     with DRAW_LOCK:
-        cached = _svg_cache.get(str(model_id))
+        cached = kept.get(str(model_id))
         if cached is not None:
             return cached
         with tempfile.TemporaryDirectory(prefix="causalplan-graph-") as folder:
@@ -113,17 +111,20 @@ def _svg(model_id: uuid.UUID, model: CausalModel) -> bytes:
             with matplotlib.rc_context({"svg.fonttype": "none"}):
                 draw(model, path)
             svg = path.read_bytes()
-        _svg_cache[str(model_id)] = svg
+        kept.put(str(model_id), svg)
         return svg
 
 
 @router.get(
     "/{model_id}/graph",
     summary="A stored model's causal graph",
-    response_model=GraphOut,
+    # Three media types, the default (SVG) first: a generated client answers the text it can read
+    # rather than parsing every answer as the JSON one.
+    response_class=Response,
     responses={
         200: {
             "description": "SVG (default), Graphviz DOT (format=dot) or JSON nodes and edges (format=json).",
+            "model": GraphOut,
             "content": {
                 "image/svg+xml": {"schema": {"type": "string"}},
                 "text/vnd.graphviz": {"schema": {"type": "string"}},
@@ -135,6 +136,7 @@ def read_model_graph(
     model_id: uuid.UUID,
     session: SessionDep,
     catalog: CatalogDep,
+    services: ServicesDep,
     format: Annotated[Literal["svg", "dot", "json"], Query(description="svg, dot or json.")] = "svg",
 ) -> Response:
     """Draw the model left to right, from the parts' functions to the goal (invalid models too)."""
@@ -145,4 +147,4 @@ def read_model_graph(
         return Response(to_dot(model).encode("utf-8", "replace"), media_type="text/vnd.graphviz")
     if format == "json":
         return SafeJSONResponse(GraphOut.model_validate(to_json(model)).model_dump(mode="json"))
-    return Response(_svg(model_id, model), media_type="image/svg+xml", headers=SVG_SECURITY_HEADERS)
+    return Response(_svg(services, model_id, model), media_type="image/svg+xml", headers=SVG_SECURITY_HEADERS)

@@ -48,7 +48,7 @@ def _model_row(model: ModelRecord) -> dict[str, Any]:
     summary="Export everything stored",
     responses={200: {"content": {"text/csv": {"schema": {"type": "string"}}}, "description": "JSON or CSV."}},
 )
-def export(
+def export_everything(
     _: ResearchAccessDep,
     session: SessionDep,
     format: Annotated[Literal["json", "csv"], Query(description="json (models and trials) or csv.")] = "json",

@@ -13,9 +13,10 @@ from typing import Any
 from fastapi import APIRouter, Response
 
 from causalplan.service.api.routes.jobs import job_out, job_url, queue_job
-from causalplan.service.api.schemas.common import error_responses
+from causalplan.service.api.schemas.common import ErrorOut, error_responses
 from causalplan.service.api.schemas.jobs import JobOut, SimulationJobIn, VideoJobIn
 from causalplan.service.api.schemas.plans import SimulationIn
+from causalplan.service.api.schemas.simulations import SimulationOut
 from causalplan.service.deps import ClientIdsDep, Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, plan_inputs
 from causalplan.service.storage.jobs import JobKind
@@ -28,7 +29,7 @@ router = APIRouter(
     route_class=StrictJSONRoute,
 )
 
-_ONLY_PLANNED = ("picture", "robot", "include_pddl")
+_ONLY_PLANNED = ("picture", "robot", "include_pddl", "motors")
 """What a robot run's job does not take of a simulation's body (it films, or reports, the robot)."""
 
 
@@ -45,13 +46,18 @@ def queue_robot_run(body: SimulationIn, services: Services) -> JobRecord:
 @router.post(
     "",
     summary="Plan a model and simulate the plan (with the robot: a job, answered 202)",
+    response_model=None,  # two answers: declared below, each with its model
     responses={
+        200: {"model": SimulationOut, "description": "The plan, the simulator's report of it and the picture."},
         202: {
             "model": JobOut,
             "description": "With `robot`: the robot's run (and film) is queued as a job; follow `url` "
             "(also in `Location`) as for POST /v1/jobs.",
         },
-        429: {"description": "Every planner worker is busy, or the service holds as many jobs as it takes."},
+        429: {
+            "model": ErrorOut,
+            "description": "Every planner worker is busy, or the service holds as many jobs as it takes.",
+        },
     },
 )
 def create_simulation(
@@ -87,5 +93,6 @@ def create_simulation(
         inputs.time_limit,
         body.picture,
         lambda: inputs.store(services),
+        val=body.validate_plan,
     )
     return {**answer.data, "cached": answer.cached, "model_id": str(inputs.submission.record.id)}

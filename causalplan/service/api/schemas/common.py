@@ -12,6 +12,7 @@ from datetime import UTC, datetime
 from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, WithJsonSchema
+from typing_extensions import TypeAliasType
 
 from causalplan.causal.model import DEFAULT_GOAL
 
@@ -70,8 +71,10 @@ MAPPING_DOCUMENT_SCHEMA: dict[str, Any] = {
     ],
 }
 
-ModelDocument = Annotated[dict[str, Any], WithJsonSchema(MODEL_DOCUMENT_SCHEMA)]
-MappingDocument = Annotated[dict[str, Any], WithJsonSchema(MAPPING_DOCUMENT_SCHEMA)]
+# Named type aliases, so the OpenAPI document has one shared component of each (a `$ref`), not a copy
+# inlined in every request body (which generated clients turn into PlanInModelDocument, TransferIn...).
+ModelDocument = TypeAliasType("ModelDocument", Annotated[dict[str, Any], WithJsonSchema(MODEL_DOCUMENT_SCHEMA)])
+MappingDocument = TypeAliasType("MappingDocument", Annotated[dict[str, Any], WithJsonSchema(MAPPING_DOCUMENT_SCHEMA)])
 
 
 class InputModel(BaseModel):
@@ -154,6 +157,10 @@ _ERROR_DESCRIPTIONS = {
 def error_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
     """Return the OpenAPI ``responses`` entries for these error statuses (all in the one shape)."""
     return {status: {"model": ErrorOut, "description": _ERROR_DESCRIPTIONS[status]} for status in statuses}
+
+
+BINARY: dict[str, Any] = {"schema": {"type": "string", "format": "binary"}}
+"""An OpenAPI media type whose content is bytes (a film, a picture): generated clients answer it as bytes."""
 
 
 RESEARCH_ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {

@@ -214,6 +214,16 @@ class ResultsOut(OutputModel):
     trials: list[TrialRowOut]
 
 
+class ExperimentExportOut(OutputModel):
+    """An experiment's raw data as JSON (what ``causalplan analyze`` reads): every record as stored."""
+
+    exported_at: UtcDatetime
+    experiment: dict[str, Any] = Field(description="The experiment's record, its design included.")
+    rates: list[RateOut]
+    participants: list[dict[str, Any]] = Field(description="Every participant, with all saved work and exclusions.")
+    trials: list[dict[str, Any]] = Field(description="Every trial, with its full result.")
+
+
 # -- the participant pages' endpoints -----------------------------------------------------------------
 
 

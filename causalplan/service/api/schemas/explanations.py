@@ -8,7 +8,7 @@ from typing import Any
 from pydantic import Field
 
 from causalplan.service.api.schemas.common import OutputModel
-from causalplan.service.api.schemas.plans import PlanIn
+from causalplan.service.api.schemas.plans import PlanIn, PlanResultOut
 
 
 class ExplanationIn(PlanIn):
@@ -63,14 +63,14 @@ class WhyNotOut(OutputModel):
     )
     message: str
     decided_by: dict[str, Any]
-    alternative: dict[str, Any] = Field(description="The alternative plan, replayed and checked like any plan.")
+    alternative: PlanResultOut = Field(description="The alternative plan, replayed and checked like any plan.")
     simulation_failure: str | None
 
 
 class ExplanationOut(OutputModel):
     """``causalplan explain --json``, and the model stored."""
 
-    plan: dict[str, Any]
+    plan: PlanResultOut
     why: list[WhyOut]
     why_not: WhyNotOut | None
     model_id: uuid.UUID

@@ -6,7 +6,7 @@ from __future__ import annotations
 import uuid
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, StrictBool, StrictFloat, StrictInt
+from pydantic import Field, SerializeAsAny, SkipValidation, StrictBool, StrictFloat, StrictInt
 
 from causalplan.planners.result import MIN_TIME_LIMIT
 from causalplan.service.api.schemas.common import (
@@ -16,7 +16,9 @@ from causalplan.service.api.schemas.common import (
     OutputModel,
     UtcDatetime,
 )
+from causalplan.service.api.schemas.job_results import BatchResultOut, ConsensusResultOut, FitEstimationResultOut
 from causalplan.service.api.schemas.plans import SimulationIn, _Solve
+from causalplan.service.api.schemas.simulations import SimulationResultOut
 from causalplan.service.storage.jobs import JobKind, JobStatus
 
 _PLANNER = Field(default="auto", min_length=1, max_length=64, description="A planner name from GET /health.")
@@ -134,6 +136,10 @@ JobBody = BatchJobIn | SimulationJobIn | ConsensusJobIn | VideoJobIn | FitEstima
 JobIn = Annotated[JobBody, Field(discriminator="kind")]
 
 
+JobResult = SimulationResultOut | BatchResultOut | ConsensusResultOut | FitEstimationResultOut
+"""A succeeded job's result: a simulation's (kinds simulation and video), a batch's, a consensus's, fit estimates."""
+
+
 class ProgressOut(OutputModel):
     done: int = Field(description="Units of work done: trials (batch, fit_estimation), frames (video).")
     total: int = Field(description="Units of work in all (0 until the job has started).")
@@ -152,7 +158,8 @@ class JobOut(OutputModel):
     started_at: UtcDatetime | None
     finished_at: UtcDatetime | None
     expires_at: UtcDatetime | None = Field(description="When the finished job and its result are deleted.")
-    result: dict[str, Any] | None = Field(
+    # Stored results are handed back as they are (no validation, nothing dropped); the union declares their shapes.
+    result: SkipValidation[SerializeAsAny[JobResult | None]] = Field(
         description="When succeeded: batch {trials, verdicts, results}; simulation as POST /v1/simulations; "
         "consensus as `causalplan consensus`'s report.json; video as POST /v1/simulations with robot, its "
         "`video.url` where the film is; fit_estimation as `causalplan estimate-fits --json`, with `overlay`."

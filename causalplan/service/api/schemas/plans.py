@@ -79,6 +79,13 @@ class SimulationIn(PlanIn):
         "what it did ('robot' in each step), and in the result's 'robot' whether it could (else the reason "
         "robot_cannot_execute, its step and code).",
     )
+    motors: StrictBool = Field(
+        default=True,
+        description="With 'robot': also drive the motor commands through the Panda's joint motors in physics, "
+        "as `causalplan simulate --robot` does; the result's simulation.robot.motors gives the tracking error "
+        "and slip, and a run the motors cannot follow is robot_cannot_execute (tracking_error, grasp_slipped). "
+        "false: the kinematic run alone (faster).",
+    )
     video: Literal["mp4", "gif"] | None = Field(
         default=None,
         description="With 'robot': also film it, as MP4 (H.264) or GIF, in a 'video' job; its result's 'video' "
@@ -97,10 +104,20 @@ class PddlOut(OutputModel):
     problem: str
 
 
-class PlanOut(OutputModel):
-    """A replayed plan (``causalplan plan --json``), and where the answer came from."""
+class PolicyEntryOut(OutputModel):
+    """One entry of the MDP's policy: in this state (fits made, fits failed), attempt this fit."""
 
-    model_config = ConfigDict(extra="allow")  # planners may add fields, e.g. success_probability
+    made: list[str]
+    failed: list[str]
+    attempt: str = Field(description="The fit to attempt.")
+    text: str
+    success_probability: float = Field(description="The chance of reaching the goal from this state.")
+
+
+class PlanResultOut(OutputModel):
+    """A replayed plan as ``causalplan plan --json`` prints it (also a transfer's and a simulation's ``planning``)."""
+
+    model_config = ConfigDict(extra="allow")  # a newer planner's figures pass through (as additional properties)
 
     status: PlanStatus = Field(description="Every outcome a planner has, e.g. 'too_large' from the exact MDP.")
     planner_used: str
@@ -110,18 +127,52 @@ class PlanOut(OutputModel):
     valid_under_model: bool
     valid_under_true_mechanism: bool
     unmet_requirements: list[str]
-    timing: dict[str, float]
-    validated_by: dict[str, str] | None = Field(
-        default=None,
-        description="Each validator's verdict on the plan, e.g. {'replay': 'valid', 'val': 'valid'} "
-        "(VAL only when the request asked for 'validate'); null without a plan.",
+    success_probability: float | None = Field(
+        description="The chance the plan assembles the object, from the fits' success probabilities."
     )
+    expected_actions: float | None = Field(description="Attempts expected, failed ones included.")
+    fallback_reason: str | None = Field(description="Why 'auto' fell back from its first planner (else null).")
+    validated_by_up: bool | None = Field(description="unified-planning's validator's verdict, when it was asked.")
+    validated_by: dict[str, str] | None = Field(
+        description="Each validator's verdict on the plan, e.g. {'replay': 'valid', 'val': 'valid'} "
+        "(VAL only when the request asked for 'validate'); null without a plan."
+    )
+    timing: dict[str, float] = Field(description="Seconds per stage.")
     message: str
-    pddl: PddlOut | None = None
+    pddl: PddlOut | None = Field(default=None, description="The PDDL domain and problem, when asked.")
+    # The MDP's own figures, null (or absent, as in the CLI's JSON) unless the MDP gave the answer.
+    objective: Literal["probability", "attempts"] | None = Field(default=None, description="What the MDP optimised.")
+    required_success: float | None = Field(default=None, description="The success probability the MDP had to reach.")
+    optimality: Literal["optimal", "bounded"] | None = Field(
+        default=None, description="'optimal' (proved) or 'bounded' (the time limit came first)."
+    )
+    states: int | None = Field(default=None, description="States the MDP solver stored.")
+    success_probability_bounds: list[float] | None = Field(
+        default=None, min_length=2, max_length=2, description="Lower and upper bound on the success probability."
+    )
+    bound_gap: float | None = Field(default=None, description="Upper bound minus lower bound.")
+    policy: list[PolicyEntryOut] | None = Field(default=None, description="The MDP's policy, state by state.")
+
+
+class PlanOut(PlanResultOut):
+    """POST /v1/plans' answer: the replayed plan (``causalplan plan --json``), and where the answer came from."""
+
     planner_requested: str = Field(description="The planner asked for ('auto' included).")
     cached: bool = Field(description="True when an identical request was answered before.")
     model_id: uuid.UUID | None = Field(description="The stored model planned (inline models are stored too).")
     warnings: list[DiagnosticOut] = Field(description="Validation warnings of the model and mapping.")
+
+
+class SimulationSummaryOut(OutputModel):
+    """The short form of a simulation report that a transfer verdict carries."""
+
+    passed: bool
+    produces_goal: bool
+    stable: bool
+    failed_step: int | None
+    failure: str | None = Field(description="The failed step's failure code, e.g. 'falls'.")
+    unmet_requirements: list[str]
+    explanation: str = Field(description="In one sentence, what went wrong (empty when the simulation passed).")
 
 
 class ReasonOut(OutputModel):
@@ -143,8 +194,9 @@ class TransferOut(OutputModel):
     decided_by: str
     reasons: list[ReasonOut]
     plan: list[PlanStepOut] | None
-    planning: dict[str, Any] | None
+    planning: PlanResultOut | None = Field(description="The plan's full answer, as POST /v1/plans has it.")
     diagnostics: dict[str, Any]
+    simulation: SimulationSummaryOut | None = Field(description="The plan run in physics, when it was.")
     planner_requested: str
     cached: bool
     trial_id: uuid.UUID
