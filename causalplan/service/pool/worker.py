@@ -4,10 +4,10 @@
 what a worker does for itself. Its start (``initialize``) takes the app's environment (a fork
 server's worker would otherwise have the server's, from when it started), sets the memory
 limit, makes the worker's temp folder (its TMPDIR), imports and warms the planners once, and
-says hello with its pid. Each job that may be stopped first says which worker took it; each
-(``run_job``) answers
-``("ok", value)``, ``("error", code, message, details)`` for a ``CausalPlanError``, or
-``("crash", text)`` for anything else (an exception of ours might not unpickle in the app).
+says hello with its pid. A job (``run_job``) that may be stopped first says which worker took
+it; each answers ``("ok", value)``, ``("error", code, message, details)`` for a
+``CausalPlanError``, or ``("crash", text)`` for anything else (an exception of ours might not
+unpickle in the app).
 
 A worker stopped by pebble (SIGTERM: a time limit, a cancel, the pool closing) first kills its
 children's process groups: by hand, because Fast Downward's searches run in sessions of their
