@@ -4,7 +4,8 @@ Each run gets a private temp folder as its working directory (FD's search writes
 there, so concurrent runs never share files), its own process group (killed whole at the
 deadline), an address-space limit (``RLIMIT_AS``) and its output captured in ``OUTPUT_FILE``
 there (a file, not a pipe: a reader of a pipe wakes for every line a program logs); the
-command is logged shell-quoted. The service's workers are killed by ``kill_group`` too.
+command is logged shell-quoted. A service worker stopped by its pool takes the programs it
+started with it (``kill_children``).
 """
 
 from __future__ import annotations
@@ -75,18 +76,25 @@ def children_of(pid: int) -> list[int]:
     return children
 
 
+def kill_children(pid: int) -> None:
+    """Kill the children of process ``pid`` and the process groups they lead (FD's runs lead their own)."""
+    for child in children_of(pid):
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(child, signal.SIGKILL)
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.kill(child, signal.SIGKILL)  # a child that leads no group of its own
+
+
 def kill_group(process: subprocess.Popen[bytes]) -> None:
     """Kill ``process``, everything it started (its process group), and the groups its children lead, then reap it.
 
-    The children's groups: a service worker runs FD's search in a session of its own, which a
-    signal to the worker's group misses. This is the one place a started process is killed
-    (FD's runs, the idle searches, the service's workers); no pool library kills process groups.
+    The one place a started program is killed (FD's runs, the idle searches); a service worker
+    that its pool stops calls ``kill_children`` on itself.
     """
     if process.returncode is None:  # not reaped yet, so its pid (= its group id) cannot have been reused
-        children = children_of(process.pid)  # found before it dies, killed with it
-        for group in (process.pid, *children):
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.killpg(group, signal.SIGKILL)
+        kill_children(process.pid)  # found before it dies, killed with it
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(process.pid, signal.SIGKILL)
     process.wait()
 
 

@@ -8,6 +8,9 @@ ended a replacement is started on a background thread (so it does not compete wi
 for the CPU). Each process has a private folder as its working directory (where its plan is
 written), removed when the process is done with. A forked child forgets its parent's idle
 processes and closes its copies of their stdin (else FD would never see the end of its task).
+
+Not a worker manager, so not the service pool's ``pebble``: pebble runs Python functions in
+Python workers, and has no way to keep a program started ahead, waiting for its input.
 """
 
 from __future__ import annotations

@@ -75,8 +75,9 @@ def in_pool(
     """Return ``function(*args)`` run in a worker of the jobs' pool (never the interactive requests' pool).
 
     The jobs' pool has a worker per runner thread and starts with its first job. A job is not
-    in a hurry: a full queue (QueueFullError) means wait and try again, not fail. Once the job
-    is stopped (``progress.stop``), its worker is killed and this raises JobCancelledError.
+    in a hurry: a full queue (QueueFullError) means wait and try again, not fail; a closed pool
+    (the server stopping) raises WorkerCrashedError at once. Once the job is stopped
+    (``progress.stop``), its worker is killed and this raises JobCancelledError.
     """
     services.job_pool.start_once()
     while True:

@@ -1,1 +1,1 @@
-"""The planner pool: worker processes (``process``), their loop (``worker``), the jobs they run (``jobs``)."""
+"""The planner pools: pebble's worker processes (``pool``), what a worker does (``worker``), its jobs (``jobs``)."""

@@ -1,40 +1,129 @@
-"""What runs inside a planner worker process: its loop over jobs from the app.
+"""What runs inside a planner worker process: its start (pebble's initializer), each job, and its end.
 
-A worker serves one job at a time over its socket: it receives ``(function, args)``, says
-``"started"``, runs it and sends back ``("ok", value)``, ``("error", code, message, details)``
-for a ``CausalPlanError``, or ``("crash", text)`` for anything else. Fast Downward's translator
-and search run in this process and its children, so the app's own process (with uvicorn's
-threads) never does either.
+``pebble`` starts, limits by time and kills the workers (``pool.PlannerPool``); here is only
+what a worker does for itself. Its start (``initialize``) takes the app's environment (a fork
+server's worker would otherwise have the server's, from when it started), sets the memory
+limit, makes the worker's temp folder (its TMPDIR), imports and warms the planners once, and
+says hello with its pid. A job (``run_job``) that may be stopped first says which worker took
+it; each answers ``("ok", value)``, ``("error", code, message, details)`` for a
+``CausalPlanError``, or ``("crash", text)`` for anything else (an exception of ours might not
+unpickle in the app).
+
+A worker stopped by pebble (SIGTERM: a time limit, a cancel, the pool closing) first kills its
+children's process groups: by hand, because Fast Downward's searches run in sessions of their
+own, which a signal to the worker misses. It then removes its temp folder. A worker killed
+outright cannot; the app removes the folders of workers that no longer run (``remove_stale_folders``).
 """
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import os
+import re
 import resource
+import shutil
 import signal
 import sys
+import tempfile
 import traceback
 from collections.abc import Callable
 from multiprocessing.connection import Connection
+from pathlib import Path
+from types import FrameType
 from typing import Any
 
 from causalplan.errors import CausalPlanError
+from causalplan.planners import processes
 from causalplan.service.errors import PlannerOutOfMemoryError
 from causalplan.service.pool.jobs import warm_up
-from causalplan.service.pool.pool import STARTED
 
-Job = tuple[Callable[..., Any], tuple[Any, ...]]
+FOLDER_PREFIX = "causalplan-worker-"
+"""A worker's temp folder is ``causalplan-worker-<app pid>-<worker pid>-<random>``."""
+_FOLDER_NAME = re.compile(re.escape(FOLDER_PREFIX) + r"(\d+)-(?:(\d+)-)?")
+
+Message = tuple[str, int, int]
+"""What a worker tells the app: ("ready", its pid, 0) once warm, ("started", its pid, run) per job."""
+READY = "ready"
+STARTED = "started"
+
+_messages: list[Connection] = []
+"""Where this worker's messages go: a pipe to the app, shared by its workers without a lock (a
+message is one write of less than ``PIPE_BUF``, which the kernel keeps whole), so a worker
+killed while it writes leaves no lock held. None for a probe's throwaway process."""
 
 
-def main() -> None:
-    """Run as a worker: ``argv`` holds the socket's file descriptor and the memory limit in MB."""
-    descriptor, memory_mb = int(sys.argv[1]), int(sys.argv[2])
-    serve(Connection(descriptor), memory_mb)
+def is_running(pid: int) -> bool:
+    """Return whether process ``pid`` runs (a zombie, dead but not yet reaped, does not)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state not in ("Z", "X")
 
 
-def run_job(function: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, ...]:
-    """Return the reply to one job: its value, its ``CausalPlanError``, or the traceback of a bug."""
+def remove_stale_folders(root: Path | None = None) -> list[Path]:
+    """Remove the temp folders of workers that no longer run, or whose app no longer runs; return them."""
+    root = root or Path(tempfile.gettempdir())
+    removed: list[Path] = []
+    with contextlib.suppress(OSError):
+        for folder in root.glob(FOLDER_PREFIX + "*"):
+            match = _FOLDER_NAME.match(folder.name)
+            if match is None or not folder.is_dir():
+                continue
+            app, worker = match.group(1), match.group(2)
+            if is_running(int(app)) and (worker is None or is_running(int(worker))):
+                continue
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    return removed
+
+
+def initialize(
+    app_pid: int,
+    environment: dict[str, str],
+    memory_mb: int,
+    messages: Connection | None,
+    quiet: bool,
+) -> None:
+    """Make this process a warm planner worker of app ``app_pid``; say hello on ``messages``."""
+    os.environ.clear()
+    os.environ.update(environment)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)  # C extensions print banners; errors still reach stderr (unless quiet)
+    if quiet:
+        os.dup2(devnull, 2)
+    os.close(devnull)
+    limit = processes.memory_limit(memory_mb)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    folder = Path(tempfile.mkdtemp(prefix=f"{FOLDER_PREFIX}{app_pid}-{os.getpid()}-"))
+    # ``tempfile`` (and FD's processes, which inherit TMPDIR) put their folders in the worker's own.
+    os.environ["TMPDIR"] = tempfile.tempdir = str(folder)
+    signal.signal(signal.SIGTERM, lambda number, frame: _stop(folder, number, frame))
+    warm_up()
+    gc.collect()
+    gc.freeze()  # what the worker imported stays: its collections then skip all of it
+    if messages is not None:
+        _messages.append(messages)
+        messages.send((READY, os.getpid(), 0))
+
+
+def _stop(folder: Path, number: int, _frame: FrameType | None) -> None:
+    """Pebble stops this worker: take its children's process groups with it, remove its folder, exit."""
+    processes.kill_children(os.getpid())
+    shutil.rmtree(folder, ignore_errors=True)
+    sys.stderr.flush()
+    os._exit(128 + number)
+
+
+def run_job(run: int | None, function: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, ...]:
+    """Return the reply: the job's value, its ``CausalPlanError``, or a bug's traceback.
+
+    ``run``: the number of a job that may be stopped, whose caller must know which worker took it.
+    """
+    if run is not None:
+        for messages in _messages:
+            messages.send((STARTED, os.getpid(), run))
     try:
         return ("ok", function(*args))
     except CausalPlanError as exc:
@@ -43,24 +132,3 @@ def run_job(function: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, .
         return ("error", PlannerOutOfMemoryError.code, "The planner worker ran out of memory.", {})
     except Exception:  # noqa: BLE001 - reported to the app, which logs it and answers clearly
         return ("crash", traceback.format_exc())
-
-
-def serve(connection: Connection, memory_mb: int) -> None:
-    """Say hello, then run jobs from ``connection`` until it closes or sends None."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C stops the server, which then stops us
-    limit = memory_mb * 1024 * 1024
-    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-    warm_up()
-    gc.collect()
-    gc.freeze()  # what the worker imported stays: its collections then skip all of it
-    connection.send(("ready", os.getpid()))
-    while True:
-        try:
-            job: Job | None = connection.recv()
-            if job is None:
-                return
-            connection.send(STARTED)
-            reply = run_job(*job)
-            connection.send(reply)
-        except (EOFError, OSError):  # the app closed the connection (or killed us meanwhile)
-            return

@@ -1,4 +1,4 @@
-"""GET /health: the planners, the database, free space, the pool, the jobs, the cache and the limits."""
+"""GET /health: the planners, the database, free space, the pools, the jobs, the cache and the limits."""
 
 from __future__ import annotations
 
@@ -115,8 +115,8 @@ def jobs_health(services: Services) -> JobsHealthOut:
 @router.get("/health", response_model=HealthOut, summary="Is the service able to plan and store?")
 def read_health(services: ServicesDep) -> HealthOut:
     """Report the planner registry, Fast Downward, optional backends that failed to import, the
-    database, free space, the worker pool, the jobs (queued and running across replicas, this
-    replica's runners), the cache and the request limits.
+    database, free space, the worker pools (interactive requests', jobs'), the jobs (queued and
+    running across replicas, this replica's runners), the cache and the request limits.
 
     `status` is 'ok' when Fast Downward can run, the database answers and takes writes at the
     right schema, and there is enough free space; else 'degraded' (the answer is still 200:
@@ -140,6 +140,7 @@ def read_health(services: ServicesDep) -> HealthOut:
         database=database,
         storage=storage,
         pool=services.pool.stats().as_dict(),
+        job_pool=services.job_pool.stats().as_dict(),
         jobs=jobs_health(services),
         cache=services.caches.answers.stats(),
         limits={

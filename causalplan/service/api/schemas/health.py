@@ -62,7 +62,10 @@ class HealthOut(OutputModel):
     )
     database: DatabaseHealthOut
     storage: StorageHealthOut
-    pool: dict[str, int]
+    pool: dict[str, int] = Field(description="The interactive requests' workers (plans, transfers, checks).")
+    job_pool: dict[str, int] = Field(
+        description="The jobs' workers, one per runner thread (started with the first job); never the pool's."
+    )
     jobs: JobsHealthOut
     cache: dict[str, int]
     limits: dict[str, int | float]
