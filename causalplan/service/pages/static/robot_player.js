@@ -38,6 +38,7 @@ export function loadPanda() {
     manager.onError = function (url) { reject(new Error("Could not load " + url)); };
     loader.load(PANDA_URDF, function (model) { robot = model; }, undefined, reject);
   });
+  panda.catch(function () { panda = null; }); // a failed load is tried again on the next call
   return panda;
 }
 
