@@ -247,3 +247,16 @@ def test_a_synthetic_plan_through_up_replays_and_validates() -> None:
     assert validate_with_up(task, outcome.actions)
     ours = plan_task(task, "fd")
     assert validate_with_up(task, tuple((step.action, (*step.args, step.fit)) for step in ours.steps))
+
+
+def test_fast_downward_through_up_never_writes_in_the_working_directory(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # Two runs from one directory (pytest-xdist's workers, a server's workers) shared FD's output.sas.
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "output.sas").mkdir()  # FD cannot write its translated task here
+    task = _toy_task({"base": ("power",), "a": ("fa",)}, "power AND fa CAUSES light")
+    for engine in ("fast-downward", "fast-downward-opt"):
+        outcome = solve_with_up(task, engine, 30)
+        assert outcome.status is PlanStatus.SOLVED and len(outcome.actions) == 1, outcome.message
+    assert [path.name for path in tmp_path.iterdir()] == ["output.sas"]

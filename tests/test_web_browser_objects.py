@@ -1,11 +1,14 @@
 """Step 1 of each new catalog object in a real browser: its explanation and a picture of every part, named.
 
 Playwright drives Debian's Chromium headless against a live server; each object's step-1 page is
-saved as ``docs/objects/<id>.png`` (the pictures the participant sees, kept with the docs).
+saved as a picture: in the test's own folder, or, with ``CAUSALPLAN_UPDATE_DOCS=1``, as
+``docs/objects/<id>.png`` (the pictures the participant sees, kept with the docs). A test run
+never changes the repository's files unasked.
 """
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Iterator
 from pathlib import Path
@@ -42,7 +45,7 @@ def page(browser: Browser) -> Iterator[Page]:
 
 @pytest.mark.parametrize("object_id", NEW_OBJECTS)
 def test_step_one_shows_the_objects_explanation_and_each_part_pictured_and_named(
-    live_server: str, page: Page, object_id: str
+    live_server: str, page: Page, object_id: str, tmp_path: Path
 ) -> None:
     obj = CATALOG.get(object_id)
     other = "candle" if obj.category == "electric" else "flashlight"
@@ -62,5 +65,7 @@ def test_step_one_shows_the_objects_explanation_and_each_part_pictured_and_named
         expect(picture).to_have_js_property("complete", True, timeout=60_000)
         assert picture.evaluate("image => image.naturalWidth") > 0  # the simulator's picture arrived
         expect(page.get_by_label(f"Functions of the {part.name} (one per line)")).to_be_visible()
-    DOCS.mkdir(parents=True, exist_ok=True)
-    page.locator("main").screenshot(path=DOCS / f"{object_id}.png")
+    folder = DOCS if os.environ.get("CAUSALPLAN_UPDATE_DOCS") == "1" else tmp_path
+    folder.mkdir(parents=True, exist_ok=True)
+    page.locator("main").screenshot(path=folder / f"{object_id}.png")
+    assert (folder / f"{object_id}.png").stat().st_size > 0

@@ -11,7 +11,9 @@ unified-planning is slow to import, so it is imported inside the functions that 
 
 from __future__ import annotations
 
+import contextlib
 import shutil
+import tempfile
 import time
 import warnings
 from collections.abc import Callable, Mapping
@@ -298,7 +300,14 @@ def solve_with_up(
         with warnings.catch_warnings():  # "cannot establish whether X can solve": the status says it
             warnings.simplefilter("ignore")
             compiled, map_backs = compile_for_engine(problem, engine)
-            with OneshotPlanner(name=engine) as planner:
+            # Fast Downward's driver writes its translated task (output.sas) in the working directory,
+            # and UP starts it in ours: two runs from one directory would read each other's. The
+            # directory is the process's, so a process runs one UP solve at a time (as its callers do).
+            with (
+                tempfile.TemporaryDirectory(prefix="causalplan-up-") as folder,
+                contextlib.chdir(folder),
+                OneshotPlanner(name=engine) as planner,
+            ):
                 result = planner.solve(compiled, timeout=remaining)
         plan = result.plan
         for map_back in reversed(map_backs):
