@@ -62,11 +62,16 @@ def _module_fixtures(tree: ast.Module) -> set[str]:
 
 
 @cache
+def _shared_module_fixtures() -> set[str]:
+    """Return the module-scoped fixtures of ``service_fixtures.py``, which many test files import."""
+    return _module_fixtures(ast.parse((Path(__file__).parent / "service_fixtures.py").read_text(encoding="utf-8")))
+
+
+@cache
 def shares_a_module_fixture(path: Path) -> bool:
     """Return whether a test of this file asks for a module-scoped fixture (most start an app)."""
-    shared = _module_fixtures(ast.parse((Path(__file__).parent / "service_fixtures.py").read_text(encoding="utf-8")))
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    names = shared | _module_fixtures(tree)
+    names = _shared_module_fixtures() | _module_fixtures(tree)
     tests = [node for node in ast.walk(tree) if isinstance(node, ast.FunctionDef) and node.name.startswith("test_")]
     return any({arg.arg for arg in test.args.args} & names for test in tests)
 

@@ -77,16 +77,16 @@ def robot_run(obj: AssemblyObject, steps: Sequence[PlanStep | StepRequest], moto
 def robot_reason(report: SimulationReport) -> Reason | None:
     """Return why the robot could not carry out the plan of ``report`` (None when it could)."""
     failed = report.failed_step
-    motors = report.motors
-    if failed is None and report.produces_goal and motors is not None and motors.failure is not None:
+    if failed is None and report.produces_goal:  # as planned; then by its motors, when they drove it
+        motors = report.motors
+        if motors is None or (motors.failure is None and motors.produces_goal):
+            return None
+        if motors.failure is None:
+            message = f"Driven by its motors, the robot carried out every step, but built no {report.goal}."
+            return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, ("motors",))
         code = motors.failure.value
         message = f"Driven by its motors, the robot cannot carry out step {motors.step}: {code}: {motors.message}."
         return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, (f"step {motors.step}", code))
-    if failed is None and report.produces_goal and motors is not None and not motors.produces_goal:
-        message = f"Driven by its motors, the robot carried out every step, but built no {report.goal}."
-        return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, ("motors",))
-    if failed is None and report.produces_goal:
-        return None
     if failed is None:
         message = f"The robot carried out every step, but {report.explanation()}."
         return Reason(ROBOT_CANNOT_EXECUTE, Severity.ERROR, message, report.unmet_requirements)

@@ -18,10 +18,9 @@ simulator's world (metres, z up; quaternions x, y, z, w); shapes are in the part
 catalog gives them (``Shape``). ``assembled`` is where the robot's run let each part go
 (``SimulationReport.placed``): the player's last frame must put the parts there.
 
-Numbers are rounded to what the eye can see, which halves the document: the player draws
-480 by 360 pixels of a scene about a metre and a half wide, a pixel being some 3 mm. Joint angles
-keep 1e-4 rad (at the Panda's reach of about a metre, 0.1 mm at the gripper), lengths 0.1 mm,
-quaternion components 1e-4 (under 0.02° of turn), times 0.1 ms (the commands are 100 a second).
+Numbers keep ``DIGITS`` decimals: in the units above (radians, metres, seconds, unit
+quaternions) that is finer than a pixel of the player's view and than the commands' spacing in
+time, and it makes the document far smaller (sizes in benchmarks/RESULTS.md, `player.py`).
 """
 
 from __future__ import annotations
