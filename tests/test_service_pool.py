@@ -374,7 +374,12 @@ def test_starting_a_pool_removes_folders_left_by_a_killed_server() -> None:
         live.rmdir()
 
 
-def test_a_server_killed_with_sigkill_leaves_folders_the_next_start_removes(tmp_path: Path) -> None:
+def test_a_server_killed_with_sigkill_leaves_folders_the_next_start_removes(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # A temp root of its own: a pool started meanwhile by another test would sweep the shared one.
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     script = (
         "import time; from causalplan.service.pool.pool import PlannerPool\n"
         "pool = PlannerPool(1, 0, 4096, 5.0); pool.start(); print(pool.worker_pids()[0], flush=True); time.sleep(600)"
