@@ -147,7 +147,7 @@ def test_too_many_relevant_fits_is_declined_at_once() -> None:
     started = time.monotonic()
     solution = solve_mdp(task)
     assert solution.status is PlanStatus.TOO_LARGE and "stops at" in solution.message
-    assert time.monotonic() - started < 1.0
+    assert time.monotonic() - started < 3.0  # far from the 10 s it would search for; loose for a busy machine
 
 
 def test_a_state_space_beyond_the_budget_stops_at_the_time_limit_as_a_timeout() -> None:
