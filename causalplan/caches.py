@@ -119,7 +119,6 @@ FD_ANSWERS = 512
 VAL_VERDICTS = 1024
 SIMULATIONS = 256
 ROBOT_RUNS = 256
-ROBOT_FILMS = 16
 SOLIDS = 64
 SYNTHETIC_OBJECTS = 64
 LABEL_EMBEDDINGS = 4096
@@ -137,8 +136,6 @@ class Caches(NamedCaches):
     """The simulator's reports of a plan (no pictures), by object and checked steps (``transfer.verdict``)."""
     robot_runs: BoundedCache[tuple[Hashable, ...], Any] = field(default_factory=lambda: BoundedCache(ROBOT_RUNS))
     """The robot's runs of a plan, by object and checked steps (``transfer.robot_verdict``)."""
-    robot_films: BoundedCache[tuple[Hashable, ...], Any] = field(default_factory=lambda: BoundedCache(ROBOT_FILMS))
-    """Films of the robot (bytes and report), by object, checked steps, format and size: large, so few."""
     solids: BoundedCache[Any, Any] = field(default_factory=lambda: BoundedCache(SOLIDS))
     """Each object's parts as solids, by object (``sim.geometry.solids``)."""
     synthetic_objects: BoundedCache[tuple[int, int], Any] = field(

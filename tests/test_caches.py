@@ -98,14 +98,6 @@ def _robot_twice(catalog: Catalog) -> None:
         assert robot_run(board, steps("insert thin_peg board thin_peg_into_hole")).produces_goal
 
 
-def _film_twice(catalog: Catalog) -> None:
-    from causalplan.transfer.robot_verdict import robot_video
-
-    board = parsed_object(PEG_BOARD)
-    for _ in range(2):
-        robot_video(board, steps("insert thin_peg board thin_peg_into_hole"), ".gif", size=(64, 48))
-
-
 def _solids_twice(catalog: Catalog) -> None:
     from causalplan.sim.geometry import solids
 
@@ -129,12 +121,11 @@ REPEATS: dict[str, Callable[[Catalog], None]] = {
     "val_verdicts": _validate_twice,
     "simulations": _transfer_twice,
     "robot_runs": _robot_twice,
-    "robot_films": _film_twice,
     "solids": _solids_twice,
     "synthetic_objects": _synthetic_twice,
     "label_embeddings": _embed_twice,
 }
-SLOW = {"robot_runs", "robot_films"}  # the Panda moves (and is filmed)
+SLOW = {"robot_runs"}  # the Panda moves
 
 
 def test_every_cache_of_the_owner_has_a_repeat_here() -> None:

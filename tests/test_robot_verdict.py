@@ -12,13 +12,13 @@ from causalplan.caches import Caches
 from causalplan.inputs import load_mapping, load_model
 from causalplan.objects.catalog import load_catalog
 from causalplan.planners.result import PlanStep
+from causalplan.service.pool.robot_jobs import robot_simulation
 from causalplan.sim.outcomes import Failure
 from causalplan.transfer.robot_verdict import (
     ROBOT_CANNOT_EXECUTE,
     robot_reason,
     robot_run,
     robot_transfer_verdict,
-    robot_video,
 )
 from causalplan.transfer.verdict import Verdict, transfer_verdict
 from tests.conftest import EXAMPLES, builtin_catalog
@@ -64,18 +64,17 @@ def test_a_planners_steps_and_the_requests_for_them_are_one_robot_run(process_ca
 def test_the_film_of_the_robot_is_an_mp4_or_a_gif_of_every_frame() -> None:
     board = parsed_object(PEG_BOARD)
     plan = steps("insert thin_peg board thin_peg_into_hole")
-    mp4, report = robot_video(board, plan, ".mp4", size=(160, 120))
-    assert mp4[4:8] == b"ftyp" and report.produces_goal
+    report, mp4 = robot_simulation(board, plan, "mp4", (160, 120))
+    assert mp4 is not None and mp4[4:8] == b"ftyp" and report.produces_goal
     frames = iio.imread(mp4, index=None, extension=".mp4")
     assert frames.shape[1:] == (120, 160, 3) and len(frames) == len(report.video)
-    gif, _ = robot_video(board, plan, ".gif", size=(160, 120))
-    assert gif[:6] == b"GIF89a"
-    assert robot_video(board, plan, ".mp4", size=(160, 120))[0] is mp4  # one film per object and plan
+    _, gif = robot_simulation(board, plan, "gif", (160, 120))
+    assert gif is not None and gif[:6] == b"GIF89a"
 
 
 def test_the_last_frames_show_the_light_when_the_goal_is_produced() -> None:
     lamp = builtin_catalog().get("desk_lamp")
-    _, report = robot_video(lamp, steps("screw light_bulb base_with_cables bulb_into_socket"), ".gif", size=(240, 180))
+    report, _ = robot_simulation(lamp, steps("screw light_bulb base_with_cables bulb_into_socket"), "gif", (240, 180))
 
     def glowing(index: int) -> int:
         frame = report.video[index]

@@ -1,9 +1,10 @@
 """The robot's word on a plan, for callers above the simulator: transfer verdicts and the web service.
 
-``robot_video(obj, steps)`` films the Panda carrying out a plan (MP4 or GIF bytes) for the
-service's "Watch the robot"; ``robot_transfer_verdict(...)`` is ``transfer_verdict`` with the
-robot as the last judge: a plan that transfers on paper and in physics but that the robot
-cannot carry out fails with the reason ``robot_cannot_execute``, naming the step and the code.
+``robot_run(obj, steps)`` is the Panda's run of a plan, kept per object and steps;
+``robot_transfer_verdict(...)`` is ``transfer_verdict`` with the robot as the last judge: a plan
+that transfers on paper and in physics but that the robot cannot carry out fails with the reason
+``robot_cannot_execute``, naming the step and the code. Films of the robot are made by the
+service's jobs (``service.pool.robot_jobs``) and the CLI's ``simulate --robot --video``.
 """
 
 from __future__ import annotations
@@ -22,7 +23,6 @@ from causalplan.sim.executor import simulate_plan
 from causalplan.sim.outcomes import RenderMode
 from causalplan.sim.plan_steps import StepRequest, check_steps
 from causalplan.sim.report import SimulationReport
-from causalplan.sim.video import VIDEO_FORMATS, VIDEO_SIZE, VideoError, encode
 from causalplan.transfer.verdict import Reason, TransferVerdict, Verdict, transfer_verdict
 
 if TYPE_CHECKING:
@@ -30,33 +30,6 @@ if TYPE_CHECKING:
     from causalplan.objects.catalog import Catalog
 
 ROBOT_CANNOT_EXECUTE = "robot_cannot_execute"
-
-
-def robot_video(
-    obj: AssemblyObject,
-    steps: Sequence[StepRequest | PlanStep],
-    suffix: str = ".mp4",
-    size: tuple[int, int] = VIDEO_SIZE,
-) -> tuple[bytes, SimulationReport]:
-    """Return a film of the robot carrying out ``steps`` (".mp4" or ".gif" bytes) and the run's report.
-
-    Films are kept per object, checked plan, format and size (the run is deterministic; the
-    process's ``robot_films`` cache). Raises PlanInputError for steps that do not belong to the
-    object, VideoError for another format.
-    """
-    suffix = suffix.lower()
-    if suffix not in VIDEO_FORMATS:
-        raise VideoError(f"A video is written as {' or '.join(VIDEO_FORMATS)}, not '{suffix}'.")
-    checked = check_steps(steps, obj)
-    films: BoundedCache[tuple[Hashable, ...], tuple[bytes, SimulationReport]] = caches.current().robot_films
-    return films.get_or_make((obj, checked, suffix, size), lambda: _filmed(obj, checked, suffix, size))
-
-
-def _filmed(
-    obj: AssemblyObject, steps: tuple[StepRequest, ...], suffix: str, size: tuple[int, int]
-) -> tuple[bytes, SimulationReport]:
-    report = simulate_plan(obj, steps, render=RenderMode.NONE, robot=True, video=True, video_size=size)
-    return encode(report.video, suffix), report
 
 
 def robot_run(obj: AssemblyObject, steps: Sequence[PlanStep | StepRequest], motors: bool = False) -> SimulationReport:
