@@ -19,8 +19,7 @@ from causalplan.objects.model import AssemblyObject
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.result import PlanStep
 from causalplan.sim import checks
-from causalplan.sim.geometry import solids
-from causalplan.sim.layout import ROBOT_ROW_GAP, ROW_GAP, catalog_fit, layout, step_connectors
+from causalplan.sim.layout import ROBOT_ROW_GAP, ROW_GAP, catalog_fit, laid_out_scene, step_connectors
 from causalplan.sim.mechanism import Joint, evaluate, seat_error
 from causalplan.sim.motions import MOTIONS, approach, approach_path, approach_start
 from causalplan.sim.movers import Mover, PartsMoveThemselves, StepMove
@@ -227,12 +226,9 @@ def simulate_plan(
     requests = check_steps(steps, obj)
     timing: dict[str, float] = {}
     clock = time.perf_counter()
-    parts = solids(obj)
     video = video and robot
-    homes, design = layout(obj, parts, requests, ROBOT_ROW_GAP if robot else ROW_GAP)
-    with Scene(parts, drawn=render is not RenderMode.NONE or video) as scene:
-        for part, pose in homes.items():
-            scene.add_part(part, pose, dynamic=part == obj.base)
+    drawn = render is not RenderMode.NONE or video
+    with laid_out_scene(obj, requests, ROBOT_ROW_GAP if robot else ROW_GAP, drawn=drawn) as (scene, homes, design):
         recorder = VideoRecorder(scene, design, obj.name, video_size, on_frame) if video else None
         mover: Mover
         if robot:

@@ -7,12 +7,17 @@ joins, which fixes each part's designed pose relative to the part it is joined t
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import NamedTuple
+
 from causalplan.objects.model import AssemblyObject, Connector
-from causalplan.sim.geometry import Box, Solid, bounding_box, corners, mating_pose
+from causalplan.sim.geometry import Box, Solid, bounding_box, corners, mating_pose, solids
 from causalplan.sim.mechanism import Joint
 from causalplan.sim.motions import MOTIONS
 from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.poses import Pose
+from causalplan.sim.scene import Scene
 
 ROW_GAP = 0.04
 """Metres between parts waiting on the table, and between them and the assembly."""
@@ -89,3 +94,29 @@ def layout(
             homes[part] = Pose((left - solid.lower[0], row, -solid.lower[2]))
             left += width + gap
     return homes, (lower, upper)
+
+
+class LaidOut(NamedTuple):
+    """A scene with every part at its start, where they started, and the designed assembly's bounds."""
+
+    scene: Scene
+    homes: dict[str, Pose]
+    design: Box
+
+
+@contextmanager
+def laid_out_scene(
+    obj: AssemblyObject,
+    requests: tuple[StepRequest, ...],
+    gap: float = ROW_GAP,
+    *,
+    drawn: bool = False,
+    still: bool = False,
+) -> Iterator[LaidOut]:
+    """Open a scene of ``obj``'s parts laid out for ``requests`` (``layout``); the base is dynamic unless ``still``."""
+    parts = solids(obj)
+    homes, design = layout(obj, parts, requests, gap)
+    with Scene(parts, drawn=drawn) as scene:
+        for part, pose in homes.items():
+            scene.add_part(part, pose, dynamic=part == obj.base and not still)
+        yield LaidOut(scene, homes, design)

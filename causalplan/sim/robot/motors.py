@@ -26,8 +26,7 @@ from dataclasses import dataclass, field
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.sim import checks
-from causalplan.sim.geometry import solids
-from causalplan.sim.layout import ROBOT_ROW_GAP, catalog_fit, layout, step_connectors
+from causalplan.sim.layout import ROBOT_ROW_GAP, catalog_fit, laid_out_scene, step_connectors
 from causalplan.sim.mechanism import Joint, evaluate
 from causalplan.sim.motions import MOTIONS
 from causalplan.sim.outcomes import Failure, RequirementCheck
@@ -308,11 +307,7 @@ def _at(points: Sequence[Point], times: list[float], now: float) -> Point:
 
 def drive_with_motors(obj: AssemblyObject, requests: tuple[StepRequest, ...], trajectory: Trajectory) -> MotorRun:
     """Return how the motors carried out ``trajectory`` (the plan ``requests`` on ``obj``) in a fresh scene."""
-    parts = solids(obj)
-    homes, _ = layout(obj, parts, requests, ROBOT_ROW_GAP)
-    with Scene(parts, drawn=False) as scene:
-        for part, pose in homes.items():
-            scene.add_part(part, pose, dynamic=part == obj.base)
+    with laid_out_scene(obj, requests, ROBOT_ROW_GAP) as (scene, _, _):
         driver = _Driver(obj, scene, trajectory, requests)
         driver.run()
         scene.settle(checks.FINAL_SETTLE_SECONDS)

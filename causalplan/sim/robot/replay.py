@@ -14,8 +14,7 @@ from collections.abc import Sequence
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.planners.result import PlanStep
-from causalplan.sim.geometry import solids
-from causalplan.sim.layout import ROBOT_ROW_GAP, layout
+from causalplan.sim.layout import ROBOT_ROW_GAP, laid_out_scene
 from causalplan.sim.plan_steps import StepRequest, check_steps
 from causalplan.sim.poses import Pose
 from causalplan.sim.robot.panda import FINGER_JOINTS, FINGER_OPEN, Panda
@@ -48,13 +47,8 @@ def part_tracks(
     obj: AssemblyObject, steps: Sequence[StepRequest | PlanStep], trajectory: Trajectory
 ) -> dict[str, PartTrack]:
     """Return every part's track when ``trajectory`` is played in a fresh scene (parts laid out as the plan's run)."""
-    requests = check_steps(steps, obj)
-    parts = solids(obj)
-    homes, _ = layout(obj, parts, requests, ROBOT_ROW_GAP)
-    frames = Keyframes.at_rest(homes)
-    with Scene(parts, drawn=False) as scene:
-        for part, pose in homes.items():
-            scene.add_part(part, pose, dynamic=False)
+    with laid_out_scene(obj, check_steps(steps, obj), ROBOT_ROW_GAP, still=True) as (scene, homes, _):
+        frames = Keyframes.at_rest(homes)
         panda = Panda(scene)
         held: tuple[str, Pose] | None = None
         for segment in trajectory.segments:
