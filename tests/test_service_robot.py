@@ -14,6 +14,7 @@ import pytest
 import yaml
 from fastapi.testclient import TestClient
 
+from causalplan.service.api.schemas.simulations import MotorRunOut
 from tests.conftest import EXAMPLES
 from tests.service_fixtures import (
     DESK_LAMP,
@@ -82,6 +83,7 @@ def test_a_robot_job_is_driven_by_the_motors_unless_asked_not_to(robot_client: T
     motors = answer["simulation"]["robot"]["motors"]  # as `causalplan simulate --robot` reports them
     assert motors["failure"] is None and motors["grasp_slipped"] is False
     assert motors["tracking"]["max_joint_error_rad"] <= motors["tracking"]["tolerance_rad"]
+    assert MotorRunOut.model_validate(motors).model_dump(mode="json") == motors  # the schema declares every key
     body = {"model": DESK_LAMP, "robot": True, "motors": False}
     kinematic = finished(robot_client, _queued(robot_client, body)["url"], 300.0)["result"]
     assert kinematic["robot"]["carried_out"] is True and "motors" not in kinematic["simulation"]["robot"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from fastapi.testclient import TestClient
 
+from causalplan.service.api.schemas.common import ReportOut
 from tests.service_fixtures import (
     AUTH,
     DESK_LAMP,
@@ -66,6 +67,7 @@ def test_the_failed_model_fails_for_the_papers_two_reasons(client: TestClient) -
     assert (body["verdict"], body["decided_by"]) == ("fails", "precheck")
     reasons = {(reason["code"], reason["severity"]) for reason in body["reasons"]}
     assert reasons == {("missing_function", "error"), ("unmodelled_function", "warning")}
+    assert body["diagnostics"] == {}  # valid inputs: their reports come with an invalid trial's 422
 
 
 def test_a_repeated_trial_is_cached_and_stored_again(client: TestClient) -> None:
@@ -110,6 +112,8 @@ def test_an_invalid_trial_is_422_and_is_stored_as_invalid(client: TestClient) ->
     assert error["details"]["verdict"]["verdict"] == "invalid"
     assert [reason["code"] for reason in error["details"]["verdict"]["reasons"]] == ["invalid_mapping"]
     assert [d["code"] for d in error["details"]["mapping"]["errors"]] == ["unknown_part"]
+    for report in error["details"]["verdict"]["diagnostics"].values():  # what TransferOut.diagnostics declares
+        assert ReportOut.model_validate(report).model_dump(mode="json", exclude_unset=True) == report
     [trial] = trials_of(client, "transfer-invalid")
     assert trial["id"] == error["details"]["trial_id"] and trial["verdict"] == "invalid"
 

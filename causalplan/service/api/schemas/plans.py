@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import uuid
-from typing import Any, Literal
+from typing import Literal
 
 from pydantic import ConfigDict, Field, StrictBool, StrictFloat, model_validator
 
@@ -15,6 +15,7 @@ from causalplan.service.api.schemas.common import (
     ModelDocument,
     OutputModel,
     PlanStepOut,
+    ReportOut,
 )
 from causalplan.service.api.schemas.repairs import RepairsOut
 
@@ -195,7 +196,9 @@ class TransferOut(OutputModel):
     reasons: list[ReasonOut]
     plan: list[PlanStepOut] | None
     planning: PlanResultOut | None = Field(description="The plan's full answer, as POST /v1/plans has it.")
-    diagnostics: dict[str, Any]
+    diagnostics: dict[str, ReportOut] = Field(
+        description="The inputs' checks, by input: 'model' and 'mapping' ('input' for an unreadable trial)."
+    )
     simulation: SimulationSummaryOut | None = Field(description="The plan run in physics, when it was.")
     planner_requested: str
     cached: bool

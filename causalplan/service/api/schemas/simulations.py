@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import uuid
-from typing import Any, Literal
+from typing import Literal
 
 from pydantic import Field
 
@@ -61,6 +61,31 @@ class RequirementCheckOut(OutputModel):
     detail: str
 
 
+class TrackingOut(OutputModel):
+    """How closely the joint motors followed the motor commands."""
+
+    max_joint_error_rad: float
+    joint: str = Field(description="The arm joint with the largest error, by its URDF name (empty: none moved).")
+    max_end_effector_error_mm: float = Field(description="Between the gripper driven and the gripper commanded.")
+    tolerance_rad: float
+    tolerance_mm: float
+
+
+class MotorRunOut(OutputModel):
+    """The motor commands played through the Panda's joint motors in a fresh physics scene."""
+
+    seconds: float
+    tracking: TrackingOut
+    slip_mm: dict[str, float] = Field(description="How far each held part moved in the gripper, by part.")
+    slip_tolerance_mm: float
+    grasp_slipped: bool
+    failure: str | None = Field(description="E.g. tracking_error or grasp_slipped; null when the run went through.")
+    step: int | None = Field(description="The step where it failed.")
+    message: str
+    produces_goal: bool
+    mechanism: list[RequirementCheckOut]
+
+
 class RobotRunOut(OutputModel):
     """What the robot did overall: how long its motor commands take, and how its motors did."""
 
@@ -71,7 +96,7 @@ class RobotRunOut(OutputModel):
     points: int | None = None
     robot_model: str | None = None
     safety_factor: float | None = None
-    motors: dict[str, Any] | None = Field(
+    motors: MotorRunOut | None = Field(
         default=None, description="Tracking errors, slip in the gripper and the mechanism, driven by the motors."
     )
 
