@@ -40,6 +40,10 @@ CHROMIUM_ARGS = [
     "--no-first-run",
 ]
 LAPTOP: ViewportSize = {"width": 1366, "height": 900}
+ASSERTION_TIMEOUT_MS = 20_000
+"""How long an ``expect`` waits for the page (Playwright's 5 s default flaked with the suite on two shared cores)."""
+
+expect.set_options(timeout=ASSERTION_TIMEOUT_MS)  # every browser test module imports this one
 
 
 def chromium_executable() -> str:
