@@ -159,6 +159,19 @@ def test_batch_command_writes_csv_and_json(tmp_path: Path) -> None:
     assert missing.exit_code == 2 and "There is no file" in missing.stderr
 
 
+def test_the_batch_command_names_ids_that_several_trials_share(tmp_path: Path) -> None:
+    first, second = TRIALS.read_text(encoding="utf-8").splitlines()[:2]
+    shared = json.dumps({**json.loads(second), "id": "[bold]p0000[/bold]"})  # an id is the file's words, not styles
+    trials = tmp_path / "trials.jsonl"
+    trials.write_text("\n".join([first, shared, shared, first, first]), encoding="utf-8")
+    result = CliRunner().invoke(app, ["batch", str(trials), "--no-simulate", "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    said = " ".join(result.stdout.split())
+    assert "warning[duplicate_ids]: 2 trial id(s) are used by more than one trial" in said
+    assert "'p0000' (3 trials), '[bold]p0000[/bold]' (2 trials)" in said
+    assert len(list(csv.DictReader((tmp_path / "out" / "verdicts.csv").open()))) == 5  # every trial judged
+
+
 def test_a_trial_whose_plan_val_rejects_is_undecided_and_the_batch_goes_on(
     catalog: Catalog, monkeypatch: pytest.MonkeyPatch
 ) -> None:

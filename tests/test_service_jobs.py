@@ -103,6 +103,14 @@ def test_a_batch_job_gives_the_verdicts_of_the_local_batch(jobs_client: TestClie
     assert result["trials"] == FIRST_LINES
     assert {row["id"]: row["verdict"] for row in result["results"]} == local_verdicts(lines, tmp_path)
     assert sum(result["verdicts"].values()) == FIRST_LINES
+    assert result["repeated_ids"] == {}
+
+
+def test_a_json_lines_upload_that_repeats_ids_is_judged_and_names_them(jobs_client: TestClient) -> None:
+    [first, second] = first_trials(2).splitlines()
+    lines = "\n".join([first, second, first, first])  # a CSV would be refused; JSON Lines load tests repeat lines
+    result = finished(jobs_client, start(jobs_client, {"kind": "batch", "trials": lines, "simulate": False}))["result"]
+    assert result["trials"] == 4 and result["repeated_ids"] == {json.loads(first)["id"]: 3}
 
 
 def test_a_csv_upload_is_the_same_batch(jobs_client: TestClient) -> None:

@@ -209,7 +209,7 @@ def batch(
 
     from rich.table import Table
 
-    from causalplan.transfer.batch import CSV_COLUMNS, read_trials, run_batch
+    from causalplan.transfer.batch import CSV_COLUMNS, read_trials, repeated_ids, repeated_ids_warning, run_batch
     from causalplan.transfer.cluster import JudgeOptions
 
     check_planner(planner)
@@ -250,6 +250,10 @@ def batch(
     for value, counts in sorted(deciders.items()):
         table.add_row(value, str(sum(counts.values())), ", ".join(f"{name} {n}" for name, n in sorted(counts.items())))
     console.print(table)
+    repeated = repeated_ids(str(result.row["id"]) for result in results)
+    if repeated:
+        # markup off: the ids are the file's words, and rich would read "[...]" in them as styles.
+        console.print(f"warning[duplicate_ids]: {repeated_ids_warning(repeated)}", style="yellow", markup=False)
     rate = len(results) / seconds if seconds > 0 else float("inf")
     written = [out / "verdicts.csv", out / "verdicts.json"] + ([] if on_cluster is None else [out / "verdicts.jsonl"])
     console.print(

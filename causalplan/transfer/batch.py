@@ -20,6 +20,7 @@ import csv
 import io
 import json
 import time
+from collections import Counter
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -273,6 +274,22 @@ def _refuse_shared_ids(rows_of: dict[str, list[int]]) -> None:
         f"{len(shared)} trial id(s) are used more than once: {named}{more}. Give each trial its own id "
         "(or none: it is then named after its place).",
         details={"duplicate_ids": {trial_id: rows[:100] for trial_id, rows in list(shared.items())[:100]}},
+    )
+
+
+def repeated_ids(ids: Iterable[str]) -> dict[str, int]:
+    """Return each trial id that more than one trial has, with how many have it, in the order first seen."""
+    return {trial_id: count for trial_id, count in Counter(ids).items() if count > 1}
+
+
+def repeated_ids_warning(repeated: dict[str, int]) -> str:
+    """Return the warning a batch with ``repeated`` ids gets (a JSON Lines file may repeat ids; a CSV may not)."""
+    first = list(repeated.items())[:5]
+    named = ", ".join(f"{trial_id!r} ({count} trials)" for trial_id, count in first)
+    more = f" and {len(repeated) - 5} more" if len(repeated) > 5 else ""
+    return (
+        f"{len(repeated)} trial id(s) are used by more than one trial: {named}{more}. Their results can be told "
+        "apart only by their place: every result is in the file's order."
     )
 
 

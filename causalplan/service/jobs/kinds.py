@@ -32,7 +32,7 @@ from causalplan.service.pool import jobs as worker_jobs
 from causalplan.service.pool.catalog import worker_catalog
 from causalplan.service.storage.jobs import JobKind
 from causalplan.transfer import batch
-from causalplan.transfer.batch import Trial, TrialResult, run_batch, trials_of_lines
+from causalplan.transfer.batch import Trial, TrialResult, repeated_ids, run_batch, trials_of_lines
 
 if TYPE_CHECKING:
     from causalplan.service.api.schemas.jobs import BatchJobIn, ConsensusJobIn, SimulationJobIn
@@ -40,6 +40,8 @@ if TYPE_CHECKING:
 
 CHUNK_SIZE = 20
 """Trials a planner worker judges per call: small enough for steady progress and a prompt cancel."""
+MAX_REPEATED_IDS_NAMED = 100
+"""A batch result names at most this many ids that several trials share."""
 CONSENSUS_GRACE_SECONDS = 60.0
 """A consensus job's worker may take this long beyond its trials' time limits (building, aligning)."""
 
@@ -96,7 +98,13 @@ def _summary(results: list[TrialResult]) -> dict[str, Any]:
     counts: dict[str, int] = {}
     for result in results:
         counts[result.verdict.verdict.value] = counts.get(result.verdict.verdict.value, 0) + 1
-    return {"trials": len(results), "verdicts": counts, "results": [result.row() for result in results]}
+    repeated = repeated_ids(result.trial_id for result in results)
+    return {
+        "trials": len(results),
+        "verdicts": counts,
+        "repeated_ids": dict(list(repeated.items())[:MAX_REPEATED_IDS_NAMED]),
+        "results": [result.row() for result in results],
+    }
 
 
 def run_batch_job(request: BatchRequest, services: Services, progress: Progress) -> dict[str, Any]:

@@ -32,6 +32,11 @@ class BatchResultOut(OutputModel):
 
     trials: int
     verdicts: dict[str, int]
+    repeated_ids: dict[str, int] = Field(
+        default_factory=dict,
+        description="Ids that several trials of a JSON Lines upload share, with how many (the first 100): their "
+        "results are told apart by their place, the upload's order.",
+    )
     results: list[BatchRowOut]
 
 
