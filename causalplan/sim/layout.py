@@ -3,6 +3,7 @@
 The base stands on the table at the origin; the other parts wait in a row behind it (for the
 robot, in two rows with room for its hand). ``step_connectors`` says which connectors a step
 joins, which fixes each part's designed pose relative to the part it is joined to.
+``laid_out_scene`` opens a physics scene with every part at its start.
 """
 
 from __future__ import annotations

@@ -197,7 +197,8 @@ class TransferOut(OutputModel):
     plan: list[PlanStepOut] | None
     planning: PlanResultOut | None = Field(description="The plan's full answer, as POST /v1/plans has it.")
     diagnostics: dict[str, ReportOut] = Field(
-        description="The inputs' checks, by input: 'model' and 'mapping' ('input' for an unreadable trial)."
+        description="An invalid verdict's checks of its inputs, by input ('model', 'mapping'). Empty here: "
+        "invalid inputs are a 422, whose details carry the verdict; stored trials and batch verdicts keep them."
     )
     simulation: SimulationSummaryOut | None = Field(description="The plan run in physics, when it was.")
     planner_requested: str
