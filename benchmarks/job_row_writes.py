@@ -7,7 +7,8 @@ So this counts, for requests of 1 KB (the reference), 1 MB and 8 MB, the bytes t
 writes (``wchar`` of ``/proc/self/io``: the WAL and the checkpoints) for
 
 - a renewal whose counts keep their width (most renewals: the progress 10 -> 11 -> ...);
-- a renewal across a width step (progress 127 -> 128), which happens a few times in a job's life.
+- two renewals across a width step (progress 127, then 128: the second changes width), which
+  happens a few times in a job's life; both renewals' bytes are counted together.
 
     python benchmarks/job_row_writes.py [--renewals 20]
 """
@@ -69,11 +70,11 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as folder:
             engine, renew = running_job(Path(folder), megabytes)
             steady = per_renewal(renew, [(11 + i, 1000) for i in range(args.renewals)])
-            across = per_renewal(renew, [(127, 1000), (128, 1000)]) * 2  # only the second changes width
+            across = per_renewal(renew, [(127, 1000), (128, 1000)]) * 2  # both; only the second changes width
             engine.dispose()
         rows.append((megabytes, steady, across))
     reference = rows[0][1]
-    print(f"{'request':>10} | {'a renewal':>12} | {'vs 1 KB':>8} | {'across a width step':>20}")
+    print(f"{'request':>10} | {'a renewal':>12} | {'vs 1 KB':>8} | {'127, 128 (both)':>20}")
     for megabytes, steady, across in rows:
         size = f"{megabytes * 1024:.0f} KB" if megabytes < 1 else f"{megabytes:.0f} MB"
         print(f"{size:>10} | {steady / 1024:>9.1f} KB | {steady / reference:>7.2f}x | {across / 1024:>17.0f} KB")

@@ -199,7 +199,8 @@ class Settings(BaseSettings):
     jobs_in_flight: int = Field(
         default=10,
         ge=1,
-        description="Queued or running jobs one client (an API key, the research token, a participant) may have.",
+        description="Queued or running jobs one client (an API key, a participant) may have; the research token: no "
+        "limit.",
     )
     job_megabytes: float = Field(
         default=512.0,

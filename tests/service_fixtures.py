@@ -30,6 +30,7 @@ from sqlalchemy.engine import make_url
 from causalplan.service.deps import Services
 from causalplan.service.main import create_app, uvicorn_config
 from causalplan.service.owners import address_owner
+from causalplan.service.pool.worker import is_running  # noqa: F401 - the tests take it from here
 from causalplan.service.storage.migrate import upgrade
 from causalplan.service.storage.session import create_database_engine
 from causalplan.settings import Settings
@@ -117,14 +118,6 @@ def migrated_engine(folder: Path) -> Engine:
     engine = create_database_engine(sqlite_url(folder))
     upgrade(engine)
     return engine
-
-
-def is_running(pid: int) -> bool:
-    """Return whether process ``pid`` runs (a zombie does not)."""
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except (OSError, IndexError):
-        return False
 
 
 def settings_for(database_url: str, **overrides: Any) -> Settings:

@@ -115,7 +115,7 @@ def test_a_worker_killed_while_idle_is_replaced_before_use(one_worker: TestClien
     pool = services_of(one_worker).pool
     [pid] = pool.worker_pids()
     os.kill(pid, signal.SIGKILL)
-    wait_until(lambda: not Path(f"/proc/{pid}").exists() or "zombie" in Path(f"/proc/{pid}/status").read_text())
+    wait_until(lambda: not is_running(pid))
     response = one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)})
     assert response.status_code == 200 and response.json()["status"] == "solved"
 

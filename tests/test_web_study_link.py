@@ -217,7 +217,9 @@ def test_the_analyze_command_reads_the_export_of_a_real_run_and_skips_the_exclud
     written = sorted(item.name for item in (tmp_path / "out").iterdir())
     assert written == ["analysis.json", "codebook.csv", "rates.png", "rates.svg", "trials.csv"]
     page = client.get(f"/research/experiments/{created['id']}", headers=AUTH)
-    assert "2 of 2 trials analysed" in page.text and "1 participant(s) excluded" not in page.text
+    # The screened-out participant is named, with no trial lost: they never reached step 3.
+    left_out = "2 of 2 trials analysed; left out: 0 trials of 1 participant excluded by screening (comprehension 1)."
+    assert analysis["left_out"] == left_out and left_out in page.text
     assert client.get(f"/research/experiments/{created['id']}/rates.svg", headers=AUTH).text.count("<svg") == 1
     assert 'id="consensus-graph"' in page.text and "from the 2 participants' models" in page.text
     graph = client.get(f"/research/experiments/{created['id']}/consensus.svg", headers=AUTH)

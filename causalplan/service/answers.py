@@ -41,7 +41,6 @@ class ResultCache:
     """Planners' answers by key, kept pickled (each ``get`` returns a fresh copy); safe to share between threads."""
 
     def __init__(self, size: int) -> None:
-        self.size = size
         self._pickles: BoundedCache[str, bytes] = BoundedCache(size)
 
     def get(self, key: str) -> dict[str, Any] | None:

@@ -9,7 +9,7 @@ import tempfile
 from collections.abc import Sequence
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from fastapi import Request, Response
 from sqlalchemy.orm import Session
@@ -141,9 +141,46 @@ def results(session: Session, catalog: Catalog, experiment: ExperimentRecord, re
 
     The rates are ``causalplan analyze``'s of the experiment's export (``rates.rate_table``).
     """
+    participants, data = _participants_and_export(session, catalog, experiment, request)
+    return _results(catalog, experiment, request, participants, data, _rates(data, catalog))
+
+
+class StudyView(NamedTuple):
+    """What the research page shows of an experiment, from one read of its records."""
+
+    results: dict[str, Any]
+    """As ``results``."""
+    analysis: Analysis | str
+    """``causalplan analyze``'s analysis of the export, or why it cannot be made."""
+    crowd_size: int
+    """How many participants have written a model (the crowd of its consensus)."""
+
+
+def study_view(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> StudyView:
+    """Return the research page's view of an experiment: one export, analysed once."""
+    participants, data = _participants_and_export(session, catalog, experiment, request)
+    analysis = _analysis(data, catalog)
+    table = analysis if isinstance(analysis, str) else analysis.table
+    crowd = sum(1 for participant in participants if (participant.work or {}).get("model"))
+    return StudyView(_results(catalog, experiment, request, participants, data, table), analysis, crowd)
+
+
+def _participants_and_export(
+    session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request
+) -> tuple[list[ParticipantRecord], dict[str, Any]]:
     participants = store.participants_of(session, experiment.id)
     data = _export(catalog, experiment, request, participants, store.trials_of(session, experiment.id), "omit")
-    table = _rates(data, catalog)
+    return participants, data
+
+
+def _results(
+    catalog: Catalog,
+    experiment: ExperimentRecord,
+    request: Request,
+    participants: Sequence[ParticipantRecord],
+    data: dict[str, Any],
+    table: RateTable | str,
+) -> dict[str, Any]:
     return {
         "experiment": experiment_out(experiment, len(participants)),
         "participants": [participant_out(participant, catalog, request) for participant in participants],
@@ -196,20 +233,12 @@ def export(
     )
 
 
-def analysis_of(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> Analysis | str:
-    """Return the study's analysis (``causalplan analyze`` on its export), or why it cannot be made."""
-    data = export_data(session, catalog, experiment, request, platform_ids="omit")
+def _analysis(data: dict[str, Any], catalog: Catalog) -> Analysis | str:
+    """Return the study's analysis (``causalplan analyze`` on its export ``data``), or why it cannot be made."""
     try:
         return analyse_export(data, catalog)
     except (ExportError, UnknownObjectError) as exc:
         return exc.message
-
-
-def crowd_size(session: Session, experiment: ExperimentRecord) -> int:
-    """Return how many of the experiment's participants have written a model (the crowd of its consensus)."""
-    return sum(
-        1 for participant in store.participants_of(session, experiment.id) if (participant.work or {}).get("model")
-    )
 
 
 def consensus_svg(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> bytes | str:

@@ -29,7 +29,7 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from causalplan.service.deps import Services, ServicesDep, client_address, is_research_token
 from causalplan.service.errors import NotAuthenticatedError, TooManyJobStartsError
-from causalplan.service.storage.jobs import OwnerLimits
+from causalplan.service.storage.jobs import MEGABYTE, OwnerLimits
 from causalplan.service.storage.records import MAX_OWNER_LENGTH
 from causalplan.service.storage.throttle import PerMinute
 from causalplan.settings import Settings
@@ -40,7 +40,6 @@ PARTICIPANT_PREFIX = "participant:"
 ADDRESS_PREFIX = "address:"
 KEY_ID_HEX_DIGITS = 16
 """Of a key's SHA-256, what names its owner: enough to tell keys apart, useless to find the key."""
-MEGABYTE = 1_000_000
 
 
 @dataclass(frozen=True)

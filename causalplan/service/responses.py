@@ -1,4 +1,4 @@
-"""What routes answer with: JSON that never fails on an unpaired surrogate, and CSV exports."""
+"""What routes answer with: JSON that never fails on an unpaired surrogate, CSV exports, and films."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import json
 from collections.abc import Sequence
 from typing import Any
 
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
 
 
 def render_json(content: Any) -> bytes:
@@ -41,3 +41,12 @@ def csv_bytes(columns: Sequence[str], rows: Sequence[dict[str, Any]]) -> bytes:
     for row in rows:
         writer.writerow([_cell(row.get(column)) for column in columns])
     return buffer.getvalue().encode("utf-8", "replace")
+
+
+def film_response(data: bytes, content_type: str) -> Response:
+    """Return a stored film of the robot: private to the asker's browser for an hour, never sniffed as another type."""
+    return Response(
+        data,
+        media_type=content_type,
+        headers={"Cache-Control": "private, max-age=3600", "X-Content-Type-Options": "nosniff"},
+    )

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 import json
 import time
 from collections import Counter
@@ -35,6 +36,8 @@ from causalplan.transfer.verdict import Reason, TransferVerdict, Verdict, transf
 
 TRIAL_FIELDS = ("model", "mapping")
 """The fields every trial must have (``id`` is optional)."""
+NAMED_AT_MOST = 5
+"""Ids (and rows) a message names; it says how many more there are."""
 CSV_FIELDS = ("id", *TRIAL_FIELDS)
 """The columns of a CSV of trials (``id`` may be empty or absent)."""
 
@@ -262,16 +265,13 @@ def _refuse_shared_ids(rows_of: dict[str, list[int]]) -> None:
     shared = {trial_id: rows for trial_id, rows in rows_of.items() if len(rows) > 1}
     if not shared:
         return
-
-    def listed(places: list[int]) -> str:
-        more = f" and {len(places) - 5} more" if len(places) > 5 else ""
-        return ", ".join(map(str, places[:5])) + more
-
-    first = list(shared.items())[:5]
-    named = "; ".join(f"{trial_id!r} (rows {listed(rows)})" for trial_id, rows in first)
-    more = f" and {len(shared) - 5} more" if len(shared) > 5 else ""
+    named = _some_of(
+        (f"{trial_id!r} (rows {_some_of(map(str, rows), len(rows))})" for trial_id, rows in shared.items()),
+        len(shared),
+        "; ",
+    )
     raise InputFileError(
-        f"{len(shared)} trial id(s) are used more than once: {named}{more}. Give each trial its own id "
+        f"{len(shared)} trial id(s) are used more than once: {named}. Give each trial its own id "
         "(or none: it is then named after its place).",
         details={"duplicate_ids": {trial_id: rows[:100] for trial_id, rows in list(shared.items())[:100]}},
     )
@@ -284,13 +284,18 @@ def repeated_ids(ids: Iterable[str]) -> dict[str, int]:
 
 def repeated_ids_warning(repeated: dict[str, int]) -> str:
     """Return the warning a batch with ``repeated`` ids gets (a JSON Lines file may repeat ids; a CSV may not)."""
-    first = list(repeated.items())[:5]
-    named = ", ".join(f"{trial_id!r} ({count} trials)" for trial_id, count in first)
-    more = f" and {len(repeated) - 5} more" if len(repeated) > 5 else ""
+    named = _some_of((f"{trial_id!r} ({count} trials)" for trial_id, count in repeated.items()), len(repeated))
     return (
-        f"{len(repeated)} trial id(s) are used by more than one trial: {named}{more}. Their results can be told "
+        f"{len(repeated)} trial id(s) are used by more than one trial: {named}. Their results can be told "
         "apart only by their place: every result is in the file's order."
     )
+
+
+def _some_of(names: Iterable[str], total: int, separator: str = ", ") -> str:
+    """Return the first ``NAMED_AT_MOST`` of ``total`` names, joined, and how many more there are."""
+    first = list(itertools.islice(names, NAMED_AT_MOST))
+    more = f" and {total - len(first)} more" if total > len(first) else ""
+    return separator.join(first) + more
 
 
 def _unreadable_verdict(problem: str, line: int | None) -> TransferVerdict:

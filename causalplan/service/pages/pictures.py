@@ -96,9 +96,8 @@ class PictureCache:
         with self._lock:
             drawing_lock = self._drawing.setdefault(key, threading.Lock())
         with drawing_lock:
-            picture = self._pictures.get(key)
-            if picture is not None:  # drawn while this request waited
-                return picture
+            if self._pictures.has(key):  # drawn while this request waited (its miss is counted once, above)
+                return self._pictures.get(key)
             try:
                 drawn = draw()
                 self._pictures.update(drawn)

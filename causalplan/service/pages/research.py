@@ -184,8 +184,8 @@ def _experiment_page(
     experiment: ExperimentRecord,
     recruitment_errors: list[str] | None = None,
 ) -> Response:
-    data = experiments.results(session, catalog, experiment, request)
-    analysis = experiments.analysis_of(session, catalog, experiment, request)
+    view = experiments.study_view(session, catalog, experiment, request)
+    analysis = view.analysis
     return render(
         request,
         "research_experiment.html",
@@ -195,13 +195,13 @@ def _experiment_page(
         recruitment_errors=recruitment_errors or [],
         demographics=DEMOGRAPHICS,
         analysis=None if isinstance(analysis, str) else analysis.as_dict(),
-        crowd_size=experiments.crowd_size(session, experiment),
+        crowd_size=view.crowd_size,
         analysis_problem=analysis if isinstance(analysis, str) else None,
         misconception_words={
             participant: [found.says() for found in items]
             for participant, items in ({} if isinstance(analysis, str) else analysis.misconceptions).items()
         },
-        **data,
+        **view.results,
     )
 
 

@@ -31,6 +31,7 @@ from causalplan.service.jobs.video import FILM_KEY, FILM_KEY_PATTERN, film_key, 
 from causalplan.service.owners import admit_job, job_limits, participant_owner
 from causalplan.service.pages.journeys import JourneyDep
 from causalplan.service.pool.robot_jobs import CONTENT_TYPES, robot_playback_job
+from causalplan.service.responses import film_response
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.experiments import ParticipantJourney
 from causalplan.service.storage.jobs import JobKind, JobStatus
@@ -162,9 +163,4 @@ def film_video(
     found = store.get_job_file(services.engine, job.id)
     if found is None:
         raise FilmNotFoundError(f"The film '{key}' is not made (yet).", details={"key": key, "status": job.status})
-    data, content_type = found
-    return Response(
-        data,
-        media_type=content_type,
-        headers={"Cache-Control": "private, max-age=3600", "X-Content-Type-Options": "nosniff"},
-    )
+    return film_response(*found)

@@ -221,18 +221,6 @@ class StoredTrial:
     participant: ParticipantRecord
     trial: TrialRecord
 
-    @property
-    def condition(self) -> str:
-        return self.participant.condition
-
-    @property
-    def test_object(self) -> str:
-        return self.link.test_object
-
-    @property
-    def verdict(self) -> str:
-        return self.trial.verdict
-
 
 def _stored_trials() -> Select[ParticipantTrialRecord, ParticipantRecord, TrialRecord]:
     return (

@@ -40,6 +40,8 @@ from causalplan.service.errors import (
 from causalplan.service.storage.crud import clean_json, storage_errors
 from causalplan.service.storage.records import JobRecord, utc_now
 
+MEGABYTE = 1_000_000
+"""What a job's stored bytes are counted and told in."""
 MAX_ATTEMPTS = 3
 """Runs of a job whose replica stopped before finishing it, before it is given up as failed."""
 FIRST_KINDS = ("video",)
@@ -95,7 +97,7 @@ def json_size(value: object) -> int:
 
 
 def _megabytes(size: float) -> str:
-    return f"{size / 1_000_000:.1f} MB"
+    return f"{size / MEGABYTE:.1f} MB"
 
 
 @contextmanager

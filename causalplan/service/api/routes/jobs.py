@@ -28,6 +28,7 @@ from causalplan.service.errors import FilmNotFoundError
 from causalplan.service.jobs.kinds import KINDS
 from causalplan.service.jobs.video import video_url
 from causalplan.service.owners import JobOwner, JobOwnerDep, admit_job, job_limits
+from causalplan.service.responses import film_response
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.jobs import JobKind
 from causalplan.service.storage.records import JobRecord
@@ -123,7 +124,7 @@ async def create_job(
 def queue_job(body: JobBody, services: Services, owner: JobOwner) -> JobRecord:
     """Check ``body`` (its kind's ``prepare``: a clear error and nothing queued when wrong); queue it as ``owner``'s.
 
-    The minute's count comes first, so a client over it costs no reading of its upload.
+    The minute's count comes first, so a client over it costs no parsing of its upload's trials.
     """
     admit_job(services, owner)
     kind = JobKind(body.kind)
@@ -191,9 +192,4 @@ async def read_job_video(job_id: uuid.UUID, services: ServicesDep, owner: JobOwn
             f"Job {job_id} ({record.kind}, {record.status}) has no film: only a video job that has succeeded has one.",
             details={"job_id": str(job_id), "kind": record.kind, "status": record.status},
         )
-    data, content_type = found
-    return Response(
-        data,
-        media_type=content_type,
-        headers={"Cache-Control": "private, max-age=3600", "X-Content-Type-Options": "nosniff"},
-    )
+    return film_response(*found)

@@ -100,19 +100,16 @@ def _svg(services: Services, model_id: uuid.UUID, model: CausalModel) -> bytes:
 
     from causalplan.causal.render import draw
 
-    kept = services.caches.model_graphs
-    with DRAW_LOCK:
-        cached = kept.get(str(model_id))
-        if cached is not None:
-            return cached
+    def drawn() -> bytes:
         with tempfile.TemporaryDirectory(prefix="causalplan-graph-") as folder:
             path = Path(folder) / "graph.svg"
             # Keep labels as text: searchable, selectable, readable by screen readers, and smaller.
             with matplotlib.rc_context({"svg.fonttype": "none"}):
                 draw(model, path)
-            svg = path.read_bytes()
-        kept.put(str(model_id), svg)
-        return svg
+            return path.read_bytes()
+
+    with DRAW_LOCK:
+        return services.caches.model_graphs.get_or_make(str(model_id), drawn)
 
 
 @router.get(
