@@ -20,7 +20,7 @@ from causalplan.objects.catalog import Catalog, load_catalog
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
 
-pytest_plugins = ["tests.service_fixtures"]  # the HTTP service's apps, databases and PostgreSQL server
+pytest_plugins = ["tests.service.fixtures"]  # the HTTP service's apps, databases and PostgreSQL server
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -63,8 +63,8 @@ def _module_fixtures(tree: ast.Module) -> set[str]:
 
 @cache
 def _shared_module_fixtures() -> set[str]:
-    """Return the module-scoped fixtures of ``service_fixtures.py``, which many test files import."""
-    return _module_fixtures(ast.parse((Path(__file__).parent / "service_fixtures.py").read_text(encoding="utf-8")))
+    """Return the module-scoped fixtures of ``service/fixtures.py``, which many test files import."""
+    return _module_fixtures(ast.parse((Path(__file__).parent / "service" / "fixtures.py").read_text(encoding="utf-8")))
 
 
 @cache

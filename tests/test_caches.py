@@ -19,7 +19,7 @@ from causalplan.planners.fd import CONFIGS, solve
 from causalplan.planners.result import PlanStatus
 from causalplan.transfer.verdict import Verdict, evaluate_transfer
 from tests.conftest import example_mapping, example_model
-from tests.sim_fixtures import PEG_BOARD, parsed_object, steps
+from tests.sim.fixtures import PEG_BOARD, parsed_object, steps
 
 PACKAGE = Path(__file__).resolve().parent.parent / "causalplan"
 

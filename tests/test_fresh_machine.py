@@ -13,8 +13,8 @@ from pathlib import Path
 import psycopg
 import pytest
 
-from tests.service_fixtures import throwaway_postgres
-from tests.test_web_browser import CHROMIUM_VARIABLE, chromium_executable
+from tests.service.fixtures import throwaway_postgres
+from tests.service.pages.test_browser import CHROMIUM_VARIABLE, chromium_executable
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCKER = ROOT / "docker"

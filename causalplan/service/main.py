@@ -323,7 +323,7 @@ def operation_id(route: APIRoute) -> str:
     """Return a route's OpenAPI operation id: its name (``create_plan``), the method name a generated client gets.
 
     FastAPI's default adds the path and method (``create_plan_v1_plans_post``), which changes when
-    a path does; names are stable and ``tests/test_service_openapi.py`` checks they are unique.
+    a path does; names are stable and ``tests/service/api/test_openapi.py`` checks they are unique.
     """
     return route.name
 
