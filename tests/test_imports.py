@@ -127,3 +127,32 @@ def test_a_circle_of_two_packages_is_a_cycle() -> None:
     assert sorted(sorted(cycle) for cycle in nx.simple_cycles(package_graph(modules_graph))) == [
         ["causalplan.sim", "causalplan.transfer"]
     ]
+
+
+POOL = "causalplan.service.pool"
+WORK_LAYER = "causalplan.service.work"
+APP_WIRING = ("causalplan.service.main", "causalplan.service.deps")
+"""The app's wiring: it starts and stops the pools and holds them (``Services``)."""
+
+
+def pool_importers(graph: nx.DiGraph) -> list[str]:
+    """Return the modules outside the pool, the work layer and the app's wiring that import the pool."""
+    inside = (POOL, WORK_LAYER)
+    return sorted(
+        source
+        for source, target in graph.edges
+        if (target == POOL or target.startswith(POOL + "."))
+        and not any(source == place or source.startswith(place + ".") for place in inside)
+        and source not in APP_WIRING
+    )
+
+
+def test_only_the_work_layer_and_the_app_s_wiring_import_the_pool() -> None:
+    assert pool_importers(module_graph()) == []
+
+
+def test_a_route_that_calls_the_pool_itself_is_found() -> None:
+    graph = module_graph()
+    graph.add_edge("causalplan.service.api.routes.plans", "causalplan.service.pool.pool")
+    graph.add_edge("causalplan.service.work.calls", "causalplan.service.pool.pool")
+    assert pool_importers(graph) == ["causalplan.service.api.routes.plans"]

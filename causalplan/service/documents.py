@@ -3,7 +3,7 @@
 The service's limits bound the work one request can cause (parts, labels, rules); the model
 reader checks meaning and reports with the CLI's codes. What a request gives is read once here,
 into ``PlanInputs``: a valid model (and the record to store if it came inline), mapping,
-planner and time limit. Routes then ask ``answers`` for the answer.
+planner and time limit. Routes then ask the work layer (``Services.work``) for the answer.
 """
 
 from __future__ import annotations
@@ -18,21 +18,60 @@ from typing import Any
 from fastapi import Request, Response
 from fastapi.routing import APIRoute
 
+from causalplan.causal.canonical import model_hash
 from causalplan.causal.diagnostics import Diagnostic, Report
 from causalplan.causal.documents import DuplicateKeyError, SourceMap, located_duplicate_key, refuse_duplicate_keys
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.inputs import mapping_from_data, model_from_data
-from causalplan.limits import check_labelling_limits, check_model_limits
+from causalplan.limits import LimitExceededError, check_labelling_limits, check_model_limits
 from causalplan.objects.catalog import Catalog
-from causalplan.service.answers import model_hash, resolve_planner, resolve_time_limit
+from causalplan.planners import pipeline
 from causalplan.service.api.schemas.plans import PlanIn
 from causalplan.service.deps import Services, open_session
 from causalplan.service.errors import InvalidMappingError, InvalidModelError
 from causalplan.service.storage.crud import MAX_NESTING, ClientIds, clean_json, get_model, new_model_record, save
 from causalplan.service.storage.records import ModelRecord
+from causalplan.settings import Settings
 
 MAX_NUMBER_DIGITS = 100
 """No document needs a longer integer; Python refuses ones over 4,300 digits anyway."""
+DEFAULT_PLANNER = "auto"
+FALLBACK_PLANNER = "fd"
+
+
+def resolve_planner(requested: str) -> str:
+    """Return the registry name to run for ``requested``; UnknownPlannerError when there is none.
+
+    The registry is read at request time, so planners registered later are accepted as they come.
+    """
+    names = pipeline.PLANNERS
+    if requested == DEFAULT_PLANNER and DEFAULT_PLANNER not in names:
+        return FALLBACK_PLANNER  # a registry without 'auto' still gets a working default
+    if requested not in names:
+        choices = list(dict.fromkeys([DEFAULT_PLANNER, *names]))
+        raise pipeline.UnknownPlannerError(
+            f"Unknown planner '{requested}'; choose one of: {', '.join(choices)}.",
+            details={"planner": requested, "planners": choices},
+        )
+    return requested
+
+
+def default_planner() -> str:
+    """Return what the default planner ('auto') runs as, right now."""
+    return resolve_planner(DEFAULT_PLANNER)
+
+
+def resolve_time_limit(requested: float | None, settings: Settings) -> float:
+    """Return the solve's time limit; LimitExceededError when it is over the server's maximum."""
+    if requested is None:
+        return settings.default_time_limit
+    if requested > settings.max_time_limit:
+        raise LimitExceededError(
+            "time_limit_too_long",
+            f"time_limit {requested:g} s is over this server's maximum of {settings.max_time_limit:g} s.",
+            details={"limit": settings.max_time_limit, "actual": requested, "field": "time_limit"},
+        )
+    return requested
 
 
 class BodyJSONError(json.JSONDecodeError):

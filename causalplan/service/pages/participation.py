@@ -12,15 +12,17 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
+from causalplan.causal.canonical import model_hash
 from causalplan.inputs import LoadedModel
-from causalplan.service.answers import default_planner, model_hash
 from causalplan.service.deps import Services
-from causalplan.service.documents import first_errors
+from causalplan.service.documents import default_planner, first_errors
 from causalplan.service.errors import InvalidModelError
 from causalplan.service.storage import crud
 from causalplan.service.storage.crud import PAGE_SESSION_PREFIX, ClientIds
 from causalplan.service.storage.experiments import ParticipantJourney
 from causalplan.service.storage.records import ParticipantTrialRecord, utc_now
+from causalplan.service.work.planning import PlanArguments, TransferArguments
+from causalplan.service.work.registry import PLAN, TRANSFER
 from causalplan.studies.errors import StepLockedError
 from causalplan.studies.steps import MappingCheck, ParticipantModel, Stage, model_on
 
@@ -49,9 +51,10 @@ def plans(services: Services, journey: ParticipantJourney, participant_model: Pa
     planner = default_planner()
     found = []
     for obj in journey.training:
-        answer = services.answers.plan(
+        arguments = PlanArguments(
             model_on(participant_model, obj.id), None, planner, services.settings.default_time_limit
         )
+        answer = services.work.answer(PLAN, arguments)
         steps = answer.data.get("plan") or []
         found.append(
             {
@@ -109,7 +112,8 @@ def run_trial(
     planner = default_planner()
     model = model_on(participant_model, journey.training[0].id)
     limit = services.settings.default_time_limit
-    answer = services.answers.transfer(model, mapping.mapping, planner, limit, robot=journey.design.robot_verdict)
+    arguments = TransferArguments(model, mapping.mapping, planner, limit, robot=journey.design.robot_verdict)
+    answer = services.work.answer(TRANSFER, arguments)
     trial = crud.new_trial_record(
         model_id, mapping.document, planner, answer.data, answer.cached, answer.seconds, client_ids(journey)
     )

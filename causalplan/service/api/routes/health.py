@@ -13,7 +13,6 @@ from sqlalchemy import text
 from sqlalchemy.exc import SQLAlchemyError
 
 from causalplan.errors import CausalPlanError
-from causalplan.service.answers import default_planner
 from causalplan.service.api.schemas.health import (
     DatabaseHealthOut,
     FastDownwardHealthOut,
@@ -22,6 +21,7 @@ from causalplan.service.api.schemas.health import (
     StorageHealthOut,
 )
 from causalplan.service.deps import Services, ServicesDep
+from causalplan.service.documents import default_planner
 from causalplan.service.jobs.kinds import KINDS
 from causalplan.service.storage import jobs as job_store
 from causalplan.service.storage.migrate import current_revision
