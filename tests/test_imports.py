@@ -156,3 +156,41 @@ def test_a_route_that_calls_the_pool_itself_is_found() -> None:
     graph.add_edge("causalplan.service.api.routes.plans", "causalplan.service.pool.pool")
     graph.add_edge("causalplan.service.work.calls", "causalplan.service.pool.pool")
     assert pool_importers(graph) == ["causalplan.service.api.routes.plans"]
+
+
+STORAGE = "causalplan.service.storage"
+QUERY_BUILDERS = {"select", "insert", "update", "delete", "text", "func"}
+"""SQLAlchemy's ways to write a query: only ``service/storage/`` imports them."""
+SESSION_WRITES = {"add", "add_all", "flush", "commit", "execute", "scalar", "scalars", "merge", "delete"}
+"""What a session or connection runs against the database: only ``service/storage/`` calls them."""
+
+
+def sql_in(source: str) -> list[str]:
+    """Return the SQL a module writes or runs itself: query builders it imports, session calls it makes."""
+    found: list[str] = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "sqlalchemy":
+            found.extend(f"import {alias.name}" for alias in node.names if alias.name in QUERY_BUILDERS)
+        elif (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Attribute)
+            and node.func.attr in SESSION_WRITES
+            and isinstance(node.func.value, ast.Name)
+            and node.func.value.id in ("session", "connection")
+        ):
+            found.append(f"{node.func.value.id}.{node.func.attr}")
+    return found
+
+
+def test_all_sql_lives_in_the_storage_layer() -> None:
+    offending = {
+        name: sql_in(path.read_text(encoding="utf-8"))
+        for name, path in modules().items()
+        if name != STORAGE and not name.startswith(STORAGE + ".")
+    }
+    assert {name: found for name, found in offending.items() if found} == {}
+
+
+def test_a_query_outside_storage_is_found() -> None:
+    source = "from sqlalchemy import select, text\n\ndef f(session):\n    session.add(1)\n    session.commit()\n"
+    assert sql_in(source) == ["import select", "import text", "session.add", "session.commit"]

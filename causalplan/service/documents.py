@@ -13,6 +13,7 @@ import re
 import uuid
 from collections.abc import Callable, Coroutine
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 from fastapi import Request, Response
@@ -170,13 +171,19 @@ class ModelSubmission:
 
     model: CausalModel | None
     report: Report
-    record: ModelRecord
     is_new: bool
     """Whether the model came inline (and so is to be stored with the request)."""
+    make_record: Callable[[], ModelRecord]
+    """Returns the record: a new one (cleaned for storing) or the stored one; called once, by ``record``."""
 
     @property
     def is_valid(self) -> bool:
         return self.model is not None and self.report.is_valid
+
+    @cached_property
+    def record(self) -> ModelRecord:
+        """Return the model's record, made when first asked for: a plan request stores it while its worker plans."""
+        return self.make_record()
 
 
 def _read(document: dict[str, Any], catalog: Catalog) -> tuple[CausalModel | None, Report]:
@@ -186,27 +193,33 @@ def _read(document: dict[str, Any], catalog: Catalog) -> tuple[CausalModel | Non
 
 
 def read_model(document: dict[str, Any], services: Services, client: ClientIds) -> ModelSubmission:
-    """Check an inline model (limits first, then the reader); return it with its unsaved record."""
-    storable = clean_json(document, "the model")  # refuses NaN and deep nesting
+    """Check an inline model (limits first, then the reader); return it with its record, made when asked for.
+
+    What is stored is cleaned then (``clean_json`` refuses NaN and deep nesting, which a body
+    read by ``parse_json`` never has), so a plan request's path reaches its worker first.
+    """
     check_model_limits(document, services.settings)
     model, report = _read(document, services.catalog)
     valid_model = model if model is not None and report.is_valid else None
-    record = new_model_record(
-        storable,
-        model.object_id if model is not None else "",
-        valid_model is not None,
-        clean_json(report.as_dict()),
-        model_hash(valid_model) if valid_model is not None else None,
-        client,
-        cleaned=True,
-    )
-    return ModelSubmission(model, report, record, is_new=True)
+
+    def make_record() -> ModelRecord:
+        return new_model_record(
+            clean_json(document, "the model"),
+            model.object_id if model is not None else "",
+            valid_model is not None,
+            clean_json(report.as_dict()),
+            model_hash(valid_model) if valid_model is not None else None,
+            client,
+            cleaned=True,
+        )
+
+    return ModelSubmission(model, report, True, make_record)
 
 
 def stored_model(record: ModelRecord, catalog: Catalog) -> ModelSubmission:
     """Re-read a stored model against the catalog the server has now."""
     model, report = _read(record.document, catalog)
-    return ModelSubmission(model, report, record, is_new=False)
+    return ModelSubmission(model, report, False, lambda: record)
 
 
 @dataclass(frozen=True)

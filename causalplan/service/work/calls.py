@@ -4,8 +4,8 @@
 declares and the catalog's folders added; every call of the interactive pool passes through
 ``Workers.interactive_call``, and of the jobs' pool through ``Workers.queued_call``.
 ``Workers.answer`` first looks in the answer cache, whose key is the work's name, what its
-arguments depend on (``key()``: the canonical texts of the model and the mapping, the planner,
-the time limit, ...) and the catalog's fingerprint; a final answer is kept.
+arguments depend on (``canonical_key``: the canonical texts of the model and the mapping, the
+planner, the time limit, ...) and the catalog's fingerprint; a final answer is kept.
 """
 
 from __future__ import annotations
@@ -16,10 +16,11 @@ import pickle
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any, Protocol, TypeVar
+from dataclasses import dataclass, fields
+from typing import Any, TypeVar
 
 from causalplan.caches import BoundedCache
+from causalplan.causal.canonical import mapping_text, model_text
 from causalplan.objects.catalog import Catalog
 from causalplan.service.errors import QueueFullError
 from causalplan.service.pool.pool import PlannerPool, RunStoppedError
@@ -36,15 +37,6 @@ MAX_ANSWER_BYTES = 256 * 1024
 
 class WorkStoppedError(Exception):
     """The caller's ``stop`` event was set while its worker worked: the worker was killed (and replaced)."""
-
-
-class Keyed(Protocol):
-    """Arguments whose answer may be kept: ``key()`` is what the answer depends on."""
-
-    def key(self) -> str: ...
-
-
-K = TypeVar("K", bound=Keyed)
 
 
 class ResultCache:
@@ -85,8 +77,26 @@ def catalog_key(catalog: Catalog) -> str:
     return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
 
 
+def canonical_key(arguments: object) -> str:
+    """Return what an answer to ``arguments`` (a dataclass) depends on, layout aside.
+
+    The model and the mapping count by their canonical texts, the time limit as a number.
+    """
+    values: list[object] = []
+    for field in fields(arguments):  # type: ignore[arg-type]  # the registry's arguments are dataclasses
+        value = getattr(arguments, field.name)
+        if field.name == "model":
+            value = model_text(value)
+        elif field.name == "mapping":
+            value = mapping_text(value)
+        elif field.name == "time_limit":
+            value = float(value)
+        values.append(value)
+    return json.dumps(values, ensure_ascii=False)
+
+
 def answer_key(work: str, arguments: str, catalog: str) -> str:
-    """Return the cache key of the answer of ``work`` to arguments whose ``key()`` is ``arguments``."""
+    """Return the cache key of the answer of ``work`` to arguments whose ``canonical_key`` is ``arguments``."""
     text = json.dumps([work, arguments, catalog], ensure_ascii=False)
     return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
 
@@ -167,7 +177,7 @@ class Workers:
                     raise WorkStoppedError from None
 
     def answer(
-        self, work: Work[K, dict[str, Any]], arguments: K, meanwhile: Callable[[], None] | None = None
+        self, work: Work[A, dict[str, Any]], arguments: A, meanwhile: Callable[[], None] | None = None
     ) -> Answer:
         """Return the answer kept for ``work`` on ``arguments``, or run it (and keep it when final).
 
@@ -176,7 +186,7 @@ class Workers:
         request refused before a worker took it.
         """
         started = time.perf_counter()
-        key = answer_key(work.name, arguments.key(), self.catalog_key)
+        key = answer_key(work.name, canonical_key(arguments), self.catalog_key)
         cached = self.cache.get(key)
         if cached is not None:
             if meanwhile is not None:

@@ -8,13 +8,11 @@ pool it runs; ``calls.Workers`` runs them.
 
 from __future__ import annotations
 
-import json
 import re
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from importlib import metadata
 from importlib.util import find_spec
 
-from causalplan.causal.canonical import mapping_text, model_text
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import catalog_task
@@ -27,34 +25,8 @@ FAST_DOWNWARD = "fd"
 """The registry's Fast Downward planner, whose availability /health reports."""
 
 
-class KeptAnswerArguments:
-    """The arguments (a dataclass) of an answer the service keeps: ``key()`` is what the answer depends on."""
-
-    def key(self) -> str:
-        """Return what the answer depends on, layout aside: the model and the mapping by their canonical texts."""
-        return canonical_key(self)
-
-
-def canonical_key(arguments: object) -> str:
-    """Return what an answer to ``arguments`` (a dataclass) depends on, layout aside: the answer cache's key.
-
-    The model and the mapping count by their canonical texts, the time limit as a number.
-    """
-    values: list[object] = []
-    for field in fields(arguments):  # type: ignore[arg-type]  # every caller passes a dataclass
-        value = getattr(arguments, field.name)
-        if field.name == "model":
-            value = model_text(value)
-        elif field.name == "mapping":
-            value = mapping_text(value)
-        elif field.name == "time_limit":
-            value = float(value)
-        values.append(value)
-    return json.dumps(values, ensure_ascii=False)
-
-
 @dataclass(frozen=True)
-class PlanArguments(KeptAnswerArguments):
+class PlanArguments:
     """A plan of ``model`` (on the mapping's object if given); ``val``: VAL checks it too."""
 
     model: CausalModel
@@ -65,7 +37,7 @@ class PlanArguments(KeptAnswerArguments):
 
 
 @dataclass(frozen=True)
-class TransferArguments(KeptAnswerArguments):
+class TransferArguments:
     """A transfer of ``model`` through ``mapping``; ``robot``: the robot has the last word."""
 
     model: CausalModel
@@ -77,7 +49,7 @@ class TransferArguments(KeptAnswerArguments):
 
 
 @dataclass(frozen=True)
-class SimulationArguments(KeptAnswerArguments):
+class SimulationArguments:
     """A plan run in the simulator: with its final ``picture``, or carried out by the ``robot`` (and its ``motors``)."""
 
     model: CausalModel

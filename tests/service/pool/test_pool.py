@@ -27,7 +27,7 @@ from causalplan.service.errors import PlanningTimeoutError, QueueFullError, Stor
 from causalplan.service.jobs.work import Progress, in_pool
 from causalplan.service.pool.pool import PlannerPool, RunStoppedError
 from causalplan.service.pool.worker import FOLDER_PREFIX
-from causalplan.service.work.calls import ResultCache, answer_key
+from causalplan.service.work.calls import ResultCache, answer_key, canonical_key
 from causalplan.service.work.planning import PlanArguments
 from causalplan.service.work.registry import PLAN, Pool, Work
 from tests.service.fixtures import (
@@ -212,7 +212,7 @@ def test_canonical_keys_ignore_layout_but_not_meaning(catalog: Catalog) -> None:
     other = model({**DESK_LAMP, "goal": "Light"})
 
     def request_key(kind: str, model: Any, planner: str, limit: float, catalog: str) -> str:
-        return answer_key(kind, PlanArguments(model, None, planner, limit).key(), catalog)
+        return answer_key(kind, canonical_key(PlanArguments(model, None, planner, limit)), catalog)
 
     key = request_key("plan", base, "fd", 30.0, "catalog")
     assert key == request_key("plan", layout, "fd", 30.0, "catalog")
