@@ -59,8 +59,8 @@ def traced_request(example: Path) -> list[Call]:
         database_url=f"sqlite:///{folder}/db.sqlite3", planning_workers=1, job_runners=0, draw_plans_ahead=False
     )
     model = yaml.safe_load(example.read_text(encoding="utf-8"))
-    threading.setprofile(profile)  # type: ignore[arg-type]
-    sys.setprofile(profile)  # type: ignore[arg-type]
+    threading.setprofile(profile)
+    sys.setprofile(profile)
     try:
         with TestClient(create_app(settings)) as client:
             client.post("/v1/plans", json={"model": model, "time_limit": 5})  # warm: imports, caches
@@ -70,7 +70,7 @@ def traced_request(example: Path) -> list[Call]:
             answer.raise_for_status()
     finally:
         sys.setprofile(None)
-        threading.setprofile(None)  # type: ignore[arg-type]
+        threading.setprofile(None)
     return calls
 
 

@@ -104,11 +104,6 @@ def _is_final_simulation(data: dict[str, Any]) -> bool:
     return isinstance(data["planning"], dict) and _is_final_plan(data["planning"])
 
 
-def _simulation_seconds(arguments: SimulationArguments, settings: Settings) -> float:
-    extra = settings.robot_seconds if arguments.robot else SIMULATION_SECONDS
-    return _solve(arguments.time_limit, settings) + extra
-
-
 PLAN: Work[PlanArguments, dict[str, Any]] = Work(
     "plan",
     planning.plan,
@@ -126,7 +121,12 @@ TRANSFER: Work[TransferArguments, dict[str, Any]] = Work(
     _is_final_verdict,
 )
 SIMULATION: Work[SimulationArguments, dict[str, Any]] = Work(
-    "simulation", planning.simulate, SimulationArguments, Pool.INTERACTIVE, _simulation_seconds, _is_final_simulation
+    "simulation",
+    planning.simulate,
+    SimulationArguments,
+    Pool.INTERACTIVE,
+    lambda a, s: _solve(a.time_limit, s) + SIMULATION_SECONDS,
+    _is_final_simulation,
 )
 EXPLANATION: Work[ExplanationArguments, dict[str, Any]] = Work(
     "explanation",
@@ -159,7 +159,11 @@ PROBE: Work[ProbeArguments, dict[str, object]] = Work(
     "probe", planning.probe, ProbeArguments, Pool.ISOLATED, lambda a, s: PROBE_SECONDS
 )
 QUEUED_SIMULATION: Work[SimulationArguments, dict[str, Any]] = Work(
-    "queued_simulation", planning.simulate, SimulationArguments, Pool.JOBS, _simulation_seconds
+    "queued_simulation",
+    planning.simulate,
+    SimulationArguments,
+    Pool.JOBS,
+    lambda a, s: _solve(a.time_limit, s) + (s.robot_seconds if a.robot else 0.0),
 )
 FILM_OF_FITS: Work[FitsFilmArguments, dict[str, Any]] = Work(
     "film_of_fits", robot.film_of_fits, FitsFilmArguments, Pool.JOBS, lambda a, s: s.robot_seconds
