@@ -39,7 +39,7 @@ from playwright.sync_api import Browser
 
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.main import create_app
-from causalplan.service.pool.robot_jobs import steps_of
+from causalplan.service.work.robot import steps_of
 from causalplan.settings import Settings
 from causalplan.sim import RenderMode, simulate_plan
 

@@ -127,3 +127,70 @@ def test_a_circle_of_two_packages_is_a_cycle() -> None:
     assert sorted(sorted(cycle) for cycle in nx.simple_cycles(package_graph(modules_graph))) == [
         ["causalplan.sim", "causalplan.transfer"]
     ]
+
+
+POOL = "causalplan.service.pool"
+WORK_LAYER = "causalplan.service.work"
+APP_WIRING = ("causalplan.service.main", "causalplan.service.deps")
+"""The app's wiring: it starts and stops the pools and holds them (``Services``)."""
+
+
+def pool_importers(graph: nx.DiGraph) -> list[str]:
+    """Return the modules outside the pool, the work layer and the app's wiring that import the pool."""
+    inside = (POOL, WORK_LAYER)
+    return sorted(
+        source
+        for source, target in graph.edges
+        if (target == POOL or target.startswith(POOL + "."))
+        and not any(source == place or source.startswith(place + ".") for place in inside)
+        and source not in APP_WIRING
+    )
+
+
+def test_only_the_work_layer_and_the_app_s_wiring_import_the_pool() -> None:
+    assert pool_importers(module_graph()) == []
+
+
+def test_a_route_that_calls_the_pool_itself_is_found() -> None:
+    graph = module_graph()
+    graph.add_edge("causalplan.service.api.routes.plans", "causalplan.service.pool.pool")
+    graph.add_edge("causalplan.service.work.calls", "causalplan.service.pool.pool")
+    assert pool_importers(graph) == ["causalplan.service.api.routes.plans"]
+
+
+STORAGE = "causalplan.service.storage"
+QUERY_BUILDERS = {"select", "insert", "update", "delete", "text", "func"}
+"""SQLAlchemy's ways to write a query: only ``service/storage/`` imports them."""
+SESSION_WRITES = {"add", "add_all", "flush", "commit", "execute", "scalar", "scalars", "merge", "delete"}
+"""What a session or connection runs against the database: only ``service/storage/`` calls them."""
+
+
+def sql_in(source: str) -> list[str]:
+    """Return the SQL a module writes or runs itself: query builders it imports, session calls it makes."""
+    found: list[str] = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "sqlalchemy":
+            found.extend(f"import {alias.name}" for alias in node.names if alias.name in QUERY_BUILDERS)
+        elif (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Attribute)
+            and node.func.attr in SESSION_WRITES
+            and isinstance(node.func.value, ast.Name)
+            and node.func.value.id in ("session", "connection")
+        ):
+            found.append(f"{node.func.value.id}.{node.func.attr}")
+    return found
+
+
+def test_all_sql_lives_in_the_storage_layer() -> None:
+    offending = {
+        name: sql_in(path.read_text(encoding="utf-8"))
+        for name, path in modules().items()
+        if name != STORAGE and not name.startswith(STORAGE + ".")
+    }
+    assert {name: found for name, found in offending.items() if found} == {}
+
+
+def test_a_query_outside_storage_is_found() -> None:
+    source = "from sqlalchemy import select, text\n\ndef f(session):\n    session.add(1)\n    session.commit()\n"
+    assert sql_in(source) == ["import select", "import text", "session.add", "session.commit"]

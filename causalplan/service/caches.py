@@ -11,8 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from causalplan.caches import BoundedCache, NamedCaches
-from causalplan.service.answers import ResultCache
 from causalplan.service.pages.pictures import PictureCache
+from causalplan.service.work.calls import ResultCache
 from causalplan.settings import Settings
 
 MODEL_GRAPHS = 128
@@ -26,7 +26,7 @@ class ServiceCaches(NamedCaches):
     """Every cache of one app, by name."""
 
     answers: ResultCache
-    """Planners' answers to valid requests, by canonical key (``answers.Answerer``); sized by the settings."""
+    """Planners' answers to valid requests, by canonical key (``work.calls.Workers.answer``); sized by the settings."""
     model_graphs: BoundedCache[str, bytes] = field(default_factory=lambda: BoundedCache(MODEL_GRAPHS))
     """``/v1/models/{id}/graph`` drawings (SVG), by model id."""
     page_graphs: PictureCache = field(default_factory=lambda: PictureCache(PAGE_GRAPHS))

@@ -15,7 +15,6 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import Session
 
 from causalplan.objects.catalog import Catalog
-from causalplan.service.answers import Answerer
 from causalplan.service.caches import ServiceCaches
 from causalplan.service.errors import NotAuthenticatedError, ParticipantIdReservedError, ResearchDisabledError
 from causalplan.service.pool.pool import PlannerPool
@@ -23,6 +22,7 @@ from causalplan.service.storage.crud import PAGE_SESSION_PREFIX, ClientIds
 from causalplan.service.storage.experiments import is_participant
 from causalplan.service.storage.records import MAX_CLIENT_ID_LENGTH
 from causalplan.service.storage.throttle import FailedAttempts
+from causalplan.service.work.calls import Workers
 from causalplan.settings import Settings
 
 
@@ -48,6 +48,7 @@ class Services:
     catalog: Catalog
     engine: Engine
     pool: PlannerPool
+    """The interactive requests' workers (their numbers for /health): work runs through ``work``."""
     caches: ServiceCaches
     """The app's caches (answers, drawings): a new app's are empty."""
     revision: str
@@ -59,15 +60,12 @@ class Services:
     """The workers of long work (jobs: batches, robot runs, films), one per job runner: ``pool``
     is for interactive requests (and the robot runs a participant waits for), so no job can take
     its workers."""
+    work: Workers
+    """The one way to run work in a worker (on ``pool`` or ``job_pool``), through the answer cache or not."""
     runner: Runner | None = None
     """This replica's job runner (started after the pool)."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
-
-    @property
-    def answers(self) -> Answerer:
-        """Return what answers valid requests (from the cache or a worker)."""
-        return Answerer(self.caches.answers, self.pool, self.settings, self.catalog_key)
 
 
 # Dependencies that do not block are `async def`: FastAPI runs a plain `def` dependency in a

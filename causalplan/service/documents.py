@@ -3,7 +3,7 @@
 The service's limits bound the work one request can cause (parts, labels, rules); the model
 reader checks meaning and reports with the CLI's codes. What a request gives is read once here,
 into ``PlanInputs``: a valid model (and the record to store if it came inline), mapping,
-planner and time limit. Routes then ask ``answers`` for the answer.
+planner and time limit. Routes then ask the work layer (``Services.work``) for the answer.
 """
 
 from __future__ import annotations
@@ -13,26 +13,66 @@ import re
 import uuid
 from collections.abc import Callable, Coroutine
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 from fastapi import Request, Response
 from fastapi.routing import APIRoute
 
+from causalplan.causal.canonical import model_hash
 from causalplan.causal.diagnostics import Diagnostic, Report
 from causalplan.causal.documents import DuplicateKeyError, SourceMap, located_duplicate_key, refuse_duplicate_keys
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.inputs import mapping_from_data, model_from_data
-from causalplan.limits import check_labelling_limits, check_model_limits
+from causalplan.limits import LimitExceededError, check_labelling_limits, check_model_limits
 from causalplan.objects.catalog import Catalog
-from causalplan.service.answers import model_hash, resolve_planner, resolve_time_limit
+from causalplan.planners import pipeline
 from causalplan.service.api.schemas.plans import PlanIn
 from causalplan.service.deps import Services, open_session
 from causalplan.service.errors import InvalidMappingError, InvalidModelError
 from causalplan.service.storage.crud import MAX_NESTING, ClientIds, clean_json, get_model, new_model_record, save
 from causalplan.service.storage.records import ModelRecord
+from causalplan.settings import Settings
 
 MAX_NUMBER_DIGITS = 100
 """No document needs a longer integer; Python refuses ones over 4,300 digits anyway."""
+DEFAULT_PLANNER = "auto"
+FALLBACK_PLANNER = "fd"
+
+
+def resolve_planner(requested: str) -> str:
+    """Return the registry name to run for ``requested``; UnknownPlannerError when there is none.
+
+    The registry is read at request time, so planners registered later are accepted as they come.
+    """
+    names = pipeline.PLANNERS
+    if requested == DEFAULT_PLANNER and DEFAULT_PLANNER not in names:
+        return FALLBACK_PLANNER  # a registry without 'auto' still gets a working default
+    if requested not in names:
+        choices = list(dict.fromkeys([DEFAULT_PLANNER, *names]))
+        raise pipeline.UnknownPlannerError(
+            f"Unknown planner '{requested}'; choose one of: {', '.join(choices)}.",
+            details={"planner": requested, "planners": choices},
+        )
+    return requested
+
+
+def default_planner() -> str:
+    """Return what the default planner ('auto') runs as, right now."""
+    return resolve_planner(DEFAULT_PLANNER)
+
+
+def resolve_time_limit(requested: float | None, settings: Settings) -> float:
+    """Return the solve's time limit; LimitExceededError when it is over the server's maximum."""
+    if requested is None:
+        return settings.default_time_limit
+    if requested > settings.max_time_limit:
+        raise LimitExceededError(
+            "time_limit_too_long",
+            f"time_limit {requested:g} s is over this server's maximum of {settings.max_time_limit:g} s.",
+            details={"limit": settings.max_time_limit, "actual": requested, "field": "time_limit"},
+        )
+    return requested
 
 
 class BodyJSONError(json.JSONDecodeError):
@@ -131,13 +171,19 @@ class ModelSubmission:
 
     model: CausalModel | None
     report: Report
-    record: ModelRecord
     is_new: bool
     """Whether the model came inline (and so is to be stored with the request)."""
+    make_record: Callable[[], ModelRecord]
+    """Returns the record: a new one (cleaned for storing) or the stored one; called once, by ``record``."""
 
     @property
     def is_valid(self) -> bool:
         return self.model is not None and self.report.is_valid
+
+    @cached_property
+    def record(self) -> ModelRecord:
+        """Return the model's record, made when first asked for: a plan request stores it while its worker plans."""
+        return self.make_record()
 
 
 def _read(document: dict[str, Any], catalog: Catalog) -> tuple[CausalModel | None, Report]:
@@ -147,27 +193,33 @@ def _read(document: dict[str, Any], catalog: Catalog) -> tuple[CausalModel | Non
 
 
 def read_model(document: dict[str, Any], services: Services, client: ClientIds) -> ModelSubmission:
-    """Check an inline model (limits first, then the reader); return it with its unsaved record."""
-    storable = clean_json(document, "the model")  # refuses NaN and deep nesting
+    """Check an inline model (limits first, then the reader); return it with its record, made when asked for.
+
+    What is stored is cleaned then (``clean_json`` refuses NaN and deep nesting, which a body
+    read by ``parse_json`` never has), so a plan request's path reaches its worker first.
+    """
     check_model_limits(document, services.settings)
     model, report = _read(document, services.catalog)
     valid_model = model if model is not None and report.is_valid else None
-    record = new_model_record(
-        storable,
-        model.object_id if model is not None else "",
-        valid_model is not None,
-        clean_json(report.as_dict()),
-        model_hash(valid_model) if valid_model is not None else None,
-        client,
-        cleaned=True,
-    )
-    return ModelSubmission(model, report, record, is_new=True)
+
+    def make_record() -> ModelRecord:
+        return new_model_record(
+            clean_json(document, "the model"),
+            model.object_id if model is not None else "",
+            valid_model is not None,
+            clean_json(report.as_dict()),
+            model_hash(valid_model) if valid_model is not None else None,
+            client,
+            cleaned=True,
+        )
+
+    return ModelSubmission(model, report, True, make_record)
 
 
 def stored_model(record: ModelRecord, catalog: Catalog) -> ModelSubmission:
     """Re-read a stored model against the catalog the server has now."""
     model, report = _read(record.document, catalog)
-    return ModelSubmission(model, report, record, is_new=False)
+    return ModelSubmission(model, report, False, lambda: record)
 
 
 @dataclass(frozen=True)

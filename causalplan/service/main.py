@@ -27,7 +27,6 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from causalplan.errors import CausalPlanError
 from causalplan.objects.catalog import load_catalog
-from causalplan.service.answers import catalog_key
 from causalplan.service.api.routes import (
     experiments,
     explanations,
@@ -46,12 +45,12 @@ from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
 from causalplan.service.jobs.runner import JobRunner
 from causalplan.service.pages import routers as web_routers
-from causalplan.service.pool.jobs import probe_job
 from causalplan.service.pool.pool import PlannerPool
 from causalplan.service.responses import SafeJSONResponse
 from causalplan.service.storage.migrate import upgrade
 from causalplan.service.storage.session import create_database_engine
 from causalplan.service.storage.throttle import FailedAttempts
+from causalplan.service.work.calls import Workers, catalog_key
 from causalplan.settings import Settings
 from causalplan.version import __version__
 
@@ -60,7 +59,6 @@ if TYPE_CHECKING:
 
 logger = logging.getLogger(__name__)
 
-PROBE_TIMEOUT_SECONDS = 60.0
 _HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 413: "body_too_large"}
 
 
@@ -79,14 +77,16 @@ def start_services(settings: Settings) -> Services:
         raise
     # Long work's own workers, one per runner thread (no queue: a runner waits for its worker).
     job_pool = PlannerPool(max(settings.job_runners, 1), 0, settings.worker_memory_mb, settings.queue_wait_seconds)
+    caches = ServiceCaches.of(settings)
+    fingerprint = catalog_key(catalog)
     services = Services(
         settings,
         catalog,
         engine,
         pool,
-        ServiceCaches.of(settings),
+        caches,
         revision,
-        catalog_key=catalog_key(catalog),
+        catalog_key=fingerprint,
         failed_attempts=FailedAttempts(
             engine,
             settings.research_max_failures,
@@ -94,6 +94,7 @@ def start_services(settings: Settings) -> Services:
             settings.research_max_failures_total,
         ),
         job_pool=job_pool,
+        work=Workers(pool, job_pool, settings, caches.answers, fingerprint),
     )
     threading.Thread(target=_probe, args=(services,), name="causalplan-probe", daemon=True).start()
     services.runner = JobRunner(services)
@@ -126,7 +127,7 @@ def _probe(services: Services) -> None:
     try:
         with _probe_lock:
             if _probe_result is None:
-                _probe_result = services.pool.run_isolated(probe_job, (), PROBE_TIMEOUT_SECONDS)
+                _probe_result = services.work.probe()
             services.probe = _probe_result
     except Exception:
         logger.exception("the planner probe failed")

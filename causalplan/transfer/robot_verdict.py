@@ -4,7 +4,7 @@
 ``robot_transfer_verdict(...)`` is ``transfer_verdict`` with the robot as the last judge: a plan
 that transfers on paper and in physics but that the robot cannot carry out fails with the reason
 ``robot_cannot_execute``, naming the step and the code. Films of the robot are made by the
-service's jobs (``service.pool.robot_jobs``) and the CLI's ``simulate --robot --video``.
+service's work layer (``service.work.robot``) and the CLI's ``simulate --robot --video``.
 """
 
 from __future__ import annotations

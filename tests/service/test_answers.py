@@ -16,7 +16,7 @@ from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import build_task
 from causalplan.planners.pipeline import plan_task
-from causalplan.service.answers import MAX_ANSWER_BYTES, ResultCache
+from causalplan.service.work.calls import MAX_ANSWER_BYTES, ResultCache
 from tests.service.fixtures import (
     AUTH,
     DESK_LAMP,

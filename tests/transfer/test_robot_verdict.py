@@ -12,7 +12,7 @@ from causalplan.caches import Caches
 from causalplan.inputs import load_mapping, load_model
 from causalplan.objects.catalog import load_catalog
 from causalplan.planners.result import PlanStep
-from causalplan.service.pool.robot_jobs import robot_simulation
+from causalplan.service.work.robot import robot_simulation
 from causalplan.sim.outcomes import Failure
 from causalplan.transfer.robot_verdict import (
     ROBOT_CANNOT_EXECUTE,

@@ -12,39 +12,19 @@ seeded generator, so fits estimated one by one, or in chunks, give what one run 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from causalplan.limits import LimitExceededError
 from causalplan.service.errors import InvalidRequestError
 from causalplan.service.jobs.requests import FitEstimationRequest
 from causalplan.service.jobs.work import Progress, in_pool
+from causalplan.service.work.batches import FitEstimateArguments
+from causalplan.service.work.registry import FIT_ESTIMATE
 
 if TYPE_CHECKING:
     from causalplan.service.api.schemas.jobs import FitEstimationJobIn
     from causalplan.service.deps import Services
     from causalplan.sim.fit_estimates import ChunkOutcome, InsertionChunk
-
-TRIAL_SECONDS = 0.1
-"""A generous bound on one noisy insertion, for a fit's time limit in a worker (a trial is far quicker)."""
-
-
-def estimate_fit_job(
-    object_id: str,
-    fit_id: str,
-    trials: int,
-    seed: int,
-    noise_mm: float,
-    noise_deg: float,
-    catalog_folders: tuple[Path, ...],
-) -> dict[str, object]:
-    """Return ``FitEstimate.as_dict()`` of one fit of the object (runs in a planner worker)."""
-    from causalplan.service.pool.catalog import worker_catalog
-    from causalplan.sim.fit_estimates import estimate_fits
-
-    obj = worker_catalog(catalog_folders).get(object_id)
-    (estimate,) = estimate_fits(obj, trials, seed, noise_mm, noise_deg, (fit_id,))
-    return estimate.as_dict()
 
 
 def prepare_fit_estimation(body: FitEstimationJobIn, services: Services) -> FitEstimationRequest:
@@ -111,15 +91,13 @@ def _on_cluster(request: FitEstimationRequest, services: Services, progress: Pro
 
 def _in_pool(request: FitEstimationRequest, services: Services, progress: Progress) -> list[dict[str, object]]:
     """Return the fits' estimates, each fit one call of a planner worker."""
-    settings = services.settings
-    object_id, fit_ids, trials = request.object, request.fits, request.trials
-    seed, noise_mm, noise_deg = request.seed, request.noise_mm, request.noise_deg
-    folders = tuple(settings.catalog_folders)
-    timeout = settings.robot_seconds + trials * TRIAL_SECONDS
+    fit_ids, trials = request.fits, request.trials
     rows: list[dict[str, object]] = []
     for fit_id in fit_ids:
-        args = (object_id, fit_id, trials, seed, noise_mm, noise_deg, folders)
-        rows.append(in_pool(services, progress, estimate_fit_job, args, timeout))
+        arguments = FitEstimateArguments(
+            request.object, fit_id, trials, request.seed, request.noise_mm, request.noise_deg
+        )
+        rows.append(in_pool(services, progress, FIT_ESTIMATE, arguments))
         progress(len(rows) * trials, len(fit_ids) * trials)
     return rows
 

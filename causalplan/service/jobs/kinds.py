@@ -11,8 +11,6 @@ own (``video``, ``fit_estimation``).
 from __future__ import annotations
 
 import io
-import tempfile
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from causalplan.errors import InputFileError
@@ -28,11 +26,12 @@ from causalplan.service.jobs.requests import (
 )
 from causalplan.service.jobs.video import prepare_video, run_video_job
 from causalplan.service.jobs.work import Kind, Progress, in_pool
-from causalplan.service.pool import jobs as worker_jobs
-from causalplan.service.pool.catalog import worker_catalog
 from causalplan.service.storage.jobs import JobKind
+from causalplan.service.work.batches import ConsensusArguments, TrialsArguments
+from causalplan.service.work.planning import SimulationArguments
+from causalplan.service.work.registry import CONSENSUS, JUDGED_TRIALS, QUEUED_SIMULATION
 from causalplan.transfer import batch
-from causalplan.transfer.batch import Trial, TrialResult, repeated_ids, run_batch, trials_of_lines
+from causalplan.transfer.batch import Trial, TrialResult, repeated_ids, trials_of_lines
 
 if TYPE_CHECKING:
     from causalplan.service.api.schemas.jobs import BatchJobIn, ConsensusJobIn, SimulationJobIn
@@ -42,8 +41,6 @@ CHUNK_SIZE = 20
 """Trials a planner worker judges per call: small enough for steady progress and a prompt cancel."""
 MAX_REPEATED_IDS_NAMED = 100
 """A batch result names at most this many ids that several trials share."""
-CONSENSUS_GRACE_SECONDS = 60.0
-"""A consensus job's worker may take this long beyond its trials' time limits (building, aligning)."""
 
 
 # -- batch --------------------------------------------------------------------------------------
@@ -73,7 +70,7 @@ def read_uploaded_trials(text: str, limit: int) -> list[Trial]:
 
 
 def prepare_batch(body: BatchJobIn, services: Services) -> BatchRequest:
-    from causalplan.service.answers import resolve_planner, resolve_time_limit
+    from causalplan.service.documents import resolve_planner, resolve_time_limit
 
     lines = csv_to_json_lines(body.trials) if body.format == "csv" else body.trials
     trials = read_uploaded_trials(lines, services.settings.max_job_trials)
@@ -85,13 +82,6 @@ def prepare_batch(body: BatchJobIn, services: Services) -> BatchRequest:
         simulate=body.simulate,
         validate=body.validate_plan,
     )
-
-
-def judge_trials(
-    trials: list[Trial], planner: str, time_limit: float, simulate: bool, folders: tuple[Path, ...], val: bool = False
-) -> list[TrialResult]:
-    """Return the results of a chunk of trials (what a planner worker runs); ``val``: VAL checks each plan."""
-    return run_batch(trials, worker_catalog(folders), planner, time_limit, simulate, val=val)
 
 
 def _summary(results: list[TrialResult]) -> dict[str, Any]:
@@ -133,13 +123,10 @@ def run_batch_job(request: BatchRequest, services: Services, progress: Progress)
         )
         return _summary(ordered)
     results: list[TrialResult] = []
-    folders = tuple(settings.catalog_folders)
     for start in range(0, total, CHUNK_SIZE):
-        chunk = trials[start : start + CHUNK_SIZE]
-        timeout = len(chunk) * (time_limit + settings.solve_grace_seconds)
-        results.extend(
-            in_pool(services, progress, judge_trials, (chunk, planner, time_limit, simulate, folders, val), timeout)
-        )
+        chunk = TrialsArguments(tuple(trials[start : start + CHUNK_SIZE]), planner, time_limit, simulate, val)
+        judged = in_pool(services, progress, JUDGED_TRIALS, chunk)
+        results.extend(judged)
         progress(len(results), total)
     return _summary(results)
 
@@ -179,21 +166,17 @@ def run_simulation_job(request: SimulationRequest, services: Services, progress:
     body = SimulationIn.model_validate(request.stored())
     inputs = plan_inputs(body, services, ClientIds())
     progress(0, 1)
-    args = (
+    arguments = SimulationArguments(
         inputs.model,
         inputs.mapping,
         inputs.planner,
         inputs.time_limit,
-        tuple(services.settings.catalog_folders),
         body.picture,
         body.robot,
         body.validate_plan,
         body.motors,
     )
-    timeout = inputs.time_limit + services.settings.solve_grace_seconds
-    if body.robot:
-        timeout += services.settings.robot_seconds
-    data = in_pool(services, progress, worker_jobs.simulate_job, args, timeout)
+    data = in_pool(services, progress, QUEUED_SIMULATION, arguments)
     progress(1, 1)
     return {**data, "model_id": request.model_id}
 
@@ -202,7 +185,7 @@ def run_simulation_job(request: SimulationRequest, services: Services, progress:
 
 
 def prepare_consensus(body: ConsensusJobIn, services: Services) -> ConsensusRequest:
-    from causalplan.service.answers import resolve_planner, resolve_time_limit
+    from causalplan.service.documents import resolve_planner, resolve_time_limit
 
     count = len([line for line in body.trials.splitlines() if line.strip()])
     if count == 0:
@@ -223,37 +206,12 @@ def prepare_consensus(body: ConsensusJobIn, services: Services) -> ConsensusRequ
     )
 
 
-def consensus_report(
-    text: str, min_support: float, planner: str, time_limit: float, simulate: bool, folders: tuple[Path, ...]
-) -> dict[str, Any]:
-    """Return ``causalplan consensus``'s report.json of the participants in ``text`` (what a worker runs)."""
-    from causalplan.consensus.build import build_consensus
-    from causalplan.consensus.judging import judge, report
-    from causalplan.consensus.participants import read_participants
-
-    catalog = worker_catalog(folders)
-    with tempfile.TemporaryDirectory(prefix="causalplan-upload-") as folder:
-        path = Path(folder) / "crowd.jsonl"
-        path.write_text(text, encoding="utf-8", errors="surrogatepass")
-        participants = read_participants(path)
-    crowd = build_consensus(participants, catalog, min_support)
-    return report(judge(crowd, participants, catalog, planner, time_limit, simulate))
-
-
 def run_consensus_job(request: ConsensusRequest, services: Services, progress: Progress) -> dict[str, Any]:
     progress(0, 1)
-    time_limit = request.time_limit
-    args = (
-        request.trials,
-        request.min_support,
-        request.planner,
-        time_limit,
-        request.simulate,
-        tuple(services.settings.catalog_folders),
+    arguments = ConsensusArguments(
+        request.trials, request.count, request.min_support, request.planner, request.time_limit, request.simulate
     )
-    # Every member's trial plus one per test object may each take the time limit.
-    timeout = (request.count + 8) * (time_limit + services.settings.solve_grace_seconds)
-    data = in_pool(services, progress, consensus_report, args, timeout + CONSENSUS_GRACE_SECONDS)
+    data = in_pool(services, progress, CONSENSUS, arguments)
     progress(1, 1)
     return data
 

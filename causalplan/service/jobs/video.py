@@ -22,10 +22,10 @@ from typing import TYPE_CHECKING, Any
 
 from causalplan.service.jobs.requests import FitsFilmRequest, PlanFilmRequest, VideoRequest
 from causalplan.service.jobs.work import JobCancelledError, JobFile, Outcome, Progress, in_pool
-from causalplan.service.pool.robot_jobs import CONTENT_TYPES, read_progress
+from causalplan.service.work.registry import FILM_OF_FITS, FILM_OF_PLAN
+from causalplan.service.work.robot import CONTENT_TYPES, FitsFilmArguments, PlanFilmArguments, read_progress
 
 if TYPE_CHECKING:
-    from causalplan.causal.model import CausalModel, Labelling
     from causalplan.service.api.schemas.jobs import VideoJobIn
     from causalplan.service.deps import Services
     from causalplan.service.documents import PlanInputs
@@ -52,37 +52,6 @@ def film_key(catalog_key: str, object_id: str, fit_ids: Sequence[str], video: st
 def video_url(job_id: object) -> str:
     """Return where the API serves the film of job ``job_id``."""
     return f"/v1/jobs/{job_id}/video"
-
-
-def film_plan_job(
-    model: CausalModel,
-    mapping: Labelling | None,
-    planner: str,
-    time_limit: float,
-    catalog_folders: tuple[Path, ...],
-    validate: bool,
-    video: str,
-    size: tuple[int, int],
-    progress: Path,
-) -> dict[str, object]:
-    """Plan ``model`` and film the robot carrying the plan out (runs in a planner worker).
-
-    Returns ``planning`` (as ``causalplan plan --json``), ``simulation`` and ``robot`` (as POST
-    /v1/simulations with ``robot``) and ``video``: the film's bytes, or None when there is no plan.
-    """
-    from causalplan.pddl.task import catalog_task
-    from causalplan.planners import pipeline
-    from causalplan.service.pool.catalog import worker_catalog
-    from causalplan.service.pool.robot_jobs import robot_outcome, robot_simulation
-
-    task = catalog_task(model, worker_catalog(catalog_folders), mapping)
-    result = pipeline.plan_task(task, planner, time_limit, val=validate)
-    data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "robot": None, "video": None}
-    if not result.has_plan:
-        return data
-    report, film = robot_simulation(task.obj, result.steps, video, size, progress)
-    data.update(simulation=report.as_dict(), robot=robot_outcome(report), video=film)
-    return data
 
 
 def _plan_inputs(fields: dict[str, Any], services: Services) -> PlanInputs:
@@ -116,20 +85,24 @@ def fits_film_request(object_id: str, fit_ids: tuple[str, ...], video: str, key:
 def _film_in_worker(
     request: VideoRequest, services: Services, progress: Progress, progress_file: Path
 ) -> dict[str, Any]:
-    from causalplan.service.pool.robot_jobs import robot_film_job
-
     settings = services.settings
     size = (settings.robot_video_width, settings.robot_video_height)
-    folders = tuple(settings.catalog_folders)
     video = request.video
     if isinstance(request, FitsFilmRequest):
-        args: tuple[Any, ...] = (request.object, tuple(request.fits), folders, video, size, progress_file)
-        made: dict[str, Any] = in_pool(services, progress, robot_film_job, args, settings.robot_seconds)
-        return made
+        fits = FitsFilmArguments(request.object, tuple(request.fits), video, size, progress_file)
+        return in_pool(services, progress, FILM_OF_FITS, fits)
     inputs = _plan_inputs(request.stored(), services)
-    args = (inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, folders, request.validate_plan)
-    timeout = inputs.time_limit + settings.solve_grace_seconds + settings.robot_seconds
-    data: dict[str, Any] = in_pool(services, progress, film_plan_job, (*args, video, size, progress_file), timeout)
+    plan = PlanFilmArguments(
+        inputs.model,
+        inputs.mapping,
+        inputs.planner,
+        inputs.time_limit,
+        request.validate_plan,
+        video,
+        size,
+        progress_file,
+    )
+    data = in_pool(services, progress, FILM_OF_PLAN, plan)
     return {**data, "model_id": request.model_id}
 
 

@@ -9,13 +9,14 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from pydantic import BaseModel
 
-from causalplan.service.errors import QueueFullError
 from causalplan.service.jobs.requests import JobRequest
-from causalplan.service.pool.pool import RunStoppedError
+from causalplan.service.work.calls import WorkStoppedError
+from causalplan.service.work.registry import Work
 
 if TYPE_CHECKING:
     from causalplan.service.deps import Services
 
+A = TypeVar("A")
 T = TypeVar("T")
 B = TypeVar("B", bound=BaseModel)
 R = TypeVar("R", bound=JobRequest)
@@ -69,22 +70,13 @@ class Kind(Generic[B, R]):
     run: Callable[[R, Services, Progress], dict[str, Any] | Outcome]
 
 
-def in_pool(
-    services: Services, progress: Progress, function: Callable[..., T], args: tuple[Any, ...], timeout: float
-) -> T:
-    """Return ``function(*args)`` run in a worker of the jobs' pool (never the interactive requests' pool).
+def in_pool(services: Services, progress: Progress, work: Work[A, T], arguments: A) -> T:
+    """Return ``work`` done on ``arguments`` by the work layer, in a worker of the jobs' pool.
 
-    The jobs' pool has a worker per runner thread and starts with its first job. A job is not
-    in a hurry: a full queue (QueueFullError) means wait and try again, not fail; a closed pool
-    (the server stopping) raises WorkerCrashedError at once. Once the job is stopped
-    (``progress.stop``), its worker is killed and this raises JobCancelledError.
+    Once the job is stopped (``progress.stop``), its worker is killed and this raises
+    JobCancelledError; a full pool is waited for (``Workers.queued_call``).
     """
-    services.job_pool.start_once()
-    while True:
-        try:
-            return services.job_pool.run(function, args, timeout, stop=progress.stop)
-        except RunStoppedError:
-            raise JobCancelledError from None
-        except QueueFullError as exc:
-            if progress.stop.wait(exc.retry_after):
-                raise JobCancelledError from None
+    try:
+        return services.work.run(work, arguments, stop=progress.stop)
+    except WorkStoppedError:
+        raise JobCancelledError from None

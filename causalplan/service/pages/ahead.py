@@ -17,9 +17,11 @@ from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import CausalModel, read_model
 from causalplan.errors import CausalPlanError
 from causalplan.objects.model import AssemblyObject
-from causalplan.service.answers import default_planner
 from causalplan.service.deps import Services
+from causalplan.service.documents import default_planner
 from causalplan.service.pages.drawings import plan_picture
+from causalplan.service.work.planning import PlanArguments
+from causalplan.service.work.registry import PLAN
 
 logger = logging.getLogger(__name__)
 
@@ -46,7 +48,8 @@ def needing(obj: AssemblyObject, parts: tuple[str, ...]) -> CausalModel:
 
 def plan_fits(services: Services, model: CausalModel) -> tuple[str, ...]:
     """Return the fits of the robot's plan of ``model``, in order (empty when there is no plan)."""
-    answer = services.answers.plan(model, None, default_planner(), services.settings.default_time_limit)
+    arguments = PlanArguments(model, None, default_planner(), services.settings.default_time_limit)
+    answer = services.work.answer(PLAN, arguments)
     steps = answer.data.get("plan") or []
     fits = tuple(str(step.get("fit") or "") for step in steps)
     return fits if fits and all(fits) else ()

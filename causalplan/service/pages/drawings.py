@@ -17,11 +17,11 @@ from causalplan.objects.model import AssemblyObject
 from causalplan.service.api.routes.models import SVG_SECURITY_HEADERS
 from causalplan.service.deps import Services
 from causalplan.service.pages import pictures
+from causalplan.service.work.pictures import AssemblyPictureArguments, PartPicturesArguments
+from causalplan.service.work.registry import ASSEMBLY_PICTURE, PART_PICTURES
 
 logger = logging.getLogger(__name__)
 
-PICTURE_SECONDS = 20.0
-"""Longest a worker may take to draw an object's parts or a plan's result."""
 SVG_HEADERS = {**SVG_SECURITY_HEADERS, "X-Content-Type-Options": "nosniff"}
 
 
@@ -56,10 +56,9 @@ def _picture_key(services: Services, *names: str) -> str:
 
 def part_picture(services: Services, obj: AssemblyObject, part_id: str) -> tuple[bytes, str]:
     """Return the simulator's picture of one part (PNG), or a plain drawing (SVG) when it cannot draw now."""
-    folders = tuple(services.settings.catalog_folders)
 
     def draw() -> dict[str, bytes]:
-        drawn = services.pool.run(pictures.part_pictures_job, (obj.id, folders), PICTURE_SECONDS)
+        drawn = services.work.run(PART_PICTURES, PartPicturesArguments(obj.id))
         return {_picture_key(services, obj.id, part): png for part, png in drawn.items()}
 
     try:
@@ -79,11 +78,10 @@ def is_plan_picture_kept(services: Services, obj: AssemblyObject, fit_ids: tuple
 
 def plan_picture(services: Services, obj: AssemblyObject, fit_ids: tuple[str, ...]) -> bytes:
     """Return the simulator's picture of the object after the plan that makes ``fit_ids`` (PNG)."""
-    folders = tuple(services.settings.catalog_folders)
     key = _picture_key(services, obj.id, *fit_ids)
 
     def draw() -> dict[str, bytes]:
-        return {key: services.pool.run(pictures.assembly_picture_job, (obj.id, fit_ids, folders), PICTURE_SECONDS)}
+        return {key: services.work.run(ASSEMBLY_PICTURE, AssemblyPictureArguments(obj.id, fit_ids))}
 
     png = services.caches.plan_pictures.get(key, draw)
     assert png is not None

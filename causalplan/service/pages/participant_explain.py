@@ -12,13 +12,14 @@ from typing import Any
 from fastapi import APIRouter
 from pydantic import Field
 
-from causalplan.service.answers import default_planner
 from causalplan.service.api.schemas.common import InputModel, OutputModel
 from causalplan.service.deps import CatalogDep, ServicesDep, SettingsDep
+from causalplan.service.documents import default_planner
 from causalplan.service.errors import InvalidRequestError, NotFoundError
 from causalplan.service.pages.journeys import JourneyDep
 from causalplan.service.pages.participation import invalid_model_error
-from causalplan.service.pool.explain_jobs import PLANS_PER_EXPLANATION, explanation_job
+from causalplan.service.work.planning import ExplanationArguments
+from causalplan.service.work.registry import EXPLANATION
 from causalplan.studies.steps import Stage, check_model, model_on
 
 router = APIRouter(prefix="/p/{code}", include_in_schema=False)
@@ -55,12 +56,9 @@ def explain(
     check = check_model(draft, catalog, settings)
     if not check.is_valid:
         raise invalid_model_error(check)
-    limit = settings.default_time_limit
-    args = (model_on(draft, obj.id), None, default_planner(), limit, tuple(settings.catalog_folders))
-    seconds = PLANS_PER_EXPLANATION * limit + settings.solve_grace_seconds
-    data: dict[str, Any] = services.answers.pool.run(
-        explanation_job, (*args, body.why, body.why_not, False, False), seconds
-    )
+    model, limit = model_on(draft, obj.id), settings.default_time_limit
+    arguments = ExplanationArguments(model, None, default_planner(), limit, body.why, body.why_not)
+    data: dict[str, Any] = services.work.run(EXPLANATION, arguments)
     contrast = data.get("why_not")
     if contrast is not None:
         steps = (contrast["alternative"].get("plan") or []) if contrast["code"] != "already_does" else []

@@ -7,20 +7,21 @@ experiment's ``participant_trials`` row links each trial to its participant.
 
 from __future__ import annotations
 
-import uuid
 from typing import Any
 
 from sqlalchemy.orm import Session
 
+from causalplan.causal.canonical import model_hash
 from causalplan.inputs import LoadedModel
-from causalplan.service.answers import default_planner, model_hash
 from causalplan.service.deps import Services
-from causalplan.service.documents import first_errors
+from causalplan.service.documents import default_planner, first_errors
 from causalplan.service.errors import InvalidModelError
 from causalplan.service.storage import crud
 from causalplan.service.storage.crud import PAGE_SESSION_PREFIX, ClientIds
 from causalplan.service.storage.experiments import ParticipantJourney
-from causalplan.service.storage.records import ParticipantTrialRecord, utc_now
+from causalplan.service.storage.participation import store_submitted_model, store_trial
+from causalplan.service.work.planning import PlanArguments, TransferArguments
+from causalplan.service.work.registry import PLAN, TRANSFER
 from causalplan.studies.errors import StepLockedError
 from causalplan.studies.steps import MappingCheck, ParticipantModel, Stage, model_on
 
@@ -49,9 +50,10 @@ def plans(services: Services, journey: ParticipantJourney, participant_model: Pa
     planner = default_planner()
     found = []
     for obj in journey.training:
-        answer = services.answers.plan(
+        arguments = PlanArguments(
             model_on(participant_model, obj.id), None, planner, services.settings.default_time_limit
         )
+        answer = services.work.answer(PLAN, arguments)
         steps = answer.data.get("plan") or []
         found.append(
             {
@@ -84,12 +86,7 @@ def submit_model(
         model_hash(model_on(participant_model, first)),
         client_ids(journey),
     )
-    with crud.storage_errors(session):  # the model and the participant's move to step 3 together
-        session.add(record)
-        session.flush()
-        journey.finish_model(participant_model, record.id)
-        session.add(journey.participant)
-        session.commit()
+    store_submitted_model(session, journey, participant_model, record)
 
 
 def run_trial(
@@ -109,21 +106,9 @@ def run_trial(
     planner = default_planner()
     model = model_on(participant_model, journey.training[0].id)
     limit = services.settings.default_time_limit
-    answer = services.answers.transfer(model, mapping.mapping, planner, limit, robot=journey.design.robot_verdict)
+    arguments = TransferArguments(model, mapping.mapping, planner, limit, robot=journey.design.robot_verdict)
+    answer = services.work.answer(TRANSFER, arguments)
     trial = crud.new_trial_record(
         model_id, mapping.document, planner, answer.data, answer.cached, answer.seconds, client_ids(journey)
     )
-    link = ParticipantTrialRecord(
-        id=uuid.uuid4(),
-        participant_id=journey.participant.id,
-        trial_id=trial.id,
-        test_object=test.id,
-        position=index,
-        created_at=utc_now(),
-    )
-    # The trial first: the link's foreign key needs it, and the two are committed together.
-    with crud.storage_errors(session):
-        session.add(trial)
-        session.flush()
-        session.add(link)
-        session.commit()
+    store_trial(session, journey, trial, test.id, index)

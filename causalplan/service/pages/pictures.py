@@ -1,56 +1,19 @@
-"""Pictures for the pages, drawn by the simulator: each part of an object, and an object after a plan.
+"""Keeping the pages' pictures, and a plain one when the simulator cannot draw.
 
-The jobs here run in a planner worker process (PyBullet never loads in the web server);
-``PictureCache`` keeps what they drew in the server (the app's caches, ``service.caches``),
-since a picture runs the simulator and the same pictures are asked for again and again. When
-the simulator cannot draw (busy, missing), ``drawing`` gives a plain picture with the part's
-name instead.
+The simulator draws in a worker process (``work.pictures``: PyBullet never loads in the web
+server); ``PictureCache`` keeps what it drew in the server (the app's caches, ``service.caches``),
+since the same pictures are asked for again and again. When the simulator cannot draw (busy,
+missing), ``drawing`` gives a plain picture with the part's name instead.
 """
 
 from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from pathlib import Path
 from xml.sax.saxutils import escape
 
 from causalplan.caches import BoundedCache
-from causalplan.service.pool.catalog import worker_catalog
-
-PART_PICTURE_SIZE = (320, 240)
-PLAN_PICTURE_SIZE = (480, 360)
-
-
-def part_pictures_job(object_id: str, catalog_folders: tuple[Path, ...]) -> dict[str, bytes]:
-    """Return a PNG of each part of an object, alone on the table (runs in a worker)."""
-    from causalplan.sim.geometry import solids
-    from causalplan.sim.poses import Pose
-    from causalplan.sim.render import Camera, draw
-    from causalplan.sim.scene import Scene
-
-    obj = worker_catalog(catalog_folders).get(object_id)
-    pictures: dict[str, bytes] = {}
-    for part_id, solid in solids(obj).items():
-        with Scene({part_id: solid}) as scene:
-            # Centred on the table, standing on it.
-            pose = Pose(
-                (-(solid.lower[0] + solid.upper[0]) / 2, -(solid.lower[1] + solid.upper[1]) / 2, -solid.lower[2])
-            )
-            scene.add_part(part_id, pose, dynamic=False)
-            camera = Camera.around(scene, pose.apply(solid.lower), pose.apply(solid.upper), size=PART_PICTURE_SIZE)
-            pictures[part_id] = draw(scene, camera, (), "").png()
-    return pictures
-
-
-def assembly_picture_job(object_id: str, fit_ids: tuple[str, ...], catalog_folders: tuple[Path, ...]) -> bytes:
-    """Return a PNG of the object after the plan that makes ``fit_ids`` in order (runs in a worker)."""
-    from causalplan.sim import RenderMode, StepRequest, simulate_plan
-
-    obj = worker_catalog(catalog_folders).get(object_id)
-    steps = [StepRequest(fit.primitive, fit.moving_part, fit.fixed_part, fit.id) for fit in map(obj.fit, fit_ids)]
-    report = simulate_plan(obj, steps, render=RenderMode.FINAL, size=PLAN_PICTURE_SIZE)
-    assert report.picture is not None, "RenderMode.FINAL always draws the final picture"
-    return report.picture.png()
+from causalplan.service.work.pictures import PART_PICTURE_SIZE
 
 
 def drawing(name: str, width: int = PART_PICTURE_SIZE[0], height: int = PART_PICTURE_SIZE[1]) -> bytes:

@@ -30,12 +30,13 @@ from causalplan.service.errors import FilmNotFoundError, InvalidRequestError, No
 from causalplan.service.jobs.video import FILM_KEY, FILM_KEY_PATTERN, film_key, fits_film_request
 from causalplan.service.owners import admit_job, job_limits, participant_owner
 from causalplan.service.pages.journeys import JourneyDep
-from causalplan.service.pool.robot_jobs import CONTENT_TYPES, robot_playback_job
 from causalplan.service.responses import film_response
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.experiments import ParticipantJourney
 from causalplan.service.storage.jobs import JobKind, JobStatus
 from causalplan.service.storage.records import JobRecord, utc_now
+from causalplan.service.work.registry import ROBOT_PLAYBACK
+from causalplan.service.work.robot import CONTENT_TYPES, PlaybackArguments
 
 router = APIRouter(prefix="/p/{code}/films", include_in_schema=False)
 
@@ -103,8 +104,7 @@ def playback_response(obj: AssemblyObject, fits: list[str], services: Services) 
     The robot's run alone (no film): ``sim.robot.playback``'s document, plus ``outcome``
     (whether it carried out the plan), as the worker encoded it.
     """
-    args = (obj.id, tuple(fits), tuple(services.settings.catalog_folders))
-    document = services.pool.run(robot_playback_job, args, services.settings.robot_seconds)
+    document = services.work.run(ROBOT_PLAYBACK, PlaybackArguments(obj.id, tuple(fits)))
     return Response(document, media_type="application/json")
 
 

@@ -1,1 +1,4 @@
-"""The planner pools: pebble's worker processes (``pool``), what a worker does (``worker``), its jobs (``jobs``)."""
+"""The worker processes: pebble's pools (``pool``), what a worker does for itself (``worker``), its catalog.
+
+What a worker runs is the work layer's (``service.work``), the only caller of these pools.
+"""

@@ -1,4 +1,4 @@
-"""The catalog a worker process reads once: the jobs of a worker share it."""
+"""The catalog a worker process reads once: every call a worker serves shares it."""
 
 from __future__ import annotations
 

@@ -1,16 +1,16 @@
 """The planner pool: warm worker processes behind a queue limit, run by ``pebble``.
 
 ``pebble.ProcessPool`` starts the workers (forked from a fork server, never from the app,
-which runs uvicorn's and anyio's threads), kills the one whose job overruns its time limit or
-is cancelled, fails only that job, and replaces the worker. What it cannot do is kept here,
+which runs uvicorn's and anyio's threads), kills the one whose call overruns its time limit or
+is cancelled, fails only that call, and replaces the worker. What it cannot do is kept here,
 each for its reason:
 
 - the in-flight cap and the wait for a free worker: pebble queues without limit;
-- the workers' hello and "started" messages (``worker.run_job``): pebble does not say which
-  worker runs a job, and a cancelled job's caller waits until that worker is dead;
+- the workers' hello and "started" messages (``worker.run_call``): pebble does not say which
+  worker runs a call, and a cancelled call's caller waits until that worker is dead;
 - a new pebble pool when a worker dies while none is working: pebble then takes the whole pool
-  for broken (its sign of a failing initializer), and every later job would fail;
-- failing the jobs still running when the pool closes: pebble leaves their futures unresolved.
+  for broken (its sign of a failing initializer), and every later call would fail;
+- failing the calls still running when the pool closes: pebble leaves their futures unresolved.
 
 ``PlannerPool.run`` blocks the calling thread (a route's worker thread, never the event loop).
 """
@@ -54,10 +54,12 @@ CLOSED = "closed"
 STOP_POLL_SECONDS = 0.02
 """How often a call with a ``stop`` event looks at it while its worker works."""
 KILL_WAIT_SECONDS = CONSTS.term_timeout + 2.0
-"""How long a stopped call waits for its job to reach a worker, then for pebble to kill that worker
+"""How long a stopped call waits for its call to reach a worker, then for pebble to kill that worker
 (SIGTERM, then SIGKILL after ``term_timeout``)."""
+WORK_MODULE = "causalplan.service.work.registry"
+"""The functions workers run (the work layer's registry), named here so the fork server imports them once."""
 _CONTEXT = multiprocessing.get_context("forkserver")
-_CONTEXT.set_forkserver_preload([worker.__name__])  # each worker forks with the planners imported
+_CONTEXT.set_forkserver_preload([worker.__name__, WORK_MODULE])  # each worker forks with the planners imported
 
 
 class RunStoppedError(Exception):
@@ -94,7 +96,7 @@ class PlannerPool:
         self._busy = 0
         self._completed = 0
         self._hellos = 0
-        self._seconds_per_job = 0.05  # moving average, for Retry-After
+        self._seconds_per_call = 0.05  # moving average, for Retry-After
         self._workers: set[int] = set()
         self._started: dict[int, int | None] = {}  # a run in progress -> the pid of the worker that took it
         self._futures: set[Future[Any]] = set()
@@ -111,7 +113,7 @@ class PlannerPool:
             self._start()
 
     def start_once(self) -> None:
-        """Start the workers unless they are started (the jobs' pool starts when its first job comes)."""
+        """Start the workers unless they are started (the jobs' pool starts with its first call)."""
         with self._start_lock:
             if self._pebble is None and not self._closed:
                 self._start()
@@ -130,7 +132,7 @@ class PlannerPool:
         if not ready:
             self.close()
             raise WorkerCrashedError(
-                "A planner worker did not start; run `python -c 'import causalplan.service.pool.jobs'` to see why."
+                "A planner worker did not start; run `python -c 'import causalplan.service.work.registry'` to see why."
             )
 
     def _new_pebble(self) -> ProcessPool:
@@ -196,7 +198,7 @@ class PlannerPool:
     def retry_after(self) -> int:
         """Return the seconds after which a refused request may find room (at least 1)."""
         with self._lock:
-            return max(1, math.ceil(self._seconds_per_job * self._in_flight / self.size))
+            return max(1, math.ceil(self._seconds_per_call * self._in_flight / self.size))
 
     def run(
         self,
@@ -216,8 +218,8 @@ class PlannerPool:
         a refused request runs nothing; what it raises is raised once the worker has answered.
 
         Raises QueueFullError (429), PlanningTimeoutError (504), WorkerCrashedError (503; also
-        once the pool is closed), the ``CausalPlanError`` the job raised, InternalError for a
-        bug in the job, or what pickling the job raised.
+        once the pool is closed), the ``CausalPlanError`` the call raised, InternalError for a
+        bug in the function, or what pickling the call raised.
         """
         self._admit()
         try:
@@ -280,7 +282,7 @@ class PlannerPool:
         try:
             try:
                 reply = self._reply(future, run, timeout, stop)
-            except BrokenProcessPool:  # a worker died before it took the job: its replacement does it
+            except BrokenProcessPool:  # a worker died before it took the call: its replacement does it
                 future = self._schedule(run, function, args, timeout)
                 reply = self._reply(future, run, timeout, stop)
         except BrokenProcessPool:
@@ -292,7 +294,7 @@ class PlannerPool:
                 self._futures.discard(future)
         with self._lock:
             self._completed += 1
-            self._seconds_per_job = 0.8 * self._seconds_per_job + 0.2 * (time.perf_counter() - started)
+            self._seconds_per_call = 0.8 * self._seconds_per_call + 0.2 * (time.perf_counter() - started)
         if failure is not None:
             raise failure
         return _unwrap(reply)
@@ -302,9 +304,9 @@ class PlannerPool:
     ) -> Future[Any]:
         pebble = self._pebble_pool()
         try:
-            future: Future[Any] = pebble.schedule(worker.run_job, (run, function, args), timeout=timeout)
+            future: Future[Any] = pebble.schedule(worker.run_call, (run, function, args), timeout=timeout)
         except RuntimeError:  # broken since we looked
-            future = self._pebble_pool().schedule(worker.run_job, (run, function, args), timeout=timeout)
+            future = self._pebble_pool().schedule(worker.run_call, (run, function, args), timeout=timeout)
         with self._lock:
             self._futures.add(future)
         return future
@@ -342,7 +344,7 @@ class PlannerPool:
     def _kill(self, future: Future[Any], run: int) -> None:
         """Cancel ``future`` once a worker has it (pebble then kills that worker); wait until the worker is dead.
 
-        A job on its way to a worker is let arrive first: cancelled on the way, it would still
+        A call on its way to a worker is let arrive first: cancelled on the way, it would still
         be run by the worker that takes it, until pebble kills that one too.
         """
         deadline = time.monotonic() + KILL_WAIT_SECONDS
@@ -358,11 +360,11 @@ class PlannerPool:
         remove_stale_folders()
 
     def run_isolated(self, function: Callable[..., T], args: tuple[Any, ...], timeout: float) -> T:
-        """Run one job in a fresh worker process that exits afterwards (for probes that import a lot)."""
+        """Run one call in a fresh worker process that exits afterwards (for probes that import a lot)."""
         initargs = (os.getpid(), dict(os.environ), self.memory_mb, None, True)
         pebble = ProcessPool(1, initializer=worker.initialize, initargs=initargs, context=_CONTEXT)
         try:
-            reply = pebble.schedule(worker.run_job, (None, function, args), timeout=timeout).result()
+            reply = pebble.schedule(worker.run_call, (None, function, args), timeout=timeout).result()
         except TimeoutError:
             raise PlanningTimeoutError(f"The probe did not finish within {timeout:g} s.") from None
         except (ProcessExpired, BrokenProcessPool):
@@ -413,5 +415,5 @@ def _unwrap(reply: tuple[Any, ...]) -> Any:
         # A class this process has not imported (e.g. the consensus's) is found as the root: keep the code.
         error.code = code
         raise error
-    logger.error("planner worker job failed:\n%s", reply[1])
+    logger.error("planner worker call failed:\n%s", reply[1])
     raise InternalError("The planner failed unexpectedly; the server log has the details.")

@@ -1,10 +1,10 @@
-"""What runs inside a planner worker process: its start (pebble's initializer), each job, and its end.
+"""What runs inside a planner worker process: its start (pebble's initializer), each call, and its end.
 
 ``pebble`` starts, limits by time and kills the workers (``pool.PlannerPool``); here is only
 what a worker does for itself. Its start (``initialize``) takes the app's environment (a fork
 server's worker would otherwise have the server's, from when it started), sets the memory
 limit, makes the worker's temp folder (its TMPDIR), imports and warms the planners once, and
-says hello with its pid. A job (``run_job``) that may be stopped first says which worker took
+says hello with its pid. A call (``run_call``) that may be stopped first says which worker took
 it; each answers ``("ok", value)``, ``("error", code, message, details)`` for a
 ``CausalPlanError``, or ``("crash", text)`` for anything else (an exception of ours might not
 unpickle in the app).
@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import gc
+import importlib
 import os
 import re
 import resource
@@ -33,17 +34,19 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
+from causalplan import caches
 from causalplan.errors import CausalPlanError
-from causalplan.planners import processes
+from causalplan.planners import fd, processes
 from causalplan.service.errors import PlannerOutOfMemoryError
-from causalplan.service.pool.jobs import warm_up
+from causalplan.service.pool.catalog import worker_catalog
+from causalplan.settings import Settings
 
 FOLDER_PREFIX = "causalplan-worker-"
 """A worker's temp folder is ``causalplan-worker-<app pid>-<worker pid>-<random>``."""
 _FOLDER_NAME = re.compile(re.escape(FOLDER_PREFIX) + r"(\d+)-(?:(\d+)-)?")
 
 Message = tuple[str, int, int]
-"""What a worker tells the app: ("ready", its pid, 0) once warm, ("started", its pid, run) per job."""
+"""What a worker tells the app: ("ready", its pid, 0) once warm, ("started", its pid, run) per call."""
 READY = "ready"
 STARTED = "started"
 
@@ -77,6 +80,22 @@ def remove_stale_folders(root: Path | None = None) -> list[Path]:
             shutil.rmtree(folder, ignore_errors=True)
             removed.append(folder)
     return removed
+
+
+def warm_up() -> None:
+    """Do once, before the first call, what solves need: settings applied, translator imported, a search started.
+
+    The catalog is read too. A planner that cannot run says so in its own answers (and /health).
+    """
+    settings = Settings()
+    if settings.fd_binary is not None:
+        fd.use_search_binary(settings.fd_binary)
+    caches.fresh({"fd_answers": settings.solve_cache_size})  # this worker's own, sized by the settings
+    with contextlib.suppress(Exception):  # a translator that cannot run says so in the answers (and /health)
+        importlib.import_module("fast_downward.translate.main")
+    fd.prestart(fd.CONFIGS["fd"])  # the default search, waiting for its first task
+    with contextlib.suppress(CausalPlanError):
+        worker_catalog(())
 
 
 def initialize(
@@ -116,10 +135,10 @@ def _stop(folder: Path, number: int, _frame: FrameType | None) -> None:
     os._exit(128 + number)
 
 
-def run_job(run: int | None, function: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, ...]:
-    """Return the reply: the job's value, its ``CausalPlanError``, or a bug's traceback.
+def run_call(run: int | None, function: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, ...]:
+    """Return the reply: the function's value, its ``CausalPlanError``, or a bug's traceback.
 
-    ``run``: the number of a job that may be stopped, whose caller must know which worker took it.
+    ``run``: the number of a call that may be stopped, whose caller must know which worker took it.
     """
     if run is not None:
         for messages in _messages:

@@ -21,6 +21,7 @@ from causalplan.service.storage.records import (
     TrialRecord,
     utc_now,
 )
+from causalplan.studies.assignment import Place, choose
 from causalplan.studies.counterbalance import object_orders
 from causalplan.studies.design import Condition, Design
 from causalplan.studies.journey import Journey
@@ -117,8 +118,10 @@ def add_participants(
 ) -> list[ParticipantRecord]:
     """Make ``count`` participant links, in one condition or spread evenly over all; return them.
 
-    Each participant is numbered within their condition, and that number picks their object
-    orders from the Latin squares (``counterbalance.object_orders``).
+    Spread, each link joins the condition ``studies.assignment.choose`` picks (the rule arrivals
+    on the public link follow), counting every participant made so far. Each participant is
+    numbered within their condition, and that number picks their object orders from the Latin
+    squares (``counterbalance.object_orders``).
     """
     design = Design.from_dict(experiment.design)
     if not 1 <= count <= MAX_LINKS_PER_REQUEST:
@@ -137,11 +140,12 @@ def add_participants(
     taken = participants_per_condition(session, experiment.id)
     made: list[ParticipantRecord] = []
     for _ in range(count):
-        condition = (
-            design.condition(condition_name)
-            if condition_name is not None
-            else min(design.conditions, key=lambda c: taken[c.name])  # ties: the first defined
-        )
+        name = condition_name
+        if name is None:  # the arrivals' rule: the emptiest (links have no quota, so every condition is open)
+            place = choose([Place(c.name, taken[c.name], quota=None) for c in design.conditions])
+            assert place is not None, "a condition without a quota is always open"
+            name = place.condition
+        condition = design.condition(name)
         made.append(participant_record(experiment, design, condition, taken[condition.name]))
         taken[condition.name] += 1
     save(session, *made)

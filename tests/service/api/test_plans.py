@@ -2,14 +2,22 @@
 
 from __future__ import annotations
 
+import sys
 import uuid
+from collections.abc import Callable
+from pathlib import Path
+from types import FrameType
 from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
 
+import causalplan.service
 from causalplan.planners import pipeline
 from causalplan.planners.result import MIN_TIME_LIMIT
+from causalplan.service.api.routes.plans import create_plan
+from causalplan.service.api.schemas.plans import PlanIn
+from causalplan.service.storage.crud import ClientIds
 from tests.service.fixtures import (
     DESK_LAMP,
     FLASHLIGHT_MAPPING,
@@ -289,3 +297,39 @@ def test_val_checks_the_plan_by_default_as_in_the_cli_and_validate_false_skips_i
     assert plain.status_code == checked.status_code == 200, checked.text
     assert checked.json()["validated_by"] == {"replay": "valid", "val": "valid"}  # `causalplan plan --json`'s
     assert plain.json()["validated_by"] == {"replay": "valid"}  # `causalplan plan --no-val --json`'s
+
+
+SERVICE = Path(causalplan.service.__file__).parent
+WORK_LAYER = SERVICE / "work"
+
+
+def service_files_before_the_work_layer(call: Callable[[], object]) -> tuple[list[str], bool]:
+    """Return the service files whose functions ``call`` runs before it first enters the work layer, in order,
+    and whether it entered it (a trace of this thread with ``sys.setprofile``)."""
+    entered: list[str] = []
+    reached = False
+
+    def profile(frame: FrameType, event: str, _: object) -> None:
+        nonlocal reached
+        path = Path(frame.f_code.co_filename)
+        if event != "call" or reached or not path.is_relative_to(SERVICE):
+            return
+        if path.is_relative_to(WORK_LAYER):
+            reached = True
+        elif (name := path.relative_to(SERVICE).as_posix()) not in entered:
+            entered.append(name)
+
+    sys.setprofile(profile)
+    try:
+        call()
+    finally:
+        sys.setprofile(None)
+    return entered, reached
+
+
+def test_a_plan_request_reaches_the_work_layer_through_two_service_files(client: TestClient) -> None:
+    # The route and the reading of its documents, then the work layer: three service files before planning.
+    services = services_of(client)
+    body = PlanIn.model_validate({"model": with_unique_effect(DESK_LAMP)})
+    files, reached = service_files_before_the_work_layer(lambda: create_plan(body, services, ClientIds()))
+    assert reached and files == ["api/routes/plans.py", "documents.py"]

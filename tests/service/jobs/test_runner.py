@@ -24,10 +24,11 @@ from sqlalchemy.orm import Session
 from causalplan.consensus.population import population
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.api.schemas.jobs import BatchJobIn
-from causalplan.service.jobs.kinds import KINDS, csv_to_json_lines, judge_trials, read_uploaded_trials
+from causalplan.service.jobs.kinds import KINDS, csv_to_json_lines, read_uploaded_trials
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.jobs import MAX_ATTEMPTS
 from causalplan.service.storage.records import JobRecord, utc_now
+from causalplan.service.work.batches import TrialsArguments, judged_trials
 from causalplan.transfer.batch import read_trials, run_batch
 from tests.service.fixtures import (
     DESK_LAMP,
@@ -176,7 +177,8 @@ def test_a_batch_job_checks_plans_with_val_by_default_as_the_cli_does(jobs_clien
     ):
         stored = KINDS["batch"].prepare(BatchJobIn.model_validate(body), services).stored()
         assert stored["validate"] is expected
-    (checked,) = judge_trials(read_uploaded_trials(lines, 1), "auto", 30.0, False, (), val=True)
+    arguments = TrialsArguments(tuple(read_uploaded_trials(lines, 1)), "auto", 30.0, False, val=True)
+    (checked,) = judged_trials(arguments, services.catalog)
     assert checked.verdict.plan is not None and checked.verdict.plan.validated_by["val"] == "valid"
 
 

@@ -18,11 +18,11 @@ def sleep_then_plan(*args: Any) -> dict[str, object]:
     import tempfile
     from pathlib import Path
 
-    from causalplan.service.pool.jobs import plan_job
+    from causalplan.service.work.planning import plan
 
     (Path(tempfile.gettempdir()) / STARTED_MARK).touch()
     time.sleep(SLOW_JOB_SECONDS)
-    return plan_job(*args)
+    return plan(*args)
 
 
 def crash_with_exception(*_: Any) -> dict[str, object]:

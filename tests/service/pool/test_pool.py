@@ -23,12 +23,13 @@ from causalplan.causal.documents import SourceMap
 from causalplan.inputs import model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.service import main
-from causalplan.service.answers import ResultCache, answer_key, mapping_text, model_text
 from causalplan.service.errors import PlanningTimeoutError, QueueFullError, StorageError, WorkerCrashedError
 from causalplan.service.jobs.work import Progress, in_pool
-from causalplan.service.pool import jobs
 from causalplan.service.pool.pool import PlannerPool, RunStoppedError
 from causalplan.service.pool.worker import FOLDER_PREFIX
+from causalplan.service.work.calls import ResultCache, answer_key, canonical_key
+from causalplan.service.work.planning import PlanArguments
+from causalplan.service.work.registry import PLAN, Pool, Work
 from tests.service.fixtures import (
     DESK_LAMP,
     error_of,
@@ -75,7 +76,7 @@ def test_a_full_queue_is_429_with_retry_after(one_worker: TestClient, monkeypatc
     pool = services_of(one_worker).pool
     answered = {"model": with_unique_effect(DESK_LAMP)}
     assert one_worker.post("/v1/plans", json=answered).status_code == 200
-    monkeypatch.setattr(jobs, "plan_job", sleep_then_plan)
+    monkeypatch.setattr(PLAN, "function", sleep_then_plan)
     thread, responses = post_in_background(one_worker, {"model": with_unique_effect(DESK_LAMP)})
     wait_until(lambda: pool.stats().busy == 1)
     refused = one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)})
@@ -93,7 +94,7 @@ def test_a_full_queue_is_429_with_retry_after(one_worker: TestClient, monkeypatc
 
 def test_a_killed_worker_fails_only_its_request(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
     pool = services_of(one_worker).pool
-    monkeypatch.setattr(jobs, "plan_job", sleep_then_plan)
+    monkeypatch.setattr(PLAN, "function", sleep_then_plan)
     [pid] = pool.worker_pids()
     (_temp_folder_of(pid) / STARTED_MARK).unlink(missing_ok=True)  # left by an earlier slow job of this worker
     thread, responses = post_in_background(one_worker, {"model": with_unique_effect(DESK_LAMP)})
@@ -121,7 +122,7 @@ def test_a_worker_killed_while_idle_is_replaced_before_use(one_worker: TestClien
 
 
 def test_a_stuck_worker_is_killed_after_its_time_limit(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(jobs, "plan_job", sleep_forever)
+    monkeypatch.setattr(PLAN, "function", sleep_forever)
     response = one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP), "time_limit": 0.5})
     error = error_of(response, 504)
     assert error["code"] == "planning_timeout"
@@ -132,7 +133,7 @@ def test_a_stuck_worker_is_killed_after_its_time_limit(one_worker: TestClient, m
 
 
 def test_a_bug_in_a_job_is_500_without_a_traceback(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(jobs, "plan_job", crash_with_exception)
+    monkeypatch.setattr(PLAN, "function", crash_with_exception)
     error = error_of(one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}), 500)
     assert error["code"] == "internal_error"
     assert "a bug in a planner" not in error["message"]
@@ -143,7 +144,7 @@ def test_a_bug_in_a_job_is_500_without_a_traceback(one_worker: TestClient, monke
 def test_a_worker_out_of_memory_is_503_and_keeps_serving(
     one_worker: TestClient, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(jobs, "plan_job", allocate_too_much)
+    monkeypatch.setattr(PLAN, "function", allocate_too_much)
     error = error_of(one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}), 503)
     assert error["code"] == "planner_out_of_memory"
     monkeypatch.undo()
@@ -174,7 +175,7 @@ def test_a_full_queue_with_a_waiting_line(tmp_path: Path, monkeypatch: pytest.Mo
     settings = settings_for(f"sqlite:///{tmp_path}/db.sqlite3", planning_workers=1, queue_size=1)
     with running_client(settings) as client:
         pool = services_of(client).pool
-        monkeypatch.setattr(jobs, "plan_job", sleep_then_plan)
+        monkeypatch.setattr(PLAN, "function", sleep_then_plan)
         running = post_in_background(client, {"model": with_unique_effect(DESK_LAMP)})
         wait_until(lambda: pool.stats().busy == 1)
         waiting = post_in_background(client, {"model": with_unique_effect(DESK_LAMP)})
@@ -211,7 +212,7 @@ def test_canonical_keys_ignore_layout_but_not_meaning(catalog: Catalog) -> None:
     other = model({**DESK_LAMP, "goal": "Light"})
 
     def request_key(kind: str, model: Any, planner: str, limit: float, catalog: str) -> str:
-        return answer_key(kind, model_text(model), mapping_text(None), planner, limit, catalog)
+        return answer_key(kind, canonical_key(PlanArguments(model, None, planner, limit)), catalog)
 
     key = request_key("plan", base, "fd", 30.0, "catalog")
     assert key == request_key("plan", layout, "fd", 30.0, "catalog")
@@ -429,12 +430,14 @@ def test_a_closed_pool_answers_503_and_a_job_stops_trying(one_worker: TestClient
     with pytest.raises(WorkerCrashedError):
         closed.run(timed_sleep, (0.0,), 30)
     # A job's call gives up at once: it used to take the closed pool for a full one and retry forever.
-    services = dataclasses.replace(services_of(one_worker), job_pool=closed)
+    running = services_of(one_worker)
+    services = dataclasses.replace(running, work=dataclasses.replace(running.work, jobs=closed))
+    never_runs = Work("sleep", crash_with_exception, float, Pool.JOBS, lambda arguments, settings: 30.0)
     raised: list[BaseException] = []
 
     def call() -> None:
         try:
-            in_pool(services, Progress(lambda done, total: None), timed_sleep, (0.0,), 30)
+            in_pool(services, Progress(lambda done, total: None), never_runs, 0.0)
         except Exception as exc:  # noqa: BLE001 - checked below
             raised.append(exc)
 

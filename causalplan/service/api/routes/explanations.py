@@ -10,7 +10,8 @@ from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.api.schemas.explanations import ExplanationIn, ExplanationOut
 from causalplan.service.deps import ClientIdsDep, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, plan_inputs
-from causalplan.service.pool.explain_jobs import PLANS_PER_EXPLANATION, explanation_job
+from causalplan.service.work.planning import ExplanationArguments
+from causalplan.service.work.registry import EXPLANATION
 
 router = APIRouter(
     prefix="/v1/explanations",
@@ -32,17 +33,15 @@ def create_explanation(body: ExplanationIn, services: ServicesDep, client: Clien
     """
     inputs = plan_inputs(body, services, client)
     inputs.store(services)
-    args = (
+    arguments = ExplanationArguments(
         inputs.model,
         inputs.mapping,
         inputs.planner,
         inputs.time_limit,
-        tuple(services.settings.catalog_folders),
         body.why,
         body.why_not,
         body.validate_plan,
         body.simulate,
     )
-    seconds = PLANS_PER_EXPLANATION * inputs.time_limit + services.settings.solve_grace_seconds
-    data: dict[str, Any] = services.answers.pool.run(explanation_job, args, seconds)
+    data = services.work.run(EXPLANATION, arguments)
     return {**data, "model_id": inputs.submission.record.id}

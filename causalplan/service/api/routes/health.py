@@ -9,11 +9,9 @@ from pathlib import Path
 from typing import Any
 
 from fastapi import APIRouter
-from sqlalchemy import text
 from sqlalchemy.exc import SQLAlchemyError
 
 from causalplan.errors import CausalPlanError
-from causalplan.service.answers import default_planner
 from causalplan.service.api.schemas.health import (
     DatabaseHealthOut,
     FastDownwardHealthOut,
@@ -22,8 +20,10 @@ from causalplan.service.api.schemas.health import (
     StorageHealthOut,
 )
 from causalplan.service.deps import Services, ServicesDep
+from causalplan.service.documents import default_planner
 from causalplan.service.jobs.kinds import KINDS
 from causalplan.service.storage import jobs as job_store
+from causalplan.service.storage.health import is_server_read_only, ping
 from causalplan.service.storage.migrate import current_revision
 from causalplan.service.storage.session import sqlite_path
 from causalplan.version import __version__
@@ -44,10 +44,8 @@ def _write_problem(engine_backend: str, services: Services) -> str | None:
             if place.exists() and not os.access(place, os.W_OK):
                 return f"the SQLite {'file' if place == path else 'folder'} is read-only"
         return None
-    if engine_backend == "postgresql":
-        with services.engine.connect() as connection:
-            if connection.execute(text("SHOW transaction_read_only")).scalar() == "on":
-                return "the database server is read-only"
+    if engine_backend == "postgresql" and is_server_read_only(services.engine):
+        return "the database server is read-only"
     return None
 
 
@@ -56,8 +54,7 @@ def database_health(services: Services) -> DatabaseHealthOut:
     backend = services.engine.dialect.name
     expected = services.revision  # what start-up migrated to: the newest the package ships
     try:
-        with services.engine.connect() as connection:
-            connection.execute(text("SELECT 1"))
+        ping(services.engine)
         revision = current_revision(services.engine)
         read_only = _write_problem(backend, services)
     except SQLAlchemyError as exc:

@@ -6,11 +6,16 @@ from typing import Any
 
 from fastapi import APIRouter
 
-from causalplan.service.answers import compiled_pddl
+from causalplan.causal.model import CausalModel, Labelling
+from causalplan.objects.catalog import Catalog
+from causalplan.pddl.task import catalog_task
+from causalplan.pddl.writer import compile_task
 from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.api.schemas.plans import PlanIn, PlanOut
 from causalplan.service.deps import ClientIdsDep, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, plan_inputs
+from causalplan.service.work.planning import PlanArguments
+from causalplan.service.work.registry import PLAN
 
 router = APIRouter(
     prefix="/v1/plans",
@@ -29,14 +34,8 @@ def create_plan(body: PlanIn, services: ServicesDep, client: ClientIdsDep) -> di
     model or mapping is answered with 422 and the CLI's codes.
     """
     inputs = plan_inputs(body, services, client)
-    answer = services.answers.plan(
-        inputs.model,
-        inputs.mapping,
-        inputs.planner,
-        inputs.time_limit,
-        lambda: inputs.store(services),
-        val=body.validate_plan,
-    )
+    arguments = PlanArguments(inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, body.validate_plan)
+    answer = services.work.answer(PLAN, arguments, lambda: inputs.store(services))
     pddl = compiled_pddl(services.catalog, inputs.model, inputs.mapping) if body.include_pddl else None
     return {
         **answer.data,
@@ -46,3 +45,9 @@ def create_plan(body: PlanIn, services: ServicesDep, client: ClientIdsDep) -> di
         "model_id": inputs.submission.record.id,
         "warnings": [warning.as_dict() for warning in inputs.warnings],
     }
+
+
+def compiled_pddl(catalog: Catalog, model: CausalModel, mapping: Labelling | None) -> dict[str, str]:
+    """Return the readable PDDL domain and problem of a plan request (pure and quick: done here, not by a worker)."""
+    compiled = compile_task(catalog_task(model, catalog, mapping))
+    return {"domain": compiled.domain, "problem": compiled.problem}

@@ -22,6 +22,8 @@ from causalplan.service.documents import StrictJSONRoute, plan_inputs
 from causalplan.service.owners import BearerDep, JobOwner, resolve_owner
 from causalplan.service.storage.jobs import JobKind
 from causalplan.service.storage.records import JobRecord
+from causalplan.service.work.planning import SimulationArguments
+from causalplan.service.work.registry import SIMULATION
 
 router = APIRouter(
     prefix="/v1/simulations",
@@ -94,13 +96,8 @@ def create_simulation(
         job: dict[str, Any] = job_out(record).model_dump(mode="json")
         return job
     inputs = plan_inputs(body, services, client)
-    answer = services.answers.simulate(
-        inputs.model,
-        inputs.mapping,
-        inputs.planner,
-        inputs.time_limit,
-        body.picture,
-        lambda: inputs.store(services),
-        val=body.validate_plan,
+    arguments = SimulationArguments(
+        inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, body.picture, val=body.validate_plan
     )
+    answer = services.work.answer(SIMULATION, arguments, lambda: inputs.store(services))
     return {**answer.data, "cached": answer.cached, "model_id": str(inputs.submission.record.id)}

@@ -4,17 +4,21 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from causalplan.service.answers import resolve_planner, resolve_time_limit
 from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.api.schemas.plans import TransferIn, TransferOut
 from causalplan.service.deps import ClientIdsDep, ServicesDep
-from causalplan.service.documents import StrictJSONRoute, invalid_input_error, model_for_request, read_mapping
-from causalplan.service.pool.explain_jobs import repair_job
+from causalplan.service.documents import (
+    StrictJSONRoute,
+    invalid_input_error,
+    model_for_request,
+    read_mapping,
+    resolve_planner,
+    resolve_time_limit,
+)
 from causalplan.service.storage import crud
+from causalplan.service.work.planning import RepairArguments, TransferArguments
+from causalplan.service.work.registry import REPAIRS, TRANSFER
 from causalplan.transfer.verdict import invalid_verdict
-
-REPAIR_TIME_FACTOR = 10
-"""A repair search re-checks many edited models; most are decided without planning, the rest share cached solves."""
 
 router = APIRouter(
     prefix="/v1/transfers",
@@ -53,16 +57,15 @@ def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDe
         problem.details.update({"verdict": verdict, "trial_id": str(trial.id)})
         raise problem
     assert submission.model is not None and mapping.mapping is not None
-    answer = services.answers.transfer(submission.model, mapping.mapping, planner, time_limit, val=body.validate_plan)
+    model, val = submission.model, body.validate_plan
+    answer = services.work.answer(TRANSFER, TransferArguments(model, mapping.mapping, planner, time_limit, val))
     trial = crud.new_trial_record(
         submission.record.id, mapping.document, planner, answer.data, answer.cached, answer.seconds, client
     )
     crud.save(services.engine, [*new_records, trial])
     repairs = None
     if body.repair and answer.data["verdict"] == "fails":
-        repair_args = (submission.model, mapping.mapping, planner, time_limit, tuple(services.settings.catalog_folders))
-        seconds = REPAIR_TIME_FACTOR * time_limit + services.settings.solve_grace_seconds
-        repairs = services.answers.pool.run(repair_job, (*repair_args, body.validate_plan), seconds)
+        repairs = services.work.run(REPAIRS, RepairArguments(model, mapping.mapping, planner, time_limit, val))
     return TransferOut.model_validate(
         {
             **answer.data,

@@ -1,8 +1,8 @@
-"""The robot's jobs for the planner workers: carry out a plan, and film it with progress.
+"""What a worker process runs for the robot: carry out a plan for the 3D player, film it, film a model's plan.
 
-Filming is slow, so a film job writes its progress (frames drawn, frames
-expected) to a small JSON file that the app reads while the worker works: the worker's
-socket carries only the job and its answer.
+Filming is slow, so a film writes its progress (frames drawn, frames expected) to a small JSON
+file that the app reads while the worker works: the worker's socket carries only the work and
+its answer. Functions take typed arguments and the worker's catalog, as ``planning``'s do.
 """
 
 from __future__ import annotations
@@ -11,9 +11,12 @@ import json
 import math
 import os
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from causalplan.causal.model import CausalModel, Labelling
+from causalplan.objects.catalog import Catalog
 from causalplan.objects.model import AssemblyObject
 
 if TYPE_CHECKING:
@@ -23,6 +26,39 @@ if TYPE_CHECKING:
 FORMATS = {"mp4": ".mp4", "gif": ".gif"}
 """Video formats a request may ask for, by name, and the file suffix each is written with."""
 CONTENT_TYPES = {"mp4": "video/mp4", "gif": "image/gif"}
+
+
+@dataclass(frozen=True)
+class PlaybackArguments:
+    """The robot making ``fit_ids`` of the object, for the browser's player (no film)."""
+
+    object_id: str
+    fit_ids: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class FitsFilmArguments:
+    """A film of the robot making ``fit_ids`` of the object; its progress goes to ``progress``."""
+
+    object_id: str
+    fit_ids: tuple[str, ...]
+    video: str
+    size: tuple[int, int]
+    progress: Path | None
+
+
+@dataclass(frozen=True)
+class PlanFilmArguments:
+    """A plan of ``model`` (on the mapping's object), then a film of the robot carrying it out."""
+
+    model: CausalModel
+    mapping: Labelling | None
+    planner: str
+    time_limit: float
+    val: bool
+    video: str
+    size: tuple[int, int]
+    progress: Path
 
 
 def write_progress(path: Path | None, frames: int, expected: int | None) -> None:
@@ -94,25 +130,6 @@ def robot_simulation(
     return filmed, encode(filmed.video, FORMATS[video])
 
 
-def robot_film_job(
-    object_id: str,
-    fit_ids: tuple[str, ...],
-    catalog_folders: tuple[Path, ...],
-    video: str,
-    size: tuple[int, int],
-    progress: Path | None,
-) -> dict[str, object]:
-    """Film the robot making ``fit_ids`` of the object (runs in a worker); return the film and the report.
-
-    ``{"video": bytes, "simulation": report.as_dict(), "robot": robot_outcome(report)}``.
-    """
-    from causalplan.service.pool.catalog import worker_catalog
-
-    obj = worker_catalog(catalog_folders).get(object_id)
-    report, film = robot_simulation(obj, steps_of(obj, fit_ids), video, size, progress)
-    return {"video": film, "simulation": report.as_dict(), "robot": robot_outcome(report)}
-
-
 def robot_outcome(report: SimulationReport) -> dict[str, object]:
     """Return whether the robot carried out the plan and, when not, why: the ``robot_cannot_execute`` reason."""
     from causalplan.transfer.robot_verdict import robot_reason
@@ -135,19 +152,45 @@ def robot_outcome(report: SimulationReport) -> dict[str, object]:
     }
 
 
-def robot_playback_job(object_id: str, fit_ids: tuple[str, ...], catalog_folders: tuple[Path, ...]) -> bytes:
-    """Return the browser player's document of the robot making ``fit_ids`` of the object, as JSON (in a worker).
+def film_of_fits(arguments: FitsFilmArguments, catalog: Catalog) -> dict[str, object]:
+    """Film the robot making the fits; return ``{"video": bytes, "simulation": ..., "robot": robot_outcome}``."""
+    obj = catalog.get(arguments.object_id)
+    steps = steps_of(obj, arguments.fit_ids)
+    report, film = robot_simulation(obj, steps, arguments.video, arguments.size, arguments.progress)
+    return {"video": film, "simulation": report.as_dict(), "robot": robot_outcome(report)}
+
+
+def film_of_plan(arguments: PlanFilmArguments, catalog: Catalog) -> dict[str, object]:
+    """Plan the model and film the robot carrying the plan out.
+
+    Returns ``planning`` (as ``causalplan plan --json``), ``simulation`` and ``robot`` (as POST
+    /v1/simulations with ``robot``) and ``video``: the film's bytes, or None when there is no plan.
+    """
+    from causalplan.pddl.task import catalog_task
+    from causalplan.planners import pipeline
+
+    task = catalog_task(arguments.model, catalog, arguments.mapping)
+    result = pipeline.plan_task(task, arguments.planner, arguments.time_limit, val=arguments.val)
+    data: dict[str, object] = {"planning": result.as_dict(), "simulation": None, "robot": None, "video": None}
+    if not result.has_plan:
+        return data
+    report, film = robot_simulation(task.obj, result.steps, arguments.video, arguments.size, arguments.progress)
+    data.update(simulation=report.as_dict(), robot=robot_outcome(report), video=film)
+    return data
+
+
+def playback(arguments: PlaybackArguments, catalog: Catalog) -> bytes:
+    """Return the browser player's document of the robot making the fits, as JSON.
 
     ``sim.robot.playback``'s document plus ``"outcome"``: whether the robot carried out the plan,
     or why not. The run records the parts' tracks as it goes (one scene, not a second for a
     replay). Encoded here: the app passes the bytes on, unlike a dict of thousands of lists.
     """
-    from causalplan.service.pool.catalog import worker_catalog
     from causalplan.sim import RenderMode, simulate_plan
-    from causalplan.sim.robot.playback import playback
+    from causalplan.sim.robot.playback import playback as player_document
 
-    obj = worker_catalog(catalog_folders).get(object_id)
-    steps = steps_of(obj, fit_ids)
+    obj = catalog.get(arguments.object_id)
+    steps = steps_of(obj, arguments.fit_ids)
     report = simulate_plan(obj, steps, render=RenderMode.NONE, robot=True, tracks=True)
-    document = {**playback(obj, steps, report), "outcome": robot_outcome(report)}
+    document = {**player_document(obj, steps, report), "outcome": robot_outcome(report)}
     return json.dumps(document, separators=(",", ":")).encode()
