@@ -13,7 +13,7 @@ TESTS = Path(__file__).resolve().parent
 PACKAGE = TESTS.parent / "causalplan"
 
 # What the top-level test files check that is not one module: the project as a whole.
-PROJECT_WIDE = {"test_imports.py", "test_docker.py", "test_fresh_machine.py", "test_layout.py"}
+PROJECT_WIDE = {"test_architecture.py", "test_imports.py", "test_docker.py", "test_fresh_machine.py", "test_layout.py"}
 
 
 def test_every_test_folder_is_a_package_folder() -> None:
