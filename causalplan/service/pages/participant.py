@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter, Request, Response
+from starlette.concurrency import run_in_threadpool
 
 from causalplan.causal.diagnostics import Report
 from causalplan.inputs import LoadedModel
@@ -351,7 +352,9 @@ async def submit_step3(
     checked = check_mapping(mapping_document(obj, entries), catalog, settings)
     if not checked.is_valid:
         return _step3_page(request, journey, index, session, checked.report, status_code=422)
-    run_trial(services, session, journey, index, checked)
+    # The trial waits on a planner worker for up to the time limit: off the event loop, so other
+    # participants' pages are served meanwhile.
+    await run_in_threadpool(run_trial, services, session, journey, index, checked)
     return redirect(f"/p/{journey.participant.code}/step3/{number}")
 
 
