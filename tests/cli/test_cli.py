@@ -197,7 +197,7 @@ def test_check_warnings_keep_exit_zero(tmp_path: Path) -> None:
 
 
 def test_check_mapping_file() -> None:
-    code, data = run_json("check", FLASHLIGHT_MAPPING)
+    code, data = run_json("check", "--kind", "mapping", FLASHLIGHT_MAPPING)
     assert code == 0
     assert data["kind"] == "mapping"
     assert data["valid"] is True
@@ -205,7 +205,7 @@ def test_check_mapping_file() -> None:
 
 def test_check_invalid_mapping_file(tmp_path: Path) -> None:
     path = write(tmp_path, "mapping.yaml", "object: flashlight\nfunctions:\n  bateries: [provide electricity]\n")
-    code, data = run_json("check", path)
+    code, data = run_json("check", "--kind", "mapping", path)
     assert code == 2
     assert data["kind"] == "mapping"
     assert [error["code"] for error in data["errors"]] == ["unknown_part"]
