@@ -80,7 +80,8 @@ def check(file: Path, kind: str, as_json: bool, catalog: tuple[Path, ...]) -> No
 def compile_command(model: Path, out: Path, mapping: Path | None, catalog: tuple[Path, ...]) -> None:
     """Compile a model to a PDDL 2.2 domain and problem with derived predicates, without planning.
 
-    MODEL is the causal model file (YAML or JSON).
+    MODEL is the causal model file (YAML or JSON). Exit 0 when written, 2 for invalid input
+    (the model's or mapping's problems are printed, as `check` prints them).
     """
     from causalplan.pddl.writer import compile_task
 

@@ -218,10 +218,10 @@ def test_check_trajectory_refuses_an_over_fast_file_naming_the_joint_and_the_rat
     fast = tmp_path / "fast.json"
     fast.write_text(json.dumps({"joints": [f"panda_joint{i}" for i in range(1, 8)], "points": points}))
     result = run("check-trajectory", fast)
-    assert result.exit_code == 2
+    assert result.exit_code == 1  # beyond the limits is a "no", not invalid input
     assert "panda_joint7 velocity" in result.stdout and "2.00x its limit 2.61" in result.stdout
     code, data = run_json("check-trajectory", fast, "--robot", "panda")
-    assert code == 2 and not data["within_limits"]
+    assert code == 1 and not data["within_limits"]
     velocity = [v for v in data["violations"] if v["quantity"] == "velocity"]
     assert velocity[0]["joint"] == "panda_joint7" and velocity[0]["ratio"] == 2.0 and velocity[0]["time"] == 0.005
 
