@@ -22,7 +22,10 @@ if TYPE_CHECKING:
     from causalplan.planners.result import PlanResult
 
 EXIT_OK, EXIT_NO_PLAN, EXIT_INVALID, EXIT_UNDECIDED = 0, 1, 2, 3
-EXIT_CODES = "Exit codes: 0 done (yes), 1 no (no plan, no transfer, beyond the limits), 2 invalid input, 3 could not decide (the planner timed out or failed)."
+EXIT_CODES = (
+    "Exit codes: 0 done (yes), 1 no (no plan, no transfer, beyond the limits), 2 invalid input, "
+    "3 could not decide (the planner timed out or failed)."
+)
 """The one exit-code table every command keeps, as `causalplan --help` and the README give it."""
 
 FILE = click.Path(path_type=Path)

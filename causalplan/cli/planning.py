@@ -139,12 +139,15 @@ def _print_invalid_inputs(*inputs: tuple[Path, Report, str]) -> None:
     """Say which input is invalid and print its problems as `check` does (codes, where, "did you mean")."""
     invalid = [(path, report, kind) for path, report, kind in inputs if not report.is_valid]
     which = " and the ".join(kind for _, _, kind in invalid)
-    say(f"{click.style('invalid', fg='red', bold=True)}: the {which} {'are' if len(invalid) > 1 else 'is'} invalid, so nothing was planned.")
+    verb = "are" if len(invalid) > 1 else "is"
+    say(f"{click.style('invalid', fg='red', bold=True)}: the {which} {verb} invalid, so nothing was planned.")
     for path, report, kind in invalid:
         print_report(report)
         option = " --kind mapping" if kind == "mapping" else ""
-        say(f"{path}: {kind} is invalid ({len(report.errors)} error(s), {len(report.warnings)} warning(s)); "
-            f"`causalplan check{option} {path}` checks it again after fixing it.")
+        say(
+            f"{path}: {kind} is invalid ({len(report.errors)} error(s), {len(report.warnings)} warning(s)); "
+            f"`causalplan check{option} {path}` checks it again after fixing it."
+        )
 
 
 @click.command(short_help="Test whether a model transfers to a new object (step 3).")

@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING
 import click
 
 from causalplan.cli.common import (
-    EXIT_INVALID,
     EXIT_NO_PLAN,
     EXIT_OK,
     EXIT_UNDECIDED,
