@@ -217,7 +217,8 @@ def objects(
         console.print("[bold]True mechanism:[/] " + escape(obj.mechanism_explanation))
         for requirement in obj.mechanism:
             function = f"; function: {escape(requirement.function)}" if requirement.function else ""
-            console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)}{function})")
+            after = f"; after {', '.join(requirement.after)}" if requirement.after else ""
+            console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)}{function}{after})")
         return
     if as_json:
         print_json(
