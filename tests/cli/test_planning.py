@@ -8,8 +8,8 @@ from pathlib import Path
 import yaml
 
 from causalplan.comparison.synthetic import synthetic_model, synthetic_object
-from causalplan.objects.model import AssemblyObject, Connector
 from tests.cli.test_cli import DESK_LAMP, FAILED_DESK_LAMP, run, write
+from tests.comparison.test_synthetic import object_as_dict
 
 
 def write_synthetic(folder: Path, parts: int) -> tuple[Path, Path]:
@@ -17,44 +17,11 @@ def write_synthetic(folder: Path, parts: int) -> tuple[Path, Path]:
     obj = synthetic_object(parts)
     catalog = folder / "catalog"
     catalog.mkdir()
-    (catalog / f"{obj.id}.yaml").write_text(yaml.safe_dump(object_data(obj), sort_keys=False), encoding="utf-8")
+    (catalog / f"{obj.id}.yaml").write_text(yaml.safe_dump(object_as_dict(obj), sort_keys=False), encoding="utf-8")
     model = synthetic_model(obj)
     functions = {part: list(labels) for part, labels in model.labelling.functions.items()}
     data = {"object": obj.id, "goal": model.goal, "functions": functions, "rules": [r.text for r in model.rules]}
     return catalog, write(folder, "model.yaml", yaml.safe_dump(data, sort_keys=False))
-
-
-def connector_data(connector: Connector) -> dict[str, str]:
-    return {"id": connector.id, "kind": connector.kind, "spec": connector.spec}
-
-
-def object_data(obj: AssemblyObject) -> dict[str, object]:
-    """Return an object in the catalog's file schema."""
-    return {
-        "id": obj.id,
-        "name": obj.name,
-        "category": obj.category,
-        "goal": obj.goal,
-        "base": obj.base,
-        "parts": [
-            {"id": p.id, "name": p.name, "connectors": [connector_data(c) for c in p.connectors]} for p in obj.parts
-        ],
-        "fits": [
-            {
-                "id": f.id,
-                "primitive": f.primitive,
-                "moving": f"{f.moving_part}.{f.moving_connector}",
-                "fixed": f"{f.fixed_part}.{f.fixed_connector}",
-                "probability": f.probability,
-                "blocks": [f"{part}.{connector}" for part, connector in f.blocks],
-            }
-            for f in obj.fits
-        ],
-        "mechanism": {
-            "explanation": obj.mechanism_explanation,
-            "requires": [{"any": list(r.any_of), "says": r.says} for r in obj.mechanism],
-        },
-    }
 
 
 def test_plan_exits_3_when_the_planner_times_out(tmp_path: Path) -> None:
