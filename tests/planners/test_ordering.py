@@ -14,10 +14,11 @@ LIGHT = ("ignite", ("match", "wick", "match_lights_wick"))
 OIL = ("insert", ("oil_bottle", "lamp_bowl", "bottle_into_filling_hole"))
 
 
-def test_the_wick_is_lit_after_the_oil_and_the_rest_keeps_the_planners_order(catalog: Catalog) -> None:
+def test_the_wick_is_lit_after_the_oil_and_a_plan_in_order_keeps_the_planners_order(catalog: Catalog) -> None:
     task = reference_task(catalog.get("oil_lamp"), catalog)
-    assert mechanism_order(task, (WICK, LIGHT, OIL)) == (WICK, OIL, LIGHT)
-    assert mechanism_order(task, (OIL, WICK, LIGHT)) == (OIL, WICK, LIGHT)  # already in order: unchanged
+    # the oil first, then the wick, as the mechanism lists them, and the flame last
+    assert mechanism_order(task, (WICK, LIGHT, OIL)) == (OIL, WICK, LIGHT)
+    assert mechanism_order(task, (WICK, OIL, LIGHT)) == (WICK, OIL, LIGHT)  # already in order: the planner's
 
 
 def test_a_step_the_plan_does_not_have_is_not_waited_for(catalog: Catalog) -> None:
