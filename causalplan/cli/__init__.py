@@ -2,8 +2,9 @@
 
 Built on click, and each command imports what it needs when it runs, so ``causalplan --help``
 and ``causalplan plan`` start fast: the sentences are styled with click, and rich (tables,
-progress bars) is loaded only by the commands that draw them. Exit codes: 0 success, 1 no
-plan / no transfer, 2 invalid input, 3 the planner could not decide.
+progress bars) is loaded only by the commands that draw them. Every command keeps one table
+of exit codes (`common.EXIT_CODES`): 0 done, 1 no (no plan, no transfer, beyond the limits),
+2 invalid input, 3 could not decide (the planner timed out or failed).
 
 One module per family of commands; `common` holds what they share. A new command is a
 `click.command` in its family's module (or a new one), registered below by its name and
@@ -12,6 +13,7 @@ One module per family of commands; `common` holds what they share. A new command
 
 import click
 
+from causalplan.cli.common import EXIT_CODES
 from causalplan.cli.lazy import LazyGroup
 from causalplan.version import __version__
 
@@ -45,8 +47,7 @@ COMMANDS = {
     cls=LazyGroup,
     lazy_commands=COMMANDS,
     context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 110, "show_default": True},
-    epilog="Exit codes: 0 done, 1 no plan or no transfer, 2 invalid input, 3 the planner could not decide. "
-    "Run `causalplan COMMAND --help` for a command's options.",
+    epilog=f"{EXIT_CODES} Run `causalplan COMMAND --help` for a command's options and its exit codes.",
 )
 @click.version_option(__version__, "-V", "--version", prog_name="causalplan", message="%(prog)s %(version)s")
 def app() -> None:

@@ -22,6 +22,11 @@ if TYPE_CHECKING:
     from causalplan.planners.result import PlanResult
 
 EXIT_OK, EXIT_NO_PLAN, EXIT_INVALID, EXIT_UNDECIDED = 0, 1, 2, 3
+EXIT_CODES = (
+    "Exit codes: 0 done (yes), 1 no (no plan, no transfer, beyond the limits), 2 invalid input, "
+    "3 could not decide (the planner timed out or failed)."
+)
+"""The one exit-code table every command keeps, as `causalplan --help` and the README give it."""
 
 FILE = click.Path(path_type=Path)
 catalog_option = click.option(
@@ -58,6 +63,15 @@ val_option = click.option(
 
 def exit_with(code: int) -> NoReturn:
     raise SystemExit(code)
+
+
+def status_exit_code(status: str) -> int:
+    """Return the exit code of a planner's outcome: 0 solved, 1 proven unsolvable, 3 undecided (timeout, ...)."""
+    from causalplan.planners.result import PlanStatus
+
+    if status == PlanStatus.SOLVED:
+        return EXIT_OK
+    return EXIT_NO_PLAN if status == PlanStatus.UNSOLVABLE else EXIT_UNDECIDED
 
 
 def say(message: str = "", *, err: bool = False) -> None:
@@ -155,12 +169,16 @@ def check_planner(planner: str) -> None:
         fail("unknown_planner", f"Unknown planner '{planner}'; choose one of: {', '.join(PLANNERS)}.")
 
 
-def is_mapping_file(path: Path) -> bool:
-    """Return whether a file looks like a step-3 mapping (no 'rules' field) rather than a model."""
+def looks_like_a_mapping(path: Path) -> bool:
+    """Return whether a file has a mapping's fields (object, functions) and nothing else.
+
+    Used only for advice after a model is found invalid: a file is read as a model or a
+    mapping by the command and its options, never by what it holds.
+    """
     from causalplan.causal.documents import read_document
 
     data, _, problems = read_document(path)
-    return not problems and isinstance(data, dict) and "rules" not in data
+    return not problems and isinstance(data, dict) and bool(data) and set(data) <= {"object", "functions"}
 
 
 def stop_if_invalid(report: Report, path: Path, as_json: bool, advice: str = "") -> None:

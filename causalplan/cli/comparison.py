@@ -166,6 +166,26 @@ def _on_cluster(
             )
 
 
+TRIALS_FORMAT = 'A batch is JSON Lines (*.jsonl), one {"id", "model", "mapping"} a line, or a JSON/YAML list of them.'
+BINARY_PEEK = 8192
+"""Bytes read from a trials file's start to tell text from binary: a NUL there is not text (as git and grep judge)."""
+
+
+def _stop_unless_trials(path: Path) -> None:
+    """Exit with 2, saying why, when ``path`` is empty, blank or binary: there is nothing to judge in it."""
+    try:
+        with path.open("rb") as handle:
+            start = handle.read(BINARY_PEEK)
+            blank = not start.strip() and not handle.read(1)
+    except OSError as exc:
+        fail("input_file_error", f"Cannot read the trials file {path}: {exc.strerror}.")
+    if blank:
+        fail("no_trials", f"{path} is empty: there are no trials to judge. {TRIALS_FORMAT}")
+    nul = start.find(b"\x00")
+    if nul >= 0:
+        fail("unreadable_trials", f"{path} is not text (a NUL byte at byte {nul}): it is not a batch. {TRIALS_FORMAT}")
+
+
 @click.command(short_help="Judge many transfer trials; write their verdicts and reasons.")
 @click.argument("trials_file", metavar="TRIALS", type=FILE)
 @planner_option
@@ -203,6 +223,10 @@ def batch(
     With --cluster or --workers the trials go to a Dask cluster in chunks; each finished
     chunk's verdicts are appended to verdicts.jsonl as they come (a run that is stopped keeps
     them), and the final files list every trial in the file's order, as a local run does.
+
+    A trial that cannot be read is judged invalid and the batch goes on; a file with no
+    trials at all (empty, blank, binary, or not readable as a whole) is invalid input. Exit 0
+    when the verdicts are written, whatever they are; 2 for invalid input.
     """
     import csv
     import time
@@ -216,16 +240,21 @@ def batch(
     objects = catalog_from(catalog)
     if not trials_file.is_file():
         fail("file_not_found", f"There is no file {trials_file}.")
-    make_folder(out)
+    _stop_unless_trials(trials_file)
     judge = None
     if robot:
         from causalplan.transfer.robot_verdict import robot_judged
 
         judge = robot_judged
     started = time.perf_counter()
+    trials = list(read_trials(trials_file)) if on_cluster is None else []
+    if on_cluster is None and len(trials) == 1 and trials[0].id == "file" and trials[0].problem is not None:
+        fail("unreadable_trials", f"{trials_file}: {trials[0].problem}")
+    if on_cluster is None and not trials:
+        fail("no_trials", f"{trials_file} holds no trials. {TRIALS_FORMAT}")
+    make_folder(out)
     with progress_bar() as progress:
         if on_cluster is None:
-            trials = list(read_trials(trials_file))
             bar = progress.add_task("judging trials", total=len(trials))
             judged = run_batch(
                 trials, objects, planner, time_limit, simulate, lambda: progress.advance(bar), val=val, judge=judge

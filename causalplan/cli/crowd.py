@@ -83,6 +83,8 @@ def consensus(
 
     With --cluster or --workers the members' trials and the consensus's are judged on a Dask
     cluster in chunks of --chunk-size (the same verdicts as here; the bar moves per chunk).
+    Exit 0 when the consensus transfers to some test object, 1 when to none, 2 when no valid
+    consensus exists (or for invalid input).
 
     Example: causalplan population desk_lamp --n 30 --out crowd.jsonl &&
     causalplan consensus crowd.jsonl --out out/consensus --workers 2

@@ -8,7 +8,6 @@ from typing import TYPE_CHECKING
 import click
 
 from causalplan.cli.common import (
-    EXIT_NO_PLAN,
     EXIT_OK,
     FILE,
     catalog_from,
@@ -21,6 +20,7 @@ from causalplan.cli.common import (
     load_task,
     print_json,
     say,
+    status_exit_code,
     time_limit_option,
     val_option,
 )
@@ -89,7 +89,7 @@ def explain(
     the question's constraint and compare the two plans, naming the rule or function that
     decides it; the alternative plan is replayed and checked by VAL like any plan.
     Exit 0 answered, 1 no plan to explain, 2 invalid input or question (its code, e.g.
-    unknown_part, invalid_question).
+    unknown_part, invalid_question), 3 when the planner could not decide (it timed out).
 
     \b
         causalplan explain examples/paper/failed_desk_lamp.yaml --why-not "shade before light_bulb"
@@ -109,7 +109,7 @@ def explain(
                 print_json({"status": "no_plan", "code": exc.code, "message": exc.message})
             else:
                 say(f"{click.style('No plan to explain', fg='red', bold=True)}: {exc.message}")
-            exit_with(EXIT_NO_PLAN)
+            exit_with(status_exit_code(str(exc.details.get("status", "unsolvable"))))
     if as_json:
         print_json(explanation.as_dict())
     else:
@@ -118,8 +118,16 @@ def explain(
 
 
 def print_repairs(search: RepairSearch) -> None:
-    """Print the repairs of a failed transfer, smallest first (as many as ``search.shown`` shows)."""
-    sizes = ", ".join(f"{count} of {size} edit(s)" for size, count in search.by_size().items())
-    say(f"Repairs: {len(search.repairs)} found ({sizes}); {search.checked} edit set(s) checked by a full verdict.")
-    for repair in search.shown():
+    """Print the repairs of a failed transfer, smallest first, saying how many of them are shown."""
+    shown, found = search.shown(), len(search.repairs)
+    sizes = ", ".join(
+        f"{count} with {size} edit{'s' if size > 1 else ''}" for size, count in search.by_size().items() if count
+    )
+    checked = f"{search.checked} edit set(s) checked by a full verdict"
+    if not found:
+        say(f"Repairs: none found with up to {search.max_edits} edit(s); {checked}.")
+        return
+    listed = f"{len(shown)} of {found} shown, smallest first" if len(shown) < found else "all shown"
+    say(f"Repairs: {found} found ({sizes}), {listed}; {checked}.")
+    for repair in shown:
         say(f"  [{len(repair.edits)}] {repair.describe()}")

@@ -17,14 +17,15 @@ from causalplan.cli.common import (
     exit_on_error,
     exit_with,
     fail,
-    is_mapping_file,
     json_option,
     load_task,
+    looks_like_a_mapping,
     make_console,
     mark,
     print_json,
     print_report,
     say,
+    stop_if_invalid,
     write_pddl,
     writing,
 )
@@ -33,27 +34,41 @@ if TYPE_CHECKING:
     from causalplan.objects.model import AssemblyObject
 
 
-@click.command(short_help="Validate a model or mapping: what is wrong, where, how to fix it.")
-@click.argument("model", type=FILE)
+@click.command(short_help="Validate a model (or, with --kind mapping, a mapping): what is wrong, where, how to fix it.")
+@click.argument("file", metavar="FILE", type=FILE)
+@click.option(
+    "--kind",
+    type=click.Choice(["model", "mapping"]),
+    default="model",
+    help="What FILE is: a model (steps 1-2: object, functions, rules) or a step-3 mapping (object, functions). "
+    "The option decides, never the file's contents.",
+)
 @json_option
 @catalog_option
-def check(model: Path, as_json: bool, catalog: tuple[Path, ...]) -> None:
-    """Validate a model (or mapping): errors with a code, where, and how to fix them.
+def check(file: Path, kind: str, as_json: bool, catalog: tuple[Path, ...]) -> None:
+    """Validate a model, or a step-3 mapping: errors with a code, where, and how to fix them.
 
-    MODEL is a model file (or a step-3 mapping file) in YAML or JSON. Exit 0 when valid
+    FILE is read as a model (YAML or JSON), unless --kind mapping says it is a step-3
+    mapping; what the file holds never changes how it is read, so a model whose 'rules' are
+    misspelled or missing is an invalid model, as `plan` says too. Exit 0 when valid
     (warnings allowed), 2 when invalid.
+
+    \b
+        causalplan check examples/paper/desk_lamp.yaml
+        causalplan check --kind mapping examples/paper/flashlight_mapping.yaml
     """
     from causalplan.inputs import load_mapping, load_model
 
     objects = catalog_from(catalog)
-    kind = "mapping" if is_mapping_file(model) else "model"
-    report = load_mapping(model, objects).report if kind == "mapping" else load_model(model, objects).report
+    report = load_mapping(file, objects).report if kind == "mapping" else load_model(file, objects).report
     if as_json:
-        print_json({"file": str(model), "kind": kind, **report.as_dict()})
+        print_json({"file": str(file), "kind": kind, **report.as_dict()})
     else:
         print_report(report)
         verdict = mark(report.is_valid, "valid", "invalid")
-        say(f"{model}: {kind} is {verdict} ({len(report.errors)} error(s), {len(report.warnings)} warning(s))")
+        say(f"{file}: {kind} is {verdict} ({len(report.errors)} error(s), {len(report.warnings)} warning(s))")
+        if kind == "model" and looks_like_a_mapping(file):
+            say(f"If {file} is a step-3 mapping, check it as one: causalplan check --kind mapping {file}")
     exit_with(EXIT_OK if report.is_valid else EXIT_INVALID)
 
 
@@ -65,7 +80,8 @@ def check(model: Path, as_json: bool, catalog: tuple[Path, ...]) -> None:
 def compile_command(model: Path, out: Path, mapping: Path | None, catalog: tuple[Path, ...]) -> None:
     """Compile a model to a PDDL 2.2 domain and problem with derived predicates, without planning.
 
-    MODEL is the causal model file (YAML or JSON).
+    MODEL is the causal model file (YAML or JSON). Exit 0 when written, 2 for invalid input
+    (the model's or mapping's problems are printed, as `check` prints them).
     """
     from causalplan.pddl.writer import compile_task
 
@@ -88,16 +104,18 @@ def compile_command(model: Path, out: Path, mapping: Path | None, catalog: tuple
 def graph(model: Path, out: Path | None, as_json: bool, catalog: tuple[Path, ...]) -> None:
     """Draw the model's causal graph, left to right from the parts' functions to the goal.
 
-    MODEL is the causal model file (YAML or JSON). Invalid models are drawn too (causes
-    nothing produces are red), to help see what is wrong.
+    MODEL is the causal model file (YAML or JSON). An invalid model is not drawn: its
+    problems are printed (as `check` prints them), nothing is written, and the exit code is 2.
+    Exit 0 when drawn.
     """
     from causalplan.causal.render import PICTURE_SUFFIXES, draw, to_dot, to_json
     from causalplan.inputs import load_model
 
+    if out is not None and out.suffix.lower() not in (*PICTURE_SUFFIXES, ".dot"):
+        fail("unknown_format", f"Cannot tell the format of {out}: use .png, .svg, .pdf or .dot.")
     loaded = load_model(model, catalog_from(catalog))
-    if loaded.model is None:
-        print_report(loaded.report, err=True)
-        exit_with(EXIT_INVALID)
+    stop_if_invalid(loaded.report, model, as_json, f"{model}: the model is invalid, so nothing was drawn.")
+    assert loaded.model is not None
     if as_json:
         print_json(to_json(loaded.model))
     elif out is None:
@@ -105,14 +123,12 @@ def graph(model: Path, out: Path | None, as_json: bool, catalog: tuple[Path, ...
     elif out.suffix.lower() == ".dot":
         with writing(out):
             out.write_text(to_dot(loaded.model), encoding="utf-8")
-    elif out.suffix.lower() in PICTURE_SUFFIXES:
+    else:
         with writing(out):
             draw(loaded.model, out)
-    else:
-        fail("unknown_format", f"Cannot tell the format of {out}: use .png, .svg, .pdf or .dot.")
     if out is not None:
         say(f"Wrote {out}", err=True)
-    exit_with(EXIT_OK if loaded.report.is_valid else EXIT_INVALID)
+    exit_with(EXIT_OK)
 
 
 def _write_reference_model(obj: AssemblyObject, out: Path | None, as_json: bool) -> None:
@@ -201,7 +217,8 @@ def objects(
         console.print("[bold]True mechanism:[/] " + escape(obj.mechanism_explanation))
         for requirement in obj.mechanism:
             function = f"; function: {escape(requirement.function)}" if requirement.function else ""
-            console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)}{function})")
+            after = f"; after {', '.join(requirement.after)}" if requirement.after else ""
+            console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)}{function}{after})")
         return
     if as_json:
         print_json(

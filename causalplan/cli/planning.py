@@ -8,8 +8,6 @@ from typing import TYPE_CHECKING
 import click
 
 from causalplan.cli.common import (
-    EXIT_NO_PLAN,
-    EXIT_OK,
     FILE,
     catalog_from,
     catalog_option,
@@ -22,13 +20,16 @@ from causalplan.cli.common import (
     planner_option,
     print_json,
     print_plan,
+    print_report,
     say,
+    status_exit_code,
     time_limit_option,
     val_option,
     write_pddl,
 )
 
 if TYPE_CHECKING:
+    from causalplan.causal.diagnostics import Report
     from causalplan.transfer.verdict import TransferVerdict
 
 
@@ -82,8 +83,9 @@ def plan(
 
     MODEL is the causal model file (YAML or JSON). Every plan is replayed on the object before
     it is shown: against the model, and against the object's true mechanism; VAL checks it on
-    the PDDL as written (--no-val skips that). Exit 0 with a plan, 1 without one, 2 for
-    invalid input or a plan VAL rejects.
+    the PDDL as written (--no-val skips that). Exit 0 with a plan, 1 when there is none (the
+    planner proved it), 2 for invalid input or a plan VAL rejects, 3 when the planner could not
+    decide (it timed out or failed).
 
     Example: causalplan plan examples/paper/desk_lamp.yaml --pddl-out out/desk_lamp
     """
@@ -116,7 +118,7 @@ def plan(
         print_json(data)
     else:
         print_plan(result)
-    exit_with(EXIT_OK if result.has_plan else EXIT_NO_PLAN)
+    exit_with(status_exit_code(result.status))
 
 
 def _print_verdict(verdict: TransferVerdict) -> None:
@@ -131,6 +133,21 @@ def _print_verdict(verdict: TransferVerdict) -> None:
         say("Plan:")
         for number, step in enumerate(verdict.plan.steps, start=1):
             say(f"  {number}. {step.text}")
+
+
+def _print_invalid_inputs(*inputs: tuple[Path, Report, str]) -> None:
+    """Say which input is invalid and print its problems as `check` does (codes, where, "did you mean")."""
+    invalid = [(path, report, kind) for path, report, kind in inputs if not report.is_valid]
+    which = " and the ".join(kind for _, _, kind in invalid)
+    verb = "are" if len(invalid) > 1 else "is"
+    say(f"{click.style('invalid', fg='red', bold=True)}: the {which} {verb} invalid, so nothing was planned.")
+    for path, report, kind in invalid:
+        print_report(report)
+        option = " --kind mapping" if kind == "mapping" else ""
+        say(
+            f"{path}: {kind} is invalid ({len(report.errors)} error(s), {len(report.warnings)} warning(s)); "
+            f"`causalplan check{option} {path}` checks it again after fixing it."
+        )
 
 
 @click.command(short_help="Test whether a model transfers to a new object (step 3).")
@@ -204,6 +221,8 @@ def transfer(
             )
     if as_json:
         print_json({**verdict.as_dict(), **({"repairs": repairs.as_dict()} if repairs is not None else {})})
+    elif verdict.verdict.value == "invalid" and not (loaded_model.report.is_valid and loaded_mapping.report.is_valid):
+        _print_invalid_inputs((model, loaded_model.report, "model"), (mapping, loaded_mapping.report, "mapping"))
     else:
         _print_verdict(verdict)
         if repairs is not None:

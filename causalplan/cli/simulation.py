@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING
 import click
 
 from causalplan.cli.common import (
-    EXIT_INVALID,
     EXIT_NO_PLAN,
     EXIT_OK,
     EXIT_UNDECIDED,
@@ -274,16 +273,18 @@ def check_trajectory(file: Path, model: str | None, as_json: bool) -> None:
 
     Velocity, acceleration and jerk are recomputed from the positions and times by finite
     differences (the velocities a file claims are not trusted); each value beyond a limit is
-    reported with its joint, time and ratio to the limit. FILE is a trajectory JSON (the one
-    `simulate --robot --trajectory` writes, or yours: 'joints' and 'points' with
-    'time_from_start' and 'positions'). Exit 0 within the limits, 2 when not (or invalid input).
+    reported with its joint, time and ratio to the limit. FILE is any of the three forms
+    `simulate --robot` writes, told apart by what FILE is: a folder is a ROS 2 bag
+    (--ros2-bag; the arm's JointTrajectory, and the gripper's when there), a .yaml/.yml file a
+    FollowJointTrajectory goal (--joint-trajectory), anything else a trajectory JSON
+    (--trajectory, or yours: 'joints' and 'points' with 'time_from_start' and 'positions').
+    Exit 0 within the limits, 1 beyond them, 2 for invalid input.
     """
     from causalplan.sim.robot.checker import violations
     from causalplan.sim.robot.trajectory import read_trajectory
 
-    data = _read_json(file, "trajectory", "invalid_trajectory")
     with exit_on_error():
-        trajectory = read_trajectory(data, model)
+        trajectory = read_trajectory(_trajectory_data(file), model)
     found = violations(trajectory)
     if as_json:
         print_json(
@@ -298,7 +299,27 @@ def check_trajectory(file: Path, model: str | None, as_json: bool) -> None:
         )
     else:
         _print_violations(file, trajectory.limits.model, len(trajectory.points), found)
-    exit_with(EXIT_OK if not found else EXIT_INVALID)
+    exit_with(EXIT_OK if not found else EXIT_NO_PLAN)
+
+
+def _trajectory_data(file: Path) -> object:
+    """Return the trajectory data of a ROS 2 bag folder, a FollowJointTrajectory goal (YAML) or a JSON file."""
+    if file.is_dir():
+        from causalplan.sim.robot.ros import bag_trajectory_data
+
+        return bag_trajectory_data(file)
+    if file.suffix.lower() in (".yaml", ".yml"):
+        import yaml
+
+        from causalplan.sim.robot.ros import goal_trajectory_data
+
+        try:
+            return goal_trajectory_data(yaml.safe_load(file.read_text(encoding="utf-8")))
+        except OSError as exc:
+            fail("input_file_error", f"Cannot read the trajectory file {file}: {exc.strerror}.")
+        except (UnicodeDecodeError, yaml.YAMLError) as exc:
+            fail("invalid_trajectory", f"{file} is not YAML: {exc}.")
+    return _read_json(file, "trajectory", "invalid_trajectory")
 
 
 def _print_violations(file: Path, model: str, points: int, found: list[Violation]) -> None:

@@ -101,6 +101,8 @@ def analyze(export: Path, out: Path, near_misses: bool, as_json: bool, catalog: 
             console.print(f"Why models failed in {escape(condition)}: {listed}")
     for counts in misses or []:
         console.print(f"Near misses in {escape(counts.summary())}")
+    if misses == []:
+        console.print("Near misses: there is no failed transfer to check (among participants not excluded).")
     console.print("[bold]Conclusions[/]")
     for conclusion in analysis.conclusions:
         console.print(f"  - {escape(conclusion)}")

@@ -74,6 +74,7 @@ def synthetic_export(
                 "decided_by": verdict.decided_by,
                 "reasons": [{"code": reason.code} for reason in verdict.reasons],
                 "model": line["model"],
+                "mapping": line["mapping"],
             }
         )
     participants = sorted({str(line["participant_id"]) for line in lines})

@@ -93,6 +93,16 @@ def build_object(schema: ObjectSchema) -> AssemblyObject:
         unknown = [fit_id for fit_id in requirement.any if fit_id not in fit_ids]
         if unknown:
             raise ValueError(f"mechanism requirement '{requirement.says}' names unknown fit(s): {', '.join(unknown)}")
+        unknown = [fit_id for fit_id in requirement.after if fit_id not in fit_ids]
+        if unknown:
+            raise ValueError(
+                f"mechanism requirement '{requirement.says}': 'after' names unknown fit(s): {', '.join(unknown)}"
+            )
+        itself = sorted(set(requirement.after) & set(requirement.any))
+        if itself:
+            raise ValueError(
+                f"mechanism requirement '{requirement.says}': fit(s) {', '.join(itself)} cannot come after themselves"
+            )
     return AssemblyObject(
         id=schema.id,
         name=schema.name,
@@ -111,7 +121,9 @@ def build_object(schema: ObjectSchema) -> AssemblyObject:
             for p in schema.parts
         ),
         fits=fits,
-        mechanism=tuple(Requirement(tuple(r.any), r.says, r.function) for r in schema.mechanism.requires),
+        mechanism=tuple(
+            Requirement(tuple(r.any), r.says, r.function, tuple(r.after)) for r in schema.mechanism.requires
+        ),
         mechanism_explanation=schema.mechanism.explanation,
     )
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 PRIMITIVE_TEXTS: dict[str, str] = {
@@ -127,11 +128,22 @@ class Requirement:
     """One condition of the true mechanism: at least one of ``any_of`` fits has been made.
 
     ``function`` is what the part making it does, in an expert's words (None: not given).
+    ``after`` is the order a real object imposes: fits that must have been made at an earlier
+    step than this requirement's fit (a wick burns only if the fuel was there when it was lit).
     """
 
     any_of: tuple[str, ...]
     says: str
     function: str | None = None
+    after: tuple[str, ...] = ()
+
+    def is_met_by(self, made: Sequence[str]) -> bool:
+        """Return whether the fits ``made`` (in the order made) meet this requirement, its order included."""
+        steps = {fit_id: number for number, fit_id in enumerate(made)}
+        return any(
+            fit_id in steps and all(steps.get(earlier, len(made)) < steps[fit_id] for earlier in self.after)
+            for fit_id in self.any_of
+        )
 
 
 @dataclass(frozen=True)
@@ -171,6 +183,20 @@ class AssemblyObject:
         """Return the sentence describing the step that makes ``fit``."""
         template = fit.text or PRIMITIVE_TEXTS[fit.primitive]
         return template.format(moving=self.part(fit.moving_part).name, fixed=self.part(fit.fixed_part).name)
+
+    def requirement_of(self, fit_id: str) -> Requirement | None:
+        """Return the first requirement of the true mechanism that ``fit_id`` can meet (None: no requirement)."""
+        return next((requirement for requirement in self.mechanism if fit_id in requirement.any_of), None)
+
+    def order_words(self, requirement: Requirement) -> str:
+        """Return a requirement in words with the order it needs, e.g. 'the wick has been lit after the ...'."""
+        if not requirement.after:
+            return requirement.says
+        earlier = []
+        for fit_id in requirement.after:
+            needed = self.requirement_of(fit_id)
+            earlier.append(needed.says if needed is not None else self.step_text(self.fit(fit_id)).rstrip("."))
+        return f"{requirement.says} after {' and '.join(earlier)}"
 
     def excluded_fits(self, fit: Fit) -> tuple[str, ...]:
         """Return the fits (itself included) that can no longer be made once ``fit`` is made."""

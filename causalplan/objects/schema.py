@@ -177,6 +177,11 @@ class RequirementSchema(_Strict):
         max_length=80,
         description="What the part making it does, as an expert labels it (the reference model's function).",
     )
+    after: list[str] = Field(
+        default_factory=list,
+        description="Fit ids that must have been made at an earlier step than this requirement's fit: the order "
+        "a real object imposes (the fuel is there before the wick is lit).",
+    )
 
     @field_validator("function")
     @classmethod

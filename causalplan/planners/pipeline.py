@@ -25,6 +25,7 @@ from causalplan.pddl.canonical import canonical_pddl, plan_actions
 from causalplan.pddl.task import PlanningTask
 from causalplan.pddl.writer import compile_task
 from causalplan.planners import fd
+from causalplan.planners.ordering import mechanism_order
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanResult, PlanStatus, PlanStep, SearchOutcome
 
@@ -213,6 +214,8 @@ def _run(task: PlanningTask, planner: str, time_limit: float, asked: _Asked) -> 
             outcome.status, planner, outcome.message or _failure_message(outcome.status, task, time_limit)
         )
         return replace(failed, mdp=_mdp_figures(outcome))
+    if not outcome.policy:  # an open-loop plan: its steps in the order the true mechanism needs
+        outcome = replace(outcome, actions=mechanism_order(task, outcome.actions))
     replay_started = time.perf_counter()
     checked = replay(task, outcome.actions)
     timing["replay"] = time.perf_counter() - replay_started

@@ -7,6 +7,7 @@ mechanism (the catalog's requirements).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from causalplan.causal.graph import goal_holds
@@ -44,10 +45,19 @@ class AssemblyState:
         self.unavailable.update(obj.excluded_fits(fit))
 
 
-def unmet_requirements(obj: AssemblyObject, made: list[str] | set[str]) -> tuple[str, ...]:
-    """Return the true mechanism's requirements (in words) that the made fits do not meet."""
-    done = set(made)
-    return tuple(req.says for req in obj.mechanism if not done & set(req.any_of))
+def unmet_requirements(obj: AssemblyObject, made: Sequence[str]) -> tuple[str, ...]:
+    """Return the true mechanism's requirements (in words) that the fits ``made``, in their order, do not meet.
+
+    A requirement whose fit was made, but before a fit its ``after`` names (the wick lit before
+    the oil is in the bowl), is not met: its words then say the order it needs.
+    """
+    unmet = []
+    for requirement in obj.mechanism:
+        if requirement.is_met_by(made):
+            continue
+        was_made = set(made) & set(requirement.any_of)
+        unmet.append(obj.order_words(requirement) if was_made else requirement.says)
+    return tuple(unmet)
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,9 @@ A requirement of the catalog ("the light bulb is screwed into the socket") holds
 its fits was made in the simulation *and* still holds physically: the two connectors are
 still seated within the alignment tolerance, and the part is joined, through seated joints,
 to the base (where the power or the fuel is). A lighting fit holds when the flame touched
-the tip and the lit part is joined to the base in the same way.
+the tip and the lit part is joined to the base in the same way. A requirement with an order
+(``after``: the fuel there before the wick is lit) holds only when each fit it names was made
+at an earlier step than its own.
 """
 
 from __future__ import annotations
@@ -90,6 +92,20 @@ def _judge(
     return True, f"the {moving} seated on the {fixed} ({where})"
 
 
+def _too_early(obj: AssemblyObject, after: tuple[str, ...], fit: Fit, joints: list[Joint]) -> str | None:
+    """Return how ``fit`` (made, as ``joints`` show) came before a fit ``after`` names, or None when in order."""
+    step = max(joint.step for joint in joints if joint.matches(fit))
+    for earlier_id in after:
+        earlier = obj.fit(earlier_id)
+        steps = [joint.step for joint in joints if joint.matches(earlier)]
+        what = obj.step_text(earlier).rstrip(".").lower()
+        if not steps:
+            return f"'{what}' never was, and must come first"
+        if min(steps) >= step:
+            return f"that was before '{what}' (step {min(steps)}), which must come first"
+    return None
+
+
 def evaluate(obj: AssemblyObject, scene: Scene, joints: list[Joint]) -> tuple[RequirementCheck, ...]:
     """Return each requirement of the true mechanism, judged on the simulated assembly now."""
     errors = {joint: seat_error(scene, joint) for joint in joints if not joint.touch_only}
@@ -99,6 +115,9 @@ def evaluate(obj: AssemblyObject, scene: Scene, joints: list[Joint]) -> tuple[Re
         seen = []
         for fit_id in requirement.any_of:
             met, detail = _judge(obj, obj.fit(fit_id), joints, errors, joined)
+            too_early = _too_early(obj, requirement.after, obj.fit(fit_id), joints) if met else None
+            if too_early is not None:
+                met, detail = False, f"{detail}; but {too_early}"
             if met:
                 checks.append(RequirementCheck(requirement.says, True, fit_id, detail))
                 break

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from causalplan.objects.catalog import Catalog
 from causalplan.studies.far_generalization import BOTH_CATEGORIES, ONE_CATEGORY, prediction_tests
-from causalplan.studies.misconceptions import Misconception, misconceptions
+from causalplan.studies.misconceptions import Misconception, MisconceptionCheck, check_misconceptions
 from causalplan.studies.rates import Rate, RateTable, rate_table, share, training_spans
 from causalplan.studies.statistics import ClusteredModel, Comparison, Proportion, clustered_logistic, fisher, holm
 from causalplan.studies.trials import Study, TrialRow, read_study
@@ -39,6 +39,8 @@ class Analysis:
     reasons: dict[str, dict[str, int]]
     misconceptions: dict[str, tuple[Misconception, ...]]
     conclusions: tuple[str, ...]
+    misconceptions_not_checked: dict[str, str] = field(default_factory=dict)
+    """Participant id -> why their model could not be checked for the misconception."""
 
     @property
     def rates(self) -> tuple[Rate, ...]:
@@ -65,6 +67,7 @@ class Analysis:
             "misconceptions": {
                 participant: [found.as_dict() for found in items] for participant, items in self.misconceptions.items()
             },
+            "misconceptions_not_checked": self.misconceptions_not_checked,
             "conclusions": list(self.conclusions),
         }
 
@@ -150,13 +153,21 @@ def _conclusion(comparison: Comparison) -> str:
     )
 
 
-def _misconceptions(rows: Sequence[TrialRow], catalog: Catalog) -> dict[str, tuple[Misconception, ...]]:
-    found: dict[str, tuple[Misconception, ...]] = {}
+def _misconceptions(
+    rows: Sequence[TrialRow], catalog: Catalog
+) -> tuple[dict[str, tuple[Misconception, ...]], dict[str, str]]:
+    """Return each participant's misconceptions (those with any), and why a participant's model was not checked."""
+    checked: dict[str, MisconceptionCheck] = {}
     for row in rows:
-        if row.participant_id in found or row.model is None:
+        if row.participant_id in checked:
             continue
-        found[row.participant_id] = tuple(misconceptions(row.model, catalog))
-    return {participant: items for participant, items in found.items() if items}
+        if row.model is None:
+            checked[row.participant_id] = MisconceptionCheck(not_checked="the export has no model for the participant")
+            continue
+        checked[row.participant_id] = check_misconceptions(row.model, catalog, row.training_objects)
+    found = {participant: check.found for participant, check in checked.items() if check.found}
+    skipped = {participant: check.not_checked for participant, check in checked.items() if check.not_checked}
+    return found, skipped
 
 
 def analyse(study: Study, catalog: Catalog) -> Analysis:
@@ -183,7 +194,7 @@ def analyse(study: Study, catalog: Catalog) -> Analysis:
             for code in set(row.reason_codes)
         )
         reasons[condition] = dict(counts.most_common())
-    found = _misconceptions(included, catalog)
+    found, not_checked = _misconceptions(included, catalog)
     conclusions = [_conclusion(comparison) for comparison in comparisons]
     if not comparisons:
         conclusions.append("No test of the predictions could be made: each needs two groups of decided trials.")
@@ -195,12 +206,28 @@ def analyse(study: Study, catalog: Catalog) -> Analysis:
         )
     if clustered.problem:
         conclusions.append(f"Logistic GEE not reported: {clustered.problem}.")
+    participants = len({row.participant_id for row in included})
+    checked = participants - len(not_checked)
     if found:
         conclusions.append(
-            f"{len(found)} of {len({row.participant_id for row in included})} participants made a function the true "
+            f"{len(found)} of {checked} participants whose models were checked made a function the true "
             "mechanism does not need a necessary cause (the paper's 'diffuse light' misconception)."
         )
-    return Analysis(rows, rate_table(study, catalog), tuple(comparisons), clustered, reasons, found, tuple(conclusions))
+    if not_checked:
+        why = "; ".join(f"{reason} ({count})" for reason, count in Counter(not_checked.values()).most_common())
+        conclusions.append(
+            f"The misconception was not looked for in {len(not_checked)} of {participants} participants' models: {why}."
+        )
+    return Analysis(
+        rows,
+        rate_table(study, catalog),
+        tuple(comparisons),
+        clustered,
+        reasons,
+        found,
+        tuple(conclusions),
+        not_checked,
+    )
 
 
 def analyse_export(export: Mapping[str, Any], catalog: Catalog) -> Analysis:

@@ -141,6 +141,10 @@ class ClusteredModel:
         }
 
 
+MAX_LOG_ODDS = 700.0
+"""Beyond this log odds ratio ``math.exp`` overflows: the fit has separated, and gives no number worth reporting."""
+
+
 def clustered_logistic(
     outcomes: Sequence[int], predictors: dict[str, Sequence[int]], clusters: Sequence[str]
 ) -> ClusteredModel:
@@ -179,6 +183,10 @@ def clustered_logistic(
     effects = []
     for index, name in enumerate(usable, start=1):
         low, high = intervals[index]
+        if not all(abs(value) < MAX_LOG_ODDS for value in (fitted.params[index], low, high)):
+            # A (quasi-)separated sample: the fit runs off towards infinity without a warning.
+            problem = f"the model could not be fitted: {name}'s odds ratio runs off to infinity (too few trials)"
+            return ClusteredModel(formula, len(outcomes), participants, (), problem)
         effects.append(
             Effect(name, math.exp(fitted.params[index]), (math.exp(low), math.exp(high)), float(fitted.pvalues[index]))
         )

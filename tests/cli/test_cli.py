@@ -197,7 +197,7 @@ def test_check_warnings_keep_exit_zero(tmp_path: Path) -> None:
 
 
 def test_check_mapping_file() -> None:
-    code, data = run_json("check", FLASHLIGHT_MAPPING)
+    code, data = run_json("check", "--kind", "mapping", FLASHLIGHT_MAPPING)
     assert code == 0
     assert data["kind"] == "mapping"
     assert data["valid"] is True
@@ -205,7 +205,7 @@ def test_check_mapping_file() -> None:
 
 def test_check_invalid_mapping_file(tmp_path: Path) -> None:
     path = write(tmp_path, "mapping.yaml", "object: flashlight\nfunctions:\n  bateries: [provide electricity]\n")
-    code, data = run_json("check", path)
+    code, data = run_json("check", "--kind", "mapping", path)
     assert code == 2
     assert data["kind"] == "mapping"
     assert [error["code"] for error in data["errors"]] == ["unknown_part"]
@@ -665,3 +665,33 @@ def test_check_and_plan_exit_2_naming_the_line_of_a_number_too_long_to_read(tmp_
         result = run(command, model)
         assert result.exit_code == 2, result.output
         assert f"error[number_too_long] {model}, line {line}" in result.output
+
+
+# --- one exit-code table ----------------------------------------------------------------------------
+
+
+def test_the_help_and_the_readme_give_one_exit_code_table() -> None:
+    from causalplan.cli.common import EXIT_CODES
+
+    said = " ".join(run("--help").output.split())
+    assert EXIT_CODES in said
+    assert "0 done (yes), 1 no (" in EXIT_CODES and "2 invalid input, 3 could not decide" in EXIT_CODES
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    table = readme[readme.index("## Exit codes") :].split("\n## ")[0]
+    rows = [line.split("|")[1:3] for line in table.splitlines() if line.startswith("| ") and line[2].isdigit()]
+    assert [(code.strip(), means.strip()) for code, means in rows] == [
+        ("0", "done, yes"),
+        ("1", "no"),
+        ("2", "invalid input"),
+        ("3", "could not decide"),
+    ]
+
+
+def test_readmes_explain_why_runs_on_readmes_model(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(ROOT)  # the README's paths are from the repository's root
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    command = next(line for line in readme.splitlines() if line.startswith("$ causalplan explain"))
+    arguments = command.removeprefix("$ causalplan ").split()
+    result = runner.invoke(app, arguments, catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    assert "Why step 1?" in result.stdout

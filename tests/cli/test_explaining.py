@@ -50,5 +50,5 @@ def test_transfer_repair_lists_the_heads_missing_function() -> None:
 def test_transfer_repair_in_words() -> None:
     result = run("transfer", FAILED_DESK_LAMP, FAILED_FLASHLIGHT_MAPPING, "--repair")
     assert result.exit_code == 1
-    assert "Repairs: 4 found (1 of 1 edit(s), 3 of 2 edit(s))" in result.stdout
+    assert "Repairs: 4 found (1 with 1 edit, 3 with 2 edits), all shown;" in result.stdout
     assert "[1] give 'turn electricity into light' to the batteries" in result.stdout

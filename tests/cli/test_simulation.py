@@ -218,10 +218,10 @@ def test_check_trajectory_refuses_an_over_fast_file_naming_the_joint_and_the_rat
     fast = tmp_path / "fast.json"
     fast.write_text(json.dumps({"joints": [f"panda_joint{i}" for i in range(1, 8)], "points": points}))
     result = run("check-trajectory", fast)
-    assert result.exit_code == 2
+    assert result.exit_code == 1  # beyond the limits is a "no", not invalid input
     assert "panda_joint7 velocity" in result.stdout and "2.00x its limit 2.61" in result.stdout
     code, data = run_json("check-trajectory", fast, "--robot", "panda")
-    assert code == 2 and not data["within_limits"]
+    assert code == 1 and not data["within_limits"]
     velocity = [v for v in data["violations"] if v["quantity"] == "velocity"]
     assert velocity[0]["joint"] == "panda_joint7" and velocity[0]["ratio"] == 2.0 and velocity[0]["time"] == 0.005
 
@@ -234,3 +234,27 @@ def test_check_trajectory_says_what_is_wrong_with_a_bad_file(tmp_path: Path) -> 
     bad.write_text(json.dumps({"joints": [], "points": [{"time_from_start": 0, "positions": []}]}))
     unknown = run("check-trajectory", bad, "--robot", "ur5")
     assert unknown.exit_code == 2 and "unknown_robot" in unknown.stderr
+
+
+def test_check_trajectory_reads_the_bag_and_the_goal_that_simulate_writes(tmp_path: Path) -> None:
+    bag, goal = tmp_path / "bag", tmp_path / "goal.yaml"
+    code, data = run_json("simulate", DESK_LAMP, "--robot", "--ros2-bag", bag, "--joint-trajectory", goal)
+    assert code == 0 and data["files"] == [str(goal), str(bag)]
+    for written in (bag, goal):
+        result = run("check-trajectory", written)
+        assert result.exit_code == 0, result.output
+        assert f"{written}: " in result.stdout and "points within the panda's limits" in result.stdout
+        checked = run_json("check-trajectory", written)[1]
+        assert checked["within_limits"] and checked["points"] > 100
+        assert abs(checked["seconds"] - data["robot"]["seconds"]) < 0.01
+    metadata = run("check-trajectory", bag / "metadata.yaml")
+    assert metadata.exit_code == 2 and "give the bag's folder instead" in metadata.stderr
+
+
+def test_check_trajectory_says_what_is_wrong_with_a_folder_or_yaml_that_is_no_trajectory(tmp_path: Path) -> None:
+    empty = tmp_path / "not_a_bag"
+    empty.mkdir()
+    not_a_bag = run("check-trajectory", empty)
+    assert not_a_bag.exit_code == 2 and "is not a ROS 2 bag that can be read" in not_a_bag.stderr
+    model = run("check-trajectory", DESK_LAMP)
+    assert model.exit_code == 2 and "A FollowJointTrajectory goal is YAML with 'trajectory'" in model.stderr

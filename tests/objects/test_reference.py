@@ -89,7 +89,7 @@ def test_without_out_the_model_is_printed_as_yaml_or_json() -> None:
 def test_the_reference_model_checks_plans_and_transfers_to_its_object(object_id: str, written: Path) -> None:
     model, mapping = written / f"{object_id}.yaml", written / f"{object_id}_mapping.yaml"
     assert invoke("check", model).exit_code == 0
-    assert invoke("check", mapping).exit_code == 0
+    assert invoke("check", "--kind", "mapping", mapping).exit_code == 0
     planned = invoke("plan", model, "--json")
     assert planned.exit_code == 0, planned.output
     assert json.loads(planned.output)["plan"]

@@ -46,3 +46,28 @@ def test_a_lit_wick_counts_only_when_it_stands_in_the_wax(catalog: Catalog) -> N
         standing, burning = evaluate(candle, scene, [lit])
     assert not standing.met
     assert not burning.met and "not joined to the wax" in burning.detail
+
+
+def test_the_oil_lamps_wick_lit_before_its_oil_does_not_burn(catalog: Catalog) -> None:
+    lamp = catalog.get("oil_lamp")
+    parts = solids(lamp)
+    wick = mating_pose(parts["wick"].frames["stem"], parts["lamp_bowl"].frames["spout"])
+    bottle = mating_pose(parts["oil_bottle"].frames["neck"], parts["lamp_bowl"].frames["filling_hole"])
+    in_spout = Joint(1, "wick_into_spout", "wick", "stem", "lamp_bowl", "spout")
+    with Scene(parts, drawn=False) as scene:
+        scene.add_part("lamp_bowl", Pose(), dynamic=False)
+        scene.add_part("wick", wick, dynamic=False)
+        scene.add_part("oil_bottle", bottle, dynamic=False)
+        scene.add_part("match", Pose((0.0, 0.3, 0.0)), dynamic=False)
+
+        def judged(lit_at: int, oil_at: int) -> list[tuple[bool, str]]:
+            lit = Joint(lit_at, "match_lights_wick", "match", "flame", "wick", "tip", touch_only=True)
+            oil = Joint(oil_at, "bottle_into_filling_hole", "oil_bottle", "neck", "lamp_bowl", "filling_hole")
+            return [(check.met, check.detail) for check in evaluate(lamp, scene, [in_spout, lit, oil])]
+
+        lit_first, lit_last = judged(lit_at=2, oil_at=3), judged(lit_at=3, oil_at=2)
+    assert [met for met, _ in lit_last] == [True, True, True]
+    assert [met for met, _ in lit_first] == [True, True, False]
+    assert lit_first[2][1].endswith(
+        "but that was before 'stand the bottle of lamp oil neck down in the lamp bowl' (step 3), which must come first"
+    )

@@ -65,3 +65,29 @@ def test_the_goal_yaml_holds_every_point_with_its_time() -> None:
     assert {"positions", "velocities", "accelerations", "time_from_start"} <= set(points[-1])
     end = points[-1]["time_from_start"]
     assert end["sec"] + end["nanosec"] / 1e9 == pytest.approx(trajectory.seconds, abs=1e-6)
+
+
+def test_a_bag_and_a_goal_read_back_as_the_trajectory_written(tmp_path: Path) -> None:
+    from causalplan.sim.robot.ros import bag_trajectory_data, goal_trajectory_data
+    from causalplan.sim.robot.trajectory import read_trajectory
+
+    trajectory = commands()
+    write_bag(trajectory, tmp_path / "bag")
+    from_bag = read_trajectory(bag_trajectory_data(tmp_path / "bag"))
+    from_goal = read_trajectory(goal_trajectory_data(yaml.safe_load(follow_joint_trajectory_goal(trajectory))))
+    for read in (from_bag, from_goal):
+        assert len(read.points) == len(trajectory.points)
+        assert read.seconds == pytest.approx(trajectory.seconds, abs=1e-6)
+        assert read.points[-1].positions == pytest.approx(trajectory.points[-1].positions, abs=1e-6)
+        assert read.points[3].velocities == pytest.approx(trajectory.points[3].velocities, abs=1e-6)
+    assert [p.gripper_width for p in from_bag.points] == pytest.approx([p.gripper_width for p in trajectory.points])
+
+
+def test_a_goal_without_a_trajectory_is_refused_saying_what_a_goal_holds() -> None:
+    from causalplan.sim.robot.ros import goal_trajectory_data
+    from causalplan.sim.robot.trajectory import TrajectoryInputError
+
+    with pytest.raises(TrajectoryInputError, match="'trajectory': 'joint_names' and 'points'"):
+        goal_trajectory_data({"object": "desk_lamp"})
+    with pytest.raises(TrajectoryInputError, match="whole numbers 'sec' and 'nanosec'"):
+        goal_trajectory_data({"trajectory": {"joint_names": [], "points": [{"time_from_start": 1.5}]}})
