@@ -17,12 +17,14 @@ from causalplan.troubleshoot.structure import Structure, bits
 State = tuple[int, int, int]
 
 
-def _outcomes(structure: Structure, suspicion: Suspicion, state: State, attached: int) -> list[list[tuple[float, State | None]]]:
+def _outcomes(
+    structure: Structure, suspicion: Suspicion, state: State, attached: int
+) -> list[list[tuple[float, State | None]]]:
     """Return each action's outcomes from ``state``: (probability, next state; None when repaired)."""
     suspects, replaced, where = state
     among = suspects | replaced
     graph = assembly_graph(structure)
-    options: list[list[tuple[float, State | None]]] = []
+    options: Outcomes = []
     for move in graph.moves[where]:
         options.append([(1.0, (suspects, replaced, move.target))])
     if structure.is_assembled(attached):
@@ -43,6 +45,10 @@ def _outcomes(structure: Structure, suspicion: Suspicion, state: State, attached
             else:
                 options.append([(1.0, state)])
     return options
+
+
+def _value(values: dict[State, float], after: State | None) -> float:
+    return 0.0 if after is None else values[after]
 
 
 def _is_possible(probability: float, after: State | None) -> bool:
@@ -67,7 +73,10 @@ def best_expected_actions(structure: Structure, suspicion: Suspicion, horizon: i
         values = {
             state: min(
                 (
-                    1.0 + sum(p * (0.0 if after is None else values[after]) for p, after in option if _is_possible(p, after))
+                    1.0
+                    + sum(
+                        p * (0.0 if after is None else values[after]) for p, after in option if _is_possible(p, after)
+                    )
                     for option in outcomes[state]
                 ),
                 default=math.inf,
