@@ -15,11 +15,11 @@ from causalplan.troubleshoot.priors import Suspicion
 from causalplan.troubleshoot.structure import Structure, bits
 
 State = tuple[int, int, int]
+Outcomes = list[list[tuple[float, State | None]]]
+"""Each action's outcomes: (probability, next state; None when repaired)."""
 
 
-def _outcomes(
-    structure: Structure, suspicion: Suspicion, state: State, attached: int
-) -> list[list[tuple[float, State | None]]]:
+def _outcomes(structure: Structure, suspicion: Suspicion, state: State, attached: int) -> Outcomes:
     """Return each action's outcomes from ``state``: (probability, next state; None when repaired)."""
     suspects, replaced, where = state
     among = suspects | replaced
