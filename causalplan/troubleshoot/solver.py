@@ -39,7 +39,8 @@ if TYPE_CHECKING:
     import numpy.typing as npt
 
 TEST, INSPECT, REPLACE = "test", "inspect", "replace"
-MAX_BELIEFS = 100_000
+MAX_STATES = 10_000_000
+"""The (belief, assembly state) pairs the solver may hold: about 18 bytes each, 180 MB in all."""
 NO_PART = -1
 TOLERANCE = 1e-9
 """Values closer than this are equal (sums of the same numbers in another order differ in the last bits)."""
@@ -76,7 +77,7 @@ class Policy:
     structure: Structure
     graph: AssemblyGraph
     suspicion: Suspicion
-    max_beliefs: int = MAX_BELIEFS
+    max_states: int = MAX_STATES
     _distances: npt.NDArray[np.float64] | None = field(default=None, repr=False)
     _tables: dict[Belief, _BeliefTable] = field(default_factory=dict, repr=False)
     _masks: dict[tuple[str, int], npt.NDArray[np.bool_]] = field(default_factory=dict, repr=False)
@@ -112,10 +113,11 @@ class Policy:
     def _table(self, belief: Belief) -> _BeliefTable:
         table = self._tables.get(belief)
         if table is None:
-            if len(self._tables) >= self.max_beliefs:
+            if (len(self._tables) + 1) * len(self.graph.states) > self.max_states:
                 raise TooLargeError(
-                    f"Solving the {self.structure.object_id} exactly needs more than {self.max_beliefs} beliefs.",
-                    details={"object": self.structure.object_id, "limit": self.max_beliefs},
+                    f"Solving the {self.structure.object_id} exactly needs more than {self.max_states} "
+                    "(belief, assembly) states.",
+                    details={"object": self.structure.object_id, "limit": self.max_states},
                 )
             table = self._solve(belief)
             self._tables[belief] = table
@@ -176,8 +178,8 @@ class Policy:
         return self._distances
 
 
-def solve(structure: Structure, suspicion: Suspicion, max_beliefs: int = MAX_BELIEFS) -> Policy:
+def solve(structure: Structure, suspicion: Suspicion, max_states: int = MAX_STATES) -> Policy:
     """Return the exact policy of ``suspicion`` on ``structure`` (solved as far as the start needs it)."""
-    policy = Policy(structure, assembly_graph(structure), suspicion, max_beliefs)
+    policy = Policy(structure, assembly_graph(structure), suspicion, max_states)
     policy.expected_actions()
     return policy

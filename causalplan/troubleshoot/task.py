@@ -11,7 +11,7 @@ from causalplan.troubleshoot.episode import Episode, run_episode
 from causalplan.troubleshoot.errors import FaultNotNeededError, NoFaultsError, UnknownFaultPartError
 from causalplan.troubleshoot.measures import REPAIR_BONUS, StrategyResult, score
 from causalplan.troubleshoot.priors import STRATEGIES, Suspicion, model_suspicion, oracle_suspicion, uniform_suspicion
-from causalplan.troubleshoot.solver import MAX_BELIEFS, Policy, solve
+from causalplan.troubleshoot.solver import MAX_STATES, Policy, solve
 from causalplan.troubleshoot.structure import Structure, structure_of
 
 
@@ -24,7 +24,7 @@ class TroubleshootingTask:
     suspicions: dict[str, Suspicion]
     routes: tuple[frozenset[str], ...] = ()
     """The model's routes to the goal (minimal sets of function labels); empty without a model."""
-    max_beliefs: int = MAX_BELIEFS
+    max_states: int = MAX_STATES
     _policies: dict[str, Policy] = field(default_factory=dict, repr=False)
 
     @property
@@ -34,7 +34,7 @@ class TroubleshootingTask:
     def policy(self, strategy: str) -> Policy:
         """Return the exact policy of ``strategy`` (solved once per task)."""
         if strategy not in self._policies:
-            self._policies[strategy] = solve(self.structure, self.suspicions[strategy], self.max_beliefs)
+            self._policies[strategy] = solve(self.structure, self.suspicions[strategy], self.max_states)
         return self._policies[strategy]
 
     def episode(self, strategy: str, fault: str) -> Episode:
@@ -68,7 +68,7 @@ def troubleshooting_task(
     obj: AssemblyObject,
     model: CausalModel | None = None,
     mapping: Labelling | None = None,
-    max_beliefs: int = MAX_BELIEFS,
+    max_states: int = MAX_STATES,
 ) -> TroubleshootingTask:
     """Return the task of repairing ``obj``; with a model (and its mapping on a new object), the ``model`` strategy.
 
@@ -90,4 +90,4 @@ def troubleshooting_task(
         routes = believed.routes
     suspicions["uniform"] = uniform_suspicion(obj)
     suspicions["oracle"] = oracle_suspicion(obj)
-    return TroubleshootingTask(obj, structure, suspicions, routes, max_beliefs)
+    return TroubleshootingTask(obj, structure, suspicions, routes, max_states)

@@ -6,11 +6,12 @@ import pytest
 
 from causalplan.objects.catalog import Catalog
 from causalplan.troubleshoot.episode import run_episode
+from causalplan.troubleshoot.errors import TooLargeError
 from causalplan.troubleshoot.priors import Suspicion, oracle_suspicion, uniform_suspicion
 from causalplan.troubleshoot.solver import solve
 from causalplan.troubleshoot.structure import Structure, structure_of
+from causalplan.troubleshoot.synthetic import chain, star
 from tests.troubleshoot.exhaustive import best_expected_actions
-from tests.troubleshoot.shapes import chain, star
 
 
 def _longest_episode(structure: Structure, suspicion: Suspicion) -> int:
@@ -106,3 +107,9 @@ def test_a_part_without_weight_is_suspected_once_every_weighted_part_is_cleared(
     checked = [step.part for step in episode.steps if step.kind in ("inspect", "replace")]
     assert checked.index("p1") > max(checked.index("p2"), checked.index("p3"))
     assert episode.steps[-1].observed == "goal"
+
+
+def test_the_solver_refuses_rather_than_approximates_beyond_its_limit() -> None:
+    with pytest.raises(TooLargeError) as raised:
+        solve(star(5, visible=False), Suspicion("test", (1.0,) * 6), max_states=1000)
+    assert raised.value.code == "troubleshooting_too_large"

@@ -1,4 +1,9 @@
-"""Small synthetic objects for the solver's tests, built as ``Structure``s directly."""
+"""Synthetic objects of any size for the solver's tests and its benchmark, built as ``Structure``s directly.
+
+The two extremes of access: a *star* (every part on the base, side by side: the most
+assembly states, 2 to the number of parts) and a *chain* (each part held by the one below:
+the fewest, one more than the parts).
+"""
 
 from __future__ import annotations
 
