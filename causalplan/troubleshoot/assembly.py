@@ -9,18 +9,13 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from causalplan.troubleshoot.errors import NotTroubleshootableError, TooLargeError
 from causalplan.troubleshoot.structure import Structure, bits
 
-if TYPE_CHECKING:
-    import numpy as np
-    import numpy.typing as npt
-
 DETACH, ATTACH = "detach", "attach"
 MAX_ASSEMBLY_STATES = 1 << 12
-"""The all-pairs distances of this many states take 32 MB; beyond it the beliefs are too many anyway."""
+"""The all-pairs distances of this many states take 130 MB; beyond it the beliefs are too many anyway."""
 
 
 @dataclass(frozen=True)
@@ -44,12 +39,10 @@ class AssemblyGraph:
     def index(self, attached: int) -> int:
         return self.states.index(attached)
 
-    def distances(self) -> npt.NDArray[np.int32]:
-        """Return the fewest moves between every two states (a breadth-first search from each)."""
-        import numpy as np
-
+    def distances(self) -> list[list[int]]:
+        """Return the fewest moves between every two states (a breadth-first search from each; -1: none)."""
         count = len(self.states)
-        result = np.full((count, count), -1, dtype=np.int32)
+        result = [[-1] * count for _ in range(count)]
         for source in range(count):
             row = result[source]
             row[source] = 0

@@ -26,7 +26,11 @@ on every run.
 
 from __future__ import annotations
 
+import math
+from array import array
+from collections.abc import Iterable
 from dataclasses import dataclass, field
+from operator import add
 from typing import TYPE_CHECKING
 
 from causalplan.troubleshoot.assembly import AssemblyGraph, Move, assembly_graph
@@ -42,6 +46,8 @@ TEST, INSPECT, REPLACE = "test", "inspect", "replace"
 MAX_STATES = 10_000_000
 """The (belief, assembly state) pairs the solver may hold: about 18 bytes each, 180 MB in all."""
 NO_PART = -1
+SMALL_GRAPH = 32
+"""Up to this many assembly states, a belief's values are summed in Python; above, with numpy."""
 TOLERANCE = 1e-9
 """Values closer than this are equal (sums of the same numbers in another order differ in the last bits)."""
 
@@ -61,12 +67,12 @@ Belief = tuple[int, int]
 
 @dataclass(frozen=True)
 class _BeliefTable:
-    values: npt.NDArray[np.float64]
+    values: array[float]
     """The value of each assembly state."""
-    acting: npt.NDArray[np.float64]
+    acting: array[float]
     """The value of the best informative action in each state (inf: none there)."""
     acts: tuple[Act, ...]
-    which: npt.NDArray[np.int16]
+    which: array[int]
     """The index in ``acts`` of that action, per state."""
 
 
@@ -78,9 +84,12 @@ class Policy:
     graph: AssemblyGraph
     suspicion: Suspicion
     max_states: int = MAX_STATES
-    _distances: npt.NDArray[np.float64] | None = field(default=None, repr=False)
-    _tables: dict[Belief, _BeliefTable] = field(default_factory=dict, repr=False)
-    _masks: dict[tuple[str, int], npt.NDArray[np.bool_]] = field(default_factory=dict, repr=False)
+    _rows: list[list[float]] | None = field(default=None, repr=False)
+    _matrix: npt.NDArray[np.float64] | None = field(default=None, repr=False)
+    _tables: dict[tuple[int, tuple[float, ...]], _BeliefTable] = field(default_factory=dict, repr=False)
+    _masses: dict[int, float] = field(default_factory=dict, repr=False)
+    _weighed: dict[int, tuple[float, ...]] = field(default_factory=dict, repr=False)
+    _places: dict[tuple[str, int], tuple[int, ...]] = field(default_factory=dict, repr=False)
 
     @property
     def start(self) -> Belief:
@@ -110,8 +119,24 @@ class Policy:
         """Return the expected number of actions from the broken, assembled object, under the strategy's prior."""
         return self.value(self.start, self.graph.assembled)
 
+    def _share(self, part: int, among: int) -> float:
+        """Return ``Suspicion.share(part, among)``, with the masses of the sets of parts kept."""
+        mass = self._masses.get(among)
+        if mass is None:
+            mass = self._masses[among] = self.suspicion.mass(among)
+        if mass > 0:
+            return self.suspicion.weights[part] / mass
+        return 1.0 / among.bit_count()
+
     def _table(self, belief: Belief) -> _BeliefTable:
-        table = self._tables.get(belief)
+        # The replaced parts matter only through their weights (the chance that the object is
+        # repaired already), never by name: beliefs whose replaced parts weigh alike share a table.
+        suspects, replaced = belief
+        weights = self._weighed.get(replaced)
+        if weights is None:
+            weights = self._weighed[replaced] = tuple(sorted(self.suspicion.weights[part] for part in bits(replaced)))
+        key = (suspects, weights)
+        table = self._tables.get(key)
         if table is None:
             if (len(self._tables) + 1) * len(self.graph.states) > self.max_states:
                 raise TooLargeError(
@@ -120,62 +145,74 @@ class Policy:
                     details={"object": self.structure.object_id, "limit": self.max_states},
                 )
             table = self._solve(belief)
-            self._tables[belief] = table
+            self._tables[key] = table
         return table
 
     def _solve(self, belief: Belief) -> _BeliefTable:
-        import numpy as np
-
-        structure, graph, suspicion = self.structure, self.graph, self.suspicion
+        structure, graph = self.structure, self.graph
         suspects, replaced = belief
         among = suspects | replaced
         count = len(graph.states)
+        acting = [math.inf] * count
+        which = [0] * count
         acts: list[Act] = []
-        rows: list[npt.NDArray[np.float64]] = []
+
+        def offer(act: Act, offers: Iterable[tuple[int, float]]) -> None:
+            index = len(acts)
+            acts.append(act)
+            for state, value in offers:
+                if value < acting[state]:
+                    acting[state], which[state] = value, index
+
         if replaced:
-            repaired = sum(suspicion.share(part, among) for part in bits(replaced))
+            repaired = sum(self._share(part, among) for part in bits(replaced))
             after = 0.0 if not suspects else (1.0 - repaired) * self.value((suspects, 0), graph.assembled)
-            row = np.full(count, np.inf)
-            row[graph.assembled] = 1.0 + after
-            acts.append(Act(TEST))
-            rows.append(row)
+            offer(Act(TEST), ((graph.assembled, 1.0 + after),))
         if among.bit_count() >= 2:
             for part in bits(suspects & structure.visible):
-                broken = suspicion.share(part, among)
+                broken = self._share(part, among)
+                if broken == 0.0:
+                    continue  # it works, for sure: inspecting it costs an action and teaches nothing
                 found = self._table((1 << part, 0)).values
                 cleared = self._table((suspects & ~(1 << part), replaced)).values
-                values = 1.0 + broken * found + (1.0 - broken) * cleared
-                acts.append(Act(INSPECT, part))
-                rows.append(np.where(self._allowed(INSPECT, part), values, np.inf))
+                works = 1.0 - broken
+                offers = (
+                    (state, 1.0 + broken * found[state] + works * cleared[state])
+                    for state in self._where(INSPECT, part)
+                )
+                offer(Act(INSPECT, part), offers)
         for part in bits(suspects):
+            if self._share(part, among) == 0.0:
+                continue  # replacing a part that works for sure costs an action and repairs nothing
             swapped = self._table((suspects & ~(1 << part), replaced | 1 << part)).values
-            acts.append(Act(REPLACE, part))
-            rows.append(np.where(self._allowed(REPLACE, part), 1.0 + swapped, np.inf))
-        table = np.vstack(rows)
-        which = np.argmin(table, axis=0).astype(np.int16)
-        acting = table[which, np.arange(count)]
-        values = np.min(self._all_distances() + acting[np.newaxis, :], axis=1)
-        return _BeliefTable(values, acting, tuple(acts), which)
+            offer(Act(REPLACE, part), ((state, 1.0 + swapped[state]) for state in self._where(REPLACE, part)))
+        return _BeliefTable(self._nearest(acting), array("d", acting), tuple(acts), array("h", which))
 
-    def _allowed(self, kind: str, part: int) -> npt.NDArray[np.bool_]:
-        """Return, per assembly state, whether ``part`` can be inspected (or replaced) there."""
-        import numpy as np
-
+    def _where(self, kind: str, part: int) -> tuple[int, ...]:
+        """Return the assembly states in which ``part`` can be inspected (or replaced)."""
         key = (kind, part)
-        if key not in self._masks:
+        if key not in self._places:
             allowed = self.structure.can_inspect if kind == INSPECT else self.structure.can_replace
-            states = self.graph.states
-            self._masks[key] = np.fromiter((allowed(part, attached) for attached in states), bool, len(states))
-        return self._masks[key]
+            self._places[key] = tuple(
+                state for state, attached in enumerate(self.graph.states) if allowed(part, attached)
+            )
+        return self._places[key]
 
-    def _all_distances(self) -> npt.NDArray[np.float64]:
+    def _nearest(self, acting: list[float]) -> array[float]:
+        """Return, per state, the cheapest way to act: min over states S of distance to S + acting(S).
+
+        In Python for small assembly graphs (numpy's call costs more than the sums), else with numpy.
+        """
+        if self._rows is None:
+            distances = self.graph.distances()
+            self._rows = [[math.inf if d < 0 else float(d) for d in row] for row in distances]
+        if len(acting) <= SMALL_GRAPH:
+            return array("d", [min(map(add, row, acting)) for row in self._rows])
         import numpy as np
 
-        if self._distances is None:
-            distances = self.graph.distances().astype(np.float64)
-            distances[distances < 0] = np.inf
-            self._distances = distances
-        return self._distances
+        if self._matrix is None:
+            self._matrix = np.array(self._rows, dtype=np.float64)
+        return array("d", np.min(self._matrix + np.array(acting)[np.newaxis, :], axis=1).tolist())
 
 
 def solve(structure: Structure, suspicion: Suspicion, max_states: int = MAX_STATES) -> Policy:
