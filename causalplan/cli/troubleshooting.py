@@ -9,6 +9,8 @@ import click
 
 from causalplan.cli.common import (
     EXIT_INVALID,
+    EXIT_NO_PLAN,
+    EXIT_OK,
     EXIT_UNDECIDED,
     FILE,
     catalog_from,
@@ -48,6 +50,12 @@ STRATEGY_WORDS = {
     default="model",
     help="With --fault: whose policy runs the episode.",
 )
+@click.option(
+    "--physics",
+    is_flag=True,
+    help="With --fault: rebuild the object as the episode left it at its last test, in physics (PyBullet), "
+    "and say whether it gives its goal there (the robot's detaching is not simulated).",
+)
 @json_option
 @catalog_option
 def troubleshoot(
@@ -57,6 +65,7 @@ def troubleshoot(
     fault: str | None,
     all_faults: bool,
     strategy: str,
+    physics: bool,
     as_json: bool,
     catalog: tuple[Path, ...],
 ) -> None:
@@ -71,7 +80,8 @@ def troubleshoot(
         causalplan troubleshoot examples/paper/desk_lamp.yaml --fault light_bulb
         causalplan troubleshoot examples/paper/desk_lamp.yaml -m examples/paper/flashlight_mapping.yaml --all-faults
 
-    Exit codes: 0 done, 2 invalid input, 3 too large to solve exactly.
+    Exit codes: 0 done, 1 the rebuilt object gives no goal in physics (--physics), 2 invalid
+    input, 3 too large to solve exactly.
     """
     from causalplan.errors import CausalPlanError
     from causalplan.troubleshoot.errors import TooLargeError
@@ -79,6 +89,8 @@ def troubleshoot(
 
     if (fault is not None) == all_faults:
         fail("missing_option", "Give --fault PART (one episode) or --all-faults (the strategies' table), not both.")
+    if physics and fault is None:
+        fail("missing_option", "--physics goes with --fault PART: it rebuilds that episode's object in physics.")
     known = catalog_from(catalog)
     causal_model = load_valid_model(model, known, as_json)
     labelling = load_valid_mapping(mapping, known, as_json) if mapping else None
@@ -86,7 +98,7 @@ def troubleshoot(
     try:
         task = troubleshooting_task(known.get(chosen), causal_model, labelling)
         if fault is not None:
-            _episode(task, fault, strategy, as_json)
+            _episode(task, fault, strategy, physics, as_json)
         else:
             _table(task, as_json)
     except TooLargeError as exc:
@@ -103,23 +115,30 @@ def _refuse(code: str, message: str, as_json: bool, exit_code: int) -> None:
     exit_with(exit_code)
 
 
-def _episode(task: TroubleshootingTask, fault: str, strategy: str, as_json: bool) -> None:
+def _episode(task: TroubleshootingTask, fault: str, strategy: str, physics: bool, as_json: bool) -> None:
     obj = task.obj
     episode = task.episode(strategy, fault)
     others = {name: task.episode(name, fault).actions for name in task.strategies}
+    rebuilt = None
+    if physics:
+        from causalplan.sim.troubleshooting import repair_in_physics
+
+        rebuilt = repair_in_physics(obj, episode)
+    works = rebuilt is None or rebuilt.produces_goal
     if as_json:
         print_json(
             {
-                "status": "repaired",
+                "status": "repaired" if works else "not_repaired_in_physics",
                 "object": obj.id,
                 "fault": fault,
                 "strategy": strategy,
                 "actions": episode.actions,
                 "steps": [step.as_dict() for step in episode.steps],
                 "strategies": {name: {"actions": actions} for name, actions in others.items()},
+                **({"physics": rebuilt.as_dict()} if rebuilt is not None else {}),
             }
         )
-        return
+        exit_with(EXIT_OK if works else EXIT_NO_PLAN)
     looks = next((f.looks for f in obj.faults if f.part == fault), "a fault the catalog does not list")
     say(f"The {obj.name} gives no {obj.goal}: the {obj.part(fault).name} is broken ({looks}).")
     say(dim(f"Strategy {strategy}: {STRATEGY_WORDS[strategy]}."))
@@ -127,6 +146,14 @@ def _episode(task: TroubleshootingTask, fault: str, strategy: str, as_json: bool
         say(f"{number:>3}. {step.text(obj.goal)}")
     compared = ", ".join(f"{name} {actions}" for name, actions in others.items())
     say(f"Repaired in {episode.actions} actions ({compared}).")
+    if rebuilt is not None:
+        order = ", ".join(rebuilt.order)
+        if works:
+            say(f"In physics, rebuilt in that order ({order}), the {obj.name} gives {obj.goal}.")
+        else:
+            why = rebuilt.report.explanation() or f"the broken {fault} was never replaced"
+            say(click.style(f"In physics, rebuilt in that order ({order}), it gives no {obj.goal}: {why}.", fg="red"))
+        exit_with(EXIT_OK if works else EXIT_NO_PLAN)
 
 
 def _table(task: TroubleshootingTask, as_json: bool) -> None:

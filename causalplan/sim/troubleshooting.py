@@ -1,0 +1,111 @@
+"""A troubleshooting episode's last test, in physics: the object rebuilt as the episode left it.
+
+The episode's moves change the order in which the parts sit on the object: a part detached
+and attached again comes after the parts that stayed. This rebuilds the object in that order
+in PyBullet (parts move themselves, with every physics check: blocked path, contact,
+alignment, stability), lights it where it has something to light it with (each ``ignite`` fit
+as soon as its part is in place, before anything covers it), and judges the true mechanism
+on what was built. The object gives its goal when physics says so *and* the broken part was
+swapped for a spare: a broken part looks whole to the simulator.
+
+What this does not do: the robot detaching, setting aside and fetching parts (the Panda only
+assembles today), so a detach is not simulated, only the reassembly it leads to.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+from causalplan.objects.model import AssemblyObject
+from causalplan.sim.executor import simulate_plan
+from causalplan.sim.outcomes import RenderMode
+from causalplan.sim.plan_steps import StepRequest
+from causalplan.sim.report import SimulationReport
+from causalplan.troubleshoot.assembly import ATTACH, DETACH, AssemblyGraph, assembly_graph
+from causalplan.troubleshoot.episode import Episode
+from causalplan.troubleshoot.solver import REPLACE
+from causalplan.troubleshoot.structure import structure_of
+
+
+@dataclass(frozen=True)
+class RepairInPhysics:
+    """The last test of an episode in physics: the simulation of the rebuilt object, and the verdict."""
+
+    order: tuple[str, ...]
+    """The parts in the order they sit on the object at the last test (the base first)."""
+    report: SimulationReport
+    broken_part_replaced: bool
+
+    @property
+    def produces_goal(self) -> bool:
+        """Return whether the rebuilt object gives its goal: physics says so, and the broken part is a spare."""
+        return self.report.passed and self.broken_part_replaced
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "order": list(self.order),
+            "produces_goal": self.produces_goal,
+            "broken_part_replaced": self.broken_part_replaced,
+            "simulation": self.report.summary(),
+        }
+
+
+def _first_build(graph: AssemblyGraph, parts: tuple[str, ...]) -> list[str]:
+    """Return the parts in an order that builds the object from the bare base (fewest attaches)."""
+    came_from: dict[int, tuple[int, str]] = {}
+    queue = deque([0])
+    seen = {0}
+    while queue:
+        state = queue.popleft()
+        for move in graph.moves[state]:
+            if move.kind == ATTACH and move.target not in seen:
+                seen.add(move.target)
+                came_from[move.target] = (state, parts[move.part])
+                queue.append(move.target)
+    order: list[str] = []
+    state = graph.assembled
+    while state != 0:
+        state, part = came_from[state]
+        order.append(part)
+    return order[::-1]
+
+
+def _steps(obj: AssemblyObject, order: list[str]) -> list[StepRequest]:
+    """Return the steps that attach ``order`` and light the object (each ignite as soon as its part is in)."""
+    fit_of = {fit.moving_part: fit for fit in obj.fits if fit.primitive != "ignite"}
+    lights = [fit for fit in obj.fits if fit.primitive == "ignite"]
+    steps: list[StepRequest] = []
+    in_place = {obj.base}
+
+    def light_what_can_be() -> None:
+        for fit in [fit for fit in lights if fit.fixed_part in in_place]:
+            steps.append(StepRequest(fit.primitive, fit.moving_part, fit.fixed_part, fit.id))
+            lights.remove(fit)
+
+    light_what_can_be()
+    for part in order:
+        fit = fit_of[part]
+        steps.append(StepRequest(fit.primitive, fit.moving_part, fit.fixed_part, fit.id))
+        in_place.add(part)
+        light_what_can_be()
+    return steps
+
+
+def repair_in_physics(obj: AssemblyObject, episode: Episode) -> RepairInPhysics:
+    """Rebuild ``obj`` as ``episode`` left it at its last test, in physics, and judge whether it gives its goal."""
+    structure = structure_of(obj)
+    order = _first_build(assembly_graph(structure), structure.parts)
+    last_test = max(index for index, step in enumerate(episode.steps) if step.kind == "test")
+    replaced = False
+    for step in episode.steps[:last_test]:
+        if step.kind == DETACH and step.part in order:
+            order.remove(step.part)
+        elif step.kind == ATTACH and step.part is not None:
+            order.append(step.part)
+        elif step.kind == "test":
+            replaced = False  # an earlier test showed no goal: the spares so far were not the answer
+        elif step.kind == REPLACE and step.part == episode.fault:
+            replaced = True
+    report = simulate_plan(obj, _steps(obj, order), render=RenderMode.NONE)
+    return RepairInPhysics((obj.base, *order), report, replaced)
