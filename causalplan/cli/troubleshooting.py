@@ -24,6 +24,7 @@ from causalplan.cli.common import (
     make_console,
     print_json,
     say,
+    writing,
 )
 
 if TYPE_CHECKING:
@@ -56,6 +57,13 @@ STRATEGY_WORDS = {
     help="With --fault: rebuild the object as the episode left it at its last test, in physics (PyBullet), "
     "and say whether it gives its goal there (the robot's detaching is not simulated).",
 )
+@click.option(
+    "--robot",
+    is_flag=True,
+    help="With --fault: the Franka Panda rebuilds the object in physics, as --physics (implied), within its "
+    "datasheet's limits, driven by its motors.",
+)
+@click.option("--trajectory", type=FILE, help="With --robot: write the Panda's motor commands (check-trajectory).")
 @json_option
 @catalog_option
 def troubleshoot(
@@ -66,6 +74,8 @@ def troubleshoot(
     all_faults: bool,
     strategy: str,
     physics: bool,
+    robot: bool,
+    trajectory: Path | None,
     as_json: bool,
     catalog: tuple[Path, ...],
 ) -> None:
@@ -89,8 +99,10 @@ def troubleshoot(
 
     if (fault is not None) == all_faults:
         fail("missing_option", "Give --fault PART (one episode) or --all-faults (the strategies' table), not both.")
-    if physics and fault is None:
-        fail("missing_option", "--physics goes with --fault PART: it rebuilds that episode's object in physics.")
+    if (physics or robot) and fault is None:
+        fail("missing_option", "--physics and --robot go with --fault PART: they rebuild that episode's object.")
+    if trajectory is not None and not robot:
+        fail("missing_option", "--trajectory needs --robot (the robot's motor commands are what it writes).")
     known = catalog_from(catalog)
     causal_model = load_valid_model(model, known, as_json)
     labelling = load_valid_mapping(mapping, known, as_json) if mapping else None
@@ -98,7 +110,7 @@ def troubleshoot(
     try:
         task = troubleshooting_task(known.get(chosen), causal_model, labelling)
         if fault is not None:
-            _episode(task, fault, strategy, physics, as_json)
+            _episode(task, fault, strategy, (physics or robot, robot, trajectory), as_json)
         else:
             _table(task, as_json)
     except TooLargeError as exc:
@@ -115,15 +127,24 @@ def _refuse(code: str, message: str, as_json: bool, exit_code: int) -> None:
     exit_with(exit_code)
 
 
-def _episode(task: TroubleshootingTask, fault: str, strategy: str, physics: bool, as_json: bool) -> None:
+def _episode(
+    task: TroubleshootingTask, fault: str, strategy: str, physics: tuple[bool, bool, Path | None], as_json: bool
+) -> None:
     obj = task.obj
     episode = task.episode(strategy, fault)
     others = {name: task.episode(name, fault).actions for name in task.strategies}
+    in_physics, robot, trajectory = physics
     rebuilt = None
-    if physics:
+    if in_physics:
         from causalplan.sim.troubleshooting import repair_in_physics
 
-        rebuilt = repair_in_physics(obj, episode)
+        rebuilt = repair_in_physics(obj, episode, robot=robot)
+        commands = rebuilt.report.motor_commands
+        if trajectory is not None and commands is not None:
+            import json
+
+            with writing(trajectory):
+                trajectory.write_text(json.dumps(commands.as_dict()), encoding="utf-8")
     works = rebuilt is None or rebuilt.produces_goal
     if as_json:
         print_json(
@@ -148,11 +169,12 @@ def _episode(task: TroubleshootingTask, fault: str, strategy: str, physics: bool
     say(f"Repaired in {episode.actions} actions ({compared}).")
     if rebuilt is not None:
         order = ", ".join(rebuilt.order)
+        who = "the Panda rebuilt it" if robot else "rebuilt"
         if works:
-            say(f"In physics, rebuilt in that order ({order}), the {obj.name} gives {obj.goal}.")
+            say(f"In physics, {who} in that order ({order}): the {obj.name} gives {obj.goal}.")
         else:
             why = rebuilt.report.explanation() or f"the broken {fault} was never replaced"
-            say(click.style(f"In physics, rebuilt in that order ({order}), it gives no {obj.goal}: {why}.", fg="red"))
+            say(click.style(f"In physics, {who} in that order ({order}): no {obj.goal}, {why}.", fg="red"))
         exit_with(EXIT_OK if works else EXIT_NO_PLAN)
 
 

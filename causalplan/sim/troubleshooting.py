@@ -8,8 +8,12 @@ as soon as its part is in place, before anything covers it), and judges the true
 on what was built. The object gives its goal when physics says so *and* the broken part was
 swapped for a spare: a broken part looks whole to the simulator.
 
-What this does not do: the robot detaching, setting aside and fetching parts (the Panda only
-assembles today), so a detach is not simulated, only the reassembly it leads to.
+With ``robot``, the Franka Panda does the rebuilding, from the parts laid out on the table
+(a replaced part's spare among them), within its datasheet's limits, and its motor commands
+are then played through its joint motors, as `simulate --robot` does. What this does not do:
+the robot detaching, setting aside and fetching parts (the Panda only assembles today), so a
+detach is not simulated, only the reassembly it leads to; and the robot rebuilds the whole
+object from the base, the parts that stayed on included.
 """
 
 from __future__ import annotations
@@ -92,8 +96,11 @@ def _steps(obj: AssemblyObject, order: list[str]) -> list[StepRequest]:
     return steps
 
 
-def repair_in_physics(obj: AssemblyObject, episode: Episode) -> RepairInPhysics:
-    """Rebuild ``obj`` as ``episode`` left it at its last test, in physics, and judge whether it gives its goal."""
+def repair_in_physics(obj: AssemblyObject, episode: Episode, robot: bool = False) -> RepairInPhysics:
+    """Rebuild ``obj`` as ``episode`` left it at its last test, in physics, and judge whether it gives its goal.
+
+    ``robot``: the Panda rebuilds it (the report's ``motor_commands`` are its trajectory).
+    """
     structure = structure_of(obj)
     order = _first_build(assembly_graph(structure), structure.parts)
     last_test = max(index for index, step in enumerate(episode.steps) if step.kind == "test")
@@ -107,5 +114,5 @@ def repair_in_physics(obj: AssemblyObject, episode: Episode) -> RepairInPhysics:
             replaced = False  # an earlier test showed no goal: the spares so far were not the answer
         elif step.kind == REPLACE and step.part == episode.fault:
             replaced = True
-    report = simulate_plan(obj, _steps(obj, order), render=RenderMode.NONE)
+    report = simulate_plan(obj, _steps(obj, order), render=RenderMode.NONE, robot=robot, motors=robot)
     return RepairInPhysics((obj.base, *order), report, replaced)
