@@ -10,9 +10,8 @@ from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.api.schemas.troubleshooting import TroubleshootingIn, TroubleshootingOut
 from causalplan.service.deps import ClientIdsDep, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, invalid_input_error, model_for_request, read_mapping
+from causalplan.service.pool.troubleshooting_jobs import troubleshooting_job
 from causalplan.service.storage.crud import save
-from causalplan.troubleshoot.measures import REPAIR_BONUS
-from causalplan.troubleshoot.task import troubleshooting_task
 
 MAX_SERVICE_STATES = 1_000_000
 """The (belief, assembly) states one request may solve: every catalog object needs far fewer."""
@@ -20,7 +19,7 @@ MAX_SERVICE_STATES = 1_000_000
 router = APIRouter(
     prefix="/v1/troubleshooting",
     tags=["troubleshooting"],
-    responses=error_responses(403, 404, 429),
+    responses=error_responses(403, 404, 429, 503, 504),
     route_class=StrictJSONRoute,
 )
 
@@ -28,6 +27,8 @@ router = APIRouter(
 @router.post("", response_model=TroubleshootingOut, summary="Troubleshoot a broken object")
 def create_troubleshooting(body: TroubleshootingIn, services: ServicesDep, client: ClientIdsDep) -> dict[str, Any]:
     """Solve the model's, uniform's and the oracle's exact policies on the broken object, and score them.
+
+    Solved in a planner worker, stopped after the server's default time limit (504).
 
     The same JSON as `causalplan troubleshoot --all-faults --json`, with `episode` (as
     `--fault PART --json`) when `fault` is given, and `model_id`. An inline model is stored,
@@ -43,29 +44,20 @@ def create_troubleshooting(body: TroubleshootingIn, services: ServicesDep, clien
     if problem is not None:
         raise problem
     assert submission.model is not None
-    labelling = mapping.mapping if mapping is not None else None
-    chosen = body.object or (labelling or submission.model.labelling).object_id
-    task = troubleshooting_task(services.catalog.get(chosen), submission.model, labelling, MAX_SERVICE_STATES)
-    episode = None
-    if body.fault is not None:
-        run = task.episode(body.strategy, body.fault)
-        episode = {
-            "fault": body.fault,
-            "strategy": body.strategy,
-            "actions": run.actions,
-            "steps": [step.as_dict() for step in run.steps],
-            "strategies": {name: {"actions": task.episode(name, body.fault).actions} for name in task.strategies},
-        }
-    obj = task.obj
+    args = (
+        submission.model,
+        mapping.mapping if mapping is not None else None,
+        body.object,
+        body.fault,
+        body.strategy,
+        tuple(services.settings.catalog_folders),
+        MAX_SERVICE_STATES,
+    )
+    seconds = services.settings.default_time_limit + services.settings.solve_grace_seconds
+    answer = services.answers.pool.run(troubleshooting_job, args, seconds)
     warnings = [*submission.report.warnings, *(mapping.report.warnings if mapping is not None else [])]
     return {
-        "status": "solved",
-        "object": obj.id,
-        "fault_priors": obj.fault_priors,
-        "repair_bonus": REPAIR_BONUS,
-        "faults": {fault.part: fault.probability for fault in obj.faults},
-        "strategies": {name: result.as_dict() for name, result in task.table().items()},
-        "episode": episode,
+        **answer,
         "model_id": submission.record.id,
         "warnings": [warning.as_dict() for warning in warnings],
     }
