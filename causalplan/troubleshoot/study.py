@@ -24,7 +24,7 @@ from causalplan.troubleshoot.priors import model_suspicion
 from causalplan.troubleshoot.solver import solve
 from causalplan.troubleshoot.task import TroubleshootingTask, troubleshooting_task
 
-SERVICE_STATES = 1_000_000
+MAX_TRIAL_STATES = 1_000_000
 """The (belief, assembly) states one trial may solve: every catalog object needs far fewer."""
 
 
@@ -97,7 +97,7 @@ def troubleshooting_by_object(export: Mapping[str, Any], catalog: Catalog) -> li
         row = rows.setdefault(key, TroubleshootingByObject(*key))
         if test_object not in baselines:
             try:
-                baselines[test_object] = troubleshooting_task(catalog.get(test_object), max_states=SERVICE_STATES)
+                baselines[test_object] = troubleshooting_task(catalog.get(test_object), max_states=MAX_TRIAL_STATES)
             except CausalPlanError:
                 baselines[test_object] = None
         base = baselines[test_object]
@@ -113,7 +113,7 @@ def troubleshooting_by_object(export: Mapping[str, Any], catalog: Catalog) -> li
             continue
         try:
             believed = model_suspicion(model.model.rules, model.model.goal_key, mapping.mapping, base.obj)
-            policy = solve(base.structure, believed.suspicion, SERVICE_STATES)
+            policy = solve(base.structure, believed.suspicion, MAX_TRIAL_STATES)
         except CausalPlanError:
             row.not_scored += 1
             continue
