@@ -15,7 +15,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from causalplan.causal.diagnostics import Report
 from causalplan.causal.documents import SourceMap
+from causalplan.causal.model import CausalModel, read_model
 from causalplan.errors import CausalPlanError
 from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
@@ -83,6 +85,29 @@ def _excluded(export: Mapping[str, Any]) -> set[str]:
     return {str(item.get("participant_id")) for item in participants if isinstance(item, dict) and item.get("excluded")}
 
 
+def _model_of(document: object, catalog: Catalog) -> CausalModel | None:
+    """Return a trial's model, enough to troubleshoot with (its rules and goal); None when it cannot be read.
+
+    A model file's form (``object``, ``functions``, ``rules``) is validated as a file is. A
+    study's form keeps step 1's functions per training object, without ``object``: the study
+    checked it at step 2, and the rules and the goal are all the mapping needs, so only they
+    are read back (their syntax checked).
+    """
+    if not isinstance(document, Mapping):
+        return None
+    if "object" in document:
+        loaded = model_from_data(document, SourceMap(), catalog)
+        return loaded.model if loaded.is_valid else None
+    rules_only = {
+        "object": "study",
+        "goal": document.get("goal", "light"),
+        "functions": {},
+        "rules": document.get("rules"),
+    }
+    model, problems = read_model(rules_only, SourceMap())
+    return model if model is not None and Report(tuple(problems)).is_valid else None
+
+
 def troubleshooting_by_object(export: Mapping[str, Any], catalog: Catalog) -> list[TroubleshootingByObject]:
     """Return, per (condition, test object) in the order met, the models' troubleshooting against the baselines."""
     trials = export.get("trials")
@@ -106,13 +131,13 @@ def troubleshooting_by_object(export: Mapping[str, Any], catalog: Catalog) -> li
             continue
         table = base.table()
         row.uniform, row.oracle = table["uniform"].expected_actions, table["oracle"].expected_actions
-        model = model_from_data(item.get("model"), SourceMap(), catalog)
+        model = _model_of(item.get("model"), catalog)
         mapping = mapping_from_data(item.get("mapping"), SourceMap(), catalog)
-        if model.model is None or mapping.mapping is None or not (model.is_valid and mapping.is_valid):
+        if model is None or mapping.mapping is None or not mapping.is_valid:
             row.not_scored += 1
             continue
         try:
-            believed = model_suspicion(model.model.rules, model.model.goal_key, mapping.mapping, base.obj)
+            believed = model_suspicion(model.rules, model.goal_key, mapping.mapping, base.obj)
             policy = solve(base.structure, believed.suspicion, MAX_TRIAL_STATES)
         except CausalPlanError:
             row.not_scored += 1

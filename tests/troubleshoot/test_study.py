@@ -66,3 +66,18 @@ def test_analyze_reports_troubleshooting(tmp_path: Path) -> None:
     assert (row["scored"], row["not_scored"]) == (1, 1)
     assert row["model_mean_expected_actions"] == pytest.approx(6.9)
     assert row["uniform_expected_actions"] == pytest.approx(6.95)
+
+
+def test_a_study_s_model_with_functions_per_training_object_is_read_by_its_rules(catalog: Catalog) -> None:
+    export = _export()
+    lamp = export["trials"][0]["model"]
+    export["trials"][0]["model"] = {
+        "goal": "light",
+        "functions": {"desk_lamp": lamp["functions"]},
+        "rules": lamp["rules"],
+    }
+    [row] = troubleshooting_by_object(export, catalog)
+    assert len(row.model_actions) == 1
+    export["trials"][0]["model"] = {"goal": "light", "functions": {}, "rules": ["light CAUSES"]}
+    [row] = troubleshooting_by_object(export, catalog)
+    assert (len(row.model_actions), row.not_scored) == (0, 2)
