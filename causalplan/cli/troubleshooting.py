@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -130,6 +131,8 @@ def _refuse(code: str, message: str, as_json: bool, exit_code: int) -> None:
 def _episode(
     task: TroubleshootingTask, fault: str, strategy: str, physics: tuple[bool, bool, Path | None], as_json: bool
 ) -> None:
+    from causalplan.troubleshoot.answer import episode_answer
+
     obj = task.obj
     episode = task.episode(strategy, fault)
     others = {name: task.episode(name, fault).actions for name in task.strategies}
@@ -141,21 +144,16 @@ def _episode(
         rebuilt = repair_in_physics(obj, episode, robot=robot)
         commands = rebuilt.report.motor_commands
         if trajectory is not None and commands is not None:
-            import json
-
             with writing(trajectory):
                 trajectory.write_text(json.dumps(commands.as_dict()), encoding="utf-8")
     works = rebuilt is None or rebuilt.produces_goal
     if as_json:
+        answer = episode_answer(task, fault, strategy)
         print_json(
             {
                 "status": "repaired" if works else "not_repaired_in_physics",
                 "object": obj.id,
-                "fault": fault,
-                "strategy": strategy,
-                "actions": episode.actions,
-                "steps": [step.as_dict() for step in episode.steps],
-                "strategies": {name: {"actions": actions} for name, actions in others.items()},
+                **answer,
                 **({"physics": rebuilt.as_dict()} if rebuilt is not None else {}),
             }
         )
@@ -181,21 +179,13 @@ def _episode(
 def _table(task: TroubleshootingTask, as_json: bool) -> None:
     from rich.table import Table
 
+    from causalplan.troubleshoot.answer import table_answer
     from causalplan.troubleshoot.measures import REPAIR_BONUS
 
     obj = task.obj
     table = task.table()
     if as_json:
-        print_json(
-            {
-                "status": "solved",
-                "object": obj.id,
-                "fault_priors": obj.fault_priors,
-                "repair_bonus": REPAIR_BONUS,
-                "faults": {fault.part: fault.probability for fault in obj.faults},
-                "strategies": {name: result.as_dict() for name, result in table.items()},
-            }
-        )
+        print_json(table_answer(task))
         return
     console = make_console()
     columns = ["strategy", "expected actions", "worst", "reward share"] + [

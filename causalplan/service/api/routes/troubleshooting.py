@@ -10,16 +10,18 @@ from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.api.schemas.troubleshooting import TroubleshootingIn, TroubleshootingOut
 from causalplan.service.deps import ClientIdsDep, ServicesDep
 from causalplan.service.documents import StrictJSONRoute, invalid_input_error, model_for_request, read_mapping
-from causalplan.service.pool.troubleshooting_jobs import troubleshooting_job
 from causalplan.service.storage.crud import save
+from causalplan.troubleshoot.answer import episode_answer, table_answer
+from causalplan.troubleshoot.task import troubleshooting_task
 
-MAX_SERVICE_STATES = 1_000_000
-"""The (belief, assembly) states one request may solve: every catalog object needs far fewer."""
+MAX_SERVICE_STATES = 500_000
+"""The (belief, assembly) states one request may solve, about a second of work: the catalog's objects need
+at most a few thousand. The solve runs on the request's thread; beyond this it is refused (422)."""
 
 router = APIRouter(
     prefix="/v1/troubleshooting",
     tags=["troubleshooting"],
-    responses=error_responses(403, 404, 429, 503, 504),
+    responses=error_responses(403, 404, 429),
     route_class=StrictJSONRoute,
 )
 
@@ -28,7 +30,8 @@ router = APIRouter(
 def create_troubleshooting(body: TroubleshootingIn, services: ServicesDep, client: ClientIdsDep) -> dict[str, Any]:
     """Solve the model's, uniform's and the oracle's exact policies on the broken object, and score them.
 
-    Solved in a planner worker, stopped after the server's default time limit (504).
+    Solved on the request's thread (a catalog object takes milliseconds), within a bound on the
+    solver's states (``troubleshooting_too_large`` beyond it).
 
     The same JSON as `causalplan troubleshoot --all-faults --json`, with `episode` (as
     `--fault PART --json`) when `fault` is given, and `model_id`. An inline model is stored,
@@ -44,20 +47,14 @@ def create_troubleshooting(body: TroubleshootingIn, services: ServicesDep, clien
     if problem is not None:
         raise problem
     assert submission.model is not None
-    args = (
-        submission.model,
-        mapping.mapping if mapping is not None else None,
-        body.object,
-        body.fault,
-        body.strategy,
-        tuple(services.settings.catalog_folders),
-        MAX_SERVICE_STATES,
-    )
-    seconds = services.settings.default_time_limit + services.settings.solve_grace_seconds
-    answer = services.answers.pool.run(troubleshooting_job, args, seconds)
+    labelling = mapping.mapping if mapping is not None else None
+    chosen = body.object or (labelling or submission.model.labelling).object_id
+    task = troubleshooting_task(services.catalog.get(chosen), submission.model, labelling, MAX_SERVICE_STATES)
+    episode = episode_answer(task, body.fault, body.strategy) if body.fault is not None else None
     warnings = [*submission.report.warnings, *(mapping.report.warnings if mapping is not None else [])]
     return {
-        **answer,
+        **table_answer(task),
+        "episode": episode,
         "model_id": submission.record.id,
         "warnings": [warning.as_dict() for warning in warnings],
     }
