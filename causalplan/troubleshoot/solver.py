@@ -19,6 +19,12 @@ informative action's value in each state. The result is the minimum expected num
 actions under the strategy's own prior, and a policy that reaches it, for every belief and
 assembly state.
 
+Two reductions keep it exact: beliefs whose replaced parts have the same weights share one
+table (the replaced parts matter only through the chance that the object is repaired
+already), and no action is tried on a part with no chance of being the broken one under the
+current belief (it costs an action and changes no outcome's probability). The tests compare
+the values with value iteration over every action in every state.
+
 Ties go to acting before moving, then to the test, then to inspections and replacements in
 the catalog's part order, then to moves in the assembly graph's order, so a policy is the same
 on every run.
