@@ -38,6 +38,8 @@ class RepairInPhysics:
 
     order: tuple[str, ...]
     """The parts in the order they sit on the object at the last test (the base first)."""
+    fits: tuple[str, ...]
+    """The fits of the rebuild, in order (lighting included): the 3D player plays them (``POST /research/playback``)."""
     report: SimulationReport
     broken_part_replaced: bool
 
@@ -49,6 +51,7 @@ class RepairInPhysics:
     def as_dict(self) -> dict[str, object]:
         return {
             "order": list(self.order),
+            "fits": list(self.fits),
             "produces_goal": self.produces_goal,
             "broken_part_replaced": self.broken_part_replaced,
             "simulation": self.report.summary(),
@@ -114,5 +117,7 @@ def repair_in_physics(obj: AssemblyObject, episode: Episode, robot: bool = False
             replaced = False  # an earlier test showed no goal: the spares so far were not the answer
         elif step.kind == REPLACE and step.part == episode.fault:
             replaced = True
-    report = simulate_plan(obj, _steps(obj, order), render=RenderMode.NONE, robot=robot, motors=robot)
-    return RepairInPhysics((obj.base, *order), report, replaced)
+    steps = _steps(obj, order)
+    report = simulate_plan(obj, steps, render=RenderMode.NONE, robot=robot, motors=robot)
+    fits = tuple(step.fit for step in steps if step.fit is not None)
+    return RepairInPhysics((obj.base, *order), fits, report, replaced)

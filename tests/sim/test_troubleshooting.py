@@ -22,6 +22,7 @@ def test_the_desk_lamp_rebuilt_after_a_new_bulb_gives_light_in_physics(catalog: 
     episode = troubleshooting_task(lamp).episode("oracle", "light_bulb")
     rebuilt = repair_in_physics(lamp, episode)
     assert rebuilt.order == ("base_with_cables", "light_bulb", "shade")
+    assert rebuilt.fits == ("bulb_into_socket", "shade_onto_ring")
     assert rebuilt.report.passed and rebuilt.broken_part_replaced and rebuilt.produces_goal
 
 
@@ -40,6 +41,14 @@ def test_physics_refuses_a_rebuild_in_an_order_the_geometry_blocks(catalog: Cata
     assert not rebuilt.produces_goal
     failed = rebuilt.report.failed_step
     assert failed is not None and failed.failure is not None and failed.failure.value == "blocked_path"
+
+
+def test_a_lamp_to_light_is_lit_before_anything_covers_its_wick(catalog: Catalog) -> None:
+    lamp = catalog.get("kerosene_lamp")
+    episode = troubleshooting_task(lamp).episode("oracle", "wick")
+    rebuilt = repair_in_physics(lamp, episode)
+    assert rebuilt.fits.index("lighter_lights_wick") < rebuilt.fits.index("chimney_onto_burner")
+    assert rebuilt.produces_goal
 
 
 def test_a_broken_part_never_replaced_gives_no_goal_though_physics_builds_it(catalog: Catalog) -> None:
