@@ -38,6 +38,7 @@ COMMANDS = {
     "crowd-curve": "crowd:crowd_curve",
     "synthetic-study": "synthetic:synthetic_study",
     "export-rddl": "exports:export_rddl_command",
+    "troubleshoot": "troubleshooting:troubleshoot",
 }
 """Every command: its name, and where it lives under ``causalplan.cli``."""
 

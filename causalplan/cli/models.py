@@ -219,6 +219,15 @@ def objects(
             function = f"; function: {escape(requirement.function)}" if requirement.function else ""
             after = f"; after {', '.join(requirement.after)}" if requirement.after else ""
             console.print(f"  - {escape(requirement.says)} ({' or '.join(requirement.any_of)}{function}{after})")
+        if obj.faults:
+            title = f"Faults ({obj.fault_priors} priors)"
+            faults = Table("part", "p", "fault", "visible on inspection", title=title, title_justify="left")
+            for fault in obj.faults:
+                visible = "yes" if fault.visible else "no"
+                faults.add_row(fault.part, f"{fault.probability:g}", escape(fault.looks), visible)
+            console.print(faults)
+        else:
+            console.print("No faults listed: `causalplan troubleshoot` cannot use this object.")
         return
     if as_json:
         print_json(

@@ -34,9 +34,17 @@ from causalplan.cli.common import (
     help="Also count, per condition, the failed transfers one or two edits would fix, and which edits "
     "(a repair search per failed trial).",
 )
+@click.option(
+    "--troubleshooting",
+    is_flag=True,
+    help="Also, per condition and test object, the expected actions the participants' models need to repair "
+    "the broken test object, against no model (uniform) and the catalog's fault priors (oracle).",
+)
 @json_option
 @catalog_option
-def analyze(export: Path, out: Path, near_misses: bool, as_json: bool, catalog: tuple[Path, ...]) -> None:
+def analyze(
+    export: Path, out: Path, near_misses: bool, troubleshooting: bool, as_json: bool, catalog: tuple[Path, ...]
+) -> None:
     """Analyse an experiment export (the research page's JSON export).
 
     Prints the transfer rate of every condition on every test object with its 95% Wilson
@@ -65,8 +73,17 @@ def analyze(export: Path, out: Path, near_misses: bool, as_json: bool, catalog: 
 
         with exit_on_error():
             misses = count_near_misses(data, objects)
+    repairs = None
+    if troubleshooting:
+        from causalplan.troubleshoot.study import troubleshooting_by_object
+
+        repairs = troubleshooting_by_object(data, objects)
     if as_json:
-        extra = {"near_misses": [counts.as_dict() for counts in misses]} if misses is not None else {}
+        extra: dict[str, object] = (
+            {"near_misses": [counts.as_dict() for counts in misses]} if misses is not None else {}
+        )
+        if repairs is not None:
+            extra["troubleshooting"] = [row.as_dict() for row in repairs]
         print_json({**analysis.as_dict(), **extra, "files": [str(path) for path in written]})
         exit_with(EXIT_OK)
     console = make_console()
@@ -103,6 +120,8 @@ def analyze(export: Path, out: Path, near_misses: bool, as_json: bool, catalog: 
         console.print(f"Near misses in {escape(counts.summary())}")
     if misses == []:
         console.print("Near misses: there is no failed transfer to check (among participants not excluded).")
+    for row in repairs or []:
+        console.print(f"Troubleshooting, {escape(row.summary())}")
     console.print("[bold]Conclusions[/]")
     for conclusion in analysis.conclusions:
         console.print(f"  - {escape(conclusion)}")

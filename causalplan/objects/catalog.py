@@ -7,7 +7,7 @@ checked before is read back from ``objects.cache`` instead, keyed by its exact t
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
@@ -19,13 +19,13 @@ from causalplan.causal.labels import closest
 from causalplan.causal.validation import ObjectSummary
 from causalplan.errors import CatalogError, UnknownObjectError
 from causalplan.objects.cache import cached_object
-from causalplan.objects.model import AssemblyObject, Connector, Fit, Grasp, Part, Requirement
+from causalplan.objects.model import AssemblyObject, Connector, Fault, Fit, Grasp, Part, Requirement
 from causalplan.objects.shapes import build_geometry, unit
 
 if TYPE_CHECKING:
     from pydantic import ValidationError
 
-    from causalplan.objects.schema import FitSchema, ObjectSchema
+    from causalplan.objects.schema import FaultsSchema, FitSchema, ObjectSchema
 
 OBJECT_FILE_SUFFIXES = (".yaml", ".yml", ".json")
 
@@ -67,6 +67,32 @@ def _build_fit(schema: FitSchema, specs: dict[tuple[str, str], str]) -> Fit:
     )
 
 
+FAULT_PRIORS_SUM_TOLERANCE = 1e-6
+
+
+def _build_faults(schema: FaultsSchema | None, obj: AssemblyObject) -> tuple[Fault, ...]:
+    """Cross-check the faults against the object (known parts, once each, needed, priors summing to 1)."""
+    if schema is None:
+        return ()
+    parts = [fault.part for fault in schema.parts]
+    unknown = sorted(set(parts) - set(obj.part_ids))
+    if unknown:
+        raise ValueError(f"faults: {', '.join(unknown)} is not a part of this object ({', '.join(obj.part_ids)})")
+    duplicates = sorted({part for part in parts if parts.count(part) > 1})
+    if duplicates:
+        raise ValueError(f"faults: part(s) {', '.join(duplicates)} listed twice")
+    not_needed = [part for part in parts if not obj.is_needed(part)]
+    if not_needed:
+        raise ValueError(
+            f"faults: the true mechanism does not need {', '.join(not_needed)}, so it cannot be what stops the "
+            f"{obj.goal}; list only parts that every way of meeting some requirement uses"
+        )
+    total = sum(fault.probability for fault in schema.parts)
+    if abs(total - 1.0) > FAULT_PRIORS_SUM_TOLERANCE:
+        raise ValueError(f"faults: the probabilities sum to {total:g}, not 1 (one part is broken)")
+    return tuple(Fault(fault.part, fault.probability, fault.looks, fault.visible) for fault in schema.parts)
+
+
 def build_object(schema: ObjectSchema) -> AssemblyObject:
     """Cross-check a schema-valid object file and return the object; ValueError says what is wrong."""
     from causalplan.objects.schema import RESERVED_WORDS
@@ -103,7 +129,7 @@ def build_object(schema: ObjectSchema) -> AssemblyObject:
             raise ValueError(
                 f"mechanism requirement '{requirement.says}': fit(s) {', '.join(itself)} cannot come after themselves"
             )
-    return AssemblyObject(
+    obj = AssemblyObject(
         id=schema.id,
         name=schema.name,
         category=schema.category,
@@ -126,6 +152,10 @@ def build_object(schema: ObjectSchema) -> AssemblyObject:
         ),
         mechanism_explanation=schema.mechanism.explanation,
     )
+    faults = _build_faults(schema.faults, obj)
+    if not faults:
+        return obj
+    return replace(obj, faults=faults, fault_priors=schema.faults.priors if schema.faults else None)
 
 
 def _describe_validation_error(exc: ValidationError) -> str:

@@ -147,6 +147,21 @@ class Requirement:
 
 
 @dataclass(frozen=True)
+class Fault:
+    """One way the assembled object can fail: ``part`` is broken (one fault at a time).
+
+    ``probability`` is the prior of this part being the broken one (an object's faults sum to
+    1); ``looks`` says what the fault is like; ``visible`` says whether inspecting the part
+    shows it (a burnt-out filament does; flat batteries do not).
+    """
+
+    part: str
+    probability: float
+    looks: str
+    visible: bool
+
+
+@dataclass(frozen=True)
 class AssemblyObject:
     """An assemblable object: its parts, fits, base part, category and true mechanism."""
 
@@ -160,6 +175,10 @@ class AssemblyObject:
     fits: tuple[Fit, ...]
     mechanism: tuple[Requirement, ...]
     mechanism_explanation: str
+    faults: tuple[Fault, ...] = ()
+    """The parts whose failure stops the goal, with priors; empty when the file gives none."""
+    fault_priors: str | None = None
+    """Where the faults' priors come from ("illustrative" or "measured"); None without faults."""
 
     @property
     def part_ids(self) -> tuple[str, ...]:
@@ -197,6 +216,17 @@ class AssemblyObject:
             needed = self.requirement_of(fit_id)
             earlier.append(needed.says if needed is not None else self.step_text(self.fit(fit_id)).rstrip("."))
         return f"{requirement.says} after {' and '.join(earlier)}"
+
+    def is_needed(self, part_id: str) -> bool:
+        """Return whether the true mechanism fails when ``part_id`` does nothing (a fault there stops the goal).
+
+        A requirement then holds only through a fit that does not involve the part; a part
+        that every fit of some requirement involves (as the moving or the fixed side) is needed.
+        """
+        return any(
+            all(part_id in (self.fit(fit_id).moving_part, self.fit(fit_id).fixed_part) for fit_id in requirement.any_of)
+            for requirement in self.mechanism
+        )
 
     def excluded_fits(self, fit: Fit) -> tuple[str, ...]:
         """Return the fits (itself included) that can no longer be made once ``fit`` is made."""

@@ -196,6 +196,22 @@ class MechanismSchema(_Strict):
     requires: list[RequirementSchema] = Field(min_length=1)
 
 
+class FaultSchema(_Strict):
+    part: str = Field(pattern=IDENTIFIER_PATTERN, description="The part that is broken.")
+    probability: float = Field(gt=0.0, le=1.0, description="Prior that this part is the broken one.")
+    looks: str = Field(min_length=1, max_length=200, description="What the fault is, e.g. 'a burnt-out filament'.")
+    visible: bool = Field(description="Whether inspecting the part shows the fault.")
+
+
+class FaultsSchema(_Strict):
+    """The parts whose failure stops the goal (one fault at a time), with prior probabilities."""
+
+    priors: Literal["illustrative", "measured"] = Field(
+        description="Where the probabilities come from: 'illustrative' (made up to show the idea) or 'measured'."
+    )
+    parts: list[FaultSchema] = Field(min_length=1, max_length=100)
+
+
 class ObjectSchema(_Strict):
     id: str = Field(pattern=IDENTIFIER_PATTERN)
     name: str = Field(min_length=1, max_length=80)
@@ -206,3 +222,4 @@ class ObjectSchema(_Strict):
     parts: list[PartSchema] = Field(min_length=1)
     fits: list[FitSchema] = Field(default_factory=list)
     mechanism: MechanismSchema
+    faults: FaultsSchema | None = Field(default=None, description="Optional; without it, no troubleshooting.")

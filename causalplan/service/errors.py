@@ -16,6 +16,7 @@ from causalplan.studies.errors import (
     PlatformIdRequiredError,
     StepLockedError,
 )
+from causalplan.troubleshoot.errors import TroubleshootError
 
 
 class ServiceError(CausalPlanError):
@@ -281,6 +282,7 @@ _LOWER_STATUS: dict[type[CausalPlanError], int] = {
     PlatformIdRequiredError: 403,
     QuestionError: 422,  # a why-not question the plan or the object cannot answer (unknown_part, ...)
     PlanUnavailableError: 422,  # a model without a plan to explain
+    TroubleshootError: 422,  # a fault the object cannot have, an object without faults, a mapping that does not fit
 }
 
 

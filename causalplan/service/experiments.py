@@ -42,6 +42,7 @@ from causalplan.studies.far_generalization import DesignError, template_conditio
 from causalplan.studies.rates import RateTable, rate_table
 from causalplan.studies.recruitment import Recruitment, read_quotas, read_recruitment
 from causalplan.studies.trials import ExportError, read_study
+from causalplan.troubleshoot.study import troubleshooting_by_object
 
 
 def create(session: Session, catalog: Catalog, body: ExperimentIn) -> ExperimentRecord:
@@ -154,6 +155,8 @@ class StudyView(NamedTuple):
     """``causalplan analyze``'s analysis of the export, or why it cannot be made."""
     crowd_size: int
     """How many participants have written a model (the crowd of its consensus)."""
+    troubleshooting: tuple[dict[str, object], ...] = ()
+    """``causalplan analyze --troubleshooting``: per condition and test object, the models against the baselines."""
 
 
 def study_view(session: Session, catalog: Catalog, experiment: ExperimentRecord, request: Request) -> StudyView:
@@ -162,7 +165,8 @@ def study_view(session: Session, catalog: Catalog, experiment: ExperimentRecord,
     analysis = _analysis(data, catalog)
     table = analysis if isinstance(analysis, str) else analysis.table
     crowd = sum(1 for participant in participants if (participant.work or {}).get("model"))
-    return StudyView(_results(catalog, experiment, request, participants, data, table), analysis, crowd)
+    repairs = tuple(row.as_dict() for row in troubleshooting_by_object(data, catalog))
+    return StudyView(_results(catalog, experiment, request, participants, data, table), analysis, crowd, repairs)
 
 
 def _participants_and_export(

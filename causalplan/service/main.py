@@ -38,6 +38,7 @@ from causalplan.service.api.routes import (
     research,
     simulations,
     transfers,
+    troubleshooting,
 )
 from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.caches import ServiceCaches
@@ -371,7 +372,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_exception_handler(StarletteHTTPException, handle_http_error)
     app.add_middleware(UnexpectedErrorMiddleware)
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes, upload_bytes=settings.max_upload_bytes)
-    for module in (models, plans, simulations, transfers, explanations, jobs, objects, research, health, experiments):
+    routers = (models, plans, simulations, transfers, troubleshooting, explanations, jobs, objects, research, health)
+    for module in (*routers, experiments):
         app.include_router(module.router)
     for router in web_routers():  # the participant and research pages
         app.include_router(router)

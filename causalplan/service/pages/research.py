@@ -196,6 +196,7 @@ def _experiment_page(
         demographics=DEMOGRAPHICS,
         analysis=None if isinstance(analysis, str) else analysis.as_dict(),
         crowd_size=view.crowd_size,
+        troubleshooting=view.troubleshooting,
         analysis_problem=analysis if isinstance(analysis, str) else None,
         misconception_words={
             participant: [found.says() for found in items]

@@ -73,6 +73,7 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/plans",
         "/v1/simulations",
         "/v1/transfers",
+        "/v1/troubleshooting",
         "/v1/explanations",
         "/v1/jobs",
         "/v1/jobs/{job_id}",

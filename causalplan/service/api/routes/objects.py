@@ -32,7 +32,15 @@ def object_out(obj: AssemblyObject) -> ObjectOut:
     )
     summary = ObjectSummaryOut.model_validate(obj, from_attributes=True)
     return ObjectOut.model_validate(
-        {**dict(summary), "base": obj.base, "parts": obj.parts, "fits": fits, "mechanism": mechanism},
+        {
+            **dict(summary),
+            "base": obj.base,
+            "parts": obj.parts,
+            "fits": fits,
+            "mechanism": mechanism,
+            "faults": obj.faults,
+            "fault_priors": obj.fault_priors,
+        },
         from_attributes=True,
     )
 

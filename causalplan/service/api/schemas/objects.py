@@ -55,6 +55,13 @@ class MechanismOut(OutputModel):
     requires: list[RequirementOut]
 
 
+class FaultOut(OutputModel):
+    part: str
+    probability: float = Field(description="The prior that this part is the broken one (an object's sum to 1).")
+    looks: str = Field(description="What the fault is like.")
+    visible: bool = Field(description="Whether inspecting the part shows the fault.")
+
+
 class ObjectOut(ObjectSummaryOut):
     """A catalog object in full: parts, connectors, fits and true mechanism."""
 
@@ -62,3 +69,5 @@ class ObjectOut(ObjectSummaryOut):
     parts: list[PartOut]  # type: ignore[assignment]  # the summary's parts, with their connectors
     fits: list[FitOut]
     mechanism: MechanismOut
+    faults: list[FaultOut] = Field(description="The parts whose failure stops the goal (empty: none listed).")
+    fault_priors: str | None = Field(description="Where the faults' priors come from: 'illustrative' or 'measured'.")
