@@ -63,6 +63,18 @@ def relevant_fits(task: PlanningTask) -> tuple[Fit, ...]:
     return tuple(fit for fit in obj.fits if fit.moving_part in relevant and fit.fixed_part in relevant)
 
 
+@dataclass(frozen=True)
+class Completion:
+    """An all-success completion from a state: its attempts, their joint chance, expected attempts.
+
+    The expected attempts count a stop at the first failure (see ``completion.py``).
+    """
+
+    fits: tuple[int, ...]
+    chance: float
+    attempts: float
+
+
 @dataclass
 class CompiledMdp:
     """The restricted MDP as bit masks: everything the inner loops need, nothing else."""
@@ -79,18 +91,22 @@ class CompiledMdp:
     fits_of_part: dict[int, list[int]]  # part bit -> the fits that attach it
     moving_connector: list[str]  # each fit's connector on its moving part
     fits_onto_part: dict[int, list[int]]  # part bit -> the fits that attach something to it
+    goal_keys: tuple[str, ...] = ()  # the nodes that must all hold; () means the model's goal
     goal_cache: dict[int, bool] = field(default_factory=dict)
     cutting_pairs: list[tuple[int, int]] | None = None  # worked out once by ``bounds``
+    completions: dict[State, Completion] = field(default_factory=dict)  # kept by ``completion``
+    completion_dead_ends: set[tuple[int, int]] = field(default_factory=set)  # (parts, unusable) with none
 
     def goal_holds(self, parts: int) -> bool:
-        """Return whether the model's goal holds with ``parts`` assembled."""
+        """Return whether the goal (the model's, or every one of ``goal_keys``) holds with ``parts`` assembled."""
         cached = self.goal_cache.get(parts)
         if cached is None:
             functions: set[str] = set()
             for bit, keys in self.functions_of_part.items():
                 if parts & bit:
                     functions |= keys
-            cached = self.task.goal_key in active_nodes(functions, self.task.rules)
+            active = active_nodes(functions, self.task.rules)
+            cached = all(key in active for key in self.goal_keys or (self.task.goal_key,))
             self.goal_cache[parts] = cached
         return cached
 
@@ -135,8 +151,8 @@ class CompiledMdp:
         return parts, unusable
 
 
-def compile_mdp(task: PlanningTask, fits: tuple[Fit, ...]) -> CompiledMdp:
-    """Return the MDP over ``fits`` (the relevant ones) as bit masks."""
+def compile_mdp(task: PlanningTask, fits: tuple[Fit, ...], goal_keys: tuple[str, ...] = ()) -> CompiledMdp:
+    """Return the MDP over ``fits`` (the relevant ones) as bit masks; ``goal_keys``: see ``CompiledMdp``."""
     obj = task.obj
     part_bit = {part_id: 1 << index for index, part_id in enumerate(obj.part_ids)}
     fit_bit = {fit.id: 1 << index for index, fit in enumerate(fits)}
@@ -160,6 +176,7 @@ def compile_mdp(task: PlanningTask, fits: tuple[Fit, ...]) -> CompiledMdp:
             mask([other.id for other in fits if set(other.connectors()) & set(fit.connectors())]) for fit in fits
         ],
         base=part_bit[obj.base],
+        goal_keys=goal_keys,
         functions_of_part={bit: frozenset(keys) for bit, keys in functions.items()},
         moving_connector=[fit.moving_connector for fit in fits],
         fits_onto_part={
