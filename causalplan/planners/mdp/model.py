@@ -19,6 +19,8 @@
 
 from __future__ import annotations
 
+from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
 
@@ -197,8 +199,10 @@ class MdpSolution:
     ``success_probability`` is the success probability of the returned policy (a lower bound
     on it when ``optimality`` is ``bounded``); ``success_upper`` bounds the success probability
     of every policy from above. ``policy_table`` maps states to the fit index to attempt, for
-    rolling the policy out (``decide`` completes it where the search stopped early). ``states``
-    counts the states solved (exact solver) or expanded (heuristic search).
+    rolling the policy out (``decide`` completes it where the search stopped early), and
+    ``state_success`` their success probabilities; a policy composed of independent
+    components has ``decider`` instead (``composed.py``). ``states`` counts the states solved
+    (exact solver) or expanded (heuristic search).
     """
 
     status: PlanStatus
@@ -215,19 +219,22 @@ class MdpSolution:
     required_success: float | None = None
     fits: tuple[Fit, ...] = field(default=(), repr=False)
     policy_table: dict[State, int] = field(default_factory=dict, repr=False, compare=False)
+    state_success: dict[State, float] = field(default_factory=dict, repr=False, compare=False)
+    fewest_attempts: bool = True  # the expected attempts are proved the fewest among the most reliable policies
+    decider: Callable[[State], int] | None = field(default=None, repr=False, compare=False)
 
 
 def policy_entries(
-    compiled: CompiledMdp, table: dict[State, int], success: dict[State, float]
+    compiled: CompiledMdp, decide: Callable[[State], int], success: Callable[[State], float]
 ) -> tuple[dict[str, object], ...]:
-    """Return the policy in the states it reaches from the start (at most MAX_POLICY_ENTRIES)."""
+    """Return the policy (``decide``: a state's attempt, -1 when none) in the states it reaches (MAX_POLICY_ENTRIES)."""
     obj, fits = compiled.task.obj, compiled.fits
     entries: list[dict[str, object]] = []
     start: State = (0, 0)
-    frontier, seen = [start], {start}
+    frontier, seen = deque([start]), {start}
     while frontier and len(entries) < MAX_POLICY_ENTRIES:
-        made, failed = frontier.pop(0)
-        action = table.get((made, failed), -1)
+        made, failed = frontier.popleft()
+        action = decide((made, failed))
         if action < 0:
             continue
         fit = fits[action]
@@ -237,12 +244,12 @@ def policy_entries(
                 "failed": [f.id for i, f in enumerate(fits) if failed >> i & 1],
                 "attempt": fit.id,
                 "text": obj.step_text(fit),
-                "success_probability": round(success.get((made, failed), 0.0), 6),
+                "success_probability": round(success((made, failed)), 6),
             }
         )
         bit = 1 << action
         for child in ((made | bit, failed), (made, failed | bit)):
-            if child in table and child not in seen:
+            if child not in seen:
                 seen.add(child)
                 frontier.append(child)
     return tuple(entries)

@@ -253,6 +253,8 @@ def decide(compiled: CompiledMdp, solution: MdpSolution, state: State, step_cost
     Inside the searched states, the policy's own choice; elsewhere (an anytime answer), the
     default policy's.
     """
+    if solution.decider is not None:
+        return solution.decider(state)
     if state in solution.policy_table:
         return solution.policy_table[state]
     return default_attempt(compiled, state, step_cost)
@@ -388,7 +390,9 @@ def _solution(
         path,
         success,
         evaluation.attempts if known_attempts else None,
-        policy_entries(compiled, evaluation.table, evaluation.successes),
+        policy_entries(
+            compiled, lambda state: evaluation.table.get(state, -1), lambda state: evaluation.successes.get(state, 0.0)
+        ),
         search.expanded,
         len(fits),
         message,
@@ -396,4 +400,6 @@ def _solution(
         upper if optimality is Optimality.BOUNDED else success,
         fits=fits,
         policy_table=evaluation.table,
+        state_success=evaluation.successes,
+        fewest_attempts=proved is None,
     )
