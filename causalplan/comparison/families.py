@@ -20,11 +20,15 @@ figures worked out by hand, at sizes (80 relevant parts and more) that no enumer
   the chains allow: ``sum_k prod_{l<k} p_(l)`` over the probabilities sorted increasing.
   Reaching it interleaves the chains.
 
-``documents`` writes an object and its model as the files a user gives ``causalplan plan``.
+``uncertain_tree`` is the other kind a user meets, with no closed form: a synthetic object
+(``synthetic.py``: a random tree with alternative sockets) with a few uncertain fits among
+those that matter. ``documents`` writes an object and its model as the files a user gives
+``causalplan plan``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import random
 from dataclasses import dataclass
@@ -32,8 +36,10 @@ from dataclasses import dataclass
 from causalplan.causal.diagnostics import Location
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.causal.rules import Rule, parse_rule
+from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.model import AssemblyObject, Connector, Fit, Part, Requirement
 from causalplan.pddl.task import PlanningTask, build_task
+from causalplan.planners.mdp.model import relevant_fits
 
 GOAL = "light"
 BASE_FUNCTION = "provide power"
@@ -243,6 +249,18 @@ def riskiest_first_chains(count: int, length: int, seed: int = 0) -> KnownOptimu
     ordered = sorted(chances)
     attempts = sum(math.prod(ordered[:k]) for k in range(len(ordered)))
     return KnownOptimum(build_task(model, obj), math.prod(chances), attempts)
+
+
+def uncertain_tree(n_parts: int, uncertain: int, seed: int = 0) -> PlanningTask:
+    """Return the synthetic object of this size and seed with ``uncertain`` of the fits that matter in [0.6, 0.95]."""
+    task = synthetic_task(n_parts, seed)
+    rng = random.Random(f"uncertain/{n_parts}/{uncertain}/{seed}")
+    chosen = set(rng.sample(sorted(fit.id for fit in relevant_fits(task)), uncertain))
+    fits = tuple(
+        dataclasses.replace(fit, probability=_chance(rng, 0.6, 0.95)) if fit.id in chosen else fit
+        for fit in task.obj.fits
+    )
+    return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
 
 
 def documents(task: PlanningTask) -> tuple[dict[str, object], dict[str, object]]:
