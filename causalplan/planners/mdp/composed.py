@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from causalplan.planners.mdp.components import Component, independent_components
 from causalplan.planners.mdp.exact import solve_compiled_mdp
 from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, Optimality, State, compile_mdp, policy_entries
-from causalplan.planners.mdp.search import decide, search_compiled_mdp, tie_breaking_step_cost
+from causalplan.planners.mdp.search import ResumableSearch, decide, tie_breaking_step_cost
 from causalplan.planners.mdp.split import solve_split
 from causalplan.planners.result import PlanStatus
 
@@ -157,23 +157,27 @@ SPLIT_SHARE = 0.5
 """The share of what is left that the splitting solver has next, before the search has the rest."""
 
 
-def solve_one(compiled: CompiledMdp, time_limit: float, step_cost: float, search_first: bool = True) -> MdpSolution:
-    """Solve one MDP exactly if possible: the search briefly, then splitting after every attempt, then the search.
+def solve_one(
+    compiled: CompiledMdp, time_limit: float, step_cost: float, search: ResumableSearch | None = None
+) -> MdpSolution:
+    """Solve one MDP exactly if possible: the search briefly, then splitting after every attempt, then the search on.
 
     The heuristic search proves the optimum of the value (the most reliable policy, then the
     fewest attempts) on small problems within moments; the splitting solver (``split.py``)
     proves the most reliable policy where holders make the problem fall apart; whatever
-    neither proves, the search answers with bounds in the time left.
+    neither proves, the search (resumed where it stopped) answers with bounds in the time left.
+    ``search`` is one that already had its first share.
     """
     started = time.monotonic()
-    if search_first:
-        first = search_compiled_mdp(compiled, FIRST_SEARCH_SHARE * time_limit, step_cost)
+    if search is None:
+        search = ResumableSearch(compiled, step_cost)
+        first = search.run(FIRST_SEARCH_SHARE * time_limit)
         if first.status is not PlanStatus.SOLVED or first.optimality is Optimality.OPTIMAL:
             return first
     split = solve_split(compiled, SPLIT_SHARE * max(0.0, started + time_limit - time.monotonic()))
     if split is not None:
         return split
-    return search_compiled_mdp(compiled, max(0.0, started + time_limit - time.monotonic()), step_cost)
+    return search.run(max(0.0, started + time_limit - time.monotonic()))
 
 
 def _solve_component(compiled: CompiledMdp, component: Component, count: int, time_limit: float) -> SolvedComponent:
@@ -217,14 +221,15 @@ def solve_by_components(compiled: CompiledMdp, time_limit: float, step_cost: flo
     """
     started = time.monotonic()
     deadline = started + time_limit
-    first = search_compiled_mdp(compiled, FIRST_SEARCH_SHARE * time_limit, step_cost)
+    search = ResumableSearch(compiled, step_cost)
+    first = search.run(FIRST_SEARCH_SHARE * time_limit)
     if first.status is not PlanStatus.SOLVED or (first.optimality is Optimality.OPTIMAL and first.fewest_attempts):
         return first
     components = independent_components(compiled)
     if len(components) == 1 and len(components[0].fits) == len(compiled.fits):
         if first.optimality is Optimality.OPTIMAL:
             return first
-        return solve_one(compiled, max(0.0, deadline - time.monotonic()), step_cost, search_first=False)
+        return solve_one(compiled, max(0.0, deadline - time.monotonic()), step_cost, search)
     order = sorted(range(len(components)), key=lambda number: len(components[number].fits))
     solved: dict[int, SolvedComponent] = {}
     waiting = sum(len(component.fits) for component in components)

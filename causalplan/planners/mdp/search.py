@@ -281,39 +281,49 @@ def solve_mdp_search(task: PlanningTask, time_limit: float = 10.0, step_cost: fl
 
 
 def search_compiled_mdp(compiled: CompiledMdp, time_limit: float, step_cost: float) -> MdpSolution:
-    """Solve a compiled MDP by improved LAO* (``solve_mdp_search``'s work, for callers that solve it more than once).
+    """Solve a compiled MDP by improved LAO* (``solve_mdp_search``'s work, for callers that solve it more than once)."""
+    return ResumableSearch(compiled, step_cost).run(time_limit)
+
+
+class ResumableSearch:
+    """An improved LAO* search that can be given more time after it answered (``composed`` tries others between).
 
     It stops as soon as the optimum is proved: when the start is solved, or when the returned
     policy's success probability (evaluated exactly) meets the upper bound on every policy's
     to ``PROOF_PRECISION``; the checks come at doubling numbers of expansions, so they cost
     at most about as much as the last one.
     """
-    fits = compiled.fits
-    started = time.monotonic()
-    # The last tenth of the time goes to bounding the policy where the search stopped.
-    search = _Search(compiled, step_cost, started + SEARCH_SHARE * time_limit)
-    root = search.node((0, 0), compiled.base, 0, 0)
-    optimality = Optimality.OPTIMAL
-    proved: _Evaluation | None = None
-    limit = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(limit, 4 * len(fits) + 200))  # one frame per attempt on a path, twice
-    try:
-        next_check = FIRST_CHECK
-        while not root.solved:
-            search.run_pass(root)
-            if search.expanded >= next_check and not root.solved:
-                next_check = 2 * search.expanded
-                check = time.monotonic() + CHECK_SHARE * time_limit
-                evaluation = _evaluate(search, _policy_table(search, root), root, check)
-                if evaluation.exact and evaluation.success >= root.success * (1 - PROOF_PRECISION):
-                    proved = evaluation
-                    break
-    except _OutOfBudget:
-        optimality = Optimality.BOUNDED
-    try:
-        return _solution(search, root, optimality, time_limit, started, proved)
-    finally:
-        sys.setrecursionlimit(limit)
+
+    def __init__(self, compiled: CompiledMdp, step_cost: float) -> None:
+        self.search = _Search(compiled, step_cost, time.monotonic())
+        self.root = self.search.node((0, 0), compiled.base, 0, 0)
+        self.next_check = FIRST_CHECK
+
+    def run(self, time_limit: float) -> MdpSolution:
+        """Search on for ``time_limit`` seconds (the last tenth bounding the policy) and answer."""
+        search, root = self.search, self.root
+        started = time.monotonic()
+        search.deadline = started + SEARCH_SHARE * time_limit
+        optimality = Optimality.OPTIMAL
+        proved: _Evaluation | None = None
+        limit = sys.getrecursionlimit()
+        sys.setrecursionlimit(max(limit, 4 * len(search.c.fits) + 200))  # one frame per attempt on a path, twice
+        try:
+            while not root.solved:
+                search.run_pass(root)
+                if search.expanded >= self.next_check and not root.solved:
+                    self.next_check = 2 * search.expanded
+                    check = time.monotonic() + CHECK_SHARE * time_limit
+                    evaluation = _evaluate(search, _policy_table(search, root), root, check)
+                    if evaluation.exact and evaluation.success >= root.success * (1 - PROOF_PRECISION):
+                        proved = evaluation
+                        break
+        except _OutOfBudget:
+            optimality = Optimality.BOUNDED
+        try:
+            return _solution(search, root, optimality, time_limit, started, proved)
+        finally:
+            sys.setrecursionlimit(limit)
 
 
 def _solution(
