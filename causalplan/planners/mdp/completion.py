@@ -11,12 +11,15 @@ finds the way round, or proves that there is none (the state can never reach the
 
 The completion's chance (every attempt succeeds) bounds the default policy's success from
 below; its expected attempts, counting a stop at the first failure, are exact whenever
-failures on it leave no completion, which is the case when that chance meets the upper bound.
+failures on it leave no completion. ``evaluate_policy`` gives the figures of a searched
+policy completed by this default, exactly as ``search.decide`` rolls it out.
 """
 
 from __future__ import annotations
 
 import math
+import time
+from dataclasses import dataclass
 
 from causalplan.planners.mdp.bounds import bound
 from causalplan.planners.mdp.model import STEP_COST, CompiledMdp, Completion, State
@@ -131,3 +134,69 @@ def default_attempt(compiled: CompiledMdp, state: State, step_cost: float = STEP
     """Return the default policy's attempt in ``state``: the first of its completion; -1 when there is none."""
     found = completion(compiled, state, step_cost)
     return found.fits[0] if found.fits else -1
+
+
+MAX_EVALUATED_STATES = 200_000
+"""Beyond this many states, the returned policy's figures count the rest as failures (a lower bound)."""
+
+
+@dataclass
+class Evaluation:
+    """The returned policy's figures: success probability and expected attempts, its table and successes.
+
+    ``exact`` says that every state the policy reaches was evaluated (within the deadline and
+    ``MAX_EVALUATED_STATES``): the figures are the policy's own, not bounds.
+    """
+
+    success: float
+    attempts: float
+    table: dict[State, int]
+    successes: dict[State, float]
+    exact: bool
+
+
+def evaluate_policy(
+    compiled: CompiledMdp, step_cost: float, table: dict[State, int], start: tuple[State, int, int], deadline: float
+) -> Evaluation:
+    """Return the figures of the policy ``decide`` follows: ``table`` where it has the state, else the default.
+
+    Elsewhere than the table the policy is the default one (``completion.py``), so the figures
+    are those of exactly the policy that is returned and rolled out. States beyond the deadline
+    or the budget count as failures, and the figures are then lower bounds.
+    """
+    c = compiled
+    success: dict[State, float] = {}
+    attempts: dict[State, float] = {}
+    exact = [True]
+
+    def value(state: State, parts: int, unusable: int) -> tuple[float, float]:
+        known = success.get(state)
+        if known is not None:
+            return known, attempts[state]
+        if c.goal_holds(parts):
+            result = (1.0, 0.0)
+        elif len(success) >= MAX_EVALUATED_STATES or time.monotonic() > deadline:
+            exact[0] = False
+            return 0.0, 0.0
+        else:
+            index = table.get(state)
+            if index is None:
+                found = completion(c, state, step_cost)
+                index = found.fits[0] if found.fits else -1
+            if index < 0:
+                result = (0.0, 0.0)
+            else:
+                made, failed = state
+                bit, p = 1 << index, c.probability[index]
+                s_success, a_success = value(
+                    (made | bit, failed), parts | c.moving[index], unusable | c.taken_on_success[index]
+                )
+                s_failure, a_failure = (
+                    value((made, failed | bit), parts, unusable | c.taken_on_failure[index]) if p < 1.0 else (0.0, 0.0)
+                )
+                result = (p * s_success + (1 - p) * s_failure, 1 + p * a_success + (1 - p) * a_failure)
+        success[state], attempts[state] = result
+        return result
+
+    root_success, root_attempts = value(*start)
+    return Evaluation(root_success, root_attempts, table, success, exact[0])

@@ -25,11 +25,10 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass
 
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.mdp.bounds import DEAD_END, Bound, bound
-from causalplan.planners.mdp.completion import completion, default_attempt
+from causalplan.planners.mdp.completion import Evaluation, completion, default_attempt, evaluate_policy
 from causalplan.planners.mdp.model import (
     STEP_COST,
     CompiledMdp,
@@ -166,23 +165,8 @@ def tie_breaking_step_cost(compiled: CompiledMdp) -> float:
     return STEP_COST * max(reachable, MIN_SUCCESS_SCALE) / max(1, len(compiled.fits))
 
 
-MAX_EVALUATED_STATES = 200_000
-"""Beyond this many states, the returned policy's figures count the rest as failures (a lower bound)."""
-
-
-@dataclass
-class _Evaluation:
-    """The returned policy's figures: success probability and expected attempts, its table and successes.
-
-    ``exact`` says that every state the policy reaches was evaluated (within the deadline and
-    ``MAX_EVALUATED_STATES``): the figures are the policy's own, not bounds.
-    """
-
-    success: float
-    attempts: float
-    table: dict[State, int]
-    successes: dict[State, float]
-    exact: bool
+def _start(root: _Node) -> tuple[State, int, int]:
+    return root.state, root.parts, root.unusable
 
 
 def _policy_table(search: _Search, root: _Node) -> dict[State, int]:
@@ -200,51 +184,6 @@ def _policy_table(search: _Search, root: _Node) -> dict[State, int]:
                 seen.add(child.state)
                 stack.append(child)
     return table
-
-
-def _evaluate(search: _Search, table: dict[State, int], root: _Node, deadline: float) -> _Evaluation:
-    """Return the figures of the policy ``decide`` follows: ``table`` where it has the state, else the default.
-
-    Elsewhere than the table the policy is the default one (``completion.py``), so the figures
-    are those of exactly the policy that is returned and rolled out. States beyond the deadline
-    or the budget count as failures, and the figures are then lower bounds.
-    """
-    c = search.c
-    success: dict[State, float] = {}
-    attempts: dict[State, float] = {}
-    exact = [True]
-
-    def value(state: State, parts: int, unusable: int) -> tuple[float, float]:
-        known = success.get(state)
-        if known is not None:
-            return known, attempts[state]
-        if c.goal_holds(parts):
-            result = (1.0, 0.0)
-        elif len(success) >= MAX_EVALUATED_STATES or time.monotonic() > deadline:
-            exact[0] = False
-            return 0.0, 0.0
-        else:
-            index = table.get(state)
-            if index is None:
-                found = completion(c, state, search.step_cost)
-                index = found.fits[0] if found.fits else -1
-            if index < 0:
-                result = (0.0, 0.0)
-            else:
-                made, failed = state
-                bit, p = 1 << index, c.probability[index]
-                s_success, a_success = value(
-                    (made | bit, failed), parts | c.moving[index], unusable | c.taken_on_success[index]
-                )
-                s_failure, a_failure = (
-                    value((made, failed | bit), parts, unusable | c.taken_on_failure[index]) if p < 1.0 else (0.0, 0.0)
-                )
-                result = (p * s_success + (1 - p) * s_failure, 1 + p * a_success + (1 - p) * a_failure)
-        success[state], attempts[state] = result
-        return result
-
-    root_success, root_attempts = value(root.state, root.parts, root.unusable)
-    return _Evaluation(root_success, root_attempts, table, success, exact[0])
 
 
 def decide(compiled: CompiledMdp, solution: MdpSolution, state: State, step_cost: float = STEP_COST) -> int:
@@ -305,7 +244,7 @@ class ResumableSearch:
         started = time.monotonic()
         search.deadline = started + SEARCH_SHARE * time_limit
         optimality = Optimality.OPTIMAL
-        proved: _Evaluation | None = None
+        proved: Evaluation | None = None
         limit = sys.getrecursionlimit()
         sys.setrecursionlimit(max(limit, 4 * len(search.c.fits) + 200))  # one frame per attempt on a path, twice
         try:
@@ -314,7 +253,9 @@ class ResumableSearch:
                 if search.expanded >= self.next_check and not root.solved:
                     self.next_check = 2 * search.expanded
                     check = time.monotonic() + CHECK_SHARE * time_limit
-                    evaluation = _evaluate(search, _policy_table(search, root), root, check)
+                    evaluation = evaluate_policy(
+                        search.c, search.step_cost, _policy_table(search, root), _start(root), check
+                    )
                     if evaluation.exact and evaluation.success >= root.success * (1 - PROOF_PRECISION):
                         proved = evaluation
                         break
@@ -332,7 +273,7 @@ def _solution(
     optimality: Optimality,
     time_limit: float,
     started: float,
-    proved: _Evaluation | None,
+    proved: Evaluation | None,
 ) -> MdpSolution:
     compiled, fits, step_cost = search.c, search.c.fits, search.step_cost
     if root.solved and root.success == 0.0:
@@ -347,7 +288,7 @@ def _solution(
             fits=fits,
         )
     deadline = started + time_limit
-    evaluation = proved or _evaluate(search, _policy_table(search, root), root, deadline)
+    evaluation = proved or evaluate_policy(compiled, step_cost, _policy_table(search, root), _start(root), deadline)
     if optimality is Optimality.OPTIMAL and evaluation.success == 0.0:  # as the exact solver says it
         return MdpSolution(
             PlanStatus.UNSOLVABLE,
@@ -367,7 +308,7 @@ def _solution(
         # failure, or a table that ends where no completion is left, gives way to the default policy.
         default = completion(compiled, (0, 0), step_cost)
         if path is None or default.chance > evaluation.success:
-            evaluation = _evaluate(search, {}, root, deadline)
+            evaluation = evaluate_policy(compiled, step_cost, {}, _start(root), deadline)
             path = _all_success_path(compiled, {}, step_cost)
     upper = root.success
     if path is None:
