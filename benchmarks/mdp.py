@@ -1,16 +1,18 @@
-"""The MDP at scale: heuristic search (LAO*, planner ``mdp``) against the exact solver and fd-opt.
+"""The MDP at scale: planner ``mdp`` against the exact solver and fd-opt, and against closed forms.
 
-    python benchmarks/mdp.py [--sizes 4,8,...] [--seed 0] [--limit 30] [--exact-limit 10]
+    python benchmarks/mdp.py [--sizes 4,8,...] [--seed 0] [--limit 30] [--exact-limit 10] [--no-families]
 
 Both MDP solvers run as the planners do (``objective.solve_for``: the most reliable policy,
 the step cost only breaking ties). For each synthetic object, with random fit probabilities
-in [0.7, 1], it prints the parts and fits that matter to the model; for the heuristic search
-(at the planner's default time limit) its status, states expanded, wall time, and success
-probability with its bounds when the limit came first; for the exact solver (where it runs)
-its states and time; and Fast Downward's optimal planner (fd-opt) on the same task, timed in
-the same run, as the reference. Ratios are exact against heuristic (states, time) and
-heuristic against fd-opt (time). It ends with the largest number of relevant parts solved to
-proved optimality, and with bounds.
+in [0.7, 1], it prints the parts and fits that matter to the model; for ``mdp`` (at the
+planner's default time limit) its status, how it proved the optimum or where it stopped, the
+states it expanded or solved (search states, components' states, residual groups), wall time,
+and success probability with its bounds when the limit came first; for the exact solver
+(where it runs) its states and time; and Fast Downward's optimal planner (fd-opt) on the
+same task, timed in the same run, as the reference. Then the families whose optimum is known
+in closed form (``comparison/families.py``), 80 relevant parts and more, with the distance
+to it. It ends with the largest number of relevant parts solved to proved optimality, and
+with bounds.
 """
 
 from __future__ import annotations
@@ -26,10 +28,16 @@ from rich.console import Console
 from rich.table import Table
 
 from causalplan import caches
+from causalplan.comparison.families import (
+    cyclic_components,
+    independent_components,
+    riskiest_first_chains,
+    uncertain_tree,
+)
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.fd.solve import DEFAULT_TIME_LIMIT
-from causalplan.planners.mdp import Optimality, relevant_fits
+from causalplan.planners.mdp import MdpSolution, Optimality, relevant_fits
 from causalplan.planners.mdp.objective import solve_for
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult, PlanStatus
@@ -57,25 +65,45 @@ def timed(function: Callable[[], T]) -> tuple[T, float]:
     return result, time.perf_counter() - started
 
 
+def how(solution: MdpSolution) -> str:
+    """Return how the answer was proved, or where it stopped."""
+    if solution.status is not PlanStatus.SOLVED or solution.optimality is Optimality.BOUNDED:
+        return "time limit"
+    if "independent components" in solution.message:
+        return solution.message.split(" as ")[1].split(" independent")[0] + " components"
+    if solution.message.startswith("Proved the most reliable policy by splitting"):
+        return "split after each attempt"
+    if solution.message.startswith("Proved optimal after"):
+        return "bounds met"
+    return "search closed"
+
+
+def relevant_parts(task: PlanningTask) -> tuple[int, int]:
+    """Return the parts (the base included, as in earlier entries) and the fits that matter to the model."""
+    fits = relevant_fits(task)
+    return len({part for fit in fits for part in (fit.moving_part, fit.fixed_part)}), len(fits)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--sizes", default="4,8,12,16,20,24,28,40,80,120,200,280")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--limit", type=float, default=DEFAULT_TIME_LIMIT, help="the heuristic MDP's time limit")
+    parser.add_argument("--limit", type=float, default=DEFAULT_TIME_LIMIT, help="the MDP's time limit")
     parser.add_argument("--exact-limit", type=float, default=10.0, help="the exact MDP's time limit")
+    parser.add_argument("--no-families", action="store_true", help="leave out the closed-form families")
     args = parser.parse_args()
-    console = Console(width=200)
+    console = Console(width=220)
     table = Table(
         "parts",
         "relevant parts/fits",
         "mdp status",
-        "expanded",
+        "proved by / stopped at",
+        "states",
         "mdp time",
         "P(success) [bounds]",
         "mdp-exact",
         "exact states",
         "exact time",
-        "states exact/mdp",
         "time exact/mdp",
         "fd-opt time",
         "mdp/fd-opt time",
@@ -85,8 +113,7 @@ def main() -> None:
     largest_optimal = largest_bounded = 0
     for size in (int(item) for item in args.sizes.split(",")):
         task = with_probabilities(synthetic_task(size, args.seed), args.seed + size)
-        fits = relevant_fits(task)
-        parts = len({part for fit in fits for part in (fit.moving_part, fit.fixed_part)})
+        parts, fits = relevant_parts(task)
         heuristic, heuristic_seconds = timed(lambda task=task: solve_for(task, args.limit))  # type: ignore[misc]
         exact, exact_seconds = timed(lambda task=task: solve_for(task, args.exact_limit, exact=True))  # type: ignore[misc]
         optimal, fd_seconds = timed(lambda task=task: fresh_plan(task, "fd-opt"))  # type: ignore[misc]
@@ -98,31 +125,95 @@ def main() -> None:
                 largest_bounded = max(largest_bounded, parts)
             else:
                 largest_optimal = max(largest_optimal, parts)
+        elif heuristic.success_upper is not None:
+            probability = f"- [0, {heuristic.success_upper:.4g}]"
         exact_ran = exact.status is PlanStatus.SOLVED
         if exact_ran and heuristic.optimality is Optimality.OPTIMAL:
             assert exact.success_probability is not None and heuristic.success_probability is not None
             assert abs(exact.success_probability - heuristic.success_probability) < 1e-9
         table.add_row(
             str(size),
-            f"{parts} / {len(fits)}",
+            f"{parts} / {fits}",
             f"{heuristic.status.value} ({heuristic.optimality.value})",
+            how(heuristic),
             f"{heuristic.states:,}",
             f"{heuristic_seconds:.2f} s",
             probability,
             exact.status.value,
             f"{exact.states:,}",
             f"{exact_seconds:.2f} s",
-            f"{exact.states / max(1, heuristic.states):.1f}x" if exact_ran else "-",
             f"{exact_seconds / heuristic_seconds:.2f}x" if exact_ran else "-",
             f"{fd_seconds * 1000:.0f} ms" + ("" if optimal.has_plan else f" ({optimal.status.value})"),
             f"{heuristic_seconds / fd_seconds:.1f}x",
         )
     console.print(table)
+    if not args.no_families:
+        families(console, args.limit)
     console.print(
-        f"Largest number of relevant parts solved to proved optimality by mdp: {largest_optimal}; "
-        f"largest answered with bounds (anytime) within the limit: {largest_bounded or 'none'} "
+        f"Largest number of relevant parts of a synthetic object solved to proved optimality by mdp: "
+        f"{largest_optimal}; largest answered with bounds (anytime) within the limit: {largest_bounded or 'none'} "
         "(goal: 80 relevant parts solved)."
     )
+
+
+def families(console: Console, limit: float) -> None:
+    """Print ``mdp`` on the families with closed-form optima (and a tree with 15 uncertain fits, which has none)."""
+    table = Table(
+        "family",
+        "relevant parts/fits",
+        "mdp status",
+        "proved by / stopped at",
+        "states",
+        "mdp time",
+        "P(success)",
+        "|P - closed form|",
+        "E[attempts]",
+        "|E - closed form|",
+        title=f"Families with known optima, 80 relevant parts and more (mdp limit {limit:g} s)",
+    )
+    rows = [
+        ("16 components of 5 (OR, shared socket, two plugs)", independent_components(16)),
+        ("16 rings of 4 contacts on shared sockets", cyclic_components(16, 1)),
+        ("16 chains of 5, riskiest first", riskiest_first_chains(16, 5)),
+        ("20 chains of 5, riskiest first", riskiest_first_chains(20, 5)),
+    ]
+    for name, family in rows:
+        solution, seconds = timed(lambda family=family: solve_for(family.task, limit))  # type: ignore[misc]
+        parts, fits = relevant_parts(family.task)
+        success, attempts = solution.success_probability, solution.expected_actions
+        table.add_row(
+            name,
+            f"{parts} / {fits}",
+            f"{solution.status.value} ({solution.optimality.value})",
+            how(solution),
+            f"{solution.states:,}",
+            f"{seconds:.2f} s",
+            f"{success:.6g}" if success is not None else "-",
+            f"{abs(success - family.success_probability):.1e}" if success is not None else "-",
+            f"{attempts:.4f}" if attempts is not None else "-",
+            f"{abs(attempts - family.expected_attempts):.1e}"
+            if attempts is not None and family.expected_attempts is not None
+            else "-",
+        )
+    for seed in range(4):
+        task = uncertain_tree(80, 15, seed)
+        solution, seconds = timed(lambda task=task: solve_for(task, limit))  # type: ignore[misc]
+        parts, fits = relevant_parts(task)
+        success = solution.success_probability
+        bounds = f" [{success:.4g}, {solution.success_upper:.4g}]" if solution.optimality is Optimality.BOUNDED else ""
+        table.add_row(
+            f"80-part tree, 15 uncertain fits (seed {seed})",
+            f"{parts} / {fits}",
+            f"{solution.status.value} ({solution.optimality.value})",
+            how(solution),
+            f"{solution.states:,}",
+            f"{seconds:.2f} s",
+            (f"{success:.6g}" if success is not None else "-") + bounds,
+            "(no closed form)",
+            f"{solution.expected_actions:.4f}" if solution.expected_actions is not None else "-",
+            "-",
+        )
+    console.print(table)
 
 
 if __name__ == "__main__":

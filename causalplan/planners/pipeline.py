@@ -94,8 +94,8 @@ PLANNERS: tuple[str, ...] = ("auto", *SEARCHES)
 DESCRIPTIONS: dict[str, str] = {
     "auto": "Fast Downward when every fit that matters is certain, else the MDP (the default)",
     **{name: config.description for name, config in fd.CONFIGS.items()},
-    "mdp": "the paper's probabilistic MDP by heuristic search (improved LAO*): the optimal policy, "
-    "or the best so far with bounds at the time limit",
+    "mdp": "the paper's probabilistic MDP by heuristic search (improved LAO*), independent components and "
+    "splitting: the optimal policy, or the best so far with bounds at the time limit",
     "mdp-exact": "the same MDP solved over every reachable state: the reference; too_large on big tasks",
     **{f"up:{engine}": f"unified-planning engine '{engine}' on the axiom-free formulation" for engine in UP_ENGINES},
 }

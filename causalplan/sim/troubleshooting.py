@@ -5,8 +5,9 @@ and attached again comes after the parts that stayed. This rebuilds the object i
 in PyBullet (parts move themselves, with every physics check: blocked path, contact,
 alignment, stability), lights it where it has something to light it with (each ``ignite`` fit
 once its part is in place and the fits it must come after are made, before anything covers
-it), and judges the true mechanism on what was built. The object gives its goal when physics says so *and* the broken part was
-swapped for a spare: a broken part looks whole to the simulator.
+it), and judges the true mechanism on what was built. The object gives its goal when physics
+says so *and* the broken part was swapped for a spare: a broken part looks whole to the
+simulator.
 
 With ``robot``, the Franka Panda does the rebuilding, from the parts laid out on the table
 (a replaced part's spare among them), within its datasheet's limits, and its motor commands

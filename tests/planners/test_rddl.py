@@ -12,11 +12,13 @@ import pytest
 from click.testing import CliRunner
 
 from causalplan.cli import app
+from causalplan.comparison.families import independent_components, uncertain_tree
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
-from causalplan.planners.mdp import MdpSolution, solve_mdp_search
+from causalplan.planners.mdp import MdpSolution, Optimality, solve_mdp_search
 from causalplan.planners.mdp.model import compile_mdp
+from causalplan.planners.mdp.objective import solve_for
 from causalplan.planners.mdp.search import decide
 from causalplan.planners.rddl import RddlTask, _names, export_rddl
 from tests.conftest import EXAMPLES, example_mapping, example_model
@@ -31,14 +33,16 @@ def _with_probabilities(task: PlanningTask, seed: int, low: float) -> PlanningTa
     return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
 
 
-def _simulated_success(exported: RddlTask, task: PlanningTask, solution: MdpSolution, folder: Path) -> float:
+def _simulated_success(
+    exported: RddlTask, task: PlanningTask, solution: MdpSolution, folder: Path, episodes: int = EPISODES
+) -> float:
     """Return the share of pyRDDLGym episodes, following our policy, in which the simulator's ``lit`` holds."""
     (folder / "domain.rddl").write_text(exported.domain, encoding="utf-8")
     (folder / "instance.rddl").write_text(exported.instance, encoding="utf-8")
     env = pyRDDLGym.make(str(folder / "domain.rddl"), str(folder / "instance.rddl"))
     compiled = compile_mdp(task, solution.fits)
     successes = 0
-    for episode in range(EPISODES):
+    for episode in range(episodes):
         observation, _ = env.reset(seed=episode)
         made = failed = 0
         while (index := decide(compiled, solution, (made, failed))) >= 0:
@@ -51,11 +55,11 @@ def _simulated_success(exported: RddlTask, task: PlanningTask, solution: MdpSolu
         observation, *_ = env.step({})  # `lit` follows the goal one step later
         successes += bool(observation["lit"])
     env.close()
-    return successes / EPISODES
+    return successes / episodes
 
 
-def _interval(probability: float) -> tuple[float, float]:
-    half = Z_99 * math.sqrt(probability * (1 - probability) / EPISODES) + 0.5 / EPISODES
+def _interval(probability: float, episodes: int = EPISODES) -> tuple[float, float]:
+    half = Z_99 * math.sqrt(probability * (1 - probability) / episodes) + 0.5 / episodes
     return probability - half, probability + half
 
 
@@ -136,3 +140,25 @@ def test_made_up_names_never_take_a_kept_id() -> None:
     assert names["part_1"] == "part_1" and names["Part_2"] == "Part_2"
     assert len({name.lower() for name in names.values()}) == 4
     assert names["if"] == "part_3" and names["x-y"] == "part_4"
+
+
+def _more_reliable(task: PlanningTask, factor: float) -> PlanningTask:
+    """Return the task with every failure chance divided by ``factor``."""
+    fits = tuple(dataclasses.replace(fit, probability=1 - (1 - fit.probability) / factor) for fit in task.obj.fits)
+    return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(900)
+@pytest.mark.parametrize(("kind", "episodes"), [("components", 200), ("tree", EPISODES)])
+def test_pyrddlgym_agrees_with_the_80_part_policy(kind: str, episodes: int, tmp_path: Path) -> None:
+    # Sixteen independent components (the composed policy) and a tree with 15 uncertain fits.
+    task = _more_reliable(independent_components(16).task, 6) if kind == "components" else uncertain_tree(80, 15, 0)
+    assert len(task.obj.parts) >= 80
+    solution = solve_for(task, 30.0)
+    assert solution.optimality is Optimality.OPTIMAL and solution.success_probability is not None
+    assert 0.05 < solution.success_probability < 0.95
+    # pyRDDLGym takes about a second for an episode of the components' 60-odd attempts: fewer episodes there,
+    # a wider interval, still 99%.
+    low, high = _interval(solution.success_probability, episodes)
+    assert low <= _simulated_success(export_rddl(task), task, solution, tmp_path, episodes) <= high

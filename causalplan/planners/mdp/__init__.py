@@ -2,10 +2,11 @@
 
 The model (paper, "Planner"): a state is the assembly state, an action attempts one fit, the
 transition probability is the fit's success probability from the catalog, and the reward comes
-from the person's causal model (``model.py`` says exactly how). Two solvers give the same
-optimum: ``search.solve_mdp_search`` (improved LAO* from the start state with an admissible
-bound, planner ``mdp``) and ``exact.solve_mdp`` (every reachable state, planner ``mdp-exact``).
-``objective.solve_for`` chooses what is optimised.
+from the person's causal model (``model.py`` says exactly how). Planner ``mdp`` is
+``composed.solve_by_components``: improved LAO* from the start state with an admissible bound
+(``search.py``), then independent components solved apart (``components.py``) and a solver that
+splits after every attempt (``split.py``); ``exact.solve_mdp`` (every reachable state, planner
+``mdp-exact``) is the reference. ``objective.solve_for`` chooses what is optimised.
 """
 
 from causalplan.planners.mdp.exact import MAX_RELEVANT_FITS, solve_mdp

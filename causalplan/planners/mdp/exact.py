@@ -138,6 +138,7 @@ def solve_compiled_mdp(compiled: CompiledMdp, time_limit: float, step_cost: floa
             message="No policy reaches the goal: even if every attempt succeeded.",
         )
     table = {state: value.action for state, value in solver.values.items() if value.action >= 0}
+    successes = {state: value.success for state, value in solver.values.items()}
     actions: list[tuple[str, tuple[str, ...]]] = []
     made, failed = start
     while (value := solver.values[(made, failed)]).action >= 0:
@@ -149,10 +150,11 @@ def solve_compiled_mdp(compiled: CompiledMdp, time_limit: float, step_cost: floa
         tuple(actions),
         root.success,
         root.attempts,
-        policy_entries(compiled, table, {state: value.success for state, value in solver.values.items()}),
+        policy_entries(compiled, lambda state: table.get(state, -1), lambda state: successes.get(state, 0.0)),
         len(solver.values),
         len(fits),
         success_upper=root.success,
         fits=fits,
         policy_table=table,
+        state_success=successes,
     )

@@ -19,6 +19,8 @@
 
 from __future__ import annotations
 
+from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
 
@@ -63,6 +65,18 @@ def relevant_fits(task: PlanningTask) -> tuple[Fit, ...]:
     return tuple(fit for fit in obj.fits if fit.moving_part in relevant and fit.fixed_part in relevant)
 
 
+@dataclass(frozen=True)
+class Completion:
+    """An all-success completion from a state: its attempts, their joint chance, expected attempts.
+
+    The expected attempts count a stop at the first failure (see ``completion.py``).
+    """
+
+    fits: tuple[int, ...]
+    chance: float
+    attempts: float
+
+
 @dataclass
 class CompiledMdp:
     """The restricted MDP as bit masks: everything the inner loops need, nothing else."""
@@ -79,18 +93,22 @@ class CompiledMdp:
     fits_of_part: dict[int, list[int]]  # part bit -> the fits that attach it
     moving_connector: list[str]  # each fit's connector on its moving part
     fits_onto_part: dict[int, list[int]]  # part bit -> the fits that attach something to it
+    goal_keys: tuple[str, ...] = ()  # the nodes that must all hold; () means the model's goal
     goal_cache: dict[int, bool] = field(default_factory=dict)
     cutting_pairs: list[tuple[int, int]] | None = None  # worked out once by ``bounds``
+    completions: dict[State, Completion] = field(default_factory=dict)  # kept by ``completion``
+    completion_dead_ends: set[tuple[int, int]] = field(default_factory=set)  # (parts, unusable) with none
 
     def goal_holds(self, parts: int) -> bool:
-        """Return whether the model's goal holds with ``parts`` assembled."""
+        """Return whether the goal (the model's, or every one of ``goal_keys``) holds with ``parts`` assembled."""
         cached = self.goal_cache.get(parts)
         if cached is None:
             functions: set[str] = set()
             for bit, keys in self.functions_of_part.items():
                 if parts & bit:
                     functions |= keys
-            cached = self.task.goal_key in active_nodes(functions, self.task.rules)
+            active = active_nodes(functions, self.task.rules)
+            cached = all(key in active for key in self.goal_keys or (self.task.goal_key,))
             self.goal_cache[parts] = cached
         return cached
 
@@ -135,8 +153,8 @@ class CompiledMdp:
         return parts, unusable
 
 
-def compile_mdp(task: PlanningTask, fits: tuple[Fit, ...]) -> CompiledMdp:
-    """Return the MDP over ``fits`` (the relevant ones) as bit masks."""
+def compile_mdp(task: PlanningTask, fits: tuple[Fit, ...], goal_keys: tuple[str, ...] = ()) -> CompiledMdp:
+    """Return the MDP over ``fits`` (the relevant ones) as bit masks; ``goal_keys``: see ``CompiledMdp``."""
     obj = task.obj
     part_bit = {part_id: 1 << index for index, part_id in enumerate(obj.part_ids)}
     fit_bit = {fit.id: 1 << index for index, fit in enumerate(fits)}
@@ -160,6 +178,7 @@ def compile_mdp(task: PlanningTask, fits: tuple[Fit, ...]) -> CompiledMdp:
             mask([other.id for other in fits if set(other.connectors()) & set(fit.connectors())]) for fit in fits
         ],
         base=part_bit[obj.base],
+        goal_keys=goal_keys,
         functions_of_part={bit: frozenset(keys) for bit, keys in functions.items()},
         moving_connector=[fit.moving_connector for fit in fits],
         fits_onto_part={
@@ -180,8 +199,10 @@ class MdpSolution:
     ``success_probability`` is the success probability of the returned policy (a lower bound
     on it when ``optimality`` is ``bounded``); ``success_upper`` bounds the success probability
     of every policy from above. ``policy_table`` maps states to the fit index to attempt, for
-    rolling the policy out (``decide`` completes it where the search stopped early). ``states``
-    counts the states solved (exact solver) or expanded (heuristic search).
+    rolling the policy out (``decide`` completes it where the search stopped early), and
+    ``state_success`` their success probabilities; a policy composed of independent
+    components has ``decider`` instead (``composed.py``). ``states`` counts the states solved
+    (exact solver) or expanded (heuristic search).
     """
 
     status: PlanStatus
@@ -198,19 +219,22 @@ class MdpSolution:
     required_success: float | None = None
     fits: tuple[Fit, ...] = field(default=(), repr=False)
     policy_table: dict[State, int] = field(default_factory=dict, repr=False, compare=False)
+    state_success: dict[State, float] = field(default_factory=dict, repr=False, compare=False)
+    fewest_attempts: bool = True  # the expected attempts are proved the fewest among the most reliable policies
+    decider: Callable[[State], int] | None = field(default=None, repr=False, compare=False)
 
 
 def policy_entries(
-    compiled: CompiledMdp, table: dict[State, int], success: dict[State, float]
+    compiled: CompiledMdp, decide: Callable[[State], int], success: Callable[[State], float]
 ) -> tuple[dict[str, object], ...]:
-    """Return the policy in the states it reaches from the start (at most MAX_POLICY_ENTRIES)."""
+    """Return the policy (``decide``: a state's attempt, -1 when none) in the states it reaches (MAX_POLICY_ENTRIES)."""
     obj, fits = compiled.task.obj, compiled.fits
     entries: list[dict[str, object]] = []
     start: State = (0, 0)
-    frontier, seen = [start], {start}
+    frontier, seen = deque([start]), {start}
     while frontier and len(entries) < MAX_POLICY_ENTRIES:
-        made, failed = frontier.pop(0)
-        action = table.get((made, failed), -1)
+        made, failed = frontier.popleft()
+        action = decide((made, failed))
         if action < 0:
             continue
         fit = fits[action]
@@ -220,12 +244,12 @@ def policy_entries(
                 "failed": [f.id for i, f in enumerate(fits) if failed >> i & 1],
                 "attempt": fit.id,
                 "text": obj.step_text(fit),
-                "success_probability": round(success.get((made, failed), 0.0), 6),
+                "success_probability": round(success((made, failed)), 6),
             }
         )
         bit = 1 << action
         for child in ((made | bit, failed), (made, failed | bit)):
-            if child in table and child not in seen:
+            if child not in seen:
                 seen.add(child)
                 frontier.append(child)
     return tuple(entries)

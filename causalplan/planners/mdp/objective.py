@@ -22,6 +22,7 @@ from collections.abc import Callable
 
 from causalplan.errors import CausalPlanError
 from causalplan.pddl.task import PlanningTask
+from causalplan.planners.mdp.composed import solve_by_components
 from causalplan.planners.mdp.exact import solve_compiled_mdp
 from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, Objective, Optimality, compile_mdp, relevant_fits
 from causalplan.planners.mdp.search import search_compiled_mdp, tie_breaking_step_cost
@@ -85,6 +86,8 @@ def solve_for(
     The MDP is compiled once: every solve of the bisection shares it (and its goal cache).
     """
     solve: Solver = solve_compiled_mdp if exact else search_compiled_mdp
+    if objective is Objective.PROBABILITY and not exact:
+        solve = solve_by_components  # the product of independent components' optima: see composed.py
     deadline = time.monotonic() + time_limit
     compiled = compile_mdp(task, relevant_fits(task))
     step_cost = tie_breaking_step_cost(compiled)

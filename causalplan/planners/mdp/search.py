@@ -9,10 +9,16 @@ the made or failed ones), so a state whose best attempt leads only to solved sta
 exact optimal value and is labelled *solved* (as in AO*); the search ends when the start is
 solved, with the same optimal value as the exact solver over far fewer states.
 
+It also stops, ``optimal``, as soon as the returned policy's success probability, evaluated
+exactly, meets the upper bound on every policy's (``PROOF_PRECISION``): the most reliable
+policy is then proved, and its expected attempts are exact (those of this policy).
+
 When the time limit or the state budget comes first, the answer is anytime: the best policy
-so far (its unexpanded states completed by the bound's greedy choice), a lower bound on its
-success probability (those states counted as failures) and an upper bound on the success
-probability of every policy (the bound's), never a hang.
+so far (its unexpanded states completed by the default policy, ``completion.py``), a lower
+bound on its success probability and an upper bound on the success probability of every
+policy (the bound's), never a hang. Its plan (the path when every attempt succeeds) always
+reaches the goal; when no such plan was found in time, the answer is ``timeout``, never a
+plan that fails replay.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import time
 
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.mdp.bounds import DEAD_END, Bound, bound
+from causalplan.planners.mdp.completion import Evaluation, completion, default_attempt, evaluate_policy
 from causalplan.planners.mdp.model import (
     STEP_COST,
     CompiledMdp,
@@ -37,6 +44,12 @@ from causalplan.planners.result import PlanStatus
 MAX_NODES = 1_000_000
 SEARCH_SHARE = 0.9
 MIN_SUCCESS_SCALE = 1e-9
+PROOF_PRECISION = 1e-9
+"""The optimum is proved when the returned policy's success probability is within this share of the bound."""
+FIRST_CHECK = 64
+"""Expansions before the first check whether the bounds have met (then at doubling numbers)."""
+CHECK_SHARE = 0.05
+"""The most of the time limit one such check may take (beyond it, the check is inconclusive)."""
 TIE = 1e-12
 """A new best attempt must beat the old by more than this (the exact solver's rule: first index wins ties)."""
 
@@ -139,37 +152,6 @@ class _Search:
         visit(root)
 
 
-def default_attempt(compiled: CompiledMdp, state: State, step_cost: float = STEP_COST) -> int:
-    """Return the attempt of the default policy, used where the search stopped early; -1 when over.
-
-    It attaches a necessary part if it can (the most reliable such fit), else the most
-    reliable fit whose success keeps the goal reachable.
-    """
-    parts, unusable = compiled.parts_of(state)
-    here = bound(compiled, parts, unusable, 0, step_cost)
-    if here.goal or here.dead_end:
-        return -1
-    best, best_key = -1, (False, -1.0)
-    for index in compiled.applicable(parts, unusable):
-        after = compiled.reachable_parts(parts | compiled.moving[index], unusable | compiled.taken_on_success[index])
-        if not compiled.goal_holds(after):
-            continue
-        key = (bool(compiled.moving[index] & here.necessary), compiled.probability[index])
-        if best < 0 or key > best_key:
-            best, best_key = index, key
-    return best
-
-
-def _default_success(compiled: CompiledMdp, state: State, step_cost: float) -> float:
-    """Return a lower bound on the default policy's success from ``state``: its all-success path's chance."""
-    made, failed = state
-    chance = 1.0
-    while (index := default_attempt(compiled, (made, failed), step_cost)) >= 0:
-        chance *= compiled.probability[index]
-        made |= 1 << index
-    return chance if compiled.goal_holds(compiled.parts_of((made, failed))[0]) else 0.0
-
-
 def tie_breaking_step_cost(compiled: CompiledMdp) -> float:
     """Return a step cost that only breaks ties between policies of (nearly) equal success probability.
 
@@ -179,47 +161,29 @@ def tie_breaking_step_cost(compiled: CompiledMdp) -> float:
     attempts together cost at most ``STEP_COST`` times that probability, so a policy is only
     preferred to a more reliable one when it is less reliable by under ``STEP_COST / 2`` of it.
     """
-    reachable = _default_success(compiled, (0, 0), STEP_COST)
+    reachable = completion(compiled, (0, 0), STEP_COST).chance
     return STEP_COST * max(reachable, MIN_SUCCESS_SCALE) / max(1, len(compiled.fits))
 
 
-def _evaluate(
-    search: _Search, root: _Node, deadline: float
-) -> tuple[float, float, dict[State, int], dict[State, float]]:
-    """Return the best policy's success probability, expected attempts, its table and successes.
+def _start(root: _Node) -> tuple[State, int, int]:
+    return root.state, root.parts, root.unusable
 
-    Where the search stopped early, the policy goes on with ``default_attempt``: its success
-    there is bounded below by its all-success path's chance (0 once ``deadline`` has passed),
-    so the first figure is a lower bound (and the attempts are counted up to there).
-    """
-    success: dict[State, float] = {}
-    attempts: dict[State, float] = {}
-    table: dict[State, int] = {}
+
+def _policy_table(search: _Search, root: _Node) -> dict[State, int]:
+    """Return the best policy's choice in every expanded state it reaches from the start."""
     c = search.c
-
-    def value(node: _Node) -> tuple[float, float]:
-        known = success.get(node.state)
-        if known is not None:
-            return known, attempts[node.state]
-        if c.goal_holds(node.parts):
-            result = (1.0, 0.0)
-        elif node.solved and node.action < 0:
-            result = (0.0, 0.0)
-        elif node.children is None:
-            tip = _default_success(c, node.state, search.step_cost) if time.monotonic() < deadline else 0.0
-            result = (tip, 0.0)
-        else:
-            index, on_success, on_failure = node.children[node.action]
-            table[node.state] = index
-            p = c.probability[index]
-            s_success, a_success = value(on_success)
-            s_failure, a_failure = value(on_failure)
-            result = (p * s_success + (1 - p) * s_failure, 1 + p * a_success + (1 - p) * a_failure)
-        success[node.state], attempts[node.state] = result
-        return result
-
-    root_success, root_attempts = value(root)
-    return root_success, root_attempts, table, success
+    table: dict[State, int] = {}
+    stack, seen = [root], {root.state}
+    while stack:
+        node = stack.pop()
+        if node.children is None or node.action < 0 or c.goal_holds(node.parts):
+            continue
+        table[node.state] = node.children[node.action][0]
+        for child in search.best_child_states(node):
+            if child.state not in seen:
+                seen.add(child.state)
+                stack.append(child)
+    return table
 
 
 def decide(compiled: CompiledMdp, solution: MdpSolution, state: State, step_cost: float = STEP_COST) -> int:
@@ -228,21 +192,26 @@ def decide(compiled: CompiledMdp, solution: MdpSolution, state: State, step_cost
     Inside the searched states, the policy's own choice; elsewhere (an anytime answer), the
     default policy's.
     """
+    if solution.decider is not None:
+        return solution.decider(state)
     if state in solution.policy_table:
         return solution.policy_table[state]
     return default_attempt(compiled, state, step_cost)
 
 
 def _all_success_path(
-    compiled: CompiledMdp, solution: MdpSolution, step_cost: float
-) -> tuple[tuple[str, tuple[str, ...]], ...]:
+    compiled: CompiledMdp, table: dict[State, int], step_cost: float
+) -> tuple[tuple[str, tuple[str, ...]], ...] | None:
+    """Return the policy's attempts (``table``, then the default) when all succeed; None unless the goal holds."""
     actions: list[tuple[str, tuple[str, ...]]] = []
     made = 0
-    while (index := decide(compiled, solution, (made, 0), step_cost)) >= 0:
+    while (index := table.get((made, 0), -2)) >= 0 or (
+        index == -2 and (index := default_attempt(compiled, (made, 0), step_cost)) >= 0
+    ):
         fit = compiled.fits[index]
         actions.append((fit.primitive, (fit.moving_part, fit.fixed_part, fit.id)))
         made |= 1 << index
-    return tuple(actions)
+    return tuple(actions) if compiled.goal_holds(compiled.parts_of((made, 0))[0]) else None
 
 
 def solve_mdp_search(task: PlanningTask, time_limit: float = 10.0, step_cost: float = STEP_COST) -> MdpSolution:
@@ -252,26 +221,60 @@ def solve_mdp_search(task: PlanningTask, time_limit: float = 10.0, step_cost: fl
 
 def search_compiled_mdp(compiled: CompiledMdp, time_limit: float, step_cost: float) -> MdpSolution:
     """Solve a compiled MDP by improved LAO* (``solve_mdp_search``'s work, for callers that solve it more than once)."""
-    fits = compiled.fits
-    started = time.monotonic()
-    # The last tenth of the time goes to bounding the policy where the search stopped.
-    search = _Search(compiled, step_cost, started + SEARCH_SHARE * time_limit)
-    root = search.node((0, 0), compiled.base, 0, 0)
-    optimality = Optimality.OPTIMAL
-    limit = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(limit, 4 * len(fits) + 200))  # one frame per attempt on a path, twice
-    try:
-        while not root.solved:
-            search.run_pass(root)
-    except _OutOfBudget:
-        optimality = Optimality.BOUNDED
-    try:
-        return _solution(search, root, optimality, time_limit, started + time_limit)
-    finally:
-        sys.setrecursionlimit(limit)
+    return ResumableSearch(compiled, step_cost).run(time_limit)
 
 
-def _solution(search: _Search, root: _Node, optimality: Optimality, time_limit: float, deadline: float) -> MdpSolution:
+class ResumableSearch:
+    """An improved LAO* search that can be given more time after it answered (``composed`` tries others between).
+
+    It stops as soon as the optimum is proved: when the start is solved, or when the returned
+    policy's success probability (evaluated exactly) meets the upper bound on every policy's
+    to ``PROOF_PRECISION``; the checks come at doubling numbers of expansions, so they cost
+    at most about as much as the last one.
+    """
+
+    def __init__(self, compiled: CompiledMdp, step_cost: float) -> None:
+        self.search = _Search(compiled, step_cost, time.monotonic())
+        self.root = self.search.node((0, 0), compiled.base, 0, 0)
+        self.next_check = FIRST_CHECK
+
+    def run(self, time_limit: float) -> MdpSolution:
+        """Search on for ``time_limit`` seconds (the last tenth bounding the policy) and answer."""
+        search, root = self.search, self.root
+        started = time.monotonic()
+        search.deadline = started + SEARCH_SHARE * time_limit
+        optimality = Optimality.OPTIMAL
+        proved: Evaluation | None = None
+        limit = sys.getrecursionlimit()
+        sys.setrecursionlimit(max(limit, 4 * len(search.c.fits) + 200))  # one frame per attempt on a path, twice
+        try:
+            while not root.solved:
+                search.run_pass(root)
+                if search.expanded >= self.next_check and not root.solved:
+                    self.next_check = 2 * search.expanded
+                    check = time.monotonic() + CHECK_SHARE * time_limit
+                    evaluation = evaluate_policy(
+                        search.c, search.step_cost, _policy_table(search, root), _start(root), check
+                    )
+                    if evaluation.exact and evaluation.success >= root.success * (1 - PROOF_PRECISION):
+                        proved = evaluation
+                        break
+        except _OutOfBudget:
+            optimality = Optimality.BOUNDED
+        try:
+            return _solution(search, root, optimality, time_limit, started, proved)
+        finally:
+            sys.setrecursionlimit(limit)
+
+
+def _solution(
+    search: _Search,
+    root: _Node,
+    optimality: Optimality,
+    time_limit: float,
+    started: float,
+    proved: Evaluation | None,
+) -> MdpSolution:
     compiled, fits, step_cost = search.c, search.c.fits, search.step_cost
     if root.solved and root.success == 0.0:
         return MdpSolution(
@@ -284,29 +287,70 @@ def _solution(search: _Search, root: _Node, optimality: Optimality, time_limit: 
             success_upper=0.0,
             fits=fits,
         )
-    success, attempts, table, successes = _evaluate(search, root, deadline)
-    message = ""
+    deadline = started + time_limit
+    evaluation = proved or evaluate_policy(compiled, step_cost, _policy_table(search, root), _start(root), deadline)
+    if optimality is Optimality.OPTIMAL and evaluation.success == 0.0:  # as the exact solver says it
+        return MdpSolution(
+            PlanStatus.UNSOLVABLE,
+            success_probability=0.0,
+            expected_actions=0.0,
+            states=search.expanded,
+            relevant_fits=len(fits),
+            message="The optimal policy never reaches the goal.",
+            success_upper=0.0,
+            fits=fits,
+        )
+    path = _all_success_path(compiled, evaluation.table, step_cost)
+    if path is None:  # an optimum that counts on a failure (never seen): not a plan to replay
+        optimality = Optimality.BOUNDED
     if optimality is Optimality.BOUNDED:
-        fallback = _default_success(compiled, (0, 0), step_cost)
-        if fallback > success:  # the default policy alone is provably better than what was bounded
-            success, table, successes = fallback, {}, {}
+        # The plan is the all-success path: it must reach the goal. A policy that counts on a
+        # failure, or a table that ends where no completion is left, gives way to the default policy.
+        default = completion(compiled, (0, 0), step_cost)
+        if path is None or default.chance > evaluation.success:
+            evaluation = evaluate_policy(compiled, step_cost, {}, _start(root), deadline)
+            path = _all_success_path(compiled, {}, step_cost)
+    upper = root.success
+    if path is None:
+        return MdpSolution(
+            PlanStatus.TIMEOUT,
+            states=search.expanded,
+            relevant_fits=len(fits),
+            message=f"The time limit ({time_limit:g} s) or the state budget came first after {search.expanded:,} "
+            f"expansions, before a plan that reaches the goal was found; no policy does better than {upper:.4f}.",
+            optimality=Optimality.BOUNDED,
+            success_upper=upper,
+            fits=fits,
+        )
+    success = evaluation.success
+    message = ""
+    if proved is not None:
+        message = (
+            f"Proved optimal after {search.expanded:,} expansions in {time.monotonic() - started:.2f} s: this "
+            f"policy succeeds with probability {success:.6g}, and no policy does better than {upper:.6g}."
+        )
+    elif optimality is Optimality.BOUNDED:
         message = (
             f"The time limit ({time_limit:g} s) or the state budget came first after {search.expanded:,} expansions: "
             f"this is the best policy so far; it succeeds with probability at least {success:.4f}, and no policy "
-            f"does better than {root.success:.4f}."
+            f"does better than {upper:.4f}."
         )
-    draft = MdpSolution(PlanStatus.SOLVED, fits=fits, policy_table=table)
+    known_attempts = optimality is Optimality.OPTIMAL and evaluation.exact
     return MdpSolution(
         PlanStatus.SOLVED,
-        _all_success_path(compiled, draft, step_cost),
+        path,
         success,
-        attempts if optimality is Optimality.OPTIMAL else None,
-        policy_entries(compiled, table, successes),
+        evaluation.attempts if known_attempts else None,
+        policy_entries(
+            compiled, lambda state: evaluation.table.get(state, -1), lambda state: evaluation.successes.get(state, 0.0)
+        ),
         search.expanded,
         len(fits),
         message,
         optimality,
-        root.success if optimality is Optimality.BOUNDED else success,
+        upper if optimality is Optimality.BOUNDED else success,
         fits=fits,
-        policy_table=table,
+        policy_table=evaluation.table,
+        state_success=evaluation.successes,
+        fewest_attempts=proved is None,
     )

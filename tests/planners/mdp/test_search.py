@@ -7,6 +7,7 @@ import random
 
 import pytest
 
+from causalplan.comparison.families import independent_components
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
@@ -131,7 +132,7 @@ def test_the_most_reliable_policy_is_not_traded_for_fewer_attempts_when_success_
     base = synthetic_task(16, 0)
     fits = tuple(dataclasses.replace(fit, probability=0.3) for fit in base.obj.fits)
     task = dataclasses.replace(base, obj=dataclasses.replace(base.obj, fits=fits))
-    assert solve_mdp_search(task).success_probability == solve_mdp(task).success_probability == 0.0
+    assert solve_mdp_search(task).status is solve_mdp(task).status is PlanStatus.UNSOLVABLE
     solution = solve_for(task, 60.0)
     assert solution.status is PlanStatus.SOLVED and solution.success_probability is not None
     assert solution.success_probability > 0.0
@@ -147,3 +148,13 @@ def test_an_anytime_plan_says_so_in_its_json() -> None:
         high - low, abs=2e-6
     )  # each rounded to 6 places
     assert data["expected_actions"] is None and "no policy does better" in str(data["message"])
+
+
+def test_it_stops_optimal_as_soon_as_the_bounds_meet() -> None:
+    # Four independent components: the policy's success meets the bound long before every state is solved.
+    family = independent_components(4)
+    solution = solve_mdp_search(family.task, 30.0)
+    assert solution.optimality is Optimality.OPTIMAL and solution.message.startswith("Proved optimal after")
+    assert solution.success_probability == pytest.approx(family.success_probability, rel=1e-9)
+    assert solution.expected_actions is not None and not solution.fewest_attempts
+    assert solution.states < 1000

@@ -1,0 +1,344 @@
+"""An exact solver that splits the problem again after every attempt: attached parts couple nothing.
+
+The base couples nothing because it is always there (``components.py``); the same holds for
+every part once attached. So after an attempt the rest of the problem often falls apart:
+once a holder is on, the subtrees on its sockets are independent. This solver memoises
+*residual sub-problems* (the open fits of a group, the goal nodes it must make, and the
+attached parts they depend on), not whole states: a tree of holders is solved as a product
+of small pieces, where the state graph has exponentially many states.
+
+At each residual it tries every applicable fit of its group, splits each outcome's residual
+into independent groups, and combines them: the success probability is the product (proved
+as for the components), and the groups run one after another, whole, in decreasing
+``(1 - success) / attempts`` (Smith's ratio rule), which gives the fewest expected attempts
+among such orders. The attempt kept is the most reliable, then the one with the fewest
+expected attempts. The policy is the *agenda* of groups: ``decide`` replays the outcomes of a
+state from the start, so it follows exactly the policy whose figures were computed.
+
+It is exhaustive inside a group that does not split, so it stops (``None``) beyond
+``MAX_RESIDUALS`` residuals or at the time limit, and the caller falls back to the heuristic search.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass
+
+from causalplan.causal.graph import active_nodes
+from causalplan.planners.mdp.components import goal_conjuncts
+from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, State, policy_entries
+from causalplan.planners.result import PlanStatus
+
+MAX_RESIDUALS = 400_000
+TIE = 1e-12
+
+Key = tuple[int, tuple[str, ...], int]
+"""A residual: its open fits (a mask), the goal nodes it must make, the attached parts it depends on."""
+
+
+@dataclass(frozen=True)
+class _Entry:
+    success: float
+    attempts: float
+    action: int  # -1: done (its goal holds) or dead
+    on_success: tuple[Key, ...] = ()
+    on_failure: tuple[Key, ...] = ()
+
+
+def _ratio(entry: _Entry) -> float:
+    """Smith's ratio: the chance of failing per expected attempt (a dead residual first, a sure one last)."""
+    if entry.attempts == 0.0:
+        return math.inf if entry.success < 1.0 else 0.0
+    return (1.0 - entry.success) / entry.attempts
+
+
+class _Stop(Exception):
+    """Raised when the residual budget or the time is exhausted."""
+
+
+class _Splitter:
+    def __init__(self, compiled: CompiledMdp, deadline: float) -> None:
+        self.c = compiled
+        self.deadline = deadline
+        self.memo: dict[Key, _Entry] = {}
+        conjuncts = goal_conjuncts(compiled) or {}
+        part_bit = {part_id: 1 << index for index, part_id in enumerate(compiled.task.obj.part_ids)}
+        keys = compiled.goal_keys or tuple(conjuncts) or (compiled.task.goal_key,)
+        self.support = {key: sum(part_bit[part] for part in conjuncts.get(key, frozenset(part_bit))) for key in keys}
+        self.all_fits = (1 << len(compiled.fits)) - 1
+        self.holds_cache: dict[tuple[int, str], bool] = {}
+        self.chance_cache: dict[int, float] = {}
+        count = len(compiled.fits)
+        self.fits_of_bit: dict[int, int] = {}
+        for index in range(count):
+            self.fits_of_bit[compiled.moving[index]] = self.fits_of_bit.get(compiled.moving[index], 0) | 1 << index
+        self.neighbours = [
+            self.fits_of_bit[compiled.moving[index]]
+            | compiled.taken_on_success[index]
+            | compiled.taken_on_failure[index]
+            | self.fits_of_bit.get(compiled.fixed[index], 0)  # the fits attaching its holder
+            | sum(1 << other for other in range(count) if compiled.fixed[other] == compiled.moving[index])
+            for index in range(count)
+        ]
+        for index in range(count):  # a fit that blocks another is joined to it from either side
+            others = self.neighbours[index]
+            while others:
+                low = others & -others
+                others ^= low
+                self.neighbours[low.bit_length() - 1] |= 1 << index
+        self.key_fits = {
+            key: sum(1 << index for index in range(count) if compiled.moving[index] & support)
+            for key, support in self.support.items()
+        }
+
+    def holds(self, parts: int, key: str) -> bool:
+        relevant = parts & self.support[key]
+        known = self.holds_cache.get((relevant, key))
+        if known is None:
+            functions: set[str] = set()
+            for bit, labels in self.c.functions_of_part.items():
+                if relevant & bit:
+                    functions |= labels
+            known = key in active_nodes(functions, self.c.task.rules)
+            self.holds_cache[(relevant, key)] = known
+        return known
+
+    def groups(self, parts: int, unusable: int, keys: tuple[str, ...], within: int) -> tuple[Key, ...] | None:
+        """Return the independent residuals of ``within``'s fits after an outcome; None when one cannot succeed.
+
+        A flood fill over bit masks: fits are joined when they attach one part, when one attaches
+        the other's holder (an attached holder has no open fits left to join), when they exclude
+        each other, or when one goal node still waiting depends on both.
+        """
+        c = self.c
+        open_mask = within & ~unusable & ~self.fits_moving_into(parts)
+        waiting = tuple(key for key in keys if not self.holds(parts, key))
+        if not waiting:
+            return ()
+        if any(not self.key_fits[key] & open_mask for key in waiting):
+            return None  # nothing open can make this goal node
+        found: list[Key] = []
+        remaining = open_mask
+        while remaining:
+            group = frontier = remaining & -remaining
+            while frontier:
+                reached = 0
+                while frontier:
+                    low = frontier & -frontier
+                    frontier ^= low
+                    reached |= self.neighbours[low.bit_length() - 1]
+                for key in waiting:
+                    if reached & self.key_fits[key] or group & self.key_fits[key]:
+                        reached |= self.key_fits[key]
+                frontier = reached & open_mask & ~group
+                group |= frontier
+            remaining &= ~group
+            own = tuple(key for key in waiting if group & self.key_fits[key])
+            if own:
+                depends = 0
+                bits = group
+                while bits:
+                    low = bits & -bits
+                    bits ^= low
+                    depends |= c.fixed[low.bit_length() - 1]
+                for key in own:
+                    depends |= self.support[key]
+                found.append((group, own, parts & depends))
+        return tuple(sorted(found))
+
+    def fits_moving_into(self, parts: int) -> int:
+        """Return the fits whose moving part is among ``parts`` (attached: nothing left to attach)."""
+        mask = 0
+        bits = parts
+        while bits:
+            low = bits & -bits
+            bits ^= low
+            mask |= self.fits_of_bit.get(low, 0)
+        return mask
+
+    def combined(self, residuals: tuple[Key, ...] | None) -> tuple[float, float, tuple[Key, ...]]:
+        """Return the success, expected attempts and order (by ratio) of running ``residuals`` one after another."""
+        if residuals is None:
+            return 0.0, 0.0, ()
+        solved = [(self.solve(residual), residual) for residual in residuals]
+        solved.sort(key=lambda item: -_ratio(item[0]))
+        success, attempts = 1.0, 0.0
+        for entry, _ in solved:
+            attempts += success * entry.attempts
+            success *= entry.success
+        return success, attempts, tuple(residual for _, residual in solved)
+
+    def upper(self, residuals: tuple[Key, ...] | None) -> float:
+        """Return an upper bound on the success of running ``residuals`` (independent, so a product).
+
+        A goal node still waiting needs one more of the parts under it to join, and a part joins
+        only by one of its own draws (one per connector of its own, at best its most reliable
+        open fit's). Draws of different parts are independent, so over goal nodes with disjoint
+        parts the chances multiply.
+        """
+        if residuals is None:
+            return 0.0
+        bound = 1.0
+        for residual in residuals:
+            known = self.memo.get(residual)
+            if known is not None:
+                bound *= known.success
+                continue
+            within, keys, parts = residual
+            counted = 0
+            for key in keys:
+                carriers = self.support[key] & ~parts
+                if carriers & counted:
+                    continue
+                counted |= carriers
+                missing, bits = 1.0, carriers
+                while bits:
+                    low = bits & -bits
+                    bits ^= low
+                    missing *= 1.0 - self.chance(low, within)
+                bound *= 1.0 - missing
+        return bound
+
+    def chance(self, part: int, within: int) -> float:
+        """Return the best chance that ``part`` joins by ``within``'s fits: one draw per connector of its own."""
+        fits = within & self.fits_of_bit.get(part, 0)
+        known = self.chance_cache.get(fits)
+        if known is None:
+            best: dict[str, float] = {}
+            bits = fits
+            while bits:
+                low = bits & -bits
+                bits ^= low
+                index = low.bit_length() - 1
+                connector = self.c.moving_connector[index]
+                best[connector] = max(best.get(connector, 0.0), self.c.probability[index])
+            known = 1.0 - math.prod(1.0 - chance for chance in best.values())
+            self.chance_cache[fits] = known
+        return known
+
+    def solve(self, residual: Key) -> _Entry:
+        known = self.memo.get(residual)
+        if known is not None:
+            return known
+        if len(self.memo) >= MAX_RESIDUALS or time.monotonic() > self.deadline:
+            raise _Stop
+        within, keys, parts = residual
+        c = self.c
+        unusable = self.all_fits & ~within
+        reach = c.reachable_parts(parts, unusable)
+        best = _Entry(0.0, 0.0, -1)
+        if all(self.holds(reach, key) for key in keys):
+            options = []
+            for index in c.applicable(parts, unusable):
+                p = c.probability[index]
+                won = self.groups(parts | c.moving[index], unusable | c.taken_on_success[index], keys, within)
+                lost = self.groups(parts, unusable | c.taken_on_failure[index], keys, within) if p < 1.0 else None
+                options.append((p * self.upper(won) + (1 - p) * self.upper(lost), index, won, lost))
+            options.sort(key=lambda option: (-option[0], option[1]))
+            for upper, index, won, lost in options:
+                if best.action >= 0 and upper < best.success - TIE:
+                    break  # no later option can be as reliable (branch and bound)
+                p = c.probability[index]
+                s_success, a_success, after_success = self.combined(won)
+                after_failure: tuple[Key, ...] = ()
+                s_failure, a_failure = 0.0, 0.0
+                if p < 1.0:
+                    s_failure, a_failure, after_failure = self.combined(lost)
+                success = p * s_success + (1 - p) * s_failure
+                attempts = 1 + p * a_success + (1 - p) * a_failure
+                if (
+                    best.action < 0
+                    or success > best.success + TIE
+                    or (success > best.success - TIE and attempts < best.attempts - TIE)
+                    or (success > best.success - TIE and attempts < best.attempts + TIE and index < best.action)
+                ):
+                    best = _Entry(success, attempts, index, after_success, after_failure)
+        if best.success == 0.0:
+            best = _Entry(0.0, 0.0, -1)  # nothing left to gain: the run ends here
+        self.memo[residual] = best
+        return best
+
+
+class SplitPolicy:
+    """The agenda policy: replay a state's outcomes from the start; the first fit not yet tried is next."""
+
+    def __init__(self, splitter: _Splitter, start: tuple[Key, ...]) -> None:
+        self.splitter = splitter
+        self.start = start
+
+    def agenda(self, state: State) -> tuple[list[Key], int]:
+        """Return the residuals still to run in ``state`` and the fit to attempt (-1: the run is over)."""
+        made, failed = state
+        agenda = list(self.start)
+        while agenda:
+            entry = self.splitter.memo[agenda[0]]
+            if entry.action < 0:
+                if entry.success == 0.0:
+                    return agenda, -1
+                agenda.pop(0)
+                continue
+            bit = 1 << entry.action
+            if made & bit:
+                agenda[:1] = entry.on_success
+            elif failed & bit:
+                agenda[:1] = entry.on_failure
+            else:
+                return agenda, entry.action
+        return agenda, -1
+
+    def __call__(self, state: State) -> int:
+        return self.agenda(state)[1]
+
+    def success(self, state: State) -> float:
+        """Return the policy's success probability from ``state``."""
+        agenda, _ = self.agenda(state)
+        return math.prod(self.splitter.memo[residual].success for residual in agenda)
+
+
+def solve_split(compiled: CompiledMdp, time_limit: float) -> MdpSolution | None:
+    """Return the exact solution by splitting after every attempt; None when it does not finish in time."""
+    splitter = _Splitter(compiled, time.monotonic() + time_limit)
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(limit, 8 * len(compiled.fits) + 200))
+    try:
+        start = splitter.groups(compiled.base, 0, tuple(splitter.support), splitter.all_fits)
+        success, attempts, order = splitter.combined(start)
+    except _Stop:
+        return None
+    finally:
+        sys.setrecursionlimit(limit)
+    fits = compiled.fits
+    if success == 0.0:
+        return MdpSolution(
+            PlanStatus.UNSOLVABLE,
+            success_probability=0.0,
+            expected_actions=0.0,
+            states=len(splitter.memo),
+            relevant_fits=len(fits),
+            message="No policy reaches the goal.",
+            success_upper=0.0,
+            fits=fits,
+        )
+    policy = SplitPolicy(splitter, order)
+    actions: list[tuple[str, tuple[str, ...]]] = []
+    made = 0
+    while (index := policy((made, 0))) >= 0:
+        actions.append((fits[index].primitive, (fits[index].moving_part, fits[index].fixed_part, fits[index].id)))
+        made |= 1 << index
+    return MdpSolution(
+        PlanStatus.SOLVED,
+        tuple(actions),
+        success,
+        attempts,
+        policy_entries(compiled, policy, policy.success),
+        len(splitter.memo),
+        len(fits),
+        f"Proved the most reliable policy by splitting the rest into independent groups after every attempt "
+        f"({len(splitter.memo):,} residual groups); the groups run whole, in Smith's ratio order.",
+        success_upper=success,
+        fits=fits,
+        decider=policy,
+        fewest_attempts=False,
+    )
