@@ -88,6 +88,26 @@ class Settings(BaseSettings):
     planning_workers: int = Field(default=2, ge=1, le=64, description="Planner worker processes.")
     queue_size: int = Field(default=16, ge=0, le=1000, description="Solves that may wait for a free worker.")
     queue_wait_seconds: float = Field(default=120.0, gt=0, description="Longest wait for a free worker.")
+    client_requests_in_flight: int = Field(
+        default=4,
+        ge=1,
+        le=1000,
+        description="Interactive planner requests (plans, transfers, repairs, explanations, pictures, a participant's "
+        "robot runs) one client may have running or waiting at once; one more gets 429 (service.fair_share).",
+    )
+    client_workers: int = Field(
+        default=0,
+        ge=0,
+        le=64,
+        description="Planner workers one client may hold at once; 0: all but one (at least one), so one client "
+        "alone never takes every worker.",
+    )
+    search_seconds: float = Field(
+        default=10.0,
+        gt=0,
+        le=3600,
+        description="Seconds a repair search may take, whatever the time_limit: it stops there with what it found.",
+    )
     default_time_limit: float = Field(default=30.0, gt=0, description="Seconds per solve when none is asked for.")
     max_time_limit: float = Field(default=60.0, gt=0, description="The largest time_limit a request may ask for.")
     solve_grace_seconds: float = Field(

@@ -114,6 +114,12 @@ class QueueFullError(TryLaterError):
     code = "queue_full"
 
 
+class TooManyRequestsInFlightError(TryLaterError):
+    """One client has as many interactive planner requests running or waiting as it may (``service.fair_share``)."""
+
+    code = "too_many_requests_in_flight"
+
+
 class TooManyAttemptsError(TryLaterError):
     """Too many wrong research tokens came from this client address."""
 

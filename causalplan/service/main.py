@@ -44,6 +44,7 @@ from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.caches import ServiceCaches
 from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
+from causalplan.service.fair_share import ClientMiddleware, FairSharePool
 from causalplan.service.jobs.runner import JobRunner
 from causalplan.service.pages import routers as web_routers
 from causalplan.service.pool.jobs import probe_job
@@ -70,9 +71,7 @@ def start_services(settings: Settings) -> Services:
     engine = create_database_engine(settings.database_url)
     try:
         revision = upgrade(engine, settings.database_wait_seconds)
-        pool = PlannerPool(
-            settings.planning_workers, settings.queue_size, settings.worker_memory_mb, settings.queue_wait_seconds
-        )
+        pool = FairSharePool(settings)  # interactive requests take turns fairly, client by client
         pool.start()
     except BaseException:
         engine.dispose()
@@ -368,6 +367,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_exception_handler(CausalPlanError, handle_causalplan_error)
     app.add_exception_handler(RequestValidationError, handle_validation_error)
     app.add_exception_handler(StarletteHTTPException, handle_http_error)
+    app.add_middleware(ClientMiddleware, settings=settings)
     app.add_middleware(UnexpectedErrorMiddleware)
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes, upload_bytes=settings.max_upload_bytes)
     for module in (models, plans, simulations, transfers, explanations, jobs, objects, research, health, experiments):

@@ -5,6 +5,7 @@ Like ``pool.jobs``: run inside a worker process, plain values in, JSON-ready dic
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 from causalplan.causal.model import CausalModel, Labelling
@@ -41,10 +42,19 @@ def repair_job(
     time_limit: float,
     catalog_folders: tuple[Path, ...],
     val: bool,
+    seconds: float,
 ) -> dict[str, object] | None:
-    """Return the repairs of a failed transfer (``RepairSearch.as_dict()``), or None when it does not fail."""
+    """Return the repairs of a failed transfer (``RepairSearch.as_dict()``), or None when it does not fail.
+
+    ``seconds``: the whole job's budget, whatever ``time_limit`` is; the search stops there with what it found.
+    """
+    deadline = time.monotonic() + seconds
     catalog = worker_catalog(catalog_folders)
-    verdict = evaluate_transfer(model, mapping, catalog, planner, time_limit, val=val)
+    verdict = evaluate_transfer(model, mapping, catalog, planner, min(time_limit, seconds), val=val)
     if verdict.verdict is not Verdict.FAILS:
         return None
-    return search_repairs(model, mapping, catalog, verdict, planner=planner, time_limit=time_limit, val=val).as_dict()
+    left = max(0.0, deadline - time.monotonic())
+    search = search_repairs(
+        model, mapping, catalog, verdict, planner=planner, time_limit=time_limit, val=val, seconds=left
+    )
+    return search.as_dict()

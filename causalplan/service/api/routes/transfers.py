@@ -13,9 +13,6 @@ from causalplan.service.pool.explain_jobs import repair_job
 from causalplan.service.storage import crud
 from causalplan.transfer.verdict import invalid_verdict
 
-REPAIR_TIME_FACTOR = 10
-"""A repair search re-checks many edited models; most are decided without planning, the rest share cached solves."""
-
 router = APIRouter(
     prefix="/v1/transfers",
     tags=["transfers"],
@@ -61,8 +58,9 @@ def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDe
     repairs = None
     if body.repair and answer.data["verdict"] == "fails":
         repair_args = (submission.model, mapping.mapping, planner, time_limit, tuple(services.settings.catalog_folders))
-        seconds = REPAIR_TIME_FACTOR * time_limit + services.settings.solve_grace_seconds
-        repairs = services.answers.pool.run(repair_job, (*repair_args, body.validate_plan), seconds)
+        budget = services.settings.search_seconds  # its own, whatever time_limit is: it stops with what it found
+        seconds = budget + services.settings.solve_grace_seconds
+        repairs = services.answers.pool.run(repair_job, (*repair_args, body.validate_plan, budget), seconds)
     return TransferOut.model_validate(
         {
             **answer.data,
