@@ -238,6 +238,23 @@ class Settings(BaseSettings):
         default=10, ge=0, description="Jobs a client without a key may post a minute (0: no limit)."
     )
 
+    participant_jobs_in_flight: int = Field(
+        default=2, ge=1, description="Films a participant's pages may have queued or running at once."
+    )
+    address_jobs_in_flight: int = Field(
+        default=10,
+        ge=1,
+        description="Unfinished jobs of clients without a key from one address (its own jobs and its participants' "
+        "films) at once.",
+    )
+    anonymous_job_share: float = Field(
+        default=0.5,
+        gt=0,
+        le=1,
+        description="Share of max_queued_jobs the clients without a key (addresses, participants) may take together, "
+        "so API keys and the research token always find room.",
+    )
+
     @field_validator("dask_scheduler")
     @classmethod
     def _empty_scheduler_is_none(cls, value: str | None) -> str | None:

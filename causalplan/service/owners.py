@@ -6,7 +6,8 @@ A job's owner is stored on its row, one string per client:
   and is held only by the service's own cap (``max_queued_jobs``), not by a client's limits;
 - ``key:<first 16 hex digits of the key's SHA-256>``: an API key (``CAUSALPLAN_API_KEYS``),
   compared in constant time as the research token is (the key itself is never stored);
-- ``participant:<id>``: a participant's pages (their films of the robot);
+- ``participant:<id>``: a participant's pages (their films of the robot), capped per participant
+  and, with the address they come from, per address;
 - ``address:<client address>``: anyone else, by the address the throttles count
   (``deps.client_address``).
 
@@ -30,7 +31,7 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from causalplan.service.deps import Services, ServicesDep, client_address, is_research_token
 from causalplan.service.errors import NotAuthenticatedError, TooManyJobStartsError
 from causalplan.service.storage.jobs import MEGABYTE, OwnerLimits
-from causalplan.service.storage.records import MAX_OWNER_LENGTH
+from causalplan.service.storage.records import MAX_ADDRESS_LENGTH, MAX_OWNER_LENGTH
 from causalplan.service.storage.throttle import PerMinute
 from causalplan.settings import Settings
 
@@ -48,6 +49,8 @@ class JobOwner:
 
     id: str
     is_anonymous: bool = False
+    address: str | None = None
+    """Of a client without a key (an address, a participant's pages): the address it posts from."""
 
     @property
     def sees_every_job(self) -> bool:
@@ -65,14 +68,14 @@ def key_owner(key: str) -> str:
     return KEY_PREFIX + hashlib.sha256(key.encode()).hexdigest()[:KEY_ID_HEX_DIGITS]
 
 
-def participant_owner(participant_id: object) -> JobOwner:
-    """Return the owner of the jobs a participant's pages start."""
-    return JobOwner(f"{PARTICIPANT_PREFIX}{participant_id}")
+def participant_owner(participant_id: object, address: str | None = None) -> JobOwner:
+    """Return the owner of the jobs a participant's pages start (from ``address``: counted there too)."""
+    return JobOwner(f"{PARTICIPANT_PREFIX}{participant_id}", address=address)
 
 
 def address_owner(address: str) -> JobOwner:
     """Return the owner of the jobs of a client without a key, known by its address."""
-    return JobOwner(f"{ADDRESS_PREFIX}{address}"[:MAX_OWNER_LENGTH], is_anonymous=True)
+    return JobOwner(f"{ADDRESS_PREFIX}{address}"[:MAX_OWNER_LENGTH], is_anonymous=True, address=address)
 
 
 def owner_of_token(candidate: str, settings: Settings) -> JobOwner | None:
@@ -89,11 +92,25 @@ def owner_of_token(candidate: str, settings: Settings) -> JobOwner | None:
 
 
 def job_limits(owner: JobOwner, settings: Settings) -> OwnerLimits | None:
-    """Return what ``owner`` may hold: jobs in flight and bytes stored (smaller without a key; None: the operator's)."""
+    """Return what ``owner`` may hold: jobs in flight and bytes stored (smaller without a key; None: the operator's).
+
+    A client without a key (an address, a participant) is capped per address too, and shares
+    ``anonymous_job_share`` of the service's cap with every other such client.
+    """
     if owner.sees_every_job:
         return None
-    if owner.is_anonymous:
-        return OwnerLimits(settings.anonymous_jobs_in_flight, int(settings.anonymous_job_megabytes * MEGABYTE))
+    if owner.is_anonymous or owner.address is not None:
+        if owner.is_anonymous:
+            in_flight, megabytes = settings.anonymous_jobs_in_flight, settings.anonymous_job_megabytes
+        else:  # a participant's films: few at once, but a study's worth of them kept
+            in_flight, megabytes = settings.participant_jobs_in_flight, settings.job_megabytes
+        return OwnerLimits(
+            in_flight,
+            int(megabytes * MEGABYTE),
+            address=(owner.address or "")[:MAX_ADDRESS_LENGTH],
+            address_in_flight=settings.address_jobs_in_flight,
+            anonymous_share=settings.anonymous_job_share,
+        )
     return OwnerLimits(settings.jobs_in_flight, int(settings.job_megabytes * MEGABYTE))
 
 

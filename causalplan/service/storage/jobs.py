@@ -27,7 +27,7 @@ from enum import StrEnum
 from typing import Any, cast
 
 from sqlalchemy import CursorResult, Engine, and_, delete, func, or_, select, text, update
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session, aliased
 
 from causalplan.service.errors import (
     BodyTooLargeError,
@@ -44,8 +44,6 @@ MEGABYTE = 1_000_000
 """What a job's stored bytes are counted and told in."""
 MAX_ATTEMPTS = 3
 """Runs of a job whose replica stopped before finishing it, before it is given up as failed."""
-FIRST_KINDS = ("video",)
-"""Kinds a runner takes before older jobs of other kinds: a person is usually watching the page for a film."""
 
 
 class JobKind(StrEnum):
@@ -81,10 +79,19 @@ _JOBS_LOCK_ID = 0x6A6F6273
 
 @dataclass(frozen=True)
 class OwnerLimits:
-    """What one client may hold: jobs queued or running, and bytes stored (requests and results until they expire)."""
+    """What one client may hold: jobs queued or running, and bytes stored (requests and results until they expire).
+
+    ``address``: a client without a key (an address, a participant's pages) posting from it: its
+    job is anonymous work, stored with the address; all its address's anonymous jobs may be at
+    most ``address_in_flight`` unfinished, and anonymous jobs of every address together at most
+    ``anonymous_share`` of the service's cap, so keyed clients and the research token find room.
+    """
 
     in_flight: int
     stored_bytes: int
+    address: str | None = None
+    address_in_flight: int = 0
+    anonymous_share: float = 1.0
 
 
 def _changed(result: object) -> bool:
@@ -149,6 +156,27 @@ def _check_owner(session: Session, owner: str, limits: OwnerLimits, size: int, n
         )
 
 
+def _check_address(session: Session, limits: OwnerLimits, max_unfinished: int) -> None:
+    """Raise the 429 error when anonymous work (all of it, or its address's) is at its cap."""
+    unfinished = JobRecord.status.in_(UNFINISHED)
+    anonymous_cap = max(1, math.floor(max_unfinished * limits.anonymous_share))
+    anonymous = session.scalar(select(func.count()).where(unfinished, JobRecord.address.is_not(None)))
+    if (anonymous or 0) >= anonymous_cap:
+        raise TooManyJobsError(
+            f"Clients without a key have {anonymous} unfinished jobs, as many as they may together "
+            f"(the rest of the service's {max_unfinished} is kept for API keys); try again when some have finished.",
+            TRY_LATER_SECONDS,
+        )
+    if limits.address_in_flight:
+        from_here = session.scalar(select(func.count()).where(unfinished, JobRecord.address == limits.address))
+        if (from_here or 0) >= limits.address_in_flight:
+            raise TooManyJobsInFlightError(
+                f"Your address has {from_here} jobs queued or running (its films and its own jobs), as many as "
+                "it may: try again when one has finished.",
+                TRY_LATER_SECONDS,
+            )
+
+
 def create_job(
     engine: Engine,
     kind: str,
@@ -162,7 +190,8 @@ def create_job(
     """Store a new queued job of ``owner``.
 
     Refused (429, ``TryLaterError``) when the service has ``max_unfinished`` jobs queued or
-    running, or when ``owner`` would pass one of its ``limits`` (None: only the service's).
+    running, or when ``owner`` would pass one of its ``limits`` (None: only the service's),
+    its address's or the anonymous share of the service's cap (``OwnerLimits``).
     """
     stored = clean_json(request, "the job's request")
     size = json_size(stored)
@@ -175,10 +204,13 @@ def create_job(
                 TRY_LATER_SECONDS,
             )
         if limits is not None:
+            if limits.address is not None:
+                _check_address(session, limits, max_unfinished)
             _check_owner(session, owner, limits, size, now)
         record = JobRecord(
             id=uuid.uuid4(),
             owner=owner,
+            address=limits.address if limits is not None else None,
             kind=kind,
             status=JobStatus.QUEUED,
             request=stored,
@@ -296,9 +328,11 @@ def aware(value: datetime) -> datetime:
 def claim_job(
     engine: Engine, owner: str, lease_seconds: float, kinds: Sequence[str], keep_seconds: float = 86_400.0
 ) -> JobRecord | None:
-    """Take the oldest queued job of ``kinds``, or a running one whose lease has lapsed; None when there is none.
+    """Take a queued job of ``kinds``, or a running one whose lease has lapsed; None when there is none.
 
-    Jobs of ``FIRST_KINDS`` (films) come before older jobs of other kinds.
+    Round-robin across owners, whatever the kind: the job of the owner with the fewest jobs
+    running, then of the owner whose latest job started longest ago (never: first), then the
+    oldest. So one owner's many jobs (films from one address) never hold back another's.
 
     Only ``kinds`` (what this replica can do): during an upgrade, an older replica leaves a new
     kind to the newer ones. A job taken over for the ``MAX_ATTEMPTS``-th time is marked failed
@@ -316,7 +350,7 @@ def claim_job(
         for job_id, attempts in session.execute(
             select(JobRecord.id, JobRecord.attempts)
             .where(claimable)
-            .order_by(JobRecord.kind.not_in(FIRST_KINDS), JobRecord.created_at)
+            .order_by(*_round_robin(now), JobRecord.created_at)
             .limit(10)
         ).all():
             if attempts >= MAX_ATTEMPTS:
@@ -352,6 +386,18 @@ def claim_job(
             if _changed(taken):  # else another replica took it between the two statements
                 return session.get(JobRecord, job_id)
     return None
+
+
+def _round_robin(now: datetime) -> tuple[Any, ...]:
+    """Return the claim's order before age: fewest running jobs of the job's owner, then its longest wait."""
+    same = aliased(JobRecord)
+    running = (
+        select(func.count())
+        .where(same.owner == JobRecord.owner, same.status == JobStatus.RUNNING, same.lease_expires_at >= now)
+        .scalar_subquery()
+    )
+    latest_start = select(func.max(same.started_at)).where(same.owner == JobRecord.owner).scalar_subquery()
+    return running, latest_start.asc().nulls_first()
 
 
 def _mine(job_id: uuid.UUID, owner: str) -> Any:

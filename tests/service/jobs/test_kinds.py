@@ -371,16 +371,6 @@ def test_a_job_cancelled_through_another_replica_stops_its_worker(tmp_path: Path
         assert client.get(url).json()["status"] == "cancelled"
 
 
-def test_a_film_is_taken_before_older_jobs_of_other_kinds(tmp_path: Path) -> None:
-    engine = create_database_engine(sqlite_url(tmp_path))
-    upgrade(engine)
-    batch = store.create_job(engine, "batch", {"trials": "x"}, 1, 10, owner=TEST_CLIENT_OWNER).id
-    film = store.create_job(engine, "video", {"video": "mp4"}, 1, 10, owner=TEST_CLIENT_OWNER).id
-    first, second = (store.claim_job(engine, "replica", 30, ["batch", "video"]) for _ in range(2))
-    assert first is not None and second is not None and (first.id, second.id) == (film, batch)
-    engine.dispose()
-
-
 def test_a_participants_film_is_found_again_unless_it_failed(tmp_path: Path) -> None:
     engine = create_database_engine(sqlite_url(tmp_path))
     upgrade(engine)
