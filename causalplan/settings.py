@@ -23,6 +23,13 @@ MIN_WORKER_MEMORY_MB = 2560
 MIN_API_KEY_LENGTH = 16
 """Shortest API key ``api_keys`` takes: long enough that guessing, slowed to the research token's pace, is hopeless."""
 
+MIN_REQUEST_THREADS = 40
+"""anyio's own default number of worker threads, the least a server answers requests with."""
+SPARE_REQUEST_THREADS = 20
+"""Request threads beyond the solves that may run or wait, for the routes that do not solve."""
+BACKGROUND_THREADS = 4
+"""Threads of a server that use the database besides requests and job runners (the runner's poll, upkeep)."""
+
 IpNetwork = ipaddress.IPv4Network | ipaddress.IPv6Network
 
 
@@ -305,6 +312,16 @@ class Settings(BaseSettings):
     def max_in_flight(self) -> int:
         """Return how many solves may be running or waiting at once before requests get 429."""
         return self.planning_workers + self.queue_size
+
+    @property
+    def request_threads(self) -> int:
+        """Return how many requests the server answers at once in threads (each waiting solve holds one)."""
+        return max(MIN_REQUEST_THREADS, self.max_in_flight + SPARE_REQUEST_THREADS)
+
+    @property
+    def database_connections(self) -> int:
+        """Return how many threads may use the database at once: request threads, job runners, background threads."""
+        return self.request_threads + self.job_runners + BACKGROUND_THREADS
 
     def is_trusted_proxy(self, address: str) -> bool:
         """Return whether ``address`` (a peer's IP) is one of the operator's reverse proxies."""

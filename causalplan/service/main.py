@@ -68,7 +68,7 @@ _HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 413: "body_too_large
 def start_services(settings: Settings) -> Services:
     """Prepare the database (migrations), load the catalog and start the planner pool."""
     catalog = load_catalog(settings.catalog_folders)
-    engine = create_database_engine(settings.database_url)
+    engine = create_database_engine(settings.database_url, settings.database_connections)
     try:
         revision = upgrade(engine, settings.database_wait_seconds)
         pool = FairSharePool(settings)  # interactive requests take turns fairly, client by client
@@ -336,7 +336,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         services = await anyio.to_thread.run_sync(start_services, settings)
         # Each waiting solve holds one of anyio's worker threads; leave room for the other routes.
         limiter = anyio.to_thread.current_default_thread_limiter()
-        limiter.total_tokens = max(limiter.total_tokens, settings.max_in_flight + 20)
+        limiter.total_tokens = max(limiter.total_tokens, settings.request_threads)  # the database pool's size too
         app.state.services = services
         # What start-up made lives as long as the app: out of the collector's full passes.
         gc.collect()

@@ -234,17 +234,34 @@ def get_job(engine: Engine, job_id: uuid.UUID, now: datetime | None = None, *, o
     """
     now = now or utc_now()
     with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        _check_visible(session, job_id, owner, now)
         record = session.get(JobRecord, job_id)
-    if (
-        record is None
-        or (record.expires_at is not None and aware(record.expires_at) <= now)
-        or (owner is not None and record.owner != owner)
-    ):
-        raise JobNotFoundError(
-            f"There is no job {job_id}: it never existed, or it finished and its result has expired.",
-            details={"job_id": str(job_id)},
-        )
+    if record is None:  # deleted since it was looked at
+        raise _not_found(job_id)
     return record
+
+
+def _not_found(job_id: uuid.UUID) -> JobNotFoundError:
+    return JobNotFoundError(
+        f"There is no job {job_id}: it never existed, or it finished and its result has expired.",
+        details={"job_id": str(job_id)},
+    )
+
+
+def _check_visible(session: Session, job_id: uuid.UUID, owner: str | None, now: datetime) -> None:
+    """Raise JobNotFoundError unless the job exists, has not expired and is ``owner``'s (None: anyone's).
+
+    One small query of the job's owner and expiry, the same for a missing job and another
+    owner's: the request and result (megabytes, for a batch) are read only for the owner, so
+    a foreign job's 404 costs what a missing one's does and tells nothing of its size.
+    """
+    found = session.execute(select(JobRecord.owner, JobRecord.expires_at).where(JobRecord.id == job_id)).one_or_none()
+    if (
+        found is None
+        or (found.expires_at is not None and aware(found.expires_at) <= now)
+        or (owner is not None and found.owner != owner)
+    ):
+        raise _not_found(job_id)
 
 
 def find_job(engine: Engine, kind: str, field: str, value: str) -> JobRecord | None:
@@ -270,8 +287,8 @@ def get_job_file(engine: Engine, job_id: uuid.UUID, *, owner: str | None = None)
 
     JobNotFoundError when there is no such job, it has expired, or it is not ``owner``'s (``get_job``).
     """
-    get_job(engine, job_id, owner=owner)
     with Session(engine) as session, storage_errors(session):
+        _check_visible(session, job_id, owner, utc_now())
         row = session.execute(
             select(JobRecord.file_data, JobRecord.file_type).where(JobRecord.id == job_id)
         ).one_or_none()
@@ -296,9 +313,9 @@ def cancel_job(engine: Engine, job_id: uuid.UUID, keep_seconds: float, *, owner:
     JobFinishedError when the job has finished already (its result stays until it expires);
     JobNotFoundError as ``get_job`` (another ``owner``'s job is not touched).
     """
-    get_job(engine, job_id, owner=owner)
     now = utc_now()
     with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        _check_visible(session, job_id, owner, now)
         changed = session.execute(
             update(JobRecord)
             .where(JobRecord.id == job_id, JobRecord.status.in_(UNFINISHED))

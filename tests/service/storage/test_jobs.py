@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import uuid
 from collections.abc import Iterator
 
 import pytest
-from sqlalchemy import Engine
+from sqlalchemy import Engine, event
 
-from causalplan.service.errors import TooManyJobsError, TooManyJobsInFlightError
+from causalplan.service.errors import JobNotFoundError, TooManyJobsError, TooManyJobsInFlightError
 from causalplan.service.owners import address_owner, job_limits, key_owner, participant_owner
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.jobs import OwnerLimits
@@ -92,3 +93,28 @@ def test_films_are_capped_per_participant_and_per_address(engine: Engine) -> Non
         _queue(engine, own.id, limits=job_limits(own, settings))
     elsewhere = participant_owner("three", "198.51.100.3")
     _queue(engine, elsewhere.id, "video", job_limits(elsewhere, settings))
+
+
+def test_a_foreign_jobs_404_reads_no_more_than_a_missing_ones(engine: Engine) -> None:
+    big = store.create_job(engine, "batch", {"trials": "x" * 1_000_000}, 1, CAP, owner="key:owner").id
+    statements: list[str] = []
+
+    def record(_conn: object, _cursor: object, statement: str, *_: object) -> None:
+        statements.append(statement)
+
+    event.listen(engine, "before_cursor_execute", record)
+    try:
+        asked: dict[str, list[str]] = {}
+        for name, job_id in (("foreign", big), ("missing", uuid.uuid4())):
+            statements.clear()
+            for ask in (store.get_job, store.get_job_file):
+                with pytest.raises(JobNotFoundError):
+                    ask(engine, job_id, owner="key:stranger")
+            with pytest.raises(JobNotFoundError):
+                store.cancel_job(engine, job_id, 60, owner="key:stranger")
+            asked[name] = list(statements)
+    finally:
+        event.remove(engine, "before_cursor_execute", record)
+    assert asked["foreign"] == asked["missing"]  # the same statements: the same cost
+    assert not any("request" in statement for statement in asked["foreign"])  # never the big columns
+    assert store.get_job(engine, big, owner="key:owner").request["trials"] == "x" * 1_000_000
