@@ -245,6 +245,12 @@ class Settings(BaseSettings):
         default=10, ge=0, description="Jobs a client without a key may post a minute (0: no limit)."
     )
 
+    anonymous_record_hours: float = Field(
+        default=24.0,
+        gt=0,
+        description="Hours the models and trials a client without a key stores through plans, transfers, "
+        "explanations and POST /v1/models are kept (they belong to no experiment); then purged.",
+    )
     participant_jobs_in_flight: int = Field(
         default=2, ge=1, description="Films a participant's pages may have queued or running at once."
     )

@@ -106,7 +106,12 @@ CatalogDep = Annotated[Catalog, Depends(get_catalog)]
 SessionDep = Annotated[Session, Depends(get_session)]
 
 
+ALLOWANCE_STATE = "causalplan_allowance"
+"""Where the request's scope state holds its client's storage allowance (``fair_share.ClientMiddleware`` puts it)."""
+
+
 def get_client_ids(
+    request: Request,
     services: ServicesDep,
     x_participant_id: Annotated[
         str | None,
@@ -126,6 +131,8 @@ def get_client_ids(
 ) -> ClientIds:
     """Return who the client says it is; a study participant's id, or their pages' session, is not the client's to say.
 
+    With the storage allowance its stored models and trials count in (``owners.storage_allowance``).
+
     A participant's trials are attributed only by their own pages (``pages.participation``),
     so an anonymous request can never store a trial, or a model, under a participant.
     """
@@ -142,7 +149,8 @@ def get_client_ids(
                     "their work is stored only from their own participant pages.",
                     details={"header": "X-Participant-Id"},
                 )
-    return ClientIds(x_participant_id or None, x_session_id or None)
+    allowance = request.scope.get("state", {}).get(ALLOWANCE_STATE)
+    return ClientIds(x_participant_id or None, x_session_id or None, allowance)
 
 
 ClientIdsDep = Annotated[ClientIds, Depends(get_client_ids)]

@@ -157,6 +157,12 @@ class JobStorageFullError(TryLaterError):
     code = "job_storage_full"
 
 
+class StorageFullError(TryLaterError):
+    """One client's stored models, trials and jobs hold as many bytes as its allowance (``storage.allowance``)."""
+
+    code = "storage_full"
+
+
 class TooManyJobStartsError(TryLaterError):
     """One client posted more jobs this minute than it may."""
 

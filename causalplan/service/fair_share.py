@@ -38,9 +38,9 @@ from typing import Any, TypeVar
 from starlette.requests import Request
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from causalplan.service.deps import client_address
+from causalplan.service.deps import ALLOWANCE_STATE, client_address
 from causalplan.service.errors import QueueFullError, TooManyRequestsInFlightError
-from causalplan.service.owners import PARTICIPANT_PREFIX, address_owner, owner_of_token
+from causalplan.service.owners import PARTICIPANT_PREFIX, address_owner, owner_of_token, storage_allowance
 from causalplan.service.pool.pool import PlannerPool
 from causalplan.settings import Settings
 
@@ -77,7 +77,7 @@ def request_client(scope: Scope, settings: Settings) -> str:
 
 
 class ClientMiddleware:
-    """Name each HTTP request's client in ``current_client`` while the app answers it."""
+    """Name each HTTP request's client in ``current_client`` while the app answers it, and its storage allowance."""
 
     def __init__(self, app: ASGIApp, settings: Settings) -> None:
         self.app = app
@@ -87,7 +87,9 @@ class ClientMiddleware:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        token = current_client.set(request_client(scope, self.settings))
+        client = request_client(scope, self.settings)
+        scope.setdefault("state", {})[ALLOWANCE_STATE] = storage_allowance(client, self.settings)
+        token = current_client.set(client)
         try:
             await self.app(scope, receive, send)
         finally:

@@ -33,6 +33,7 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from causalplan.service.deps import Services, ServicesDep, client_address, is_research_token
 from causalplan.service.errors import NotAuthenticatedError, TooManyJobStartsError
+from causalplan.service.storage.allowance import Allowance
 from causalplan.service.storage.jobs import MEGABYTE, OwnerLimits
 from causalplan.service.storage.records import MAX_ADDRESS_LENGTH, MAX_OWNER_LENGTH
 from causalplan.service.storage.throttle import PerMinute
@@ -127,6 +128,23 @@ def job_limits(owner: JobOwner, settings: Settings) -> OwnerLimits | None:
             anonymous_share=settings.anonymous_job_share,
         )
     return OwnerLimits(settings.jobs_in_flight, int(settings.job_megabytes * MEGABYTE))
+
+
+def storage_allowance(owner: str, settings: Settings) -> Allowance | None:
+    """Return the storage allowance the models and trials ``owner``'s requests store count in.
+
+    The research token: no limit; a key: ``job_megabytes``, kept; an address:
+    ``anonymous_job_megabytes``, expiring after ``anonymous_record_hours`` (its rows belong to
+    no experiment). None for a participant's pages (their rows are their study's).
+    """
+    if owner == RESEARCH_OWNER:
+        return Allowance(owner, None, None)
+    if owner.startswith(KEY_PREFIX):
+        return Allowance(owner, int(settings.job_megabytes * MEGABYTE), None)
+    if owner.startswith(ADDRESS_PREFIX):
+        keep = settings.anonymous_record_hours * 3600
+        return Allowance(owner, int(settings.anonymous_job_megabytes * MEGABYTE), keep)
+    return None
 
 
 class JobStarts(PerMinute):

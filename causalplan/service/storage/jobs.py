@@ -16,17 +16,15 @@ no job, the same answer as a job that never existed.
 
 from __future__ import annotations
 
-import json
 import math
 import uuid
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from enum import StrEnum
 from typing import Any, cast
 
-from sqlalchemy import CursorResult, Engine, and_, delete, func, or_, select, text, update
+from sqlalchemy import CursorResult, Engine, and_, delete, func, or_, select, update
 from sqlalchemy.orm import Session, aliased
 
 from causalplan.service.errors import (
@@ -37,6 +35,7 @@ from causalplan.service.errors import (
     TooManyJobsError,
     TooManyJobsInFlightError,
 )
+from causalplan.service.storage.allowance import first_expiry, json_size, stored_bytes, take_write_lock
 from causalplan.service.storage.crud import clean_json, storage_errors
 from causalplan.service.storage.records import JobRecord, utc_now
 
@@ -73,8 +72,6 @@ UNFINISHED = (JobStatus.QUEUED, JobStatus.RUNNING)
 
 TRY_LATER_SECONDS = 30
 """``Retry-After`` when the service, or a client, has as many unfinished jobs as it may: about a short job."""
-_JOBS_LOCK_ID = 0x6A6F6273
-"""PostgreSQL advisory lock held while a job is counted and created: creators on every replica take turns."""
 
 
 @dataclass(frozen=True)
@@ -98,30 +95,8 @@ def _changed(result: object) -> bool:
     return cast(CursorResult[Any], result).rowcount == 1
 
 
-def json_size(value: object) -> int:
-    """Return the bytes ``value`` takes stored as JSON (as the JSON columns write it)."""
-    return len(json.dumps(value).encode("utf-8", "surrogatepass"))
-
-
 def _megabytes(size: float) -> str:
     return f"{size / MEGABYTE:.1f} MB"
-
-
-@contextmanager
-def _one_creator_at_a_time(engine: Engine) -> Iterator[Session]:
-    """Yield a session whose transaction holds the jobs' write lock until it ends (commit or rollback).
-
-    SQLite: ``BEGIN IMMEDIATE`` takes the database's write lock before the first count, so the
-    counts cannot go stale before the insert (other writers wait, up to the busy timeout).
-    PostgreSQL: a transaction-scoped advisory lock; each statement then sees every job committed
-    by the creators before (READ COMMITTED).
-    """
-    with Session(engine, expire_on_commit=False) as session, storage_errors(session):
-        if engine.dialect.name == "postgresql":
-            session.execute(text("SELECT pg_advisory_xact_lock(:id)"), {"id": _JOBS_LOCK_ID})
-        elif engine.dialect.name == "sqlite":
-            session.execute(text("BEGIN IMMEDIATE"))
-        yield session
 
 
 def _check_owner(session: Session, owner: str, limits: OwnerLimits, size: int, now: datetime) -> None:
@@ -141,17 +116,16 @@ def _check_owner(session: Session, owner: str, limits: OwnerLimits, size: int, n
             "stored in all.",
             details={"limit": limits.stored_bytes, "actual": size},
         )
-    live = or_(JobRecord.expires_at.is_(None), JobRecord.expires_at > now)
-    stored = session.scalar(select(func.sum(JobRecord.request_bytes + JobRecord.result_bytes)).where(mine, live))
-    if (stored or 0) + size > limits.stored_bytes:
-        first_to_go = session.scalar(select(func.min(JobRecord.expires_at)).where(mine, JobRecord.expires_at > now))
+    stored = stored_bytes(session, owner, now)  # its models and trials too: one allowance
+    if stored + size > limits.stored_bytes:
+        first_to_go = first_expiry(session, owner, now)
         wait = TRY_LATER_SECONDS
         if first_to_go is not None:
             wait = max(1, math.ceil((aware(first_to_go) - now).total_seconds()))
         raise JobStorageFullError(
-            f"Your jobs keep {_megabytes(stored or 0)} stored and this one adds {_megabytes(size)}; you may keep "
-            f"{_megabytes(limits.stored_bytes)}. A finished job is deleted when its result expires: try again "
-            f"in {wait} s.",
+            f"Your jobs, models and trials keep {_megabytes(stored)} stored and this one adds {_megabytes(size)}; "
+            f"you may keep {_megabytes(limits.stored_bytes)}. A finished job is deleted when its result expires: "
+            f"try again in {wait} s.",
             wait,
         )
 
@@ -195,7 +169,8 @@ def create_job(
     """
     stored = clean_json(request, "the job's request")
     size = json_size(stored)
-    with _one_creator_at_a_time(engine) as session:
+    with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        take_write_lock(session)
         now = utc_now()
         unfinished = session.scalar(select(func.count()).select_from(JobRecord).where(JobRecord.status.in_(UNFINISHED)))
         if (unfinished or 0) >= max_unfinished:

@@ -69,6 +69,11 @@ class ModelRecord(Base):
     canonical_hash: Mapped[str | None] = mapped_column(String(64), index=True)
     document: Mapped[dict[str, Any]] = mapped_column(JSON)
     report: Mapped[dict[str, Any]] = mapped_column(JSON)
+    owner: Mapped[str | None] = mapped_column(String(MAX_OWNER_LENGTH), index=True)
+    """The client whose storage allowance it counts in (``service.owners``); None: the pages' own, or older."""
+    stored_bytes: Mapped[int] = mapped_column(Integer, server_default="0")
+    expires_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), index=True)
+    """When it is purged (a client without a key, no experiment); None: kept."""
 
     trials: Mapped[list[TrialRecord]] = relationship(back_populates="model")
 
@@ -94,6 +99,10 @@ class TrialRecord(Base):
     cached: Mapped[bool] = mapped_column(Boolean, default=False)
     seconds: Mapped[float] = mapped_column(Float)
     result: Mapped[dict[str, Any]] = mapped_column(JSON)
+    owner: Mapped[str | None] = mapped_column(String(MAX_OWNER_LENGTH), index=True)
+    """As a model's: whose allowance it counts in; None: the pages' own, or older."""
+    stored_bytes: Mapped[int] = mapped_column(Integer, server_default="0")
+    expires_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), index=True)
 
     model: Mapped[ModelRecord] = relationship(back_populates="trials")
 

@@ -37,6 +37,9 @@ def _tune_sqlite(dbapi_connection: Any, _record: object) -> None:
     # commits (never corrupt the file). Use PostgreSQL where every commit must survive a power cut.
     # SQLite checkpoints by itself; journal_size_limit keeps the log file from staying as large
     # as its largest burst of writes.
+    # Incremental vacuum: a purge gives freed pages back to the file system (storage.allowance).
+    # It takes effect only in a file without tables yet; an older file is converted on its first purge.
+    cursor.execute("PRAGMA auto_vacuum=INCREMENTAL")
     cursor.execute("PRAGMA journal_mode=WAL")
     cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.execute("PRAGMA busy_timeout=10000")
