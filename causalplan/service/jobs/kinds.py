@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import io
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from causalplan.errors import InputFileError
 from causalplan.limits import LimitExceededError
-from causalplan.service.errors import InvalidRequestError
+from causalplan.service.errors import InvalidRequestError, WorkerCrashedError
 from causalplan.service.jobs.fit_estimation import prepare_fit_estimation, run_fit_estimation_job
 from causalplan.service.jobs.requests import (
     BatchRequest,
@@ -27,12 +28,12 @@ from causalplan.service.jobs.requests import (
     read_video_request,
 )
 from causalplan.service.jobs.video import prepare_video, run_video_job
-from causalplan.service.jobs.work import Kind, Progress, in_pool
+from causalplan.service.jobs.work import Kind, Progress, in_pool, in_pool_retried, worker_died
 from causalplan.service.pool import jobs as worker_jobs
 from causalplan.service.pool.catalog import worker_catalog
 from causalplan.service.storage.jobs import JobKind
 from causalplan.transfer import batch
-from causalplan.transfer.batch import Trial, TrialResult, repeated_ids, run_batch, trials_of_lines
+from causalplan.transfer.batch import Trial, TrialResult, repeated_ids, run_batch, trials_of_lines, undecided_results
 
 if TYPE_CHECKING:
     from causalplan.service.api.schemas.jobs import BatchJobIn, ConsensusJobIn, SimulationJobIn
@@ -132,16 +133,40 @@ def run_batch_job(request: BatchRequest, services: Services, progress: Progress)
             on_chunk=on_chunk,
         )
         return _summary(ordered)
+    options = (planner, time_limit, simulate, tuple(settings.catalog_folders), val)
+    return _summary(judge_in_chunks(services, progress, trials, judge_trials, options))
+
+
+def judge_in_chunks(
+    services: Services,
+    progress: Progress,
+    trials: list[Trial],
+    judge: Callable[..., list[TrialResult]],
+    options: tuple[Any, ...],
+) -> list[TrialResult]:
+    """Return ``judge(chunk, *options)`` of every chunk of ``trials``, run in the jobs' workers, in order.
+
+    A dead worker costs one chunk, not the job: the trials judged are kept, the chunk that was
+    running is run once more on a fresh worker, and if that worker dies too its trials are
+    ``undecided`` (reason ``worker_crashed``) and the batch goes on. ``options[1]`` is the time limit.
+    """
     results: list[TrialResult] = []
-    folders = tuple(settings.catalog_folders)
-    for start in range(0, total, CHUNK_SIZE):
+    per_trial = options[1] + services.settings.solve_grace_seconds
+    for start in range(0, len(trials), CHUNK_SIZE):
         chunk = trials[start : start + CHUNK_SIZE]
-        timeout = len(chunk) * (time_limit + settings.solve_grace_seconds)
-        results.extend(
-            in_pool(services, progress, judge_trials, (chunk, planner, time_limit, simulate, folders, val), timeout)
-        )
-        progress(len(results), total)
-    return _summary(results)
+        try:
+            judged = in_pool_retried(services, progress, judge, (chunk, *options), len(chunk) * per_trial)
+        except WorkerCrashedError as exc:
+            if not worker_died(exc):
+                raise
+            message = (
+                f"The worker judging trials {start + 1}-{start + len(chunk)} died twice "
+                f"(exit code {exc.details['exit_code']}); they were not judged."
+            )
+            judged = undecided_results(chunk, "worker_crashed", message)
+        results.extend(judged)
+        progress(len(results), len(trials))
+    return results
 
 
 # -- simulation ---------------------------------------------------------------------------------

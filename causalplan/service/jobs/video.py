@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from causalplan.service.jobs.requests import FitsFilmRequest, PlanFilmRequest, VideoRequest
-from causalplan.service.jobs.work import JobCancelledError, JobFile, Outcome, Progress, in_pool
+from causalplan.service.jobs.work import JobCancelledError, JobFile, Outcome, Progress, in_pool_retried
 from causalplan.service.pool.robot_jobs import CONTENT_TYPES, read_progress
 
 if TYPE_CHECKING:
@@ -124,17 +124,22 @@ def _film_in_worker(
     video = request.video
     if isinstance(request, FitsFilmRequest):
         args: tuple[Any, ...] = (request.object, tuple(request.fits), folders, video, size, progress_file)
-        made: dict[str, Any] = in_pool(services, progress, robot_film_job, args, settings.robot_seconds)
+        made: dict[str, Any] = in_pool_retried(services, progress, robot_film_job, args, settings.robot_seconds)
         return made
     inputs = _plan_inputs(request.stored(), services)
     args = (inputs.model, inputs.mapping, inputs.planner, inputs.time_limit, folders, request.validate_plan)
     timeout = inputs.time_limit + settings.solve_grace_seconds + settings.robot_seconds
-    data: dict[str, Any] = in_pool(services, progress, film_plan_job, (*args, video, size, progress_file), timeout)
+    data: dict[str, Any] = in_pool_retried(
+        services, progress, film_plan_job, (*args, video, size, progress_file), timeout
+    )
     return {**data, "model_id": request.model_id}
 
 
 def run_video_job(request: VideoRequest, services: Services, progress: Progress) -> Outcome:
-    """Film the plan, reporting frames drawn of frames expected; a cancel kills the worker (``in_pool``)."""
+    """Film the plan, reporting frames drawn of frames expected; a cancel kills the worker (``in_pool``).
+
+    A worker that dies while filming is replaced and the film made once more (``in_pool_retried``).
+    """
     progress(0, 1)
     with tempfile.TemporaryDirectory(prefix="causalplan-film-job-") as folder:
         progress_file = Path(folder) / "progress.json"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -9,12 +10,14 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from pydantic import BaseModel
 
-from causalplan.service.errors import QueueFullError
+from causalplan.service.errors import QueueFullError, WorkerCrashedError
 from causalplan.service.jobs.requests import JobRequest
 from causalplan.service.pool.pool import RunStoppedError
 
 if TYPE_CHECKING:
     from causalplan.service.deps import Services
+
+logger = logging.getLogger(__name__)
 
 T = TypeVar("T")
 B = TypeVar("B", bound=BaseModel)
@@ -88,3 +91,28 @@ def in_pool(
         except QueueFullError as exc:
             if progress.stop.wait(exc.retry_after):
                 raise JobCancelledError from None
+
+
+def worker_died(exc: WorkerCrashedError) -> bool:
+    """Return whether ``exc`` says the worker process died under the work (killed, out of memory, crashed).
+
+    Not when the pool closed (the server stopping: the job goes back to the queue) or no worker
+    could take the work: only a dead worker's error carries its ``exit_code``.
+    """
+    return "exit_code" in exc.details
+
+
+def in_pool_retried(
+    services: Services, progress: Progress, function: Callable[..., T], args: tuple[Any, ...], timeout: float
+) -> T:
+    """Return ``function(*args)`` as ``in_pool`` does; when its worker dies, run it once more on a fresh worker.
+
+    The pool replaces a dead worker at once. A second death raises its ``WorkerCrashedError``.
+    """
+    try:
+        return in_pool(services, progress, function, args, timeout)
+    except WorkerCrashedError as exc:
+        if not worker_died(exc) or progress.stop.is_set():
+            raise
+        logger.warning("a job worker died (exit code %s): its work runs once more", exc.details["exit_code"])
+        return in_pool(services, progress, function, args, timeout)

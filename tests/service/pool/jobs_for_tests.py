@@ -65,3 +65,34 @@ def start_a_session_then_hang(pid_file: str) -> dict[str, object]:
         handle.write(str(child.pid))
     time.sleep(3600)
     return {}
+
+
+def judge_or_die(trials: list[Any], *options: Any) -> list[Any]:
+    """Judge a batch chunk as ``judge_trials`` does, but kill this worker first for a trial named to.
+
+    Trial id ``die``: always; ``die-once``: only while the marker file (the last option) is absent,
+    which the first death leaves behind. The other options are ``judge_trials``'s.
+    """
+    import signal
+    from pathlib import Path
+
+    from causalplan.service.jobs.kinds import judge_trials
+
+    *judge_options, marker = options
+    ids = {trial.id for trial in trials}
+    if "die" in ids or ("die-once" in ids and not Path(marker).exists()):
+        Path(marker).touch()
+        os.kill(os.getpid(), signal.SIGKILL)
+    return judge_trials(trials, *judge_options)
+
+
+def die_once(marker: str, value: str) -> str:
+    """Kill this worker the first time (leaving ``marker``), return ``value`` after; ``marker`` '': always die."""
+    import signal
+    from pathlib import Path
+
+    if not marker or not Path(marker).exists():
+        if marker:
+            Path(marker).touch()
+        os.kill(os.getpid(), signal.SIGKILL)
+    return value
