@@ -12,7 +12,10 @@ client's ``client=(address, port)``, documentation addresses):
 2. wrong tokens: ``--addresses`` addresses send wrong bearer tokens as fast as they can for
    ``--token-seconds`` while a valid API key reads its own job and the research token lists
    trials; reports their answers by code;
-3. films: one address starts ``--participants`` demo participants (``POST /try``) and each asks
+3. storage: one client without a key posts plans with ~40 KB inline models (stored, then 422) from
+   4 threads for ``--growth-seconds``; reports the answers by code and the database's growth
+   (file and write-ahead log) against the client's allowance;
+4. films: one address starts ``--participants`` demo participants (``POST /try``) and each asks
    for films of distinct fit lists; then a keyed client posts a one-trial batch; reports the
    films' answers by code, the batch's answer and the seconds until it finished.
 
@@ -249,6 +252,51 @@ def film_flood(participants: int, films_each: int, wait_seconds: float) -> dict[
     }
 
 
+def _database_bytes(folder: Path) -> int:
+    return sum(path.stat().st_size for path in folder.glob("probe.sqlite3*"))
+
+
+def _big_model(number: int) -> dict[str, Any]:
+    """Return an invalid model of ~40 KB within the document limits: stored (as every inline model is), then a 422."""
+    labels = [f"function {number} {index} " + "x" * 60 for index in range(150)]
+    return {"object": "desk_lamp", "functions": {}, "rules": [f"{label} CAUSES light" for label in labels]}
+
+
+def storage_growth(seconds: float, threads: int) -> dict[str, Any]:
+    """One client without a key posts plans with big inline models from ``threads`` threads for ``seconds``."""
+    with tempfile.TemporaryDirectory(prefix="fair-share-") as name:
+        folder = Path(name)
+        settings = _settings(folder, planning_workers=1, job_runners=0)
+        with TestClient(create_app(settings), raise_server_exceptions=False) as app:
+            client = _at(app, FLOODER)
+            before = _database_bytes(folder)
+            answers: collections.Counter[str] = collections.Counter()
+            lock = threading.Lock()
+            numbers = itertools.count()
+            began = time.monotonic()
+
+            def post() -> None:
+                while time.monotonic() - began < seconds:
+                    answer = client.post("/v1/plans", json={"model": _big_model(next(numbers))})
+                    with lock:
+                        answers[_code(answer)] += 1
+
+            workers = [threading.Thread(target=post) for _ in range(threads)]
+            for worker in workers:
+                worker.start()
+            for worker in workers:
+                worker.join()
+            after = _database_bytes(folder)
+    allowance = settings.anonymous_job_megabytes
+    return {
+        "seconds": seconds,
+        "threads": threads,
+        "answers": dict(answers),
+        "allowance_mb": allowance,
+        "database_grew_mb": round((after - before) / 1e6, 1),
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="how long the repairs flood lasts")
@@ -259,10 +307,12 @@ def main() -> None:
     parser.add_argument("--participants", type=int, default=10, help="demo participants of the film flood")
     parser.add_argument("--films", type=int, default=10, help="films each participant asks for")
     parser.add_argument("--wait", type=float, default=300.0, help="longest wait for the keyed batch")
+    parser.add_argument("--growth-seconds", type=float, default=60.0, help="how long big models are posted")
     args = parser.parse_args()
     report = {
         "repair_flood": repair_flood(args.seconds, args.flood_threads, args.plans),
         "wrong_tokens": wrong_token_flood(args.token_seconds, args.addresses),
+        "storage": storage_growth(args.growth_seconds, 4),
         "films": film_flood(args.participants, args.films, args.wait),
     }
     print(json.dumps(report, indent=2))
