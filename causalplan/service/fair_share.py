@@ -32,7 +32,7 @@ from collections import Counter
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from starlette.requests import Request
@@ -103,7 +103,7 @@ class _Ticket:
     client: str
     order: int
     granted: bool = False
-    started: float = field(default=0.0)
+    started: float = 0.0
 
 
 class FairShare:
