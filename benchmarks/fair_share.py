@@ -14,7 +14,7 @@ client's ``client=(address, port)``, documentation addresses):
    trials; reports their answers by code;
 3. storage: one client without a key posts plans with ~40 KB inline models (stored, then 422) from
    4 threads for ``--growth-seconds``; reports the answers by code and the database's growth
-   (file and write-ahead log) against the client's allowance;
+   (file and write-ahead log, then the file after a checkpoint) against the client's allowance;
 4. films: one address starts ``--participants`` demo participants (``POST /try``) and each asks
    for films of distinct fit lists; then a keyed client posts a one-trial batch; reports the
    films' answers by code, the batch's answer and the seconds until it finished.
@@ -28,6 +28,7 @@ import argparse
 import collections
 import itertools
 import json
+import sqlite3
 import statistics
 import tempfile
 import threading
@@ -40,8 +41,11 @@ from typing import Any
 
 import yaml
 from fastapi.testclient import TestClient
+from sqlalchemy.orm import Session
 
 from causalplan.service.main import create_app
+from causalplan.service.storage.allowance import stored_bytes
+from causalplan.service.storage.records import utc_now
 from causalplan.settings import Settings
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -252,8 +256,15 @@ def film_flood(participants: int, films_each: int, wait_seconds: float) -> dict[
     }
 
 
-def _database_bytes(folder: Path) -> int:
-    return sum(path.stat().st_size for path in folder.glob("probe.sqlite3*"))
+def _database_bytes(folder: Path) -> tuple[int, int]:
+    """Return the bytes of the database file and of its write-ahead log (bounded by ``journal_size_limit``)."""
+    main, log = folder / "probe.sqlite3", folder / "probe.sqlite3-wal"
+    return main.stat().st_size, log.stat().st_size if log.exists() else 0
+
+
+def _checkpoint(folder: Path) -> None:
+    with sqlite3.connect(folder / "probe.sqlite3") as connection:
+        connection.execute("PRAGMA wal_checkpoint(TRUNCATE)")
 
 
 def _big_model(number: int) -> dict[str, Any]:
@@ -269,7 +280,7 @@ def storage_growth(seconds: float, threads: int) -> dict[str, Any]:
         settings = _settings(folder, planning_workers=1, job_runners=0)
         with TestClient(create_app(settings), raise_server_exceptions=False) as app:
             client = _at(app, FLOODER)
-            before = _database_bytes(folder)
+            before, _ = _database_bytes(folder)
             answers: collections.Counter[str] = collections.Counter()
             lock = threading.Lock()
             numbers = itertools.count()
@@ -286,15 +297,23 @@ def storage_growth(seconds: float, threads: int) -> dict[str, Any]:
                 worker.start()
             for worker in workers:
                 worker.join()
-            after = _database_bytes(folder)
-    allowance = settings.anonymous_job_megabytes
+            file_then, log_then = _database_bytes(folder)
+            _checkpoint(folder)  # the log's pages are in the file now: the file holds everything
+            file_after, _ = _database_bytes(folder)
+            with Session(app.app.state.services.engine) as session:  # type: ignore[attr-defined]
+                stored = stored_bytes(session, f"address:{FLOODER}", utc_now())
     return {
         "seconds": seconds,
         "threads": threads,
         "answers": dict(answers),
-        "allowance_mb": allowance,
-        "database_grew_mb": round((after - before) / 1e6, 1),
+        "allowance_mb": settings.anonymous_job_megabytes,
+        "rows_stored_mb": round(stored / 1e6, 1),
+        "file_and_log_grew_mb": round((file_then + log_then - before) / 1e6, 1),
+        "file_grew_mb_after_checkpoint": round((file_after - before) / 1e6, 1),
     }
+
+
+PROBES = ("repair_flood", "wrong_tokens", "storage", "films")
 
 
 def main() -> None:
@@ -308,13 +327,17 @@ def main() -> None:
     parser.add_argument("--films", type=int, default=10, help="films each participant asks for")
     parser.add_argument("--wait", type=float, default=300.0, help="longest wait for the keyed batch")
     parser.add_argument("--growth-seconds", type=float, default=60.0, help="how long big models are posted")
+    parser.add_argument(
+        "--probes", default=",".join(PROBES), help=f"which probes, comma-separated (default: {','.join(PROBES)})"
+    )
     args = parser.parse_args()
-    report = {
-        "repair_flood": repair_flood(args.seconds, args.flood_threads, args.plans),
-        "wrong_tokens": wrong_token_flood(args.token_seconds, args.addresses),
-        "storage": storage_growth(args.growth_seconds, 4),
-        "films": film_flood(args.participants, args.films, args.wait),
+    probes = {
+        "repair_flood": lambda: repair_flood(args.seconds, args.flood_threads, args.plans),
+        "wrong_tokens": lambda: wrong_token_flood(args.token_seconds, args.addresses),
+        "storage": lambda: storage_growth(args.growth_seconds, 4),
+        "films": lambda: film_flood(args.participants, args.films, args.wait),
     }
+    report = {name: probes[name]() for name in args.probes.split(",")}
     print(json.dumps(report, indent=2))
 
 

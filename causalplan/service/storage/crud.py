@@ -45,6 +45,9 @@ MAX_NESTING = 16
 """A model needs three levels (document, functions, labels); anything deeper is refused."""
 _SHORT_TEXT = 200
 MEGABYTE = 1_000_000
+ROW_OVERHEAD_BYTES = 4096
+"""What a stored row takes beyond its JSON, at most, about: its other columns, its index entries, and the
+slack of the last page of its overflow chain (SQLite's pages are 4 KB). Measured near 2 KB a model row."""
 TRY_LATER_SECONDS = 30
 """``Retry-After`` of a full allowance whose rows never expire (a key's): about when a job finishes."""
 
@@ -67,13 +70,18 @@ class ClientIds:
     allowance: Allowance | None = None
 
     def stored_fields(self, size: int) -> dict[str, Any]:
-        """Return the owner, size and expiry of a new record of ``size`` bytes this client stores."""
+        """Return the owner, size and expiry of a new record whose JSON takes ``size`` bytes, as this client stores it.
+
+        The size counted is the JSON's plus ``ROW_OVERHEAD_BYTES``, so an allowance bounds the
+        database's growth, not only its documents'.
+        """
+        counted = size + ROW_OVERHEAD_BYTES
         allowance = self.allowance
         if allowance is None:
-            return {"owner": None, "stored_bytes": size, "expires_at": None}
+            return {"owner": None, "stored_bytes": counted, "expires_at": None}
         keep = allowance.keep_seconds
         expires = utc_now() + timedelta(seconds=keep) if keep is not None else None
-        return {"owner": allowance.owner, "stored_bytes": size, "expires_at": expires}
+        return {"owner": allowance.owner, "stored_bytes": counted, "expires_at": expires}
 
 
 @contextmanager

@@ -322,9 +322,10 @@ def claim_job(
 ) -> JobRecord | None:
     """Take a queued job of ``kinds``, or a running one whose lease has lapsed; None when there is none.
 
-    Round-robin across owners, whatever the kind: the job of the owner with the fewest jobs
-    running, then of the owner whose latest job started longest ago (never: first), then the
-    oldest. So one owner's many jobs (films from one address) never hold back another's.
+    Round-robin across posters (an anonymous job's address, else its owner), whatever the kind:
+    the job of the poster with the fewest jobs running, then of the poster whose latest job
+    started longest ago (never: first), then the oldest. So one address's many films (of many
+    participants) never hold back a keyed client's batch by more than one job.
 
     Only ``kinds`` (what this replica can do): during an upgrade, an older replica leaves a new
     kind to the newer ones. A job taken over for the ``MAX_ATTEMPTS``-th time is marked failed
@@ -381,14 +382,20 @@ def claim_job(
 
 
 def _round_robin(now: datetime) -> tuple[Any, ...]:
-    """Return the claim's order before age: fewest running jobs of the job's owner, then its longest wait."""
+    """Return the claim's order before age: fewest running jobs of the job's poster, then its longest wait.
+
+    The poster is the job's address for anonymous work (so the films of many participants from
+    one address take one turn between them), else its owner (a key, the research token).
+    """
     same = aliased(JobRecord)
+    poster = func.coalesce(JobRecord.address, JobRecord.owner)
+    same_poster = func.coalesce(same.address, same.owner) == poster
     running = (
         select(func.count())
-        .where(same.owner == JobRecord.owner, same.status == JobStatus.RUNNING, same.lease_expires_at >= now)
+        .where(same_poster, same.status == JobStatus.RUNNING, same.lease_expires_at >= now)
         .scalar_subquery()
     )
-    latest_start = select(func.max(same.started_at)).where(same.owner == JobRecord.owner).scalar_subquery()
+    latest_start = select(func.max(same.started_at)).where(same_poster).scalar_subquery()
     return running, latest_start.asc().nulls_first()
 
 

@@ -48,6 +48,19 @@ def test_the_runner_takes_jobs_round_robin_across_owners(engine: Engine) -> None
     assert store.claim_job(engine, "replica", 30, ["batch", "video", "simulation"]) is None
 
 
+def test_the_films_of_many_participants_from_one_address_take_one_turn(engine: Engine) -> None:
+    settings = Settings(max_queued_jobs=CAP, participant_jobs_in_flight=100, address_jobs_in_flight=100)
+    films = []
+    for number in range(4):
+        participant = participant_owner(f"p{number}", "203.0.113.5")
+        films.append(_queue(engine, participant.id, "video", job_limits(participant, settings)))
+    keyed = _queue(engine, key_owner(API_KEY))  # posted after every film
+    first = store.claim_job(engine, "replica", 30, ["batch", "video"])
+    second = store.claim_job(engine, "replica", 30, ["batch", "video"])
+    assert first is not None and second is not None
+    assert (str(first.id), str(second.id)) == (films[0], keyed)
+
+
 def test_an_owner_with_a_job_running_waits_behind_one_without(engine: Engine) -> None:
     first = _queue(engine, "address:a")
     second = _queue(engine, "address:a")
