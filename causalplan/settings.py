@@ -102,6 +102,13 @@ class Settings(BaseSettings):
         description="Interactive planner requests (plans, transfers, repairs, explanations, pictures, a participant's "
         "robot runs) one client may have running or waiting at once; one more gets 429 (service.fair_share).",
     )
+    address_requests_in_flight: int = Field(
+        default=16,
+        ge=1,
+        le=1000,
+        description="Interactive planner requests of the participants of one address (their pages' robot runs, "
+        "plans and verdicts) running or waiting at once; they share one client's share of the workers.",
+    )
     client_workers: int = Field(
         default=0,
         ge=0,

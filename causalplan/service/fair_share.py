@@ -7,6 +7,9 @@ explanations, pictures, the robot runs a participant waits for) takes its turn h
   more is refused at once (429 ``too_many_requests_in_flight``, ``Retry-After``);
 - a client may hold at most ``client_workers`` workers at once (by default all but one), so
   with two or more workers one client alone never takes them all;
+- a participant's pages count per participant and per address: the participants of one
+  address share one share of the workers, and may have ``address_requests_in_flight`` requests
+  running or waiting together (so demo participants made by the dozen take one share);
 - when a worker frees, it goes to the waiting client that holds the fewest workers, and among
   those to the one served longest ago (round-robin; a client's own requests in arrival order),
   never to the next request of a client over its share. So another client's plan waits
@@ -53,6 +56,8 @@ PAGES_PREFIX = "/p/"
 
 current_client: ContextVar[str] = ContextVar("causalplan_client", default=SERVICE_CLIENT)
 """The client of the request this code runs for (set by ``ClientMiddleware``; copied into route threads)."""
+current_address: ContextVar[str | None] = ContextVar("causalplan_address", default=None)
+"""A participant's address (``address:<ip>``): its participants share one share and one cap; None for others."""
 
 
 def request_client(scope: Scope, settings: Settings) -> str:
@@ -89,18 +94,24 @@ class ClientMiddleware:
             return
         client = request_client(scope, self.settings)
         scope.setdefault("state", {})[ALLOWANCE_STATE] = storage_allowance(client, self.settings)
-        token = current_client.set(client)
+        address = None
+        if client.startswith(PARTICIPANT_PREFIX):
+            address = address_owner(client_address(Request(scope), self.settings)).id
+        token, address_token = current_client.set(client), current_address.set(address)
         try:
             await self.app(scope, receive, send)
         finally:
+            current_address.reset(address_token)
             current_client.reset(token)
 
 
 @dataclass(eq=False)
 class _Ticket:
-    """One request waiting for, or holding, a worker."""
+    """One request waiting for, or holding, a worker; ``sharer``: whose share it takes (its address's, or its own)."""
 
     client: str
+    sharer: str
+    address: str | None
     order: int
     granted: bool = False
     started: float = 0.0
@@ -110,7 +121,9 @@ class FairShare:
     """Turns on ``workers`` workers, shared fairly between clients (see the module's docstring).
 
     ``queue_size``: requests of all clients together that may wait (then 429 ``queue_full``);
-    ``wait_seconds``: the longest wait for a turn (then 429 ``queue_full``).
+    ``wait_seconds``: the longest wait for a turn (then 429 ``queue_full``). A request with an
+    address (a participant's) takes its address's share of the workers, and the address may
+    have at most ``address_requests_in_flight`` of them running or waiting.
     """
 
     def __init__(
@@ -120,6 +133,7 @@ class FairShare:
         workers_per_client: int,
         queue_size: int,
         wait_seconds: float,
+        address_requests_in_flight: int | None = None,
     ) -> None:
         if min(workers, requests_in_flight, workers_per_client) < 1:
             raise ValueError("workers, requests_in_flight and workers_per_client must be positive")
@@ -128,10 +142,11 @@ class FairShare:
         self.workers_per_client = min(workers_per_client, workers)
         self.queue_size = queue_size
         self.wait_seconds = wait_seconds
+        self.address_requests_in_flight = address_requests_in_flight or requests_in_flight
         self._lock = threading.Condition()
         self._waiting: list[_Ticket] = []
         self._running: Counter[str] = Counter()
-        self._in_flight: Counter[str] = Counter()
+        self._in_flight: Counter[str] = Counter()  # by client, and by address for participants' requests
         self._orders = itertools.count()
         self._grants = itertools.count()
         self._last_grant: dict[str, int] = {}  # client -> the number of its latest turn (round-robin)
@@ -156,21 +171,22 @@ class FairShare:
         return max(1, math.ceil(self._seconds_per_turn * turns))
 
     @contextmanager
-    def turn(self, client: str) -> Iterator[None]:
+    def turn(self, client: str, address: str | None = None) -> Iterator[None]:
         """Wait for ``client``'s fair turn on a worker, hold it in the block, then pass it on.
 
+        ``address``: a participant's, whose participants share one share of the workers.
         Raises ``TooManyRequestsInFlightError`` when ``client`` has ``requests_in_flight``
-        requests already, and ``QueueFullError`` when the queue is full or no turn came within
-        ``wait_seconds``.
+        requests already (its address ``address_requests_in_flight``), and ``QueueFullError``
+        when the queue is full or no turn came within ``wait_seconds``.
         """
-        ticket = self._enter(client)
+        ticket = self._enter(client, address)
         try:
             self._wait_for(ticket)
             yield
         finally:
             self._leave(ticket)
 
-    def _enter(self, client: str) -> _Ticket:
+    def _enter(self, client: str, address: str | None) -> _Ticket:
         with self._lock:
             count = self._in_flight[client]
             if count >= self.requests_in_flight:
@@ -180,6 +196,13 @@ class FairShare:
                     f"try again in {retry} s, or when one has been answered.",
                     retry,
                 )
+            if address is not None and self._in_flight[address] >= self.address_requests_in_flight:
+                retry = self._retry_after(address)
+                raise TooManyRequestsInFlightError(
+                    f"Your address has {self._in_flight[address]} planner requests of participants running or "
+                    f"waiting, as many as it may at once: try again in {retry} s.",
+                    retry,
+                )
             if len(self._waiting) >= self.queue_size and sum(self._running.values()) >= self.workers:
                 retry = max(1, math.ceil(self._seconds_per_turn * len(self._waiting) / self.workers))
                 raise QueueFullError(
@@ -187,8 +210,10 @@ class FairShare:
                     f"waiting. Try again in {retry} s.",
                     retry,
                 )
-            ticket = _Ticket(client, next(self._orders))
+            ticket = _Ticket(client, address or client, address, next(self._orders))
             self._in_flight[client] += 1
+            if address is not None:
+                self._in_flight[address] += 1
             self._waiting.append(ticket)
             self._dispatch()
             return ticket
@@ -209,14 +234,15 @@ class FairShare:
 
     def _leave(self, ticket: _Ticket) -> None:
         with self._lock:
-            self._in_flight[ticket.client] -= 1
-            if not self._in_flight[ticket.client]:
-                del self._in_flight[ticket.client]
-                self._last_grant.pop(ticket.client, None)
+            for counted in {ticket.client, ticket.sharer}:
+                self._in_flight[counted] -= 1
+                if not self._in_flight[counted]:
+                    del self._in_flight[counted]
+                    self._last_grant.pop(counted, None)
             if ticket.granted:
-                self._running[ticket.client] -= 1
-                if not self._running[ticket.client]:
-                    del self._running[ticket.client]
+                self._running[ticket.sharer] -= 1
+                if not self._running[ticket.sharer]:
+                    del self._running[ticket.sharer]
                 held = time.monotonic() - ticket.started
                 self._seconds_per_turn = 0.8 * self._seconds_per_turn + 0.2 * held
             else:
@@ -227,15 +253,15 @@ class FairShare:
         """Grant free workers to waiting requests: fewest held first, then the client served longest ago (lock held)."""
         granted = False
         while sum(self._running.values()) < self.workers:
-            eligible = [t for t in self._waiting if self._running[t.client] < self.workers_per_client]
+            eligible = [t for t in self._waiting if self._running[t.sharer] < self.workers_per_client]
             if not eligible:
                 break
-            ticket = min(eligible, key=lambda t: (self._running[t.client], self._last_grant.get(t.client, -1), t.order))
-            self._last_grant[ticket.client] = next(self._grants)
+            ticket = min(eligible, key=lambda t: (self._running[t.sharer], self._last_grant.get(t.sharer, -1), t.order))
+            self._last_grant[ticket.sharer] = next(self._grants)
             self._waiting.remove(ticket)
             ticket.granted = True
             ticket.started = time.monotonic()
-            self._running[ticket.client] += 1
+            self._running[ticket.sharer] += 1
             granted = True
         if granted:
             self._lock.notify_all()
@@ -246,7 +272,12 @@ def fair_share_of(settings: Settings) -> FairShare:
     workers = settings.planning_workers
     per_client = settings.client_workers or max(1, workers - 1)
     return FairShare(
-        workers, settings.client_requests_in_flight, per_client, settings.queue_size, settings.queue_wait_seconds
+        workers,
+        settings.client_requests_in_flight,
+        per_client,
+        settings.queue_size,
+        settings.queue_wait_seconds,
+        settings.address_requests_in_flight,
     )
 
 
@@ -268,5 +299,5 @@ class FairSharePool(PlannerPool):
         stop: threading.Event | None = None,
     ) -> T:
         """Run ``function(*args)`` as ``PlannerPool.run`` does, once the request's client has its turn."""
-        with self.fair_share.turn(current_client.get()):
+        with self.fair_share.turn(current_client.get(), current_address.get()):
             return super().run(function, args, timeout, meanwhile, stop)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Iterator
-from contextlib import ExitStack, contextmanager
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -30,17 +30,17 @@ from tests.service.fixtures import (
 class Holder:
     """A thread that takes ``client``'s turn and holds it until released; ``granted`` is set once it has it."""
 
-    def __init__(self, share: FairShare, client: str, log: list[str] | None = None) -> None:
+    def __init__(self, share: FairShare, client: str, log: list[str] | None = None, address: str | None = None) -> None:
         self.granted = threading.Event()
         self.release = threading.Event()
         self.error: Exception | None = None
-        self._share, self._client, self._log = share, client, log
+        self._share, self._client, self._log, self._address = share, client, log, address
         self._thread = threading.Thread(target=self._run)
         self._thread.start()
 
     def _run(self) -> None:
         try:
-            with self._share.turn(self._client):
+            with self._share.turn(self._client, self._address):
                 if self._log is not None:
                     self._log.append(self._client)
                 self.granted.set()
@@ -52,6 +52,14 @@ class Holder:
     def done(self) -> None:
         self.release.set()
         self._thread.join(30)
+
+
+def finish(*holders: Holder) -> None:
+    """Release every holder, then wait for each (one waiting for its turn gets it as the others leave)."""
+    for holder in holders:
+        holder.release.set()
+    for holder in holders:
+        holder.done()
 
 
 def waiting_for(share: FairShare, count: int) -> None:
@@ -106,8 +114,7 @@ def test_past_its_limit_a_client_is_refused_with_retry_after() -> None:
     assert refused.value.headers == {"Retry-After": str(refused.value.retry_after)}
     other = Holder(share, "B")  # another client is not refused
     waiting_for(share, 2)
-    for holder in (*holders, other):
-        holder.done()
+    finish(*holders, other)
     assert other.error is None
 
 
@@ -126,6 +133,32 @@ def test_a_full_queue_and_a_long_wait_are_queue_full() -> None:
     assert impatient.stats() == {"running": 1, "waiting": 0, "clients": 1}
     for each in (first, second, holder):
         each.done()
+
+
+def test_the_participants_of_one_address_share_one_share_and_one_cap() -> None:
+    share = FairShare(
+        workers=2,
+        requests_in_flight=4,
+        workers_per_client=1,
+        queue_size=16,
+        wait_seconds=30,
+        address_requests_in_flight=2,
+    )
+    flood = "address:203.0.113.5"
+    first = Holder(share, "participant:a", address=flood)
+    assert first.granted.wait(30)
+    second = Holder(share, "participant:b", address=flood)  # another participant, the same address
+    waiting_for(share, 1)
+    with pytest.raises(TooManyRequestsInFlightError, match="Your address"), share.turn("participant:c", flood):
+        pass
+    other = Holder(share, "address:198.51.100.8")
+    assert other.granted.wait(30), "the free worker went to another client, not to the address's second participant"
+    assert not second.granted.is_set()
+    first.done()
+    assert second.granted.wait(30)
+    for holder in (second, other):
+        holder.done()
+    assert share.stats() == {"running": 0, "waiting": 0, "clients": 0}
 
 
 def test_the_settings_give_each_client_all_workers_but_one() -> None:
@@ -154,13 +187,13 @@ def test_the_client_is_the_key_the_participant_or_the_address() -> None:
 @contextmanager
 def turns_held(share: FairShare, client: str, count: int) -> Iterator[None]:
     """Hold ``count`` of ``client``'s turns (running or waiting) during the block."""
-    with ExitStack() as stack:
-        holders = [Holder(share, client) for _ in range(count)]
-        for holder in holders:
-            stack.callback(holder.done)
+    holders = [Holder(share, client) for _ in range(count)]
+    try:
         with share._lock:
             assert share._lock.wait_for(lambda: share._in_flight[client] == count, 30)
         yield
+    finally:
+        finish(*holders)
 
 
 def test_a_client_at_its_limit_gets_429_and_others_are_answered(tmp_path: Path) -> None:
