@@ -23,6 +23,13 @@ MIN_WORKER_MEMORY_MB = 2560
 MIN_API_KEY_LENGTH = 16
 """Shortest API key ``api_keys`` takes: long enough that guessing, slowed to the research token's pace, is hopeless."""
 
+MIN_REQUEST_THREADS = 40
+"""anyio's own default number of worker threads, the least a server answers requests with."""
+SPARE_REQUEST_THREADS = 20
+"""Request threads beyond the solves that may run or wait, for the routes that do not solve."""
+BACKGROUND_THREADS = 4
+"""Threads of a server that use the database besides requests and job runners (the runner's poll, upkeep)."""
+
 IpNetwork = ipaddress.IPv4Network | ipaddress.IPv6Network
 
 
@@ -88,6 +95,33 @@ class Settings(BaseSettings):
     planning_workers: int = Field(default=2, ge=1, le=64, description="Planner worker processes.")
     queue_size: int = Field(default=16, ge=0, le=1000, description="Solves that may wait for a free worker.")
     queue_wait_seconds: float = Field(default=120.0, gt=0, description="Longest wait for a free worker.")
+    client_requests_in_flight: int = Field(
+        default=4,
+        ge=1,
+        le=1000,
+        description="Interactive planner requests (plans, transfers, repairs, explanations, pictures, a participant's "
+        "robot runs) one client may have running or waiting at once; one more gets 429 (service.fair_share).",
+    )
+    address_requests_in_flight: int = Field(
+        default=16,
+        ge=1,
+        le=1000,
+        description="Interactive planner requests of the participants of one address (their pages' robot runs, "
+        "plans and verdicts) running or waiting at once; they share one client's share of the workers.",
+    )
+    client_workers: int = Field(
+        default=0,
+        ge=0,
+        le=64,
+        description="Planner workers one client may hold at once; 0: all but one (at least one), so one client "
+        "alone never takes every worker.",
+    )
+    search_seconds: float = Field(
+        default=10.0,
+        gt=0,
+        le=3600,
+        description="Seconds a repair search may take, whatever the time_limit: it stops there with what it found.",
+    )
     default_time_limit: float = Field(default=30.0, gt=0, description="Seconds per solve when none is asked for.")
     max_time_limit: float = Field(default=60.0, gt=0, description="The largest time_limit a request may ask for.")
     solve_grace_seconds: float = Field(
@@ -218,6 +252,29 @@ class Settings(BaseSettings):
         default=10, ge=0, description="Jobs a client without a key may post a minute (0: no limit)."
     )
 
+    anonymous_record_hours: float = Field(
+        default=24.0,
+        gt=0,
+        description="Hours the models and trials a client without a key stores through plans, transfers, "
+        "explanations and POST /v1/models are kept (they belong to no experiment); then purged.",
+    )
+    participant_jobs_in_flight: int = Field(
+        default=2, ge=1, description="Films a participant's pages may have queued or running at once."
+    )
+    address_jobs_in_flight: int = Field(
+        default=10,
+        ge=1,
+        description="Unfinished jobs of clients without a key from one address (its own jobs and its participants' "
+        "films) at once.",
+    )
+    anonymous_job_share: float = Field(
+        default=0.5,
+        gt=0,
+        le=1,
+        description="Share of max_queued_jobs the clients without a key (addresses, participants) may take together, "
+        "so API keys and the research token always find room.",
+    )
+
     @field_validator("dask_scheduler")
     @classmethod
     def _empty_scheduler_is_none(cls, value: str | None) -> str | None:
@@ -268,6 +325,16 @@ class Settings(BaseSettings):
     def max_in_flight(self) -> int:
         """Return how many solves may be running or waiting at once before requests get 429."""
         return self.planning_workers + self.queue_size
+
+    @property
+    def request_threads(self) -> int:
+        """Return how many requests the server answers at once in threads (each waiting solve holds one)."""
+        return max(MIN_REQUEST_THREADS, self.max_in_flight + SPARE_REQUEST_THREADS)
+
+    @property
+    def database_connections(self) -> int:
+        """Return how many threads may use the database at once: request threads, job runners, background threads."""
+        return self.request_threads + self.job_runners + BACKGROUND_THREADS
 
     def is_trusted_proxy(self, address: str) -> bool:
         """Return whether ``address`` (a peer's IP) is one of the operator's reverse proxies."""

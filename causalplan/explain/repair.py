@@ -11,6 +11,7 @@ a simulation with one another, both cached.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from enum import StrEnum
@@ -93,11 +94,15 @@ class Repair:
 
 @dataclass(frozen=True)
 class RepairSearch:
-    """Every minimal repair found (smallest first), how many edit sets were checked, and the limit searched to."""
+    """Every minimal repair found (smallest first), how many edit sets were checked, and the limit searched to.
+
+    ``complete``: False when the search stopped at its time budget before checking every edit set.
+    """
 
     repairs: tuple[Repair, ...]
     checked: int
     max_edits: int
+    complete: bool = True
 
     def shown(self, limit: int = SHOWN) -> tuple[Repair, ...]:
         return self.repairs[:limit]
@@ -112,6 +117,7 @@ class RepairSearch:
             "by_size": self.by_size(),
             "checked": self.checked,
             "max_edits": self.max_edits,
+            "complete": self.complete,
             "repairs": [repair.as_dict() for repair in self.shown(limit)],
         }
 
@@ -204,12 +210,16 @@ def search_repairs(
     time_limit: float = DEFAULT_TIME_LIMIT,
     simulate: bool = True,
     val: bool = True,
+    seconds: float | None = None,
 ) -> RepairSearch:
     """Return the minimal edit sets (up to ``max_edits`` edits) that make ``model`` transfer through ``mapping``.
 
     ``verdict`` is the failed verdict (computed when not given); a model that already
-    transfers needs no repair, and the search is empty.
+    transfers needs no repair, and the search is empty. ``seconds``: the search's budget,
+    whatever ``time_limit`` is; each check gets at most what is left of it, and the search
+    stops with what it found (``complete`` False) once it is spent.
     """
+    deadline = time.monotonic() + seconds if seconds is not None else None
     verdict = verdict or evaluate_transfer(model, mapping, catalog, planner, time_limit, simulate, val=val)
     if verdict.verdict is not Verdict.FAILS:
         return RepairSearch((), 0, max_edits)
@@ -223,14 +233,21 @@ def search_repairs(
     found: list[Repair] = []
     working: list[frozenset[Edit]] = []
     checked = 0
+    complete = True
     for size in range(1, max_edits + 1):
         for chosen in _edit_sets(edits, size, working):
             edited = apply_edits(model, mapping, chosen)
             if edited is None:
                 continue
+            limit = time_limit if deadline is None else min(time_limit, deadline - time.monotonic())
+            if limit <= 0:
+                complete = False
+                break
             checked += 1
-            result = evaluate_transfer(*edited, catalog, planner, time_limit, simulate, val=val)
+            result = evaluate_transfer(*edited, catalog, planner, limit, simulate, val=val)
             if result.verdict is Verdict.TRANSFERS:
                 found.append(Repair(chosen, result))
+        if not complete:
+            break
         working = [frozenset(repair.edits) for repair in found]
-    return RepairSearch(tuple(sorted(found, key=lambda r: _rank(r, missing))), checked, max_edits)
+    return RepairSearch(tuple(sorted(found, key=lambda r: _rank(r, missing))), checked, max_edits, complete)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ipaddress
 import secrets
 import threading
 import uuid
@@ -103,7 +104,12 @@ CatalogDep = Annotated[Catalog, Depends(get_catalog)]
 SessionDep = Annotated[Session, Depends(get_session)]
 
 
+ALLOWANCE_STATE = "causalplan_allowance"
+"""Where the request's scope state holds its client's storage allowance (``fair_share.ClientMiddleware`` puts it)."""
+
+
 def get_client_ids(
+    request: Request,
     services: ServicesDep,
     x_participant_id: Annotated[
         str | None,
@@ -123,6 +129,8 @@ def get_client_ids(
 ) -> ClientIds:
     """Return who the client says it is; a study participant's id, or their pages' session, is not the client's to say.
 
+    With the storage allowance its stored models and trials count in (``owners.storage_allowance``).
+
     A participant's trials are attributed only by their own pages (``pages.participation``),
     so an anonymous request can never store a trial, or a model, under a participant.
     """
@@ -139,7 +147,8 @@ def get_client_ids(
                     "their work is stored only from their own participant pages.",
                     details={"header": "X-Participant-Id"},
                 )
-    return ClientIds(x_participant_id or None, x_session_id or None)
+    allowance = request.scope.get("state", {}).get(ALLOWANCE_STATE)
+    return ClientIds(x_participant_id or None, x_session_id or None, allowance)
 
 
 ClientIdsDep = Annotated[ClientIds, Depends(get_client_ids)]
@@ -157,16 +166,27 @@ def client_address(request: Request, settings: Settings) -> str:
     """Return the client's address: the peer's, or what X-Forwarded-For says when the peer is a trusted proxy.
 
     Of the forwarded chain, the last address that is not itself a trusted proxy is the client
-    (the ones before it are whatever the client chose to send). Empty when unknown (a Unix socket).
+    (the ones before it are whatever the client chose to send). Each hop is read as an IP
+    address, written in its canonical form; a hop that is not one (a name, text, a port) is
+    ignored, so a made-up value can never name a client. Empty when unknown (a Unix socket).
     """
     peer = request.client.host if request.client is not None else ""
     if not settings.is_trusted_proxy(peer):
         return peer
-    chain = [hop.strip() for value in request.headers.getlist("x-forwarded-for") for hop in value.split(",")]
+    chain = [hop for value in request.headers.getlist("x-forwarded-for") for hop in value.split(",")]
     for hop in reversed(chain):
-        if hop and not settings.is_trusted_proxy(hop):
-            return hop
+        address = ip_address_or_none(hop)
+        if address is not None and not settings.is_trusted_proxy(address):
+            return address
     return peer
+
+
+def ip_address_or_none(text: str) -> str | None:
+    """Return ``text`` as an IP address in canonical form, or None when it is not one."""
+    try:
+        return str(ipaddress.ip_address(text.strip()))
+    except ValueError:
+        return None
 
 
 def check_research_token(candidate: str, request: Request, services: Services) -> bool:

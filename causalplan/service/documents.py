@@ -285,6 +285,7 @@ class PlanInputs:
     mapping_report: Report | None
     planner: str
     time_limit: float
+    client: ClientIds
 
     @property
     def warnings(self) -> list[Diagnostic]:
@@ -294,7 +295,7 @@ class PlanInputs:
     def store(self, services: Services) -> None:
         """Store an inline model's record (a stored model's is stored already)."""
         if self.submission.is_new:
-            save(services.engine, [self.submission.record])
+            save(services.engine, [self.submission.record], self.client)
 
 
 def plan_inputs(body: PlanIn, services: Services, client: ClientIds) -> PlanInputs:
@@ -307,8 +308,8 @@ def plan_inputs(body: PlanIn, services: Services, client: ClientIds) -> PlanInpu
     problem = invalid_input_error(submission, mapping_report)
     if problem is not None:
         if submission.is_new:
-            save(services.engine, [submission.record])
+            save(services.engine, [submission.record], client)
         raise problem
     assert submission.model is not None
     mapping = mapping_read.mapping if mapping_read is not None else None
-    return PlanInputs(submission, submission.model, mapping, mapping_report, planner, time_limit)
+    return PlanInputs(submission, submission.model, mapping, mapping_report, planner, time_limit, client)

@@ -115,6 +115,12 @@ class QueueFullError(TryLaterError):
     code = "queue_full"
 
 
+class TooManyRequestsInFlightError(TryLaterError):
+    """One client has as many interactive planner requests running or waiting as it may (``service.fair_share``)."""
+
+    code = "too_many_requests_in_flight"
+
+
 class TooManyAttemptsError(TryLaterError):
     """Too many wrong research tokens came from this client address."""
 
@@ -150,6 +156,12 @@ class JobStorageFullError(TryLaterError):
     """One client's stored jobs (requests and results, until they expire) hold as many bytes as it may."""
 
     code = "job_storage_full"
+
+
+class StorageFullError(TryLaterError):
+    """One client's stored models, trials and jobs hold as many bytes as its allowance (``storage.allowance``)."""
+
+    code = "storage_full"
 
 
 class TooManyJobStartsError(TryLaterError):

@@ -224,7 +224,12 @@ def export(
         f"causalplan-experiment-{str(experiment.id)[:8]}-{datetime.fromisoformat(data['exported_at']):%Y%m%dT%H%M%SZ}"
     )
     if format == "json":
-        return SafeJSONResponse(data, headers={"Content-Disposition": f'attachment; filename="{name}.json"'})
+        # No trial yet, or a problem the results name: no rate to export, [] (the field is always there).
+        table_of_rates = _rates(data, catalog) if data["trials"] else "no trials"
+        rates = [] if isinstance(table_of_rates, str) else [rate.as_dict() for rate in table_of_rates.rates]
+        return SafeJSONResponse(
+            {**data, "rates": rates}, headers={"Content-Disposition": f'attachment; filename="{name}.json"'}
+        )
     body = (
         csv_bytes(TRIAL_COLUMNS, data["trials"])
         if table == "trials"

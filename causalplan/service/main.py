@@ -44,6 +44,7 @@ from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.caches import ServiceCaches
 from causalplan.service.deps import Services
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
+from causalplan.service.fair_share import ClientMiddleware, FairSharePool
 from causalplan.service.jobs.runner import JobRunner
 from causalplan.service.pages import routers as web_routers
 from causalplan.service.pool.pool import PlannerPool
@@ -66,12 +67,10 @@ _HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 413: "body_too_large
 def start_services(settings: Settings) -> Services:
     """Prepare the database (migrations), load the catalog and start the planner pool."""
     catalog = load_catalog(settings.catalog_folders)
-    engine = create_database_engine(settings.database_url)
+    engine = create_database_engine(settings.database_url, settings.database_connections)
     try:
         revision = upgrade(engine, settings.database_wait_seconds)
-        pool = PlannerPool(
-            settings.planning_workers, settings.queue_size, settings.worker_memory_mb, settings.queue_wait_seconds
-        )
+        pool = FairSharePool(settings)  # interactive requests take turns fairly, client by client
         pool.start()
     except BaseException:
         engine.dispose()
@@ -339,7 +338,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         services = await anyio.to_thread.run_sync(start_services, settings)
         # Each waiting solve holds one of anyio's worker threads; leave room for the other routes.
         limiter = anyio.to_thread.current_default_thread_limiter()
-        limiter.total_tokens = max(limiter.total_tokens, settings.max_in_flight + 20)
+        limiter.total_tokens = max(limiter.total_tokens, settings.request_threads)  # the database pool's size too
         app.state.services = services
         # What start-up made lives as long as the app: out of the collector's full passes.
         gc.collect()
@@ -370,6 +369,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_exception_handler(CausalPlanError, handle_causalplan_error)
     app.add_exception_handler(RequestValidationError, handle_validation_error)
     app.add_exception_handler(StarletteHTTPException, handle_http_error)
+    app.add_middleware(ClientMiddleware, settings=settings)
     app.add_middleware(UnexpectedErrorMiddleware)
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes, upload_bytes=settings.max_upload_bytes)
     routers = (models, plans, simulations, transfers, troubleshooting, explanations, jobs, objects, research, health)

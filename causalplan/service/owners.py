@@ -4,11 +4,15 @@ A job's owner is stored on its row, one string per client:
 
 - ``research``: ``Authorization: Bearer <research token>``: the operator's, it sees every job
   and is held only by the service's own cap (``max_queued_jobs``), not by a client's limits;
-- ``key:<first 16 hex digits of the key's SHA-256>``: an API key (``CAUSALPLAN_API_KEYS``),
+- ``key:<the key's SHA-256, 64 hex digits>``: an API key (``CAUSALPLAN_API_KEYS``),
   compared in constant time as the research token is (the key itself is never stored);
-- ``participant:<id>``: a participant's pages (their films of the robot);
+- ``participant:<id>``: a participant's pages (their films of the robot), capped per participant
+  and, with the address they come from, per address;
 - ``address:<client address>``: anyone else, by the address the throttles count
-  (``deps.client_address``).
+  (``deps.client_address``: an IP address, a forwarded one only as a valid IP address).
+
+An owner longer than the column (``MAX_OWNER_LENGTH``) is stored as its kind and its full
+SHA-256 (``stored_owner``), never cut: two long owners never share jobs.
 
 Only the owner reads, cancels or downloads a job (the research token any); another client is
 answered 404 ``job_not_found``, as for a job that never existed. Each owner has limits on jobs
@@ -29,8 +33,9 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from causalplan.service.deps import Services, ServicesDep, client_address, is_research_token
 from causalplan.service.errors import NotAuthenticatedError, TooManyJobStartsError
+from causalplan.service.storage.allowance import Allowance
 from causalplan.service.storage.jobs import MEGABYTE, OwnerLimits
-from causalplan.service.storage.records import MAX_OWNER_LENGTH
+from causalplan.service.storage.records import MAX_ADDRESS_LENGTH, MAX_OWNER_LENGTH
 from causalplan.service.storage.throttle import PerMinute
 from causalplan.settings import Settings
 
@@ -38,8 +43,8 @@ RESEARCH_OWNER = "research"
 KEY_PREFIX = "key:"
 PARTICIPANT_PREFIX = "participant:"
 ADDRESS_PREFIX = "address:"
-KEY_ID_HEX_DIGITS = 16
-"""Of a key's SHA-256, what names its owner: enough to tell keys apart, useless to find the key."""
+DIGEST_PREFIX = "sha256:"
+"""An owner too long to store as it is is stored as its kind and this, then its full SHA-256."""
 
 
 @dataclass(frozen=True)
@@ -48,6 +53,8 @@ class JobOwner:
 
     id: str
     is_anonymous: bool = False
+    address: str | None = None
+    """Of a client without a key (an address, a participant's pages): the address it posts from."""
 
     @property
     def sees_every_job(self) -> bool:
@@ -60,19 +67,31 @@ class JobOwner:
         return None if self.sees_every_job else self.id
 
 
+def _digest(text: str) -> str:
+    return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
+
+
+def stored_owner(owner: str) -> str:
+    """Return ``owner`` as stored: itself, or when longer than the column its kind and full digest (never cut)."""
+    if len(owner) <= MAX_OWNER_LENGTH:
+        return owner
+    kind = owner.split(":", 1)[0][:16]
+    return f"{kind}:{DIGEST_PREFIX}{_digest(owner)}"
+
+
 def key_owner(key: str) -> str:
-    """Return the owner of the jobs posted with API key ``key`` (named by its hash, never by the key)."""
-    return KEY_PREFIX + hashlib.sha256(key.encode()).hexdigest()[:KEY_ID_HEX_DIGITS]
+    """Return the owner of the jobs posted with API key ``key``: the key's full SHA-256, never the key."""
+    return KEY_PREFIX + _digest(key)
 
 
-def participant_owner(participant_id: object) -> JobOwner:
-    """Return the owner of the jobs a participant's pages start."""
-    return JobOwner(f"{PARTICIPANT_PREFIX}{participant_id}")
+def participant_owner(participant_id: object, address: str | None = None) -> JobOwner:
+    """Return the owner of the jobs a participant's pages start (from ``address``: counted there too)."""
+    return JobOwner(stored_owner(f"{PARTICIPANT_PREFIX}{participant_id}"), address=address)
 
 
 def address_owner(address: str) -> JobOwner:
     """Return the owner of the jobs of a client without a key, known by its address."""
-    return JobOwner(f"{ADDRESS_PREFIX}{address}"[:MAX_OWNER_LENGTH], is_anonymous=True)
+    return JobOwner(stored_owner(f"{ADDRESS_PREFIX}{address}"), is_anonymous=True, address=address)
 
 
 def owner_of_token(candidate: str, settings: Settings) -> JobOwner | None:
@@ -89,12 +108,43 @@ def owner_of_token(candidate: str, settings: Settings) -> JobOwner | None:
 
 
 def job_limits(owner: JobOwner, settings: Settings) -> OwnerLimits | None:
-    """Return what ``owner`` may hold: jobs in flight and bytes stored (smaller without a key; None: the operator's)."""
+    """Return what ``owner`` may hold: jobs in flight and bytes stored (smaller without a key; None: the operator's).
+
+    A client without a key (an address, a participant) is capped per address too, and shares
+    ``anonymous_job_share`` of the service's cap with every other such client.
+    """
     if owner.sees_every_job:
         return None
-    if owner.is_anonymous:
-        return OwnerLimits(settings.anonymous_jobs_in_flight, int(settings.anonymous_job_megabytes * MEGABYTE))
+    if owner.is_anonymous or owner.address is not None:
+        if owner.is_anonymous:
+            in_flight, megabytes = settings.anonymous_jobs_in_flight, settings.anonymous_job_megabytes
+        else:  # a participant's films: few at once, but a study's worth of them kept
+            in_flight, megabytes = settings.participant_jobs_in_flight, settings.job_megabytes
+        return OwnerLimits(
+            in_flight,
+            int(megabytes * MEGABYTE),
+            address=(owner.address or "")[:MAX_ADDRESS_LENGTH],
+            address_in_flight=settings.address_jobs_in_flight,
+            anonymous_share=settings.anonymous_job_share,
+        )
     return OwnerLimits(settings.jobs_in_flight, int(settings.job_megabytes * MEGABYTE))
+
+
+def storage_allowance(owner: str, settings: Settings) -> Allowance | None:
+    """Return the storage allowance the models and trials ``owner``'s requests store count in.
+
+    The research token: no limit; a key: ``job_megabytes``, kept; an address:
+    ``anonymous_job_megabytes``, expiring after ``anonymous_record_hours`` (its rows belong to
+    no experiment). None for a participant's pages (their rows are their study's).
+    """
+    if owner == RESEARCH_OWNER:
+        return Allowance(owner, None, None)
+    if owner.startswith(KEY_PREFIX):
+        return Allowance(owner, int(settings.job_megabytes * MEGABYTE), None)
+    if owner.startswith(ADDRESS_PREFIX):
+        keep = settings.anonymous_record_hours * 3600
+        return Allowance(owner, int(settings.anonymous_job_megabytes * MEGABYTE), keep)
+    return None
 
 
 class JobStarts(PerMinute):

@@ -319,6 +319,25 @@ def _unchecked_verdict(exc: PlanRejectedError | ValidatorError, training: str, t
     )
 
 
+def undecided_results(trials: Iterable[Trial], code: str, message: str) -> list[TrialResult]:
+    """Return ``undecided`` results of ``trials`` that could not be judged, each with the reason ``code``."""
+    results = []
+    for trial in trials:
+        model, mapping = trial.model, trial.mapping
+        training = model.get("object") if isinstance(model, dict) else None
+        test = mapping.get("object") if isinstance(mapping, dict) else None
+        verdict = TransferVerdict(
+            Verdict.UNDECIDED,
+            training if isinstance(training, str) else None,
+            test if isinstance(test, str) else None,
+            None,
+            "worker",
+            (Reason(code, Severity.ERROR, message),),
+        )
+        results.append(TrialResult(trial.id, verdict, 0.0))
+    return results
+
+
 Judge = Callable[[TransferVerdict, Catalog], TransferVerdict]
 """A last judge of a verdict, e.g. the robot (``transfer.robot_verdict.robot_judged``; passed in, so
 a batch loads PyBullet only when it is asked to)."""

@@ -46,3 +46,14 @@ def test_edits_change_the_mapping_and_the_model(catalog: Catalog) -> None:
     assert new_model.rules[0].text == "provide electricity AND turn electricity into light CAUSES light"
     kinds = {edit.kind for edit in candidate_edits(model, mapping, catalog)}
     assert kinds == set(EditKind)
+
+
+def test_a_search_stops_at_its_budget_with_what_it_found(catalog: Catalog) -> None:
+    model = example_model("paper/failed_desk_lamp.yaml", catalog)
+    mapping = example_mapping("paper/failed_flashlight_mapping.yaml", catalog)
+    spent = search_repairs(model, mapping, catalog, simulate=False, seconds=0.0)
+    assert (spent.repairs, spent.checked, spent.complete) == ((), 0, False)
+    assert spent.as_dict()["complete"] is False
+    whole = search_repairs(model, mapping, catalog, simulate=False, seconds=3600.0)
+    assert whole.complete and whole.checked > 0 and whole.repairs
+    assert whole.as_dict()["complete"] is True

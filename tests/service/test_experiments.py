@@ -14,6 +14,7 @@ from fastapi.testclient import TestClient
 from sqlalchemy import func, inspect, select
 from sqlalchemy.orm import Session
 
+from causalplan.service.api.schemas.experiments import ExperimentExportOut
 from causalplan.service.storage.migrate import current_revision, head_revision, upgrade
 from causalplan.service.storage.records import ParticipantTrialRecord, TrialRecord
 from causalplan.service.storage.session import create_database_engine
@@ -32,7 +33,7 @@ NEAR_AND_FAR: dict[str, Any] = {
 def test_the_migration_adds_the_experiment_tables(database_url: str) -> None:
     engine = create_database_engine(database_url)
     try:
-        assert upgrade(engine) == head_revision() == "0008" == current_revision(engine)
+        assert upgrade(engine) == head_revision() == "0010" == current_revision(engine)
         tables = set(inspect(engine).get_table_names())
         assert {"experiments", "participants", "participant_trials"} <= tables
         unique = inspect(engine).get_unique_constraints("participant_trials")
@@ -90,6 +91,18 @@ def test_definitions_and_link_requests_are_checked(storage_client: TestClient) -
     assert error_of(too_many, 422)["code"] == "invalid_request"
     missing = storage_client.get(f"/v1/experiments/{uuid.uuid4()}/results", headers=AUTH)
     assert error_of(missing, 404)["code"] == "experiment_not_found"
+    # Strict JSON types: no 0 for a boolean, no "5" for a number.
+    for loose in ({**NEAR_AND_FAR, "tutorial": 0}, {**NEAR_AND_FAR, "show_verdict": "true"}):
+        assert error_of(storage_client.post("/v1/experiments", headers=AUTH, json=loose), 422)["code"] == (
+            "invalid_request"
+        )
+    links_url = f"/v1/experiments/{created['id']}/participants"
+    assert error_of(storage_client.post(links_url, headers=AUTH, json={"count": "5"}), 422)["code"] == "invalid_request"
+    recruitment_url = f"/v1/experiments/{created['id']}/recruitment"
+    for loose_recruitment in ({"too_fast_seconds": "5"}, {"require_platform_id": 1}, {"quotas": {"near": "3"}}):
+        refused = storage_client.put(recruitment_url, headers=AUTH, json=loose_recruitment)
+        assert error_of(refused, 422)["code"] == "invalid_request", loose_recruitment
+    assert storage_client.post(links_url, headers=AUTH, json={"count": 1}).status_code == 201
 
 
 def test_results_and_exports_hold_every_trial_with_its_model_mapping_and_reasons(storage_client: TestClient) -> None:
@@ -140,6 +153,12 @@ def test_results_and_exports_hold_every_trial_with_its_model_mapping_and_reasons
     assert [t["trial_id"] for t in data["trials"]] == [works["trial_id"], fails["trial_id"]]
     assert data["trials"][1]["result"]["decided_by"] == "precheck"
     assert data["participants"][0]["work"]["rules"].startswith("provide electricity AND close the circuit")
+    assert data["rates"] == results["rates"]
+    ExperimentExportOut.model_validate(data)
+    empty = experiment(storage_client)
+    nothing = storage_client.get(f"/v1/experiments/{empty['id']}/export", headers=AUTH).json()
+    assert (nothing["trials"], nothing["rates"]) == ([], [])
+    ExperimentExportOut.model_validate(nothing)  # every required field, rates too
     table = storage_client.get(f"/v1/experiments/{created['id']}/export?format=csv", headers=AUTH)
     rows = list(csv.DictReader(io.StringIO(table.text)))
     assert [row["verdict"] for row in rows] == ["transfers", "fails"]

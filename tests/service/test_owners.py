@@ -98,6 +98,25 @@ def test_a_bearer_token_that_is_no_key_is_refused(idle_client: TestClient) -> No
     assert error_of(idle_client.get(f"/v1/jobs/{uuid.uuid4()}", headers=wrong), 401)["code"] == "not_authenticated"
 
 
+def test_wrong_tokens_cost_only_their_senders(tmp_path: Path) -> None:
+    settings = settings_for(
+        sqlite_url(tmp_path), planning_workers=1, job_runners=0, research_max_failures=2, research_max_failures_total=5
+    )
+    wrong = {"Authorization": "Bearer not-a-key-of-this-service"}
+    with running_client(settings) as app:
+        url = queue(app, KEY_AUTH)["url"]
+        flooders = [TestClient(app.app, client=(f"203.0.113.{number}", 40000)) for number in range(6)]
+        for flooder in flooders:  # more wrong tokens than every address together may send
+            for _ in range(3):
+                flooder.get(url, headers=wrong)
+        assert error_of(flooders[0].get(url, headers=wrong), 429)["code"] == "too_many_attempts"
+        assert error_of(app.get(url, headers=wrong), 429)["code"] == "too_many_attempts"  # a newcomer's guess too
+        for client in (app, flooders[0]):  # a right token from anywhere, the flooding address too
+            assert client.get(url, headers=KEY_AUTH).status_code == 200
+            assert client.get(url, headers=AUTH).status_code == 200
+            assert client.get("/v1/trials", headers=AUTH).status_code == 200
+
+
 def test_a_key_is_stored_only_as_its_hash(idle_client: TestClient) -> None:
     job_id = uuid.UUID(queue(idle_client, KEY_AUTH)["id"])
     with Session(services_of(idle_client).engine) as session:

@@ -11,11 +11,12 @@ own (``video``, ``fit_estimation``).
 from __future__ import annotations
 
 import io
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from causalplan.errors import InputFileError
 from causalplan.limits import LimitExceededError
-from causalplan.service.errors import InvalidRequestError
+from causalplan.service.errors import InvalidRequestError, WorkerCrashedError
 from causalplan.service.jobs.fit_estimation import prepare_fit_estimation, run_fit_estimation_job
 from causalplan.service.jobs.requests import (
     BatchRequest,
@@ -25,13 +26,13 @@ from causalplan.service.jobs.requests import (
     read_video_request,
 )
 from causalplan.service.jobs.video import prepare_video, run_video_job
-from causalplan.service.jobs.work import Kind, Progress, in_pool
+from causalplan.service.jobs.work import Kind, Progress, in_pool, in_pool_retried, worker_died
 from causalplan.service.storage.jobs import JobKind
 from causalplan.service.work.batches import ConsensusArguments, TrialsArguments
 from causalplan.service.work.planning import SimulationArguments
-from causalplan.service.work.registry import CONSENSUS, JUDGED_TRIALS, QUEUED_SIMULATION
+from causalplan.service.work.registry import CONSENSUS, JUDGED_TRIALS, QUEUED_SIMULATION, Work
 from causalplan.transfer import batch
-from causalplan.transfer.batch import Trial, TrialResult, repeated_ids, trials_of_lines
+from causalplan.transfer.batch import Trial, TrialResult, repeated_ids, trials_of_lines, undecided_results
 
 if TYPE_CHECKING:
     from causalplan.service.api.schemas.jobs import BatchJobIn, ConsensusJobIn, SimulationJobIn
@@ -122,13 +123,42 @@ def run_batch_job(request: BatchRequest, services: Services, progress: Progress)
             on_chunk=on_chunk,
         )
         return _summary(ordered)
+
+    def chunk_arguments(chunk: tuple[Trial, ...]) -> TrialsArguments:
+        return TrialsArguments(chunk, planner, time_limit, simulate, val)
+
+    return _summary(judge_in_chunks(services, progress, trials, chunk_arguments))
+
+
+def judge_in_chunks(
+    services: Services,
+    progress: Progress,
+    trials: list[Trial],
+    arguments: Callable[[tuple[Trial, ...]], TrialsArguments],
+    work: Work[TrialsArguments, list[TrialResult]] = JUDGED_TRIALS,
+) -> list[TrialResult]:
+    """Return ``work`` done on every chunk of ``trials`` (its ``arguments``), in the jobs' workers, in order.
+
+    A dead worker costs one chunk, not the job: the trials judged are kept, the chunk that was
+    running is run once more on a fresh worker, and if that worker dies too its trials are
+    ``undecided`` (reason ``worker_crashed``) and the batch goes on.
+    """
     results: list[TrialResult] = []
-    for start in range(0, total, CHUNK_SIZE):
-        chunk = TrialsArguments(tuple(trials[start : start + CHUNK_SIZE]), planner, time_limit, simulate, val)
-        judged = in_pool(services, progress, JUDGED_TRIALS, chunk)
+    for start in range(0, len(trials), CHUNK_SIZE):
+        chunk = tuple(trials[start : start + CHUNK_SIZE])
+        try:
+            judged = in_pool_retried(services, progress, work, arguments(chunk))
+        except WorkerCrashedError as exc:
+            if not worker_died(exc):
+                raise
+            message = (
+                f"The worker judging trials {start + 1}-{start + len(chunk)} died twice "
+                f"(exit code {exc.details['exit_code']}); they were not judged."
+            )
+            judged = undecided_results(list(chunk), "worker_crashed", message)
         results.extend(judged)
-        progress(len(results), total)
-    return _summary(results)
+        progress(len(results), len(trials))
+    return results
 
 
 # -- simulation ---------------------------------------------------------------------------------

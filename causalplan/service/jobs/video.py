@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from causalplan.service.jobs.requests import FitsFilmRequest, PlanFilmRequest, VideoRequest
-from causalplan.service.jobs.work import JobCancelledError, JobFile, Outcome, Progress, in_pool
+from causalplan.service.jobs.work import JobCancelledError, JobFile, Outcome, Progress, in_pool_retried
 from causalplan.service.work.registry import FILM_OF_FITS, FILM_OF_PLAN
 from causalplan.service.work.robot import CONTENT_TYPES, FitsFilmArguments, PlanFilmArguments, read_progress
 
@@ -90,7 +90,7 @@ def _film_in_worker(
     video = request.video
     if isinstance(request, FitsFilmRequest):
         fits = FitsFilmArguments(request.object, tuple(request.fits), video, size, progress_file)
-        return in_pool(services, progress, FILM_OF_FITS, fits)
+        return in_pool_retried(services, progress, FILM_OF_FITS, fits)
     inputs = _plan_inputs(request.stored(), services)
     plan = PlanFilmArguments(
         inputs.model,
@@ -102,12 +102,15 @@ def _film_in_worker(
         size,
         progress_file,
     )
-    data = in_pool(services, progress, FILM_OF_PLAN, plan)
+    data = in_pool_retried(services, progress, FILM_OF_PLAN, plan)
     return {**data, "model_id": request.model_id}
 
 
 def run_video_job(request: VideoRequest, services: Services, progress: Progress) -> Outcome:
-    """Film the plan, reporting frames drawn of frames expected; a cancel kills the worker (``in_pool``)."""
+    """Film the plan, reporting frames drawn of frames expected; a cancel kills the worker (``in_pool``).
+
+    A worker that dies while filming is replaced and the film made once more (``in_pool_retried``).
+    """
     progress(0, 1)
     with tempfile.TemporaryDirectory(prefix="causalplan-film-job-") as folder:
         progress_file = Path(folder) / "progress.json"

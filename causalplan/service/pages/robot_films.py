@@ -21,11 +21,11 @@ from __future__ import annotations
 import uuid
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Path, Response
+from fastapi import APIRouter, Path, Request, Response
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.api.schemas.experiments import FilmIn, FilmOut
-from causalplan.service.deps import Services, ServicesDep
+from causalplan.service.deps import Services, ServicesDep, client_address
 from causalplan.service.errors import FilmNotFoundError, InvalidRequestError, NotFoundError
 from causalplan.service.jobs.video import FILM_KEY, FILM_KEY_PATTERN, film_key, fits_film_request
 from causalplan.service.owners import admit_job, job_limits, participant_owner
@@ -116,7 +116,7 @@ def robot_playback(body: FilmIn, code: str, journey: JourneyDep, services: Servi
 
 
 @router.post("", response_model=FilmOut)
-def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesDep) -> FilmOut:
+def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesDep, http: Request) -> FilmOut:
     """Start filming the robot making ``fits`` of one of the participant's training objects (kept once made)."""
     obj = _training_object(body, journey)
     settings = services.settings
@@ -126,7 +126,7 @@ def start_film(body: FilmIn, code: str, journey: JourneyDep, services: ServicesD
     kind = JobKind.VIDEO.value
     job = store.find_job(services.engine, kind, FILM_KEY, key)
     if job is None:  # two participants asking at once may each start one: harmless, and rare
-        owner = participant_owner(journey.participant.id)
+        owner = participant_owner(journey.participant.id, client_address(http, settings))
         admit_job(services, owner)
         request = fits_film_request(obj.id, fits, FILM_FORMAT, key)
         limits = job_limits(owner, settings)

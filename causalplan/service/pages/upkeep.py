@@ -2,7 +2,8 @@
 
 At start and then periodically: purge the demo participants left alone too long, the arrivals
 on public study links that never decided on consent (``undecided_arrival_hours``), the invalid
-models of ``POST /v1/models`` that no trial uses (``invalid_model_hours``), and forget the
+models of ``POST /v1/models`` that no trial uses (``invalid_model_hours``), the models and
+trials of clients without a key (``anonymous_record_hours``, the space given back), and forget the
 revocations of research cookies that have lapsed anyway. Once, after start: draw the pictures
 of the catalog objects' likely plans (``ahead``). The thread starts after the service is up,
 so none of this delays start-up, and requests never wait for it.
@@ -23,7 +24,7 @@ from causalplan.errors import CausalPlanError
 from causalplan.service.deps import Services, open_session
 from causalplan.service.pages import ahead
 from causalplan.service.storage.arrivals import purge_undecided
-from causalplan.service.storage.crud import purge_invalid_models
+from causalplan.service.storage.crud import purge_expired_records, purge_invalid_models
 from causalplan.service.storage.demo import DemoStarts, purge_demo_participants
 from causalplan.service.storage.records import utc_now
 from causalplan.service.storage.revocations import forget_lapsed_revocations
@@ -39,12 +40,17 @@ FIRST_OBJECTS = ("desk_lamp", "flashlight")
 def purge_interval(services: Services) -> float:
     """Return the seconds between two purges."""
     settings = services.settings
-    shortest = min(settings.demo_retention_hours, settings.undecided_arrival_hours, settings.invalid_model_hours)
+    shortest = min(
+        settings.demo_retention_hours,
+        settings.undecided_arrival_hours,
+        settings.invalid_model_hours,
+        settings.anonymous_record_hours,
+    )
     return min(LONGEST_PURGE_INTERVAL_SECONDS, shortest * 3600 / 4)
 
 
 def purge(services: Services) -> int:
-    """Purge old demo participants, undecided arrivals, unused invalid models and lapsed revocations.
+    """Purge old demo participants, undecided arrivals, unused invalid models, expired rows and lapsed revocations.
 
     Return the demo participants purged.
     """
@@ -55,8 +61,15 @@ def purge(services: Services) -> int:
         arrivals = purge_undecided(session, now - timedelta(hours=settings.undecided_arrival_hours))
         models = purge_invalid_models(session, now - timedelta(hours=settings.invalid_model_hours))
         forget_lapsed_revocations(session, now)
-    if purged or arrivals or models:
-        logger.info("purged %d demo participants, %d undecided arrivals, %d invalid models", purged, arrivals, models)
+    expired = purge_expired_records(services.engine, now)  # and gives the space back
+    if purged or arrivals or models or expired:
+        logger.info(
+            "purged %d demo participants, %d undecided arrivals, %d invalid models, %d expired models and trials",
+            purged,
+            arrivals,
+            models,
+            expired,
+        )
     return purged
 
 

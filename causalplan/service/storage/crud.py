@@ -14,7 +14,7 @@ import uuid
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import UTC, datetime, timedelta
 from typing import Any
 
 from sqlalchemy import Engine, delete, func, select
@@ -22,7 +22,15 @@ from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session
 
 from causalplan.inputs import clean_text
-from causalplan.service.errors import InvalidRequestError, ModelNotFoundError, StorageError
+from causalplan.service.errors import InvalidRequestError, ModelNotFoundError, StorageError, StorageFullError
+from causalplan.service.storage.allowance import (
+    Allowance,
+    first_expiry,
+    give_space_back,
+    json_size,
+    stored_bytes,
+    take_write_lock,
+)
 from causalplan.service.storage.records import (
     MAX_CLIENT_ID_LENGTH,
     ModelRecord,
@@ -36,6 +44,12 @@ logger = logging.getLogger(__name__)
 MAX_NESTING = 16
 """A model needs three levels (document, functions, labels); anything deeper is refused."""
 _SHORT_TEXT = 200
+MEGABYTE = 1_000_000
+ROW_OVERHEAD_BYTES = 4096
+"""What a stored row takes beyond its JSON, at most, about: its other columns, its index entries, and the
+slack of the last page of its overflow chain (SQLite's pages are 4 KB). Measured near 2 KB a model row."""
+TRY_LATER_SECONDS = 30
+"""``Retry-After`` of a full allowance whose rows never expire (a key's): about when a job finishes."""
 
 
 PAGE_SESSION_PREFIX = "experiment:"
@@ -44,10 +58,30 @@ PAGE_SESSION_PREFIX = "experiment:"
 
 @dataclass(frozen=True)
 class ClientIds:
-    """Who sent a request: as the client says (``X-Participant-Id``, ``X-Session-Id``), or a participant's pages."""
+    """Who sent a request: as the client says (``X-Participant-Id``, ``X-Session-Id``), or a participant's pages.
+
+    ``allowance``: whose storage allowance the request's models and trials count in, and how
+    long they are kept (a client without a key's rows belong to no experiment and expire);
+    None for the pages' own rows (a study's data) and work no client asked for.
+    """
 
     participant_id: str | None = None
     session_id: str | None = None
+    allowance: Allowance | None = None
+
+    def stored_fields(self, size: int) -> dict[str, Any]:
+        """Return the owner, size and expiry of a new record whose JSON takes ``size`` bytes, as this client stores it.
+
+        The size counted is the JSON's plus ``ROW_OVERHEAD_BYTES``, so an allowance bounds the
+        database's growth, not only its documents'.
+        """
+        counted = size + ROW_OVERHEAD_BYTES
+        allowance = self.allowance
+        if allowance is None:
+            return {"owner": None, "stored_bytes": counted, "expires_at": None}
+        keep = allowance.keep_seconds
+        expires = utc_now() + timedelta(seconds=keep) if keep is not None else None
+        return {"owner": allowance.owner, "stored_bytes": counted, "expires_at": expires}
 
 
 @contextmanager
@@ -113,13 +147,16 @@ def new_model_record(
     cleaned: bool = False,
 ) -> ModelRecord:
     """Return an unsaved record of a submitted model (``cleaned``: ``document`` and ``report`` are cleaned already)."""
+    document = document if cleaned else clean_json(document)
+    report = report if cleaned else clean_json(report)
     return ModelRecord(
         **_new_record_fields(client),
+        **client.stored_fields(json_size(document) + json_size(report)),
         object_id=_short(object_id) or "",
         is_valid=is_valid,
         canonical_hash=canonical_hash,
-        document=document if cleaned else clean_json(document),
-        report=report if cleaned else clean_json(report),
+        document=document,
+        report=report,
     )
 
 
@@ -133,10 +170,13 @@ def new_trial_record(
     client: ClientIds,
 ) -> TrialRecord:
     """Return an unsaved record of a transfer trial (``verdict`` is ``TransferVerdict.as_dict()``)."""
+    mapping = clean_json(mapping)
+    result = clean_json(verdict)
     return TrialRecord(
         **_new_record_fields(client),
+        **client.stored_fields(json_size(mapping) + json_size(result)),
         model_id=model_id,
-        mapping=clean_json(mapping),
+        mapping=mapping,
         training_object=_short(verdict.get("training_object")),
         test_object=_short(verdict.get("test_object")),
         planner=_short(planner, 64) or "",
@@ -145,18 +185,43 @@ def new_trial_record(
         decided_by=str(verdict["decided_by"]),
         cached=cached,
         seconds=seconds,
-        result=clean_json(verdict),
+        result=result,
     )
 
 
-def save(engine: Engine, records: Sequence[ModelRecord | TrialRecord]) -> None:
+def save(engine: Engine, records: Sequence[ModelRecord | TrialRecord], client: ClientIds | None = None) -> None:
     """Store new ``records`` (as ``new_model_record`` and ``new_trial_record`` make them) in one transaction.
 
-    The records stay readable afterwards (they are not expired on commit).
+    ``client``: whose records they are; with an allowance, they are counted against it first,
+    with the owner's jobs, models and trials, under the write lock (``StorageFullError``, 429,
+    when they would pass it: nothing is stored). The records stay readable afterwards.
     """
     with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        allowance = client.allowance if client is not None else None
+        if allowance is not None and allowance.limit_bytes is not None:
+            take_write_lock(session)
+            size = sum(record.stored_bytes for record in records)
+            _check_allowance(session, allowance.owner, allowance.limit_bytes, size)
         session.add_all(records)  # the unit of work inserts models before the trials that refer to them
         session.commit()
+
+
+def _check_allowance(session: Session, owner: str, allowance: int, size: int) -> None:
+    now = utc_now()
+    stored = stored_bytes(session, owner, now)
+    if stored + size <= allowance:
+        return
+    first_to_go = first_expiry(session, owner, now)
+    wait = TRY_LATER_SECONDS
+    if first_to_go is not None:
+        expires = first_to_go.replace(tzinfo=UTC) if first_to_go.tzinfo is None else first_to_go
+        wait = max(1, math.ceil((expires - now).total_seconds()))
+    raise StorageFullError(
+        f"Your models, trials and jobs keep {stored / MEGABYTE:.2f} MB stored and this request adds "
+        f"{size / MEGABYTE:.2f} MB; you may keep {allowance / MEGABYTE:.2f} MB. Stored rows of a client without a key "
+        f"expire: try again in {wait} s.",
+        wait,
+    )
 
 
 def get_model(session: Session, model_id: uuid.UUID) -> ModelRecord:
@@ -215,3 +280,23 @@ def purge_invalid_models(session: Session, stored_before: datetime) -> int:
         )
         session.commit()
     return int(purged.rowcount)  # type: ignore[attr-defined]  # a CursorResult for a DELETE
+
+
+def purge_expired_records(engine: Engine, now: datetime) -> int:
+    """Delete the expired trials, then the expired models no trial or participant uses; give the space back.
+
+    Returns how many rows were deleted.
+    """
+    used_by_trial = select(TrialRecord.id).where(TrialRecord.model_id == ModelRecord.id).exists()
+    used_by_participant = select(ParticipantRecord.id).where(ParticipantRecord.model_id == ModelRecord.id).exists()
+    with Session(engine) as session, storage_errors(session):
+        trials = session.execute(delete(TrialRecord).where(TrialRecord.expires_at <= now))
+        models = session.execute(
+            delete(ModelRecord).where(ModelRecord.expires_at <= now, ~used_by_trial, ~used_by_participant)
+        )
+        session.commit()
+    deleted = int(trials.rowcount) + int(models.rowcount)  # type: ignore[attr-defined]  # CursorResults of DELETEs
+    if deleted:
+        with storage_errors():
+            give_space_back(engine)
+    return deleted

@@ -16,18 +16,16 @@ no job, the same answer as a job that never existed.
 
 from __future__ import annotations
 
-import json
 import math
 import uuid
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from enum import StrEnum
 from typing import Any, cast
 
-from sqlalchemy import CursorResult, Engine, and_, delete, func, or_, select, text, update
-from sqlalchemy.orm import Session
+from sqlalchemy import CursorResult, Engine, and_, delete, func, or_, select, update
+from sqlalchemy.orm import Session, aliased
 
 from causalplan.service.errors import (
     BodyTooLargeError,
@@ -37,6 +35,7 @@ from causalplan.service.errors import (
     TooManyJobsError,
     TooManyJobsInFlightError,
 )
+from causalplan.service.storage.allowance import first_expiry, json_size, stored_bytes, take_write_lock
 from causalplan.service.storage.crud import clean_json, storage_errors
 from causalplan.service.storage.records import JobRecord, utc_now
 
@@ -44,8 +43,6 @@ MEGABYTE = 1_000_000
 """What a job's stored bytes are counted and told in."""
 MAX_ATTEMPTS = 3
 """Runs of a job whose replica stopped before finishing it, before it is given up as failed."""
-FIRST_KINDS = ("video",)
-"""Kinds a runner takes before older jobs of other kinds: a person is usually watching the page for a film."""
 
 
 class JobKind(StrEnum):
@@ -75,46 +72,31 @@ UNFINISHED = (JobStatus.QUEUED, JobStatus.RUNNING)
 
 TRY_LATER_SECONDS = 30
 """``Retry-After`` when the service, or a client, has as many unfinished jobs as it may: about a short job."""
-_JOBS_LOCK_ID = 0x6A6F6273
-"""PostgreSQL advisory lock held while a job is counted and created: creators on every replica take turns."""
 
 
 @dataclass(frozen=True)
 class OwnerLimits:
-    """What one client may hold: jobs queued or running, and bytes stored (requests and results until they expire)."""
+    """What one client may hold: jobs queued or running, and bytes stored (requests and results until they expire).
+
+    ``address``: a client without a key (an address, a participant's pages) posting from it: its
+    job is anonymous work, stored with the address; all its address's anonymous jobs may be at
+    most ``address_in_flight`` unfinished, and anonymous jobs of every address together at most
+    ``anonymous_share`` of the service's cap, so keyed clients and the research token find room.
+    """
 
     in_flight: int
     stored_bytes: int
+    address: str | None = None
+    address_in_flight: int = 0
+    anonymous_share: float = 1.0
 
 
 def _changed(result: object) -> bool:
     return cast(CursorResult[Any], result).rowcount == 1
 
 
-def json_size(value: object) -> int:
-    """Return the bytes ``value`` takes stored as JSON (as the JSON columns write it)."""
-    return len(json.dumps(value).encode("utf-8", "surrogatepass"))
-
-
 def _megabytes(size: float) -> str:
     return f"{size / MEGABYTE:.1f} MB"
-
-
-@contextmanager
-def _one_creator_at_a_time(engine: Engine) -> Iterator[Session]:
-    """Yield a session whose transaction holds the jobs' write lock until it ends (commit or rollback).
-
-    SQLite: ``BEGIN IMMEDIATE`` takes the database's write lock before the first count, so the
-    counts cannot go stale before the insert (other writers wait, up to the busy timeout).
-    PostgreSQL: a transaction-scoped advisory lock; each statement then sees every job committed
-    by the creators before (READ COMMITTED).
-    """
-    with Session(engine, expire_on_commit=False) as session, storage_errors(session):
-        if engine.dialect.name == "postgresql":
-            session.execute(text("SELECT pg_advisory_xact_lock(:id)"), {"id": _JOBS_LOCK_ID})
-        elif engine.dialect.name == "sqlite":
-            session.execute(text("BEGIN IMMEDIATE"))
-        yield session
 
 
 def _check_owner(session: Session, owner: str, limits: OwnerLimits, size: int, now: datetime) -> None:
@@ -134,19 +116,39 @@ def _check_owner(session: Session, owner: str, limits: OwnerLimits, size: int, n
             "stored in all.",
             details={"limit": limits.stored_bytes, "actual": size},
         )
-    live = or_(JobRecord.expires_at.is_(None), JobRecord.expires_at > now)
-    stored = session.scalar(select(func.sum(JobRecord.request_bytes + JobRecord.result_bytes)).where(mine, live))
-    if (stored or 0) + size > limits.stored_bytes:
-        first_to_go = session.scalar(select(func.min(JobRecord.expires_at)).where(mine, JobRecord.expires_at > now))
+    stored = stored_bytes(session, owner, now)  # its models and trials too: one allowance
+    if stored + size > limits.stored_bytes:
+        first_to_go = first_expiry(session, owner, now)
         wait = TRY_LATER_SECONDS
         if first_to_go is not None:
             wait = max(1, math.ceil((aware(first_to_go) - now).total_seconds()))
         raise JobStorageFullError(
-            f"Your jobs keep {_megabytes(stored or 0)} stored and this one adds {_megabytes(size)}; you may keep "
-            f"{_megabytes(limits.stored_bytes)}. A finished job is deleted when its result expires: try again "
-            f"in {wait} s.",
+            f"Your jobs, models and trials keep {_megabytes(stored)} stored and this one adds {_megabytes(size)}; "
+            f"you may keep {_megabytes(limits.stored_bytes)}. A finished job is deleted when its result expires: "
+            f"try again in {wait} s.",
             wait,
         )
+
+
+def _check_address(session: Session, limits: OwnerLimits, max_unfinished: int) -> None:
+    """Raise the 429 error when anonymous work (all of it, or its address's) is at its cap."""
+    unfinished = JobRecord.status.in_(UNFINISHED)
+    anonymous_cap = max(1, math.floor(max_unfinished * limits.anonymous_share))
+    anonymous = session.scalar(select(func.count()).where(unfinished, JobRecord.address.is_not(None)))
+    if (anonymous or 0) >= anonymous_cap:
+        raise TooManyJobsError(
+            f"Clients without a key have {anonymous} unfinished jobs, as many as they may together "
+            f"(the rest of the service's {max_unfinished} is kept for API keys); try again when some have finished.",
+            TRY_LATER_SECONDS,
+        )
+    if limits.address_in_flight:
+        from_here = session.scalar(select(func.count()).where(unfinished, JobRecord.address == limits.address))
+        if (from_here or 0) >= limits.address_in_flight:
+            raise TooManyJobsInFlightError(
+                f"Your address has {from_here} jobs queued or running (its films and its own jobs), as many as "
+                "it may: try again when one has finished.",
+                TRY_LATER_SECONDS,
+            )
 
 
 def create_job(
@@ -162,11 +164,13 @@ def create_job(
     """Store a new queued job of ``owner``.
 
     Refused (429, ``TryLaterError``) when the service has ``max_unfinished`` jobs queued or
-    running, or when ``owner`` would pass one of its ``limits`` (None: only the service's).
+    running, or when ``owner`` would pass one of its ``limits`` (None: only the service's),
+    its address's or the anonymous share of the service's cap (``OwnerLimits``).
     """
     stored = clean_json(request, "the job's request")
     size = json_size(stored)
-    with _one_creator_at_a_time(engine) as session:
+    with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        take_write_lock(session)
         now = utc_now()
         unfinished = session.scalar(select(func.count()).select_from(JobRecord).where(JobRecord.status.in_(UNFINISHED)))
         if (unfinished or 0) >= max_unfinished:
@@ -175,10 +179,13 @@ def create_job(
                 TRY_LATER_SECONDS,
             )
         if limits is not None:
+            if limits.address is not None:
+                _check_address(session, limits, max_unfinished)
             _check_owner(session, owner, limits, size, now)
         record = JobRecord(
             id=uuid.uuid4(),
             owner=owner,
+            address=limits.address if limits is not None else None,
             kind=kind,
             status=JobStatus.QUEUED,
             request=stored,
@@ -202,17 +209,34 @@ def get_job(engine: Engine, job_id: uuid.UUID, now: datetime | None = None, *, o
     """
     now = now or utc_now()
     with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        _check_visible(session, job_id, owner, now)
         record = session.get(JobRecord, job_id)
-    if (
-        record is None
-        or (record.expires_at is not None and aware(record.expires_at) <= now)
-        or (owner is not None and record.owner != owner)
-    ):
-        raise JobNotFoundError(
-            f"There is no job {job_id}: it never existed, or it finished and its result has expired.",
-            details={"job_id": str(job_id)},
-        )
+    if record is None:  # deleted since it was looked at
+        raise _not_found(job_id)
     return record
+
+
+def _not_found(job_id: uuid.UUID) -> JobNotFoundError:
+    return JobNotFoundError(
+        f"There is no job {job_id}: it never existed, or it finished and its result has expired.",
+        details={"job_id": str(job_id)},
+    )
+
+
+def _check_visible(session: Session, job_id: uuid.UUID, owner: str | None, now: datetime) -> None:
+    """Raise JobNotFoundError unless the job exists, has not expired and is ``owner``'s (None: anyone's).
+
+    One small query of the job's owner and expiry, the same for a missing job and another
+    owner's: the request and result (megabytes, for a batch) are read only for the owner, so
+    a foreign job's 404 costs what a missing one's does and tells nothing of its size.
+    """
+    found = session.execute(select(JobRecord.owner, JobRecord.expires_at).where(JobRecord.id == job_id)).one_or_none()
+    if (
+        found is None
+        or (found.expires_at is not None and aware(found.expires_at) <= now)
+        or (owner is not None and found.owner != owner)
+    ):
+        raise _not_found(job_id)
 
 
 def find_job(engine: Engine, kind: str, field: str, value: str) -> JobRecord | None:
@@ -238,8 +262,8 @@ def get_job_file(engine: Engine, job_id: uuid.UUID, *, owner: str | None = None)
 
     JobNotFoundError when there is no such job, it has expired, or it is not ``owner``'s (``get_job``).
     """
-    get_job(engine, job_id, owner=owner)
     with Session(engine) as session, storage_errors(session):
+        _check_visible(session, job_id, owner, utc_now())
         row = session.execute(
             select(JobRecord.file_data, JobRecord.file_type).where(JobRecord.id == job_id)
         ).one_or_none()
@@ -264,9 +288,9 @@ def cancel_job(engine: Engine, job_id: uuid.UUID, keep_seconds: float, *, owner:
     JobFinishedError when the job has finished already (its result stays until it expires);
     JobNotFoundError as ``get_job`` (another ``owner``'s job is not touched).
     """
-    get_job(engine, job_id, owner=owner)
     now = utc_now()
     with Session(engine, expire_on_commit=False) as session, storage_errors(session):
+        _check_visible(session, job_id, owner, now)
         changed = session.execute(
             update(JobRecord)
             .where(JobRecord.id == job_id, JobRecord.status.in_(UNFINISHED))
@@ -296,9 +320,12 @@ def aware(value: datetime) -> datetime:
 def claim_job(
     engine: Engine, owner: str, lease_seconds: float, kinds: Sequence[str], keep_seconds: float = 86_400.0
 ) -> JobRecord | None:
-    """Take the oldest queued job of ``kinds``, or a running one whose lease has lapsed; None when there is none.
+    """Take a queued job of ``kinds``, or a running one whose lease has lapsed; None when there is none.
 
-    Jobs of ``FIRST_KINDS`` (films) come before older jobs of other kinds.
+    Round-robin across posters (an anonymous job's address, else its owner), whatever the kind:
+    the job of the poster with the fewest jobs running, then of the poster whose latest job
+    started longest ago (never: first), then the oldest. So one address's many films (of many
+    participants) never hold back a keyed client's batch by more than one job.
 
     Only ``kinds`` (what this replica can do): during an upgrade, an older replica leaves a new
     kind to the newer ones. A job taken over for the ``MAX_ATTEMPTS``-th time is marked failed
@@ -316,7 +343,7 @@ def claim_job(
         for job_id, attempts in session.execute(
             select(JobRecord.id, JobRecord.attempts)
             .where(claimable)
-            .order_by(JobRecord.kind.not_in(FIRST_KINDS), JobRecord.created_at)
+            .order_by(*_round_robin(now), JobRecord.created_at)
             .limit(10)
         ).all():
             if attempts >= MAX_ATTEMPTS:
@@ -352,6 +379,24 @@ def claim_job(
             if _changed(taken):  # else another replica took it between the two statements
                 return session.get(JobRecord, job_id)
     return None
+
+
+def _round_robin(now: datetime) -> tuple[Any, ...]:
+    """Return the claim's order before age: fewest running jobs of the job's poster, then its longest wait.
+
+    The poster is the job's address for anonymous work (so the films of many participants from
+    one address take one turn between them), else its owner (a key, the research token).
+    """
+    same = aliased(JobRecord)
+    poster = func.coalesce(JobRecord.address, JobRecord.owner)
+    same_poster = func.coalesce(same.address, same.owner) == poster
+    running = (
+        select(func.count())
+        .where(same_poster, same.status == JobStatus.RUNNING, same.lease_expires_at >= now)
+        .scalar_subquery()
+    )
+    latest_start = select(func.max(same.started_at)).where(same_poster).scalar_subquery()
+    return running, latest_start.asc().nulls_first()
 
 
 def _mine(job_id: uuid.UUID, owner: str) -> Any:

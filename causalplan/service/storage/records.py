@@ -32,6 +32,8 @@ MAX_CLIENT_ID_LENGTH = 128
 """Longest participant or session id a client may send."""
 MAX_OWNER_LENGTH = 160
 """Longest owner of a job: a kind of client and its id (``address:<address>``, ``participant:<uuid>``, ...)."""
+MAX_ADDRESS_LENGTH = 64
+"""Longest address stored with a job (an IPv6 address takes at most 45 characters)."""
 
 NAMING_CONVENTION = {
     "ix": "ix_%(column_0_label)s",
@@ -67,6 +69,11 @@ class ModelRecord(Base):
     canonical_hash: Mapped[str | None] = mapped_column(String(64), index=True)
     document: Mapped[dict[str, Any]] = mapped_column(JSON)
     report: Mapped[dict[str, Any]] = mapped_column(JSON)
+    owner: Mapped[str | None] = mapped_column(String(MAX_OWNER_LENGTH), index=True)
+    """The client whose storage allowance it counts in (``service.owners``); None: the pages' own, or older."""
+    stored_bytes: Mapped[int] = mapped_column(Integer, server_default="0")
+    expires_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), index=True)
+    """When it is purged (a client without a key, no experiment); None: kept."""
 
     trials: Mapped[list[TrialRecord]] = relationship(back_populates="model")
 
@@ -92,6 +99,10 @@ class TrialRecord(Base):
     cached: Mapped[bool] = mapped_column(Boolean, default=False)
     seconds: Mapped[float] = mapped_column(Float)
     result: Mapped[dict[str, Any]] = mapped_column(JSON)
+    owner: Mapped[str | None] = mapped_column(String(MAX_OWNER_LENGTH), index=True)
+    """As a model's: whose allowance it counts in; None: the pages' own, or older."""
+    stored_bytes: Mapped[int] = mapped_column(Integer, server_default="0")
+    expires_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), index=True)
 
     model: Mapped[ModelRecord] = relationship(back_populates="trials")
 
@@ -274,12 +285,16 @@ class JobRecord(Base):
     __table_args__ = (
         Index("ix_jobs_status_created", "status", "created_at"),
         Index("ix_jobs_owner_status", "owner", "status"),
+        Index("ix_jobs_address_status", "address", "status"),
     )
 
     id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
     owner: Mapped[str] = mapped_column(String(MAX_OWNER_LENGTH), server_default="")
     """The client the job belongs to (``service.owners``): only it, and the research token, may see it.
     Empty for jobs stored before jobs had owners: the research token's alone."""
+    address: Mapped[str | None] = mapped_column(String(MAX_ADDRESS_LENGTH))
+    """The address that posted an anonymous job (an address's own, a participant's film); None for a key's or the
+    research token's. Anonymous jobs share part of the service's cap, and each address has a cap."""
     kind: Mapped[str] = mapped_column(String(32))
     status: Mapped[str] = mapped_column(String(16))
     request: Mapped[dict[str, Any]] = mapped_column(JSON)

@@ -37,6 +37,9 @@ def _tune_sqlite(dbapi_connection: Any, _record: object) -> None:
     # commits (never corrupt the file). Use PostgreSQL where every commit must survive a power cut.
     # SQLite checkpoints by itself; journal_size_limit keeps the log file from staying as large
     # as its largest burst of writes.
+    # Incremental vacuum: a purge gives freed pages back to the file system (storage.allowance).
+    # It takes effect only in a file without tables yet; an older file is converted on its first purge.
+    cursor.execute("PRAGMA auto_vacuum=INCREMENTAL")
     cursor.execute("PRAGMA journal_mode=WAL")
     cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.execute("PRAGMA busy_timeout=10000")
@@ -46,8 +49,19 @@ def _tune_sqlite(dbapi_connection: Any, _record: object) -> None:
     cursor.close()
 
 
-def create_database_engine(url: str) -> Engine:
-    """Return an engine for ``url``; a SQLite file's folder is created if it is missing."""
+KEPT_CONNECTIONS = 5
+"""Connections an engine keeps open between requests; more are opened (up to ``connections``) under load."""
+DEFAULT_CONNECTIONS = 30
+"""Connections at once of an engine not told the concurrency it serves (tools, tests)."""
+
+
+def create_database_engine(url: str, connections: int = DEFAULT_CONNECTIONS) -> Engine:
+    """Return an engine for ``url``; a SQLite file's folder is created if it is missing.
+
+    ``connections``: how many threads may use the database at once (the server's request
+    threads, job runners and background threads: ``Settings.database_connections``); the pool
+    opens that many before a thread must wait, so a burst of requests never finds it exhausted.
+    """
     try:
         parsed = make_url(url)
     except Exception as exc:  # noqa: BLE001 - SQLAlchemy raises several types for a bad URL
@@ -62,11 +76,18 @@ def create_database_engine(url: str) -> Engine:
             ) from None
     try:
         if parsed.get_backend_name() == "sqlite":
-            engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 10})
+            engine = create_engine(
+                url, connect_args={"check_same_thread": False, "timeout": 10}, **_pool_sizes(connections)
+            )
             event.listen(engine, "connect", _tune_sqlite)
         else:
             timeout = {} if "connect_timeout" in parsed.query else {"connect_timeout": CONNECT_TIMEOUT_SECONDS}
-            engine = create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20, connect_args=timeout)
+            engine = create_engine(url, pool_pre_ping=True, connect_args=timeout, **_pool_sizes(connections))
     except Exception as exc:  # noqa: BLE001 - a missing driver or a bad option, reported as such
         raise StorageError(f"Cannot use the database {parsed.render_as_string()}: {exc}") from None
     return engine
+
+
+def _pool_sizes(connections: int) -> dict[str, int]:
+    kept = min(KEPT_CONNECTIONS, connections)
+    return {"pool_size": kept, "max_overflow": connections - kept}

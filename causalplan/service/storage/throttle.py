@@ -1,9 +1,11 @@
 """Limits every replica shares, kept in the database: wrong research tokens, and counts per fixed window.
 
-``FailedAttempts.check`` compares a token only while its client has fewer than ``max_failures``
-failures in the last ``window_seconds`` and all clients together fewer than ``max_total``;
-otherwise it raises ``TooManyAttemptsError`` (429, ``Retry-After``) without comparing, so a
-right guess during a lockout is refused too. Successes are not counted.
+``FailedAttempts.check`` accepts a right token from any address at any time: wrong tokens cost
+only their sender. A wrong one is counted against its client (its address); once the client has
+``max_failures`` failures in the last ``window_seconds``, or all clients together ``max_total``,
+its further wrong tokens get ``TooManyAttemptsError`` (429, ``Retry-After``) instead of 401, and
+are not stored (a client at its limit adds no rows). Successes are not counted. Tokens are long
+(API keys have 16+ characters), so guessing stays hopeless without refusing right ones.
 
 ``WindowCounter.admit`` counts one event of a client in the current fixed window and says
 whether the window still had room; ``PerMinute`` raises a 429 error when it had not (demo
@@ -90,11 +92,14 @@ class FailedAttempts:
     def check(self, client: str, is_correct: Callable[[], bool]) -> bool:
         """Return ``is_correct()``, counting False as a failure of ``client``.
 
-        Raises ``TooManyAttemptsError`` instead, without calling ``is_correct``, while ``client``
-        or all clients together are at their limit in the window.
+        A right token is accepted whatever the counts (no database work). A wrong one raises
+        ``TooManyAttemptsError`` instead of returning False while ``client``, or all clients
+        together, are at their limit in the window.
         """
+        if is_correct():
+            return True
         client = _client_key(client)
-        # The comparison runs under the locks, so concurrent guesses cannot overshoot the limits.
+        # Counted under the locks, so concurrent wrong guesses cannot overshoot the limits.
         with self._lock, _locked_session(self.engine, _THROTTLE_LOCK_ID) as session:
             now = self._clock()
             wait = self._wait(session, client, self.max_failures, now)
@@ -103,8 +108,6 @@ class FailedAttempts:
             wait = self._wait(session, None, self.max_total, now)
             if wait is not None:
                 raise TooManyAttemptsError(f"Too many wrong tokens lately: try again in {wait} s.", wait)
-            if is_correct():
-                return True
             session.execute(delete(FailedAttemptRecord).where(FailedAttemptRecord.at <= now - self.window_seconds))
             session.add(FailedAttemptRecord(client=client, at=now))
             return False

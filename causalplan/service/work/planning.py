@@ -9,6 +9,7 @@ pool it runs; ``calls.Workers`` runs them.
 from __future__ import annotations
 
 import re
+import time
 from dataclasses import dataclass
 from importlib import metadata
 from importlib.util import find_spec
@@ -85,6 +86,8 @@ class RepairArguments:
     planner: str
     time_limit: float
     val: bool = False
+    seconds: float = 10.0
+    """The whole search's budget, whatever ``time_limit`` is: it stops there with what it found."""
 
 
 @dataclass(frozen=True)
@@ -156,13 +159,16 @@ def repairs(arguments: RepairArguments, catalog: Catalog) -> dict[str, object] |
     """Return the repairs of a failed transfer (``RepairSearch.as_dict()``), or None when it does not fail."""
     from causalplan.explain.repair import search_repairs
 
+    deadline = time.monotonic() + arguments.seconds
     model, mapping, planner, limit = arguments.model, arguments.mapping, arguments.planner, arguments.time_limit
-    verdict = evaluate_transfer(model, mapping, catalog, planner, limit, val=arguments.val)
+    verdict = evaluate_transfer(model, mapping, catalog, planner, min(limit, arguments.seconds), val=arguments.val)
     if verdict.verdict is not Verdict.FAILS:
         return None
-    return search_repairs(
-        model, mapping, catalog, verdict, planner=planner, time_limit=limit, val=arguments.val
-    ).as_dict()
+    left = max(0.0, deadline - time.monotonic())
+    search = search_repairs(
+        model, mapping, catalog, verdict, planner=planner, time_limit=limit, val=arguments.val, seconds=left
+    )
+    return search.as_dict()
 
 
 def _version(distribution: str) -> str | None:

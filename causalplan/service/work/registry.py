@@ -43,8 +43,6 @@ SIMULATION_SECONDS = 30.0
 """Time a worker gets for the simulation and its picture, beyond the planner's limit."""
 PLANS_PER_EXPLANATION = 2
 """An explanation plans at most twice (the plan, and a why-not's alternative): its time limit is twice a plan's."""
-REPAIR_TIME_FACTOR = 10
-"""A repair search re-checks many edited models; most are decided without planning, the rest share cached solves."""
 PICTURE_SECONDS = 20.0
 """Longest a worker may take to draw an object's parts or a plan's result."""
 PROBE_SECONDS = 60.0
@@ -140,7 +138,7 @@ REPAIRS: Work[RepairArguments, dict[str, Any] | None] = Work(
     planning.repairs,
     RepairArguments,
     Pool.INTERACTIVE,
-    lambda a, s: REPAIR_TIME_FACTOR * a.time_limit + s.solve_grace_seconds,
+    lambda a, s: a.seconds + s.solve_grace_seconds,
 )
 PART_PICTURES: Work[PartPicturesArguments, dict[str, bytes]] = Work(
     "part_pictures", pictures.part_pictures, PartPicturesArguments, Pool.INTERACTIVE, lambda a, s: PICTURE_SECONDS

@@ -42,6 +42,7 @@ def test_a_failed_transfer_carries_its_repairs_when_asked(client: TestClient) ->
     assert body["verdict"] == "fails"
     repairs = body["repairs"]
     assert repairs["found"] >= 1 and repairs["repairs"][0]["verdict"] == "transfers"
+    assert repairs["complete"] is True  # well within its budget (CAUSALPLAN_SEARCH_SECONDS)
     plain = client.post("/v1/transfers", json={**asked, "repair": False}).json()
     assert plain["repairs"] is None
 

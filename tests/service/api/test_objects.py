@@ -47,8 +47,8 @@ def test_health_reports_planners_database_pool_and_limits(client: TestClient) ->
     assert health["database"] == {
         "reachable": True,
         "backend": "sqlite",
-        "revision": "0008",
-        "expected_revision": "0008",
+        "revision": "0010",
+        "expected_revision": "0010",
         "problem": None,
     }
     assert health["pool"]["workers"] == 2 and health["pool"]["max_in_flight"] == 18

@@ -10,6 +10,7 @@ import json
 import logging
 import uuid
 from collections.abc import Iterator
+from dataclasses import replace
 from datetime import timedelta
 from pathlib import Path
 from typing import Any
@@ -26,10 +27,14 @@ from causalplan.consensus.population import population
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.api.schemas.jobs import JOB_EXAMPLES
 from causalplan.service.errors import JobNotFoundError
+from causalplan.service.jobs.kinds import CHUNK_SIZE, judge_in_chunks, read_uploaded_trials
+from causalplan.service.jobs.work import Progress
 from causalplan.service.storage import jobs as store
 from causalplan.service.storage.migrate import upgrade
 from causalplan.service.storage.records import JobRecord, utc_now
 from causalplan.service.storage.session import create_database_engine
+from causalplan.service.work.registry import JUDGED_TRIALS
+from tests.conftest import EXAMPLES
 from tests.service.fixtures import (
     DESK_LAMP,
     KEY_AUTH,
@@ -44,6 +49,7 @@ from tests.service.fixtures import (
 )
 from tests.service.jobs.test_runner import finished, start
 from tests.service.pages.flows import new_participant, post
+from tests.service.pool.jobs_for_tests import DyingTrials, judge_or_die
 
 SMALL = {"robot_video_width": 96, "robot_video_height": 72}
 """A small film keeps the tests quick; the robot's run is the same at any size."""
@@ -371,16 +377,6 @@ def test_a_job_cancelled_through_another_replica_stops_its_worker(tmp_path: Path
         assert client.get(url).json()["status"] == "cancelled"
 
 
-def test_a_film_is_taken_before_older_jobs_of_other_kinds(tmp_path: Path) -> None:
-    engine = create_database_engine(sqlite_url(tmp_path))
-    upgrade(engine)
-    batch = store.create_job(engine, "batch", {"trials": "x"}, 1, 10, owner=TEST_CLIENT_OWNER).id
-    film = store.create_job(engine, "video", {"video": "mp4"}, 1, 10, owner=TEST_CLIENT_OWNER).id
-    first, second = (store.claim_job(engine, "replica", 30, ["batch", "video"]) for _ in range(2))
-    assert first is not None and second is not None and (first.id, second.id) == (film, batch)
-    engine.dispose()
-
-
 def test_a_participants_film_is_found_again_unless_it_failed(tmp_path: Path) -> None:
     engine = create_database_engine(sqlite_url(tmp_path))
     upgrade(engine)
@@ -391,3 +387,28 @@ def test_a_participants_film_is_found_again_unless_it_failed(tmp_path: Path) -> 
     store.cancel_job(engine, made, 60)
     assert store.find_job(engine, "video", "film", "k1") is None  # a cancelled film is filmed again
     engine.dispose()
+
+
+def test_a_dead_worker_costs_one_chunk_not_the_batch(tmp_path: Path) -> None:
+    settings = settings_for(sqlite_url(tmp_path), planning_workers=1, job_runners=0)
+    lines = (EXAMPLES / "batch" / "trials.jsonl").read_text(encoding="utf-8").splitlines()
+    trials = read_uploaded_trials("\n".join(lines * 2), 1000)[: 3 * CHUNK_SIZE]
+    trials[CHUNK_SIZE + 3] = replace(trials[CHUNK_SIZE + 3], id="die")  # its chunk's worker dies, and its retry's
+    trials[2 * CHUNK_SIZE + 5] = replace(trials[2 * CHUNK_SIZE + 5], id="die-once")  # dies once: the retry judges it
+    marker = tmp_path / "died-once"
+    reported: list[tuple[int, int]] = []
+    with running_client(settings) as client:
+        services = services_of(client)
+        progress = Progress(lambda done, total: reported.append((done, total)))
+        dying = replace(JUDGED_TRIALS, name="judge_or_die", function=judge_or_die)
+        results = judge_in_chunks(
+            services, progress, trials, lambda chunk: DyingTrials(chunk, "fd", 20.0, False, False, str(marker)), dying
+        )
+    assert [result.trial_id for result in results] == [trial.id for trial in trials]  # every trial, in order
+    lost = results[CHUNK_SIZE : 2 * CHUNK_SIZE]
+    assert all(result.verdict.verdict.value == "undecided" for result in lost)
+    assert all([reason.code for reason in result.verdict.reasons] == ["worker_crashed"] for result in lost)
+    assert "died twice" in lost[0].verdict.reasons[0].message
+    judged = results[:CHUNK_SIZE] + results[2 * CHUNK_SIZE :]
+    assert all(result.verdict.decided_by != "worker" for result in judged)  # kept, and the retried chunk judged
+    assert marker.exists() and reported[-1] == (len(trials), len(trials))

@@ -300,9 +300,12 @@ def test_a_finished_job_expires(tmp_path: Path) -> None:
 def test_the_queue_of_unfinished_jobs_is_bounded(tmp_path: Path) -> None:
     settings = settings_for(sqlite_url(tmp_path), planning_workers=1, job_runners=0, max_queued_jobs=2)
     with running_client(settings) as client:
-        for _ in range(2):
-            start(client, {"kind": "batch", "trials": first_trials(1)})
-        refused = client.post("/v1/jobs", json={"kind": "batch", "trials": first_trials(1)})
+        start(client, {"kind": "batch", "trials": first_trials(1)})
+        anonymous = client.post("/v1/jobs", json={"kind": "batch", "trials": first_trials(1)})
+        assert error_of(anonymous, 429)["code"] == "too_many_jobs"  # clients without a key: half the cap
+        keyed = client.post("/v1/jobs", json={"kind": "batch", "trials": first_trials(1)}, headers=KEY_AUTH)
+        assert keyed.status_code == 202, keyed.text  # the other half is the keys'
+        refused = client.post("/v1/jobs", json={"kind": "batch", "trials": first_trials(1)}, headers=KEY_AUTH)
         assert error_of(refused, 429)["code"] == "too_many_jobs" and refused.headers["retry-after"] == "30"
 
 

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import os
 import time
+from dataclasses import dataclass
 from typing import Any
+
+from causalplan.service.work.batches import TrialsArguments
 
 SLOW_JOB_SECONDS = 2.0
 
@@ -65,3 +68,40 @@ def start_a_session_then_hang(pid_file: str) -> dict[str, object]:
         handle.write(str(child.pid))
     time.sleep(3600)
     return {}
+
+
+@dataclass(frozen=True)
+class DyingTrials(TrialsArguments):
+    """A chunk of trials whose worker dies for a trial named to (see ``judge_or_die``)."""
+
+    marker: str = ""
+
+
+def judge_or_die(arguments: DyingTrials, catalog: Any) -> list[Any]:
+    """Judge a batch chunk as the jobs' ``JUDGED_TRIALS`` does, but kill this worker first for a trial named to.
+
+    Trial id ``die``: always; ``die-once``: only while the marker file is absent, which the
+    first death leaves behind.
+    """
+    import signal
+    from pathlib import Path
+
+    from causalplan.service.work.batches import judged_trials
+
+    ids = {trial.id for trial in arguments.trials}
+    if "die" in ids or ("die-once" in ids and not Path(arguments.marker).exists()):
+        Path(arguments.marker).touch()
+        os.kill(os.getpid(), signal.SIGKILL)
+    return judged_trials(arguments, catalog)
+
+
+def die_once(marker: str, value: str) -> str:
+    """Kill this worker the first time (leaving ``marker``), return ``value`` after; ``marker`` '': always die."""
+    import signal
+    from pathlib import Path
+
+    if not marker or not Path(marker).exists():
+        if marker:
+            Path(marker).touch()
+        os.kill(os.getpid(), signal.SIGKILL)
+    return value

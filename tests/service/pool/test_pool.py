@@ -179,7 +179,8 @@ def test_a_full_queue_with_a_waiting_line(tmp_path: Path, monkeypatch: pytest.Mo
         running = post_in_background(client, {"model": with_unique_effect(DESK_LAMP)})
         wait_until(lambda: pool.stats().busy == 1)
         waiting = post_in_background(client, {"model": with_unique_effect(DESK_LAMP)})
-        wait_until(lambda: pool.stats().waiting == 1)
+        # The waiting line is the fair share's, in front of the pool (service/fair_share.py).
+        wait_until(lambda: pool.fair_share.stats()["waiting"] == 1)
         assert error_of(client.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}), 429)
         for thread, responses in (running, waiting):
             thread.join()

@@ -67,17 +67,11 @@ def fail(attempts: FailedAttempts, address: str, times: int) -> None:
 
 
 def retry_after(attempts: FailedAttempts, address: str) -> int:
-    """Return the Retry-After of a refused attempt of ``address`` (asserting it is refused, unchecked)."""
-    compared: list[str] = []
-
-    def is_correct() -> bool:
-        compared.append(address)
-        return True
-
+    """Return the Retry-After of a refused wrong token of ``address``; assert a right one is still accepted."""
     with pytest.raises(TooManyAttemptsError) as refused:
-        attempts.check(address, is_correct)
-    assert compared == []  # refused without comparing: a right guess is refused too
+        attempts.check(address, wrong)
     assert refused.value.headers == {"Retry-After": str(refused.value.retry_after)}
+    assert attempts.check(address, right) is True  # wrong tokens cost only their sender, never a right token
     return refused.value.retry_after
 
 
@@ -144,7 +138,7 @@ def test_failures_from_many_clients_together_are_limited_too(engine: Engine) -> 
     attempts = FailedAttempts(engine, MAX_FAILURES, WINDOW, 5, clock=clock)
     for client in range(5):
         fail(attempts, f"client-{client}", 1)
-    assert retry_after(attempts, "a new client") == 60  # even the right token, from anyone
+    assert retry_after(attempts, "a new client") == 60  # a wrong token, from anyone; the right one passes
     clock.now += WINDOW
     assert attempts.check("a new client", right) is True
 
@@ -158,7 +152,7 @@ def test_concurrent_wrong_guesses_cannot_overshoot_the_limit(engine: Engine) -> 
     def guess(number: int) -> None:
         def is_correct() -> bool:
             compared.append(number)
-            time.sleep(0)  # let the other threads run mid-comparison (no waiting: the lock must hold them)
+            time.sleep(0)  # let the other threads run mid-comparison (no waiting: the lock must hold the counts)
             return False
 
         start.wait()
@@ -172,7 +166,9 @@ def test_concurrent_wrong_guesses_cannot_overshoot_the_limit(engine: Engine) -> 
         thread.start()
     for thread in threads:
         thread.join()
-    assert len(compared) == MAX_FAILURES and len(refused) == 16 - MAX_FAILURES
+    assert len(compared) == 16 and len(refused) == 16 - MAX_FAILURES
+    with Session(engine) as session:
+        assert session.scalar(select(func.count()).select_from(FailedAttemptRecord)) == MAX_FAILURES
 
 
 def test_limits_must_be_positive(engine: Engine) -> None:
@@ -248,30 +244,33 @@ def test_the_app_counts_failures_with_its_settings(app_client: TestClient) -> No
     client = client_at(app_client, "192.0.2.99")
     for _ in range(MAX_FAILURES):
         assert error_of(client.get("/v1/trials", headers=WRONG), 401)["code"] == "not_authenticated"
-    refused = client.get("/v1/trials", headers=AUTH)
+    refused = client.get("/v1/trials", headers=WRONG)
     assert error_of(refused, 429)["code"] == "too_many_attempts"
     assert 1 <= int(refused.headers["retry-after"]) <= WINDOW
 
 
-def test_after_max_wrong_tokens_even_the_right_one_gets_429(app_client: TestClient, clock: FakeClock) -> None:
+def test_after_max_wrong_tokens_wrong_ones_get_429_and_the_right_one_works(
+    app_client: TestClient, clock: FakeClock
+) -> None:
     client = client_at(app_client)
     for path in ("/v1/trials", "/v1/experiments", "/v1/export"):  # one count across the research endpoints
         assert error_of(client.get(path, headers=WRONG), 401)["code"] == "not_authenticated"
     clock.now += 15
     for path in ("/v1/trials", "/v1/export", "/v1/experiments", "/research"):
-        refused = client.get(path, headers=AUTH)
+        refused = client.get(path, headers=WRONG)
         assert refused.status_code == 429 and refused.headers["retry-after"] == "45", path
-    error = error_of(client.get("/v1/trials", headers=AUTH), 429)
+        assert client.get(path, headers=AUTH).status_code == 200, path  # wrong tokens cost only their sender
+    error = error_of(client.get("/v1/trials", headers=WRONG), 429)
     assert error == {
         "code": "too_many_attempts",
         "message": "Too many wrong tokens from this address: try again in 45 s.",
         "details": {"retry_after": 45},
     }
     clock.now += 45
-    assert client.get("/v1/trials", headers=AUTH).status_code == 200
+    assert error_of(client.get("/v1/trials", headers=WRONG), 401)["code"] == "not_authenticated"
 
 
-def test_right_tokens_before_the_limit_keep_working(app_client: TestClient, clock: FakeClock) -> None:
+def test_right_tokens_keep_working_whatever_the_wrong_ones(app_client: TestClient, clock: FakeClock) -> None:
     client = client_at(app_client)
     for _ in range(MAX_FAILURES - 1):
         assert client.get("/v1/trials", headers=WRONG).status_code == 401
@@ -280,7 +279,8 @@ def test_right_tokens_before_the_limit_keep_working(app_client: TestClient, cloc
         assert client.get("/v1/experiments", headers=AUTH).status_code == 200
         assert client.get("/v1/trials").status_code == 401  # no token at all is no guess
     assert client.get("/v1/trials", headers=WRONG).status_code == 401
-    assert client.get("/v1/trials", headers=AUTH).status_code == 429
+    assert client.get("/v1/trials", headers=WRONG).status_code == 429
+    assert client.get("/v1/trials", headers=AUTH).status_code == 200
 
 
 def test_the_sign_in_form_says_when_to_try_again(app_client: TestClient, clock: FakeClock) -> None:
@@ -289,17 +289,16 @@ def test_the_sign_in_form_says_when_to_try_again(app_client: TestClient, clock: 
         refused = sign_in(client, "guess")
         assert refused.status_code == 401 and "That is not the research token." in refused.text
     clock.now += 0.5
-    locked = sign_in(client, RESEARCH_TOKEN)
+    locked = sign_in(client, "another guess")
     assert locked.status_code == 429 and locked.headers["retry-after"] == "60"
     assert "Too many wrong tokens from your address" in locked.text and "try again in 60 s." in locked.text
     assert "That is not the research token." not in locked.text
     assert "set-cookie" not in locked.headers and "<form" in locked.text
-    clock.now += WINDOW
-    signed_in = sign_in(client, RESEARCH_TOKEN)
+    signed_in = sign_in(client, RESEARCH_TOKEN)  # the right token, from this address, during the lockout
     assert signed_in.status_code == 303 and "set-cookie" in signed_in.headers
 
 
-def test_a_lockout_refuses_bearer_tokens_on_pages_but_keeps_signed_in_researchers_in(
+def test_a_lockout_refuses_wrong_bearer_tokens_on_pages_and_keeps_researchers_in(
     app_client: TestClient, clock: FakeClock
 ) -> None:
     client = client_at(app_client)
@@ -307,7 +306,8 @@ def test_a_lockout_refuses_bearer_tokens_on_pages_but_keeps_signed_in_researcher
     for _ in range(MAX_FAILURES):
         assert client.get("/v1/trials", headers=WRONG).status_code == 401
     assert client.get("/research").status_code == 200  # the cookie is no token guess
-    page = client.get("/research", headers=AUTH)
+    assert client.get("/research", headers=AUTH).status_code == 200
+    page = client.get("/research", headers=WRONG)
     assert page.status_code == 429 and page.headers["retry-after"] == "60"
     assert "Please try again shortly" in page.text and "try again in 60 s." in page.text
 
@@ -316,7 +316,7 @@ def test_another_address_is_not_affected(app_client: TestClient, clock: FakeCloc
     locked_out = client_at(app_client, "203.0.113.1")
     for _ in range(MAX_FAILURES):
         locked_out.get("/v1/trials", headers=WRONG)
-    assert locked_out.get("/v1/trials", headers=AUTH).status_code == 429
+    assert locked_out.get("/v1/trials", headers=WRONG).status_code == 429
     other = client_at(app_client, "198.51.100.2")
     assert other.get("/v1/trials", headers=AUTH).status_code == 200
     assert other.get("/v1/trials", headers=WRONG).status_code == 401
@@ -344,7 +344,7 @@ def test_a_new_forwarded_address_per_request_does_not_reset_the_count(tmp_path: 
         for attempt in range(MAX_FAILURES):
             forwarded = {**WRONG, "X-Forwarded-For": f"10.0.0.{attempt}"}
             assert client.get("/v1/trials", headers=forwarded).status_code == 401
-        refused = client.get("/v1/trials", headers={**AUTH, "X-Forwarded-For": "10.0.0.99"})
+        refused = client.get("/v1/trials", headers={**WRONG, "X-Forwarded-For": "10.0.0.99"})
         assert error_of(refused, 429)["code"] == "too_many_attempts"
 
 
@@ -368,10 +368,10 @@ def test_behind_a_trusted_proxy_the_forwarded_client_is_counted(behind_proxy: Te
         # What the client sent comes first; the proxy appends the address it saw.
         chain = f"10.9.9.{attempt}, 198.51.100.7"
         assert proxy.get("/v1/trials", headers={**WRONG, "X-Forwarded-For": chain}).status_code == 401
-    refused = proxy.get("/v1/trials", headers={**AUTH, "X-Forwarded-For": "10.9.9.200, 198.51.100.7"})
+    refused = proxy.get("/v1/trials", headers={**WRONG, "X-Forwarded-For": "10.9.9.200, 198.51.100.7"})
     assert error_of(refused, 429)["code"] == "too_many_attempts"
-    other = proxy.get("/v1/trials", headers={**AUTH, "X-Forwarded-For": "198.51.100.8"})
-    assert other.status_code == 200  # another client behind the same proxy
+    other = proxy.get("/v1/trials", headers={**WRONG, "X-Forwarded-For": "198.51.100.8"})
+    assert other.status_code == 401  # another client behind the same proxy is not locked out
 
 
 def test_trusted_proxies_must_be_addresses_or_networks() -> None:

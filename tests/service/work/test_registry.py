@@ -78,7 +78,7 @@ def test_time_limits_follow_the_request_and_the_settings(model_and_mapping: tupl
     assert seconds(registry.QUEUED_SIMULATION, simulation) == solve
     assert seconds(registry.QUEUED_SIMULATION, dataclasses.replace(simulation, robot=True)) == solve + 50.0
     assert seconds(registry.EXPLANATION, ExplanationArguments(model, None, "fd", LIMIT, "1", None)) == 2 * LIMIT + 2.0
-    assert seconds(registry.REPAIRS, RepairArguments(model, mapping, "fd", LIMIT)) == 10 * LIMIT + 2.0
+    assert seconds(registry.REPAIRS, RepairArguments(model, mapping, "fd", LIMIT, seconds=7.0)) == 7.0 + 2.0
     film = PlanFilmArguments(model, None, "fd", LIMIT, False, "mp4", (160, 120), Path("progress.json"))
     assert seconds(registry.FILM_OF_PLAN, film) == solve + 50.0
     fit = FitEstimateArguments("desk_lamp", "bulb_into_socket", 200, 1, 1.0, 2.0)

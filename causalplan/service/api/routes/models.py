@@ -68,7 +68,7 @@ def create_model(
     limit = PerMinute(services.engine, "model", services.settings.models_per_minute, TooManyModelsError)
     limit.admit(client_address(request, services.settings))
     submission = read_model(document, services, client)
-    crud.save(services.engine, [submission.record])
+    crud.save(services.engine, [submission.record], client)
     if not submission.is_valid:
         raise InvalidModelError(
             "The model is invalid: "

@@ -53,7 +53,7 @@ def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDe
             str(test_object) if test_object is not None else None,
         ).as_dict()
         trial = crud.new_trial_record(submission.record.id, mapping.document, planner, verdict, False, 0.0, client)
-        crud.save(services.engine, [*new_records, trial])
+        crud.save(services.engine, [*new_records, trial], client)
         problem.details.update({"verdict": verdict, "trial_id": str(trial.id)})
         raise problem
     assert submission.model is not None and mapping.mapping is not None
@@ -62,10 +62,11 @@ def create_transfer(body: TransferIn, services: ServicesDep, client: ClientIdsDe
     trial = crud.new_trial_record(
         submission.record.id, mapping.document, planner, answer.data, answer.cached, answer.seconds, client
     )
-    crud.save(services.engine, [*new_records, trial])
+    crud.save(services.engine, [*new_records, trial], client)
     repairs = None
     if body.repair and answer.data["verdict"] == "fails":
-        repairs = services.work.run(REPAIRS, RepairArguments(model, mapping.mapping, planner, time_limit, val))
+        budget = services.settings.search_seconds  # its own, whatever time_limit is: it stops with what it found
+        repairs = services.work.run(REPAIRS, RepairArguments(model, mapping.mapping, planner, time_limit, val, budget))
     return TransferOut.model_validate(
         {
             **answer.data,

@@ -148,7 +148,9 @@ _ERROR_DESCRIPTIONS = {
     404: "No such model or object.",
     413: "The request body is over the limit.",
     422: "Invalid request, model or mapping (codes as `causalplan check`), or over a limit.",
-    429: "All planner workers are busy and the queue is full; see Retry-After.",
+    429: "All planner workers are busy and the queue is full (`queue_full`), this client has as many planner "
+    "requests running or waiting as it may (`too_many_requests_in_flight`), or its stored models, trials and jobs "
+    "fill its allowance (`storage_full`); see Retry-After.",
     503: "A planner worker crashed (it has been replaced), or the database is unavailable.",
     504: "A planner worker overran its time limit and was stopped.",
 }
@@ -173,8 +175,9 @@ JOB_LIMIT_RESPONSE: dict[str, Any] = {
     "model": ErrorOut,
     "description": "Over a limit; see Retry-After. The service's unfinished jobs (`too_many_jobs`), or this "
     "client's: jobs queued or running (`too_many_jobs_in_flight`), megabytes its jobs keep stored "
-    "(`job_storage_full`), jobs posted this minute (`too_many_job_starts`); or too many wrong bearer tokens "
-    "from this address (`too_many_attempts`).",
+    "(`job_storage_full`: its jobs, models and trials), jobs posted this minute (`too_many_job_starts`); its "
+    "address's jobs (`too_many_jobs_in_flight`) or the share of clients without a key (`too_many_jobs`); or too "
+    "many wrong bearer tokens from this address (`too_many_attempts`).",
 }
 """The 429 of a route that queues a job: every limit a job passes, each with its own code."""
 JOB_CLIENT_RESPONSES: dict[int | str, dict[str, Any]] = {

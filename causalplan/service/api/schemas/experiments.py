@@ -17,7 +17,13 @@ MAX_PART_TEXT = 10_000
 # -- experiments (researchers, bearer token) --------------------------------------------------------
 
 
-class ConditionIn(InputModel):
+class StrictInputModel(InputModel):
+    """A research route's body: JSON types as declared (no 0 for a boolean, no "5" for a number)."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+
+class ConditionIn(StrictInputModel):
     name: str = Field(min_length=1, max_length=100, description="e.g. 'near' or 'far'.", examples=["near"])
     training: list[ObjectId] = Field(
         min_length=1, max_length=2, description="Catalog ids of the training objects: one, or two one model explains."
@@ -25,7 +31,7 @@ class ConditionIn(InputModel):
     tests: list[ObjectId] = Field(min_length=1, max_length=8, description="Catalog ids of the test objects (new ones).")
 
 
-class ExperimentIn(InputModel):
+class ExperimentIn(StrictInputModel):
     """POST /v1/experiments: a new experiment."""
 
     name: str = Field(min_length=1, max_length=200)
@@ -48,6 +54,7 @@ class ExperimentIn(InputModel):
 
     model_config = ConfigDict(
         extra="forbid",
+        strict=True,
         json_schema_extra={
             "examples": [
                 {
@@ -62,7 +69,7 @@ class ExperimentIn(InputModel):
     )
 
 
-class RecruitmentIn(InputModel):
+class RecruitmentIn(StrictInputModel):
     """PUT /v1/experiments/{id}/recruitment: how the public link recruits (every field optional)."""
 
     consent_text: str = Field(
@@ -83,8 +90,6 @@ class RecruitmentIn(InputModel):
     quotas: dict[str, int | None] = Field(
         default={}, description="Condition name -> most participants on the public link (null: no limit)."
     )
-
-    model_config = ConfigDict(extra="forbid")
 
 
 class RecruitmentOut(OutputModel):
@@ -138,7 +143,7 @@ class ExperimentOut(OutputModel):
     links: ExperimentLinks
 
 
-class LinksIn(InputModel):
+class LinksIn(StrictInputModel):
     """POST /v1/experiments/{id}/participants: make participant links."""
 
     count: int = Field(ge=1, le=500, description="How many links to make.")

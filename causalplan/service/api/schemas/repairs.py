@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from pydantic import Field
+
 from causalplan.service.api.schemas.common import OutputModel
 
 
@@ -32,4 +34,9 @@ class RepairsOut(OutputModel):
     by_size: dict[int, int]
     checked: int
     max_edits: int
+    complete: bool = Field(
+        default=True,
+        description="False when the search stopped at its time budget (CAUSALPLAN_SEARCH_SECONDS) before checking "
+        "every edit set: the repairs are those found until then.",
+    )
     repairs: list[RepairOut]
