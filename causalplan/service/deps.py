@@ -19,6 +19,7 @@ from causalplan.service.answers import Answerer
 from causalplan.service.caches import ServiceCaches
 from causalplan.service.errors import NotAuthenticatedError, ParticipantIdReservedError, ResearchDisabledError
 from causalplan.service.pool.pool import PlannerPool
+from causalplan.service.readiness import Readiness
 from causalplan.service.storage.crud import PAGE_SESSION_PREFIX, ClientIds
 from causalplan.service.storage.experiments import is_participant
 from causalplan.service.storage.records import MAX_CLIENT_ID_LENGTH
@@ -63,6 +64,8 @@ class Services:
     """This replica's job runner (started after the pool)."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
+    readiness: Readiness = field(default_factory=Readiness)
+    """Whether the pool has answered its first plan (``GET /health/ready``)."""
 
     @property
     def answers(self) -> Answerer:
