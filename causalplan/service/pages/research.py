@@ -237,6 +237,7 @@ async def set_recruitment(
                 "comprehension_tries": _whole_number(form, "comprehension_tries", "The number of tries"),
                 "too_fast_seconds": _whole_number(form, "too_fast_seconds", "The too-fast threshold"),
                 "require_platform_id": form.text("require_platform_id", "", max_length=8) == "yes",
+                "places_per_client": _whole_number(form, "places_per_client", "The places per client address"),
                 "demographics": form.texts("demographics", max_count=len(DEMOGRAPHICS), max_length=40),
                 "quotas": {
                     name: _whole_number(form, f"quota:{index}", f"The quota of condition '{name}'")
