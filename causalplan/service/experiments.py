@@ -14,6 +14,7 @@ from typing import Any, NamedTuple
 from fastapi import Request, Response
 from sqlalchemy.orm import Session
 
+from causalplan.consensus.plausibility import MappingPlausibility
 from causalplan.errors import InputFileError, UnknownObjectError
 from causalplan.objects.catalog import Catalog
 from causalplan.service.api.schemas.experiments import (
@@ -238,7 +239,7 @@ def export(
 def _analysis(data: dict[str, Any], catalog: Catalog) -> Analysis | str:
     """Return the study's analysis (``causalplan analyze`` on its export ``data``), or why it cannot be made."""
     try:
-        return analyse_export(data, catalog)
+        return analyse_export(data, catalog, MappingPlausibility(catalog))
     except (ExportError, UnknownObjectError) as exc:
         return exc.message
 

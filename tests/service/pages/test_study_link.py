@@ -20,7 +20,7 @@ from causalplan.cli import app
 from causalplan.service.pages.upkeep import purge
 from causalplan.service.storage.records import ArrivalRecord, ParticipantRecord, TrialRecord, utc_now
 from tests.service.fixtures import AUTH, RESEARCH_TOKEN, running_client, services_of, settings_for, sqlite_url
-from tests.service.pages.flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, post
+from tests.service.pages.flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, links, post
 
 WRONG_ANSWERS = {**TUTORIAL_ANSWERS, "answer:diffuse": "yes"}
 ARRIVALS_PER_MINUTE = 3
@@ -432,3 +432,29 @@ def test_a_bot_looping_from_one_address_gets_two_places_and_a_real_visitor_still
     visitor = TestClient(client.app, client=("198.51.100.7", 50000))  # the running app, another address
     code = join(visitor, created["id"], prolific("real-visitor"))
     assert visitor.get(f"/p/{code}").status_code == 200
+
+
+def test_a_transfer_resting_on_an_electric_function_given_to_the_match_is_shown_and_set_aside(
+    client: TestClient, tmp_path: Path
+) -> None:
+    conditions = [{"name": "far", "training": ["desk_lamp"], "tests": ["candle"]}]
+    created = experiment(client, conditions=conditions)
+    (participant,) = links(client, created["id"])
+    electric = {
+        "chosen:wax": "provide electricity",
+        "chosen:wick": "turn electricity into light",
+        "chosen:match": "close the circuit",
+    }
+    complete(client, participant["code"], electric)
+    data = exported(client, created["id"])
+    assert [trial["verdict"] for trial in data["trials"]] == ["transfers"]  # the planner alone lets it through
+    post(client, "/research/login", {"token": RESEARCH_TOKEN, "next": "/research"})
+    page = client.get(f"/research/experiments/{created['id']}").text
+    client.cookies.clear()
+    assert "1 of 1 analysed transfers rest on an implausible mapping" in page
+    assert 'id="implausible-transfers"' in page and "match: close the circuit" in page
+    path = tmp_path / "export.json"
+    path.write_text(json.dumps(data), encoding="utf-8")
+    result = CliRunner().invoke(app, ["analyze", str(path), "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert "with every transfer, 0/0 without the implausible ones" in " ".join(result.output.split())
