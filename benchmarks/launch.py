@@ -8,9 +8,10 @@ own), waits until both are ready (``/health/ready``), defines a two-condition ex
 tutorial and quotas, and sends N participants (unique PROLIFIC_PID and SESSION_ID) arriving
 evenly over ``--arrival-seconds``, with Locust in library mode: study link, consent, tutorial,
 steps 1-3 and the end, a think time before each form. No sticky sessions: each request goes to
-a replica picked at random. Halfway through the arrivals one replica is killed with SIGKILL
-(its process group: server and workers); a request that was in flight to it, or that finds it
-gone, is retried once on the other, and later requests go to the live one only.
+a replica picked at random. Halfway through the arrivals, at a moment a request is in flight to
+it, one replica is killed with SIGKILL (its process group: server and workers); a request that
+was in flight to it, or that finds it gone, is retried once on the other, and later requests go
+to the live one only.
 
 It reports the completions against the quota (the documented over-admission: 10 % of each
 condition's quota, rounded down), the conditions' balance, the saves the service acknowledged
@@ -61,6 +62,8 @@ TOKEN = "launch-day-research-token-0123456789"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 READY_SECONDS = 300.0
 REQUEST_SECONDS = 120.0
+KILL_WAIT_SECONDS = 30.0
+"""Halfway, the kill waits this long at most for a request in flight to the doomed replica."""
 OVER_ADMISSION = 0.1
 """The service's default ``over_admission``: completions may pass each quota by this share, rounded down."""
 CONDITIONS = [
@@ -102,6 +105,7 @@ class Replica:
     process: subprocess.Popen[bytes]
     log: Path
     alive: bool = True
+    in_flight: int = 0
     server_errors: int = 0
     answers: int = 0
 
@@ -168,6 +172,7 @@ class Participant(HttpUser):
             if replica is None:
                 break
             tried = replica
+            replica.in_flight += 1
             with self.client.request(
                 method,
                 replica.url + path,
@@ -178,6 +183,7 @@ class Participant(HttpUser):
                 timeout=REQUEST_SECONDS,
                 catch_response=True,
             ) as response:
+                replica.in_flight -= 1
                 if response.status_code == 0:  # no answer: the replica died under it, or before
                     response.success()  # counted below as a retry, not as the page's failure
                     if attempt == 0:
@@ -420,10 +426,15 @@ def main() -> int:
         started = time.monotonic()
         runner.start(options.participants, spawn_rate=options.participants / options.arrival_seconds)
         killed_at = None
+        in_flight_at_kill = 0
         gevent.sleep(options.arrival_seconds / 2)
         if not options.no_kill:
-            replicas[0].alive = False  # the balancer sends nothing new there...
-            stop(replicas[0], kill=True)  # ...and whatever was in flight there is cut off
+            waited = time.monotonic()
+            while replicas[0].in_flight == 0 and time.monotonic() - waited < KILL_WAIT_SECONDS:
+                gevent.sleep(0.005)  # kill it mid-request when one comes
+            in_flight_at_kill = replicas[0].in_flight
+            stop(replicas[0], kill=True)  # what was in flight there is cut off...
+            replicas[0].alive = False  # ...and the balancer, noticing, sends nothing new there
             killed_at = round(time.monotonic() - started, 1)
         deadline = started + options.arrival_seconds + 60 * (high + 5) + 300  # bounded: a journey has ~8 forms
         while time.monotonic() < deadline and RUN.ended < options.participants:
@@ -455,6 +466,7 @@ def main() -> int:
         "draw_ahead": not options.no_draw_ahead,
         "ready_seconds": ready_seconds,
         "killed_replica_at_seconds": killed_at,
+        "requests_in_flight_to_it_when_killed": in_flight_at_kill,
         "seconds": took,
         "quota_per_condition": quota,
         "completions": dict(per_condition),
@@ -491,7 +503,7 @@ def main() -> int:
     pages = report["page_seconds"]
     print(
         f"launch: {options.participants} participants over {options.arrival_seconds:g} s, "
-        f"replica killed at {killed_at} s; done in {took} s\n"
+        f"replica killed at {killed_at} s with {in_flight_at_kill} request(s) in flight to it; done in {took} s\n"
         f"completions {dict(per_condition)} (quota {quota} each, at most {allowed}); admitted {dict(admitted)}\n"
         f"acknowledged saves {len(RUN.acknowledged)}, missing from the export {len(missing)}; "
         f"5xx live replica {live.server_errors}; retried {RUN.retries}; unanswered {RUN.failed_requests}\n"

@@ -186,7 +186,7 @@ def arrive(
         platform_study=visit.study,
         platform_session=visit.session,
         submit_to=visit.submit_to,
-        client_address=(client or None) and client[:MAX_CLIENT_ADDRESS_LENGTH],
+        client_address=client[:MAX_CLIENT_ADDRESS_LENGTH] if client else None,
     )
     with storage_errors(session):
         try:
