@@ -222,3 +222,11 @@ def test_excluded_completions_neither_fill_the_quota_nor_hold_a_place(engine: En
         (place,) = arrivals.places(session, store.get_experiment(session, experiment_id))
         assert (place.taken, place.finished) == (0, 0)
     assert admit_one(engine, experiment_id, direct_visit()) is not None  # the study is not full
+
+
+def test_a_condition_whose_twin_met_its_quota_stays_within_one_of_it() -> None:
+    near = Place("near", 104, 100, finished=100, extra=10)  # met: closed, four still at work
+    far = Place("far", 104, 100, finished=97, extra=10)
+    assert choose([near, far]) == far  # one more: 105 against 104
+    assert choose([near, Place("far", 105, 100, finished=97, extra=10)]) is None  # not two ahead
+    assert choose([near, Place("far", 105, 200, finished=97, extra=10)]) is not None  # another quota: its own
