@@ -11,6 +11,8 @@ from pathlib import Path
 
 TESTS = Path(__file__).resolve().parent
 PACKAGE = TESTS.parent / "causalplan"
+PROJECT_FOLDERS = {"benchmarks"}
+"""Folders of the repository beside the package whose code has tests of its own (``tests/benchmarks/``)."""
 
 # What the top-level test files check that is not one module: the project as a whole.
 PROJECT_WIDE = {"test_architecture.py", "test_imports.py", "test_docker.py", "test_fresh_machine.py", "test_layout.py"}
@@ -19,7 +21,10 @@ PROJECT_WIDE = {"test_architecture.py", "test_imports.py", "test_docker.py", "te
 def test_every_test_folder_is_a_package_folder() -> None:
     folders = {path.parent for path in TESTS.rglob("test_*.py")} - {TESTS}
     strays = sorted(
-        str(folder.relative_to(TESTS)) for folder in folders if not (PACKAGE / folder.relative_to(TESTS)).is_dir()
+        str(folder.relative_to(TESTS))
+        for folder in folders
+        if not (PACKAGE / folder.relative_to(TESTS)).is_dir()
+        and folder.relative_to(TESTS).parts[0] not in PROJECT_FOLDERS
     )
     assert strays == [], f"test folders with no package folder of the same path: {strays}"
 

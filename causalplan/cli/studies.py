@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import click
@@ -57,6 +58,7 @@ def analyze(
     from rich.markup import escape
     from rich.table import Table
 
+    from causalplan.consensus.plausibility import MappingPlausibility
     from causalplan.studies.analysis import analyse_export
     from causalplan.studies.outputs import write_outputs
     from causalplan.studies.trials import read_export
@@ -64,7 +66,7 @@ def analyze(
     objects = catalog_from(catalog)
     with exit_on_error():
         data = read_export(export)
-        analysis = analyse_export(data, objects)
+        analysis = analyse_export(data, objects, MappingPlausibility(objects))
     with writing(out, "write to"):
         written = write_outputs(analysis, out)
     misses = None
@@ -125,5 +127,23 @@ def analyze(
     console.print("[bold]Conclusions[/]")
     for conclusion in analysis.conclusions:
         console.print(f"  - {escape(conclusion)}")
+    if analysis.sensitivity is not None:
+        found = analysis.sensitivity
+        console.print(f"[bold]Mapping plausibility[/]: {escape(found.says())}")
+        if found.implausible:
+            without = {(rate.condition, rate.test_object): rate for rate in found.without.rates}
+            for before in analysis.rates:
+                after = without.get((before.condition, before.test_object))
+                console.print(
+                    f"  {escape(before.condition)} on {before.test_object}: {before.transfers}/{before.trials} "
+                    f"with every transfer, {after.transfers if after else 0}/{after.trials if after else 0} "
+                    "without the implausible ones"
+                )
+            for item in found.implausible:
+                mapping = json.dumps(item.mapping.get("functions", item.mapping), ensure_ascii=False)
+                console.print(
+                    f"  trial {item.trial_id[:8]} (participant {item.participant_id[:8]}, {item.test_object}): "
+                    f"score {item.score:.2f}, mapping {escape(mapping)}"
+                )
     console.print(f"Wrote {', '.join(str(path) for path in written)}")
     exit_with(EXIT_OK)

@@ -19,6 +19,7 @@ from causalplan.objects.catalog import Catalog
 from causalplan.service.caches import ServiceCaches
 from causalplan.service.errors import NotAuthenticatedError, ParticipantIdReservedError, ResearchDisabledError
 from causalplan.service.pool.pool import PlannerPool
+from causalplan.service.readiness import Readiness
 from causalplan.service.storage.crud import PAGE_SESSION_PREFIX, ClientIds
 from causalplan.service.storage.experiments import is_participant
 from causalplan.service.storage.records import MAX_CLIENT_ID_LENGTH
@@ -67,6 +68,8 @@ class Services:
     """This replica's job runner (started after the pool)."""
     probe: dict[str, object] | None = None
     probe_done: threading.Event = field(default_factory=threading.Event)
+    readiness: Readiness = field(default_factory=Readiness)
+    """Whether the pool has answered its first plan (``GET /health/ready``)."""
 
 
 # Dependencies that do not block are `async def`: FastAPI runs a plain `def` dependency in a

@@ -187,6 +187,16 @@ class WorkerCrashedError(ServiceError):
         super().__init__(message, details=details, headers={"Retry-After": "1"})
 
 
+class NotReadyError(ServiceError):
+    """This replica's planner pool has not answered its first plan yet (``GET /health/ready``)."""
+
+    code = "not_ready"
+    status_code = 503
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message, headers={"Retry-After": "1"})
+
+
 class PlannerOutOfMemoryError(ServiceError):
     """The planner worker itself ran out of memory (its limit is ``worker_memory_mb``)."""
 
@@ -273,6 +283,12 @@ class TooManyArrivalsError(TryLaterError):
     """One client arrived on public study links more often this minute than the service allows."""
 
     code = "too_many_arrivals"
+
+
+class ClientHoldsPlacesError(TryLaterError):
+    """One client address already holds its ``places_per_client`` places admitted but not started."""
+
+    code = "client_holds_places"
 
 
 _STATUS_BY_CODE = {

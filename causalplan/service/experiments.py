@@ -14,6 +14,7 @@ from typing import Any, NamedTuple
 from fastapi import Request, Response
 from sqlalchemy.orm import Session
 
+from causalplan.consensus.plausibility import MappingPlausibility
 from causalplan.errors import InputFileError, UnknownObjectError
 from causalplan.objects.catalog import Catalog
 from causalplan.service.api.schemas.experiments import (
@@ -28,7 +29,9 @@ from causalplan.service.storage import arrivals
 from causalplan.service.storage import experiments as store
 from causalplan.service.storage.experiments import ParticipantJourney, StoredTrial
 from causalplan.service.storage.records import ExperimentRecord, ParticipantRecord
+from causalplan.settings import Settings
 from causalplan.studies.analysis import Analysis, analyse_export
+from causalplan.studies.assignment import PlaceRules
 from causalplan.studies.design import Design, read_design
 from causalplan.studies.errors import InvalidExperimentError
 from causalplan.studies.export import (
@@ -245,7 +248,7 @@ def export(
 def _analysis(data: dict[str, Any], catalog: Catalog) -> Analysis | str:
     """Return the study's analysis (``causalplan analyze`` on its export ``data``), or why it cannot be made."""
     try:
-        return analyse_export(data, catalog)
+        return analyse_export(data, catalog, MappingPlausibility(catalog))
     except (ExportError, UnknownObjectError) as exc:
         return exc.message
 
@@ -274,13 +277,23 @@ def public_link(request: Request, experiment: ExperimentRecord) -> str:
     return f"{request.base_url}s/{experiment.id}"
 
 
+def place_rules(settings: Settings) -> PlaceRules:
+    """Return how long an admitted participant holds a place, and the over-admission, as the settings say."""
+    return PlaceRules(settings.place_start_minutes, settings.place_hold_hours, settings.over_admission)
+
+
 def recruitment_out(session: Session, experiment: ExperimentRecord, request: Request) -> RecruitmentOut:
-    """Return the recruiting settings with the public link and each condition's places."""
+    """Return the recruiting settings with the public link and each condition's places.
+
+    The places are counted by the rules admission uses (this server's ``place_start_minutes``,
+    ``place_hold_hours`` and ``over_admission``), so what the page shows is what arrivals meet.
+    """
+    settings: Settings = request.app.state.services.settings
     return RecruitmentOut.model_validate(
         {
             **Recruitment.from_dict(experiment.recruitment).as_dict(),
             "public_link": public_link(request, experiment),
-            "places": [vars(place) for place in arrivals.places(session, experiment)],
+            "places": [vars(place) for place in arrivals.places(session, experiment, place_rules(settings))],
             "arrivals": arrivals.arrival_counts(session, experiment.id),
         }
     )

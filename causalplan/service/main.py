@@ -43,11 +43,13 @@ from causalplan.service.api.routes import (
 from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.caches import ServiceCaches
 from causalplan.service.deps import Services
+from causalplan.service.documents import default_planner
 from causalplan.service.errors import BodyTooLargeError, error_body, http_status
 from causalplan.service.fair_share import ClientMiddleware, FairSharePool
 from causalplan.service.jobs.runner import JobRunner
 from causalplan.service.pages import routers as web_routers
 from causalplan.service.pool.pool import PlannerPool
+from causalplan.service.readiness import start_proving
 from causalplan.service.responses import SafeJSONResponse
 from causalplan.service.storage.migrate import upgrade
 from causalplan.service.storage.session import create_database_engine
@@ -65,7 +67,7 @@ _HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 413: "body_too_large
 
 
 def start_services(settings: Settings) -> Services:
-    """Prepare the database (migrations), load the catalog and start the planner pool."""
+    """Prepare the database (migrations), load the catalog, start the planner pool and prove it ready."""
     catalog = load_catalog(settings.catalog_folders)
     engine = create_database_engine(settings.database_url, settings.database_connections)
     try:
@@ -96,6 +98,9 @@ def start_services(settings: Settings) -> Services:
         job_pool=job_pool,
         work=Workers(pool, job_pool, settings, caches.answers, fingerprint),
     )
+    services.readiness = start_proving(
+        services.work, catalog, default_planner()
+    )  # first in the pool's line: before any drawing
     threading.Thread(target=_probe, args=(services,), name="causalplan-probe", daemon=True).start()
     services.runner = JobRunner(services)
     services.runner.start()

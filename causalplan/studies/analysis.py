@@ -5,8 +5,9 @@ category than to one of the other (near beats far); trained on both categories, 
 to both. ``analyse`` gives the transfer rate of every condition x test object with a Wilson
 interval (the one rates table, ``rates.rate_table``), Fisher's exact tests of those predictions
 (Holm-corrected over the family), a logistic GEE with the participant as cluster, failure
-reasons per condition, the paper's misconception per participant, and the conclusions in plain
-words with the sample behind each.
+reasons per condition, the paper's misconception per participant, the conclusions in plain
+words with the sample behind each, and (given a mapping scorer) the rates again without the
+transfers that rest on implausible mappings (``sensitivity``).
 A trial's outcome is 1 when its model transferred and 0 when it failed or was invalid;
 undecided trials (the planner timed out) and excluded participants are counted, not analysed.
 """
@@ -15,13 +16,14 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from causalplan.objects.catalog import Catalog
 from causalplan.studies.far_generalization import BOTH_CATEGORIES, ONE_CATEGORY, prediction_tests
 from causalplan.studies.misconceptions import Misconception, MisconceptionCheck, check_misconceptions
 from causalplan.studies.rates import Rate, RateTable, rate_table, share, training_spans
+from causalplan.studies.sensitivity import MappingScorer, Sensitivity, sensitivity
 from causalplan.studies.statistics import ClusteredModel, Comparison, Proportion, clustered_logistic, fisher, holm
 from causalplan.studies.trials import Study, TrialRow, read_study
 
@@ -41,6 +43,8 @@ class Analysis:
     conclusions: tuple[str, ...]
     misconceptions_not_checked: dict[str, str] = field(default_factory=dict)
     """Participant id -> why their model could not be checked for the misconception."""
+    sensitivity: Sensitivity | None = None
+    """The rates without transfers resting on implausible mappings (None: no scorer was given)."""
 
     @property
     def rates(self) -> tuple[Rate, ...]:
@@ -69,6 +73,7 @@ class Analysis:
             },
             "misconceptions_not_checked": self.misconceptions_not_checked,
             "conclusions": list(self.conclusions),
+            "mapping_plausibility": self.sensitivity.as_dict() if self.sensitivity is not None else None,
         }
 
 
@@ -230,6 +235,14 @@ def analyse(study: Study, catalog: Catalog) -> Analysis:
     )
 
 
-def analyse_export(export: Mapping[str, Any], catalog: Catalog) -> Analysis:
-    """Return the analysis of an experiment export (``causalplan analyze`` and the research page alike)."""
-    return analyse(read_study(export, catalog), catalog)
+def analyse_export(export: Mapping[str, Any], catalog: Catalog, scorer: MappingScorer | None = None) -> Analysis:
+    """Return the analysis of an experiment export (``causalplan analyze`` and the research page alike).
+
+    ``scorer``: how plausible each transfer's mapping is; the analysis then has the rates without
+    the implausible ones too (``sensitivity``).
+    """
+    study = read_study(export, catalog)
+    analysis = analyse(study, catalog)
+    if scorer is None:
+        return analysis
+    return replace(analysis, sensitivity=sensitivity(export, study, catalog, scorer))

@@ -69,6 +69,25 @@ class Place:
 
 
 def choose(found: list[Place]) -> Place | None:
-    """Return the open place with the fewest held (ties: the condition defined first); None when all are full."""
-    open_places = [place for place in found if place.is_open]
+    """Return the open place with the fewest held (ties: the condition defined first); None when all are full.
+
+    A condition whose quota is met (in completions) closes while some of its admitted are still
+    at work; another condition of the same quota, a few completions behind, would otherwise
+    take every later arrival up to its over-admission and end several completions ahead. So no
+    condition takes a place that puts it more than one ahead of a condition of the same quota
+    that has met it.
+    """
+    open_places = [place for place in found if place.is_open and not _runs_ahead(place, found)]
     return min(open_places, key=lambda place: place.taken) if open_places else None
+
+
+def _runs_ahead(place: Place, found: list[Place]) -> bool:
+    """Return whether one more place would put ``place`` two ahead of a condition of its quota that met it."""
+    return any(
+        other is not place
+        and other.quota is not None
+        and other.quota == place.quota
+        and other.finished >= other.quota
+        and place.taken > other.taken
+        for other in found
+    )

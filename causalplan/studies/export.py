@@ -58,6 +58,8 @@ class ExportedArrival(Protocol):
     def platform_session(self) -> str | None: ...
     @property
     def decided_at(self) -> datetime | None: ...
+    @property
+    def client_address(self) -> str | None: ...
 
 
 class ExportedParticipant(Protocol):
@@ -163,7 +165,9 @@ def participant_dict(
 ) -> dict[str, Any]:
     """Return one participant as exported: condition, orders, progress, times, exclusions, model and all saved work.
 
-    ``platform_ids``: the crowd platform's ids as stored (``plain``), ``hashed``, or ``omit``-ted.
+    ``platform_ids``: the crowd platform's ids and the client address consent came from, as
+    stored (``plain``), ``hashed``, or ``omit``-ted. The link code and link stay: this is the
+    researcher's export (``sharing.shareable`` makes the one to share).
     """
     work = participant.work or {}
     arrival = participant.arrival
@@ -197,6 +201,7 @@ def participant_dict(
             name: platform_id_view(getattr(arrival, field) if arrival else None, experiment_id, platform_ids)
             for name, field in PLATFORM_FIELDS
         },
+        "client_address": platform_id_view(arrival.client_address if arrival else None, experiment_id, platform_ids),
         "consented_at": _iso(arrival.decided_at) if arrival is not None else None,
         "seconds_taken": round((as_utc(finished) - as_utc(started)).total_seconds(), 1)
         if started and finished
@@ -289,6 +294,7 @@ PARTICIPANT_COLUMNS = [
     "platform_participant_id",
     "platform_study_id",
     "platform_session_id",
+    "client_address",
     "consented_at",
     "seconds_taken",
     "step_seconds",

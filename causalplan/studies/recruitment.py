@@ -41,6 +41,9 @@ REDIRECT_SECONDS = 5
 MAX_QUOTA = 100_000
 MAX_TOO_FAST_SECONDS = 24 * 3600
 MAX_TRIES = 10
+DEFAULT_PLACES_PER_CLIENT = 2
+"""Places one client address may hold admitted but not started (a household or a lab may share one)."""
+MAX_PLACES_PER_CLIENT = 1000
 
 
 @dataclass(frozen=True)
@@ -94,6 +97,9 @@ class Recruitment:
     """Ids of ``DEMOGRAPHICS`` asked at the end, in this order."""
     require_platform_id: bool = False
     """Refuse arrivals without a platform's ids (Prolific's PID and session, MTurk's worker and assignment)."""
+    places_per_client: int | None = DEFAULT_PLACES_PER_CLIENT
+    """Places one client address may hold admitted but not started (None: no limit); more consents from
+    it are asked to try again later, so a bot looping from one address cannot keep the study full."""
 
     def as_dict(self) -> dict[str, Any]:
         return {**vars(self), "demographics": list(self.demographics)}
@@ -112,6 +118,7 @@ class Recruitment:
             data.get("too_fast_seconds"),
             tuple(data.get("demographics", ())),
             bool(data.get("require_platform_id", False)),
+            data.get("places_per_client", DEFAULT_PLACES_PER_CLIENT),
         )
 
     def questions(self) -> list[DemographicQuestion]:
@@ -142,6 +149,8 @@ def read_recruitment(values: Mapping[str, Any]) -> Recruitment:
     tries, too_fast = values.get("comprehension_tries"), values.get("too_fast_seconds")
     _bounded(tries, 1, MAX_TRIES, "The number of tries of the comprehension check", problems)
     _bounded(too_fast, 1, MAX_TOO_FAST_SECONDS, "The too-fast threshold (seconds)", problems)
+    per_client = values.get("places_per_client", DEFAULT_PLACES_PER_CLIENT)
+    _bounded(per_client, 1, MAX_PLACES_PER_CLIENT, "The places one client address may hold", problems)
     demographics = tuple(dict.fromkeys(str(name) for name in values.get("demographics") or ()))
     unknown = [name for name in demographics if name not in DEMOGRAPHICS]
     if unknown:
@@ -157,6 +166,7 @@ def read_recruitment(values: Mapping[str, Any]) -> Recruitment:
         too_fast_seconds=too_fast,
         demographics=demographics,
         require_platform_id=bool(values.get("require_platform_id", False)),
+        places_per_client=per_client,
     )
 
 

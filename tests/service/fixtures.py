@@ -21,6 +21,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+import httpx
 import pytest
 import yaml
 from fastapi.testclient import TestClient
@@ -282,8 +283,10 @@ def serving(settings: Settings) -> Iterator[str]:
     thread.start()
     wait_until(lambda: server.started or not thread.is_alive(), seconds=60)
     assert server.started, "uvicorn did not start"
+    base = f"http://127.0.0.1:{server.config.port}"
+    wait_until(lambda: httpx.get(f"{base}/health/ready", timeout=5).status_code == 200, seconds=180)
     try:
-        yield f"http://127.0.0.1:{server.config.port}"
+        yield base
     finally:
         server.should_exit = True
         thread.join(30)

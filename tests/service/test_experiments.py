@@ -33,7 +33,7 @@ NEAR_AND_FAR: dict[str, Any] = {
 def test_the_migration_adds_the_experiment_tables(database_url: str) -> None:
     engine = create_database_engine(database_url)
     try:
-        assert upgrade(engine) == head_revision() == "0010" == current_revision(engine)
+        assert upgrade(engine) == head_revision() == "0011" == current_revision(engine)
         tables = set(inspect(engine).get_table_names())
         assert {"experiments", "participants", "participant_trials"} <= tables
         unique = inspect(engine).get_unique_constraints("participant_trials")

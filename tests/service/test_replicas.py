@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -92,17 +93,18 @@ def launch(database_url: str, folder: Path, name: str, **settings: str) -> Repli
     return Replica(process, f"http://127.0.0.1:{port}", log)
 
 
-def wait_healthy(replica: Replica, seconds: float = 120.0) -> None:
+def wait_ready(replica: Replica, seconds: float = 120.0) -> None:
+    """Return once the replica is ready (its planner pool has answered a plan); fail if it exits or never is."""
     deadline = time.monotonic() + seconds
     while time.monotonic() < deadline:
         assert replica.process.poll() is None, f"the replica exited:\n{replica.log.read_text()}"
         try:
-            if httpx.get(f"{replica.url}/health", timeout=5).status_code in (200, 503):
+            if httpx.get(f"{replica.url}/health/ready", timeout=5).status_code == 200:
                 return
         except httpx.HTTPError:
             pass
         time.sleep(0.2)
-    pytest.fail(f"the replica did not answer within {seconds} s:\n{replica.log.read_text()}")
+    pytest.fail(f"the replica was not ready within {seconds} s:\n{replica.log.read_text()}")
 
 
 def stop(replica: Replica, kill: bool = False) -> None:
@@ -124,7 +126,7 @@ def replicas(database_url: str, folder: Path, count: int, **settings: str) -> It
         for replica in started:
             stack.callback(stop, replica)
         for replica in started:
-            wait_healthy(replica)
+            wait_ready(replica)
         yield started
 
 
@@ -179,6 +181,27 @@ def test_a_participants_steps_go_to_each_replica_in_turn(pair: list[Replica], da
             assert session.scalar(linked) == 1
     finally:
         engine.dispose()
+
+
+def test_one_address_consenting_on_both_replicas_holds_two_places_and_a_visitor_gets_in(pair: list[Replica]) -> None:
+    with pair[0].client() as first:
+        created = experiment(first)
+    study = created["id"]
+
+    def consent(replica: Replica, address: str, pid: str) -> httpx.Response:
+        forwarded = {"X-Forwarded-For": address}
+        params = {"PROLIFIC_PID": pid, "STUDY_ID": "s", "SESSION_ID": f"session-{pid}"}
+        arrival = httpx.get(f"{replica.url}/s/{study}", params=params, headers=forwarded)
+        assert arrival.status_code == 200, arrival.text
+        code = re.search(r'name="arrival" value="([A-Za-z0-9]+)"', arrival.text)
+        assert code is not None
+        form = {"arrival": code.group(1), "decision": "agree"}
+        return httpx.post(f"{replica.url}/s/{study}/consent", data=form, headers=forwarded)
+
+    with ThreadPoolExecutor(max_workers=6) as pool:  # at once, on both replicas
+        answers = list(pool.map(lambda n: consent(pair[n % 2], "203.0.113.50", f"loop-{n}"), range(6)))
+    assert sorted(answer.status_code for answer in answers) == [303, 303, 429, 429, 429, 429]
+    assert consent(pair[1], "198.51.100.60", "visitor").status_code == 303
 
 
 def test_the_research_token_throttle_is_one_count_across_replicas(pair: list[Replica]) -> None:
@@ -258,7 +281,7 @@ def test_a_job_whose_replica_is_killed_is_finished_by_another(postgres_admin_url
     with postgres_database(postgres_admin_url) as url:
         doomed = launch(url, tmp_path, "doomed", job_lease_seconds="2")
         try:
-            wait_healthy(doomed)
+            wait_ready(doomed)
             body = {"kind": "batch", "trials": "\n".join(trials), "simulate": True}
             job_url = f"{doomed.url}{httpx.post(f'{doomed.url}/v1/jobs', json=body).json()['url']}"
             deadline = time.monotonic() + 120

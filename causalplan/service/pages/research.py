@@ -10,7 +10,7 @@ import uuid
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request, Response
-from pydantic import ValidationError
+from pydantic import Field, ValidationError
 
 from causalplan.errors import CausalPlanError
 from causalplan.service import experiments
@@ -21,12 +21,14 @@ from causalplan.service.pages.auth import ResearchPageDep, sign_in, sign_out
 from causalplan.service.pages.drawings import fresh_svg
 from causalplan.service.pages.forms import Form, read_form
 from causalplan.service.pages.templating import PageRoute, redirect, render
+from causalplan.service.sharing import shareable_zip
 from causalplan.service.storage import experiments as store
 from causalplan.service.storage.records import ExperimentRecord
 from causalplan.settings import Settings
 from causalplan.studies.errors import InvalidExperimentError, InvalidRecruitmentError
 from causalplan.studies.rates import rates_chart
 from causalplan.studies.recruitment import DEMOGRAPHICS
+from causalplan.studies.sharing import DEFAULT_LICENSE
 
 router = APIRouter(prefix="/research", route_class=PageRoute, include_in_schema=False)
 
@@ -238,6 +240,7 @@ async def set_recruitment(
                 "comprehension_tries": _whole_number(form, "comprehension_tries", "The number of tries"),
                 "too_fast_seconds": _whole_number(form, "too_fast_seconds", "The too-fast threshold"),
                 "require_platform_id": form.text("require_platform_id", "", max_length=8) == "yes",
+                "places_per_client": _whole_number(form, "places_per_client", "The places per client address"),
                 "demographics": form.texts("demographics", max_count=len(DEMOGRAPHICS), max_length=40),
                 "quotas": {
                     name: _whole_number(form, f"quota:{index}", f"The quota of condition '{name}'")
@@ -284,6 +287,21 @@ async def make_links(request: Request, experiment_id: uuid.UUID, _: ResearchPage
     count = int(count_text) if count_text.isdigit() else 0
     store.add_participants(session, experiment, count, condition or None)
     return redirect(f"/research/experiments/{experiment_id}#participants")
+
+
+@router.get("/experiments/{experiment_id}/export/shareable")
+def export_shareable(
+    request: Request,
+    experiment_id: uuid.UUID,
+    _: ResearchPageDep,
+    session: SessionDep,
+    catalog: CatalogDep,
+    author: Annotated[list[Annotated[str, Field(min_length=1, max_length=200)]], Query(max_length=50)] = [],  # noqa: B006
+    license: Annotated[str, Query(min_length=1, max_length=300)] = DEFAULT_LICENSE,
+) -> Response:
+    """The data to share: the Psych-DS dataset without link codes, links, addresses or raw platform ids."""
+    experiment = store.get_experiment(session, experiment_id)
+    return shareable_zip(session, catalog, experiment, request, author, license)
 
 
 @router.get("/experiments/{experiment_id}/export")

@@ -9,8 +9,10 @@ arrival: consent again if undecided, their progress if admitted. The platform id
 nothing, so a bot that copies someone's PROLIFIC_PID cannot decide for them or take their record.
 
 In the open: a client may make ``arrivals_per_minute`` new arrivals a minute; a study may
-refuse arrivals without platform ids; and an admitted person holds a place only while at work
-(``studies.assignment.PlaceRules``), so a bot that agrees and leaves cannot keep a study full.
+refuse arrivals without platform ids; an admitted person holds a place only while at work
+(``studies.assignment.PlaceRules``), so a bot that agrees and leaves cannot keep a study full;
+and one client address may hold ``places_per_client`` places admitted but not started (more
+consents from it get "please try again later"), so a bot looping from one address cannot either.
 """
 
 from __future__ import annotations
@@ -21,16 +23,15 @@ from typing import Any
 from fastapi import APIRouter, Request, Response
 
 from causalplan.service.deps import ServicesDep, SessionDep, client_address
-from causalplan.service.errors import InvalidFormError, TooManyArrivalsError
+from causalplan.service.errors import ClientHoldsPlacesError, InvalidFormError, TooManyArrivalsError
+from causalplan.service.experiments import place_rules
 from causalplan.service.pages.forms import read_form
 from causalplan.service.pages.templating import PageRoute, redirect, render
 from causalplan.service.storage import arrivals
 from causalplan.service.storage import experiments as store
 from causalplan.service.storage.records import ExperimentRecord
 from causalplan.service.storage.throttle import PerMinute
-from causalplan.settings import Settings
 from causalplan.studies import recruitment
-from causalplan.studies.assignment import PlaceRules
 from causalplan.studies.errors import PlatformIdRequiredError
 from causalplan.studies.recruitment import MTURK_FRAME_ORIGINS, PlatformVisit, Recruitment, finish, read_visit
 
@@ -46,11 +47,6 @@ def _full(request: Request, platform: str) -> Response:
     return _page(
         request, "study_message.html", platform, kind="full", back=None, redirect_seconds=recruitment.REDIRECT_SECONDS
     )
-
-
-def place_rules(settings: Settings) -> PlaceRules:
-    """Return how long an admitted participant holds a place, and the over-admission, as the settings say."""
-    return PlaceRules(settings.place_start_minutes, settings.place_hold_hours, settings.over_admission)
 
 
 def _require_platform(recruiting: Recruitment, platform: str) -> None:
@@ -76,10 +72,12 @@ def arrive(request: Request, experiment_id: uuid.UUID, session: SessionDep, serv
         return _declined(request, found, recruiting)
     if found is None and arrivals.is_full(session, experiment, place_rules(services.settings)):
         return _full(request, visit.platform)
+    client = client_address(request, services.settings)
     if found is None:  # a new row: counted against the client's arrivals this minute
         limit = PerMinute(services.engine, "arrival", services.settings.arrivals_per_minute, TooManyArrivalsError)
-        limit.admit(client_address(request, services.settings))
-    return _consent_page(request, experiment, visit, recruiting, found or arrivals.arrive(session, experiment, visit))
+        limit.admit(client)
+    arrival = found or arrivals.arrive(session, experiment, visit, client)
+    return _consent_page(request, experiment, visit, recruiting, arrival)
 
 
 def _consent_page(
@@ -128,8 +126,18 @@ async def consent(request: Request, experiment_id: uuid.UUID, session: SessionDe
     if arrival.consented is False or decision == "decline":
         arrivals.decline(session, arrival)
         return _declined(request, arrival, Recruitment.from_dict(experiment.recruitment))
-    _require_platform(Recruitment.from_dict(experiment.recruitment), arrival.platform)
-    participant = arrivals.admit(session, experiment, arrival, place_rules(services.settings))
+    recruiting = Recruitment.from_dict(experiment.recruitment)
+    _require_platform(recruiting, arrival.platform)
+    if arrival.client_address is None:  # arrived before addresses were kept: the consent's own counts
+        arrival.client_address = client_address(request, services.settings) or None
+    try:
+        participant = arrivals.admit(
+            session, experiment, arrival, place_rules(services.settings), recruiting.places_per_client
+        )
+    except ClientHoldsPlacesError as exc:  # one address holds its places: the polite page, not a place
+        busy = _page(request, "study_message.html", arrival.platform, status_code=429, kind="busy", back=None)
+        busy.headers.update(exc.headers)
+        return busy
     if participant is None:
         return _full(request, arrival.platform)
     return redirect(f"/p/{participant.code}")

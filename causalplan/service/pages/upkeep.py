@@ -5,8 +5,9 @@ on public study links that never decided on consent (``undecided_arrival_hours``
 models of ``POST /v1/models`` that no trial uses (``invalid_model_hours``), the models and
 trials of clients without a key (``anonymous_record_hours``, the space given back), and forget the
 revocations of research cookies that have lapsed anyway. Once, after start: draw the pictures
-of the catalog objects' likely plans (``ahead``). The thread starts after the service is up,
-so none of this delays start-up, and requests never wait for it.
+of the catalog objects' likely plans (``ahead``), as background work of the planner pool (a
+request waits behind one drawing at most). The thread starts after the service is up, so none
+of this delays start-up.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from fastapi import FastAPI
 from causalplan.errors import CausalPlanError
 from causalplan.service.deps import Services, open_session
 from causalplan.service.pages import ahead
+from causalplan.service.pool.turns import background
 from causalplan.service.storage.arrivals import purge_undecided
 from causalplan.service.storage.crud import purge_expired_records, purge_invalid_models
 from causalplan.service.storage.demo import DemoStarts, purge_demo_participants
@@ -104,7 +106,8 @@ class Upkeep:
         self._purge()
         if self.services.settings.draw_plans_ahead:
             objects = sorted(self.services.catalog.objects.values(), key=lambda o: (o.id not in FIRST_OBJECTS, o.id))
-            self.drawn_ahead = ahead.draw_ahead(self.services, objects, self.stop)
+            with background():  # a request never waits behind more than one of these drawings
+                self.drawn_ahead = ahead.draw_ahead(self.services, objects, self.stop)
         while not self.stop.wait(purge_interval(self.services)):
             self._purge()
 

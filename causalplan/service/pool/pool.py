@@ -5,7 +5,8 @@ which runs uvicorn's and anyio's threads), kills the one whose call overruns its
 is cancelled, fails only that call, and replaces the worker. What it cannot do is kept here,
 each for its reason:
 
-- the in-flight cap and the wait for a free worker: pebble queues without limit;
+- the in-flight cap and the wait for a free worker: pebble queues without limit (and runs in
+  its own order; ``turns.Turns`` serves interactive requests in arrival order, background work last);
 - the workers' hello and "started" messages (``worker.run_call``): pebble does not say which
   worker runs a call, and a cancelled call's caller waits until that worker is dead;
 - a new pebble pool when a worker dies while none is working: pebble then takes the whole pool
@@ -42,6 +43,7 @@ from causalplan.service.errors import (
     error_class,
 )
 from causalplan.service.pool import worker
+from causalplan.service.pool.turns import Turns, is_background
 from causalplan.service.pool.worker import READY, STARTED, Message, is_running, remove_stale_folders
 
 logger = logging.getLogger(__name__)
@@ -90,7 +92,7 @@ class PlannerPool:
         self.max_in_flight = size + queue_size
         self.memory_mb = memory_mb
         self.queue_wait_seconds = queue_wait_seconds
-        self._free = threading.Semaphore(size)
+        self._turns = Turns(size)  # interactive requests in arrival order, background work after them
         self._lock = threading.Condition()
         self._in_flight = 0
         self._busy = 0
@@ -213,7 +215,8 @@ class PlannerPool:
         ``stop`` (a cancelled job's): once it is set, the worker is killed, and this raises
         RunStoppedError once it is dead (a job's work may run for minutes between its own checks).
 
-        Blocks while no worker is free: call it from a thread, not the event loop. ``meanwhile``
+        Blocks while no worker is free (waiters are served in arrival order, background work after
+        every interactive request: ``turns``): call it from a thread, not the event loop. ``meanwhile``
         runs here once a worker is ours, while it works (e.g. storing the request's record), so
         a refused request runs nothing; what it raises is raised once the worker has answered.
 
@@ -222,8 +225,9 @@ class PlannerPool:
         bug in the function, or what pickling the call raised.
         """
         self._admit()
+        is_background_work = is_background()
         try:
-            if not self._free.acquire(timeout=self.queue_wait_seconds):
+            if not self._turns.take(self.queue_wait_seconds, is_background_work):
                 retry = self.retry_after()
                 raise QueueFullError(
                     f"No planner worker became free within {self.queue_wait_seconds:g} s. Try again in {retry} s.",
@@ -239,7 +243,7 @@ class PlannerPool:
             finally:
                 with self._lock:
                     self._busy -= 1
-                self._free.release()
+                self._turns.give_back(is_background_work)
         finally:
             with self._lock:
                 self._in_flight -= 1

@@ -15,14 +15,15 @@ from __future__ import annotations
 import uuid
 from datetime import datetime
 
-from sqlalchemy import and_, case, delete, func, or_, select, update
+from sqlalchemy import and_, case, delete, exists, func, or_, select, text, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
-from causalplan.service.errors import StorageError
+from causalplan.service.errors import ClientHoldsPlacesError, StorageError
 from causalplan.service.storage import experiments as store
 from causalplan.service.storage.crud import storage_errors
 from causalplan.service.storage.records import (
+    MAX_CLIENT_ADDRESS_LENGTH,
     ArrivalRecord,
     ExclusionRecord,
     ExperimentRecord,
@@ -38,15 +39,22 @@ from causalplan.studies.steps import Stage
 MAX_CLAIM_ATTEMPTS = 50
 """Tries to take a place while others take them at the same moment (each lost race means one was taken)."""
 DEFAULT_RULES = PlaceRules()
+_CLIENT_LOCK_SPACE = 0x63706C63  # any constant: the advisory locks of one client's admissions (with the key's hash)
 
 
 def held_places(
     session: Session, experiment_id: uuid.UUID, rules: PlaceRules, now: datetime
 ) -> dict[str, tuple[int, int]]:
-    """Return, per condition, the places held (finished or at work lately) and the participants who finished."""
+    """Return, per condition, the places held (finished or at work lately) and the participants who finished.
+
+    An excluded participant (screened out, or flagged as too fast) holds no place and is no
+    completion: bots that race through with well-formed ids cannot fill the quota.
+    """
     participant = ParticipantRecord
-    finished = participant.stage == Stage.DONE.value
+    kept = ~exists().where(ExclusionRecord.participant_id == participant.id)
+    finished = and_(participant.stage == Stage.DONE.value, kept)
     at_work = and_(
+        kept,
         participant.finished_at.is_(None),
         or_(
             and_(participant.updated_at.is_(None), participant.created_at > now - rules.start),
@@ -158,8 +166,13 @@ def find_arrival(session: Session, experiment_id: uuid.UUID, visit: PlatformVisi
         ).first()
 
 
-def arrive(session: Session, experiment: ExperimentRecord, visit: PlatformVisit) -> ArrivalRecord:
-    """Return this visit's arrival: the one stored for its platform session, or a new one (before consent)."""
+def arrive(
+    session: Session, experiment: ExperimentRecord, visit: PlatformVisit, client: str | None = None
+) -> ArrivalRecord:
+    """Return this visit's arrival: the one stored for its platform session, or a new one (before consent).
+
+    ``client``: the address it came from (``deps.client_address``), kept for the places-per-client limit.
+    """
     found = find_arrival(session, experiment.id, visit)
     if found is not None:
         return found
@@ -173,6 +186,7 @@ def arrive(session: Session, experiment: ExperimentRecord, visit: PlatformVisit)
         platform_study=visit.study,
         platform_session=visit.session,
         submit_to=visit.submit_to,
+        client_address=client[:MAX_CLIENT_ADDRESS_LENGTH] if client else None,
     )
     with storage_errors(session):
         try:
@@ -198,9 +212,17 @@ def arrival_by_code(session: Session, experiment_id: uuid.UUID, code: str) -> Ar
 
 
 def admit(
-    session: Session, experiment: ExperimentRecord, arrival: ArrivalRecord, rules: PlaceRules = DEFAULT_RULES
+    session: Session,
+    experiment: ExperimentRecord,
+    arrival: ArrivalRecord,
+    rules: PlaceRules = DEFAULT_RULES,
+    places_per_client: int | None = None,
 ) -> ParticipantRecord | None:
-    """Record consent and make the arrival a participant in the emptiest open condition; None when the study is full."""
+    """Record consent and make the arrival a participant in the emptiest open condition; None when the study is full.
+
+    ``places_per_client``: the places the arrival's client address may hold admitted but not
+    started, this one included; one more raises ClientHoldsPlacesError and stores nothing.
+    """
     if arrival.participant is not None:
         return arrival.participant
     claimed = claim_place(session, experiment, rules)
@@ -216,8 +238,48 @@ def admit(
         arrival.decided_at = participant.created_at
         arrival.participant_id = participant.id
         session.add(arrival)
+        session.flush()
+        client = arrival.client_address
+        if places_per_client is not None and client:
+            held = unstarted_places_of(session, experiment.id, client, rules, participant.created_at)
+            if held > places_per_client:
+                session.rollback()  # the place goes back too: it was taken in this transaction
+                raise ClientHoldsPlacesError(
+                    "Many people have just joined this study from your network; please try again later.",
+                    int(rules.start.total_seconds()),
+                )
         session.commit()
     return participant
+
+
+def unstarted_places_of(
+    session: Session, experiment_id: uuid.UUID, client: str, rules: PlaceRules, now: datetime
+) -> int:
+    """Return the places ``client`` holds admitted but not started (this transaction's own admission included).
+
+    On PostgreSQL the count waits for a lock of this experiment and client, held to the end of
+    the transaction, so two consents from one address on two replicas are counted one after the
+    other (each statement sees what the other committed). SQLite has one writer at a time anyway.
+    """
+    if session.get_bind().dialect.name == "postgresql":
+        session.execute(
+            text("SELECT pg_advisory_xact_lock(:space, hashtext(:key))"),
+            {"space": _CLIENT_LOCK_SPACE, "key": f"{experiment_id}:{client}"},
+        )
+    participant = ParticipantRecord
+    query = (
+        select(func.count())
+        .select_from(ArrivalRecord)
+        .join(participant, participant.id == ArrivalRecord.participant_id)
+        .where(
+            ArrivalRecord.experiment_id == experiment_id,
+            ArrivalRecord.client_address == client,
+            participant.finished_at.is_(None),
+            participant.updated_at.is_(None),
+            participant.created_at > now - rules.start,
+        )
+    )
+    return int(session.scalar(query) or 0)
 
 
 def decline(session: Session, arrival: ArrivalRecord) -> None:

@@ -30,6 +30,8 @@ from causalplan.studies.recruitment import MAX_PLATFORM_ID_LENGTH
 
 MAX_CLIENT_ID_LENGTH = 128
 """Longest participant or session id a client may send."""
+MAX_CLIENT_ADDRESS_LENGTH = 64
+"""Longest client address stored with an arrival (an IPv6 address in full is 45 characters)."""
 MAX_OWNER_LENGTH = 160
 """Longest owner of a job: a kind of client and its id (``address:<address>``, ``participant:<uuid>``, ...)."""
 MAX_ADDRESS_LENGTH = 64
@@ -209,6 +211,7 @@ class ArrivalRecord(Base):
         UniqueConstraint(
             "experiment_id", "platform", "platform_id", "platform_session", name="uq_study_arrivals_platform_session"
         ),
+        Index("ix_study_arrivals_client", "experiment_id", "client_address"),
     )
 
     id: Mapped[uuid.UUID] = mapped_column(Uuid, primary_key=True, default=uuid.uuid4)
@@ -220,6 +223,8 @@ class ArrivalRecord(Base):
     platform_study: Mapped[str | None] = mapped_column(String(MAX_PLATFORM_ID_LENGTH))
     platform_session: Mapped[str | None] = mapped_column(String(MAX_PLATFORM_ID_LENGTH))
     submit_to: Mapped[str | None] = mapped_column(String(64))
+    client_address: Mapped[str | None] = mapped_column(String(MAX_CLIENT_ADDRESS_LENGTH))
+    """The address the arrival came from (``deps.client_address``): one may hold ``places_per_client`` places."""
     consented: Mapped[bool | None] = mapped_column(Boolean)
     decided_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     participant_id: Mapped[uuid.UUID | None] = mapped_column(

@@ -47,8 +47,8 @@ def test_health_reports_planners_database_pool_and_limits(client: TestClient) ->
     assert health["database"] == {
         "reachable": True,
         "backend": "sqlite",
-        "revision": "0010",
-        "expected_revision": "0010",
+        "revision": "0011",
+        "expected_revision": "0011",
         "problem": None,
     }
     assert health["pool"]["workers"] == 2 and health["pool"]["max_in_flight"] == 18
@@ -87,8 +87,10 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/experiments/{experiment_id}/participants",
         "/v1/experiments/{experiment_id}/results",
         "/v1/experiments/{experiment_id}/export",
+        "/v1/experiments/{experiment_id}/export/shareable",
         "/v1/experiments/{experiment_id}/recruitment",
         "/health",
+        "/health/ready",
     }
     plans = spec["paths"]["/v1/plans"]["post"]["responses"]
     assert {"200", "404", "413", "422", "429", "503", "504"} <= set(plans)

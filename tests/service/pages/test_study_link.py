@@ -20,7 +20,7 @@ from causalplan.cli import app
 from causalplan.service.pages.upkeep import purge
 from causalplan.service.storage.records import ArrivalRecord, ParticipantRecord, TrialRecord, utc_now
 from tests.service.fixtures import AUTH, RESEARCH_TOKEN, running_client, services_of, settings_for, sqlite_url
-from tests.service.pages.flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, post
+from tests.service.pages.flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, links, post
 
 WRONG_ANSWERS = {**TUTORIAL_ANSWERS, "answer:diffuse": "yes"}
 ARRIVALS_PER_MINUTE = 3
@@ -332,7 +332,7 @@ def test_a_bot_that_agrees_and_leaves_lets_its_place_go(client: TestClient) -> N
 
 def test_completions_count_against_the_quota_with_a_bounded_over_admission(client: TestClient) -> None:
     created = experiment(client)
-    recruiting(client, created["id"], quotas={"near": 10})
+    recruiting(client, created["id"], quotas={"near": 10}, places_per_client=None)  # all from one test client
     codes = [join(client, created["id"], prolific(f"pid-over-{n}")) for n in range(11)]  # 10 and 10 % more
     assert "This study is full" in client.get(f"/s/{created['id']}", params=prolific("pid-over-11")).text
     complete(client, codes[0])
@@ -415,3 +415,46 @@ def test_a_bot_with_a_victims_platform_id_neither_declines_for_them_nor_takes_th
     assert back.status_code == 303 and back.headers["location"] == f"/p/{victim_code}"
     copied = client.get(f"/s/{created['id']}", params={**victim, "SESSION_ID": "bot-guess-3"}, follow_redirects=False)
     assert copied.status_code == 200 and f"/p/{victim_code}" not in copied.text and f"/p/{bot_code}" not in copied.text
+
+
+def test_a_bot_looping_from_one_address_gets_two_places_and_a_real_visitor_still_gets_in(client: TestClient) -> None:
+    created = experiment(client)
+    assert recruiting(client, created["id"], quotas={"near": 5})["places_per_client"] == 2  # the default
+    for bot in range(2):
+        join(client, created["id"], prolific(f"loop-{bot}"))
+    for bot in range(2, 6):  # it goes on consenting, from the same address
+        arrival = client.get(f"/s/{created['id']}", params=prolific(f"loop-{bot}"))
+        refused = post(
+            client, f"/s/{created['id']}/consent", {"arrival": consent_code(arrival.text), "decision": "agree"}, 429
+        )
+        assert "Please try again later" in refused.text and int(refused.headers["retry-after"]) > 0
+    assert counts(client, created["id"]) == (6, 2)
+    visitor = TestClient(client.app, client=("198.51.100.7", 50000))  # the running app, another address
+    code = join(visitor, created["id"], prolific("real-visitor"))
+    assert visitor.get(f"/p/{code}").status_code == 200
+
+
+def test_a_transfer_resting_on_an_electric_function_given_to_the_match_is_shown_and_set_aside(
+    client: TestClient, tmp_path: Path
+) -> None:
+    conditions = [{"name": "far", "training": ["desk_lamp"], "tests": ["candle"]}]
+    created = experiment(client, conditions=conditions)
+    (participant,) = links(client, created["id"])
+    electric = {
+        "chosen:wax": "provide electricity",
+        "chosen:wick": "turn electricity into light",
+        "chosen:match": "close the circuit",
+    }
+    complete(client, participant["code"], electric)
+    data = exported(client, created["id"])
+    assert [trial["verdict"] for trial in data["trials"]] == ["transfers"]  # the planner alone lets it through
+    post(client, "/research/login", {"token": RESEARCH_TOKEN, "next": "/research"})
+    page = client.get(f"/research/experiments/{created['id']}").text
+    client.cookies.clear()
+    assert "1 of 1 analysed transfers rest on an implausible mapping" in page
+    assert 'id="implausible-transfers"' in page and "match: close the circuit" in page
+    path = tmp_path / "export.json"
+    path.write_text(json.dumps(data), encoding="utf-8")
+    result = CliRunner().invoke(app, ["analyze", str(path), "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert "with every transfer, 0/0 without the implausible ones" in " ".join(result.output.split())

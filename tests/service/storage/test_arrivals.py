@@ -8,17 +8,19 @@ from collections import Counter
 from collections.abc import Iterator
 
 import pytest
-from sqlalchemy import Engine, func, select
+from sqlalchemy import Engine, func, select, update
 from sqlalchemy.orm import Session
 
+from causalplan.service.errors import ClientHoldsPlacesError
 from causalplan.service.storage import arrivals
 from causalplan.service.storage import experiments as store
 from causalplan.service.storage.migrate import upgrade
-from causalplan.service.storage.records import ExperimentRecord, ParticipantRecord
+from causalplan.service.storage.records import ExperimentRecord, ParticipantRecord, utc_now
 from causalplan.service.storage.session import create_database_engine
 from causalplan.studies.assignment import Place, choose
 from causalplan.studies.design import Condition, Design
 from causalplan.studies.recruitment import PlatformVisit
+from causalplan.studies.steps import Stage
 
 TWO_CONDITIONS = Design(
     (
@@ -151,3 +153,80 @@ def test_a_copied_platform_id_with_another_session_is_another_arrival(engine: En
     squatter = admit_one(engine, experiment_id, PlatformVisit("prolific", victim.participant, "study-1", "guess"))
     own = admit_one(engine, experiment_id, victim)
     assert squatter is not None and own is not None and squatter.id != own.id
+
+
+def admit_from(
+    engine: Engine, experiment_id: uuid.UUID, client: str, places_per_client: int | None = 2
+) -> ParticipantRecord | None:
+    """Admit a new direct arrival from ``client`` under the places-per-client limit."""
+    with Session(engine, expire_on_commit=False) as session:
+        experiment = store.get_experiment(session, experiment_id)
+        arrival = arrivals.arrive(session, experiment, direct_visit(), client)
+        return arrivals.admit(session, experiment, arrival, arrivals.DEFAULT_RULES, places_per_client)
+
+
+def test_one_client_address_holds_at_most_its_places_even_when_it_consents_at_once(engine: Engine) -> None:
+    experiment_id = new_experiment(engine, TWO_CONDITIONS)
+    start = threading.Barrier(6)
+    admitted: list[ParticipantRecord] = []
+    refused: list[ClientHoldsPlacesError] = []
+
+    def consent() -> None:
+        start.wait()
+        try:
+            participant = admit_from(engine, experiment_id, "203.0.113.9")
+        except ClientHoldsPlacesError as exc:
+            refused.append(exc)
+            return
+        assert participant is not None
+        admitted.append(participant)
+
+    threads = [threading.Thread(target=consent) for _ in range(6)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(60)
+    assert (len(admitted), len(refused)) == (2, 4)
+    assert refused[0].headers["Retry-After"] == str(15 * 60)
+    assert admit_from(engine, experiment_id, "198.51.100.20") is not None  # someone else still gets in
+    with Session(engine) as session:
+        experiment = store.get_experiment(session, experiment_id)
+        assert sum(place.taken for place in arrivals.places(session, experiment)) == 3  # refusals took nothing
+
+
+def test_a_client_whose_participants_started_may_bring_more(engine: Engine) -> None:
+    experiment_id = new_experiment(engine, ONE_CONDITION)
+    first = admit_from(engine, experiment_id, "203.0.113.10", places_per_client=1)
+    with pytest.raises(ClientHoldsPlacesError):
+        admit_from(engine, experiment_id, "203.0.113.10", places_per_client=1)
+    assert first is not None
+    with Session(engine) as session:
+        session.execute(update(ParticipantRecord).where(ParticipantRecord.id == first.id).values(updated_at=utc_now()))
+        session.commit()
+    assert admit_from(engine, experiment_id, "203.0.113.10", places_per_client=1) is not None
+    assert admit_from(engine, experiment_id, "203.0.113.10", places_per_client=None) is not None  # no limit
+
+
+def test_excluded_completions_neither_fill_the_quota_nor_hold_a_place(engine: Engine) -> None:
+    experiment_id = new_experiment(engine, ONE_CONDITION)
+    with Session(engine) as session:
+        arrivals.set_quotas(session, store.get_experiment(session, experiment_id), {"near": 1})
+    bot = admit_one(engine, experiment_id, direct_visit())
+    assert bot is not None
+    with Session(engine) as session:  # it raced through and was flagged at the end, as the pages flag it
+        record = session.get(ParticipantRecord, bot.id)
+        assert record is not None
+        record.stage, record.finished_at, record.updated_at = Stage.DONE.value, utc_now(), utc_now()
+        session.add_all([record, arrivals.exclusion(record, "too_fast", "finished in 1 s")])
+        session.commit()
+        (place,) = arrivals.places(session, store.get_experiment(session, experiment_id))
+        assert (place.taken, place.finished) == (0, 0)
+    assert admit_one(engine, experiment_id, direct_visit()) is not None  # the study is not full
+
+
+def test_a_condition_whose_twin_met_its_quota_stays_within_one_of_it() -> None:
+    near = Place("near", 104, 100, finished=100, extra=10)  # met: closed, four still at work
+    far = Place("far", 104, 100, finished=97, extra=10)
+    assert choose([near, far]) == far  # one more: 105 against 104
+    assert choose([near, Place("far", 105, 100, finished=97, extra=10)]) is None  # not two ahead
+    assert choose([near, Place("far", 105, 200, finished=97, extra=10)]) is not None  # another quota: its own

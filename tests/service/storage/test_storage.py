@@ -45,8 +45,8 @@ def test_migrations_build_exactly_the_models_schema(database_url: str) -> None:
     engine = create_database_engine(database_url)
     try:
         assert current_revision(engine) is None
-        assert upgrade(engine) == head_revision() == "0010"
-        assert upgrade(engine) == "0010"  # a second start changes nothing
+        assert upgrade(engine) == head_revision() == "0011"
+        assert upgrade(engine) == "0011"  # a second start changes nothing
         assert set(inspect(engine).get_table_names()) == {
             "alembic_version",
             "models",
@@ -73,7 +73,7 @@ def test_migrations_build_exactly_the_models_schema(database_url: str) -> None:
 def test_a_sqlite_file_and_its_folder_are_created_on_first_start(tmp_path: Any) -> None:
     path = tmp_path / "new" / "folder" / "causalplan.sqlite3"
     with running_client(settings_for(f"sqlite:///{path}", planning_workers=1)) as client:
-        assert client.get("/health").json()["database"]["revision"] == "0010"
+        assert client.get("/health").json()["database"]["revision"] == "0011"
     assert path.exists()
 
 

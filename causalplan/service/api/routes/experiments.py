@@ -9,9 +9,10 @@ import uuid
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, Query, Request, Response
+from pydantic import Field
 
 from causalplan.service import experiments
-from causalplan.service.api.schemas.common import RESEARCH_ERROR_RESPONSES, error_responses
+from causalplan.service.api.schemas.common import BINARY, RESEARCH_ERROR_RESPONSES, error_responses
 from causalplan.service.api.schemas.experiments import (
     ExperimentExportOut,
     ExperimentIn,
@@ -23,7 +24,9 @@ from causalplan.service.api.schemas.experiments import (
     ResultsOut,
 )
 from causalplan.service.deps import CatalogDep, ResearchAccessDep, SessionDep
+from causalplan.service.sharing import shareable_zip
 from causalplan.service.storage import experiments as store
+from causalplan.studies.sharing import DEFAULT_LICENSE
 
 router = APIRouter(prefix="/v1/experiments", tags=["experiments"], responses=RESEARCH_ERROR_RESPONSES)
 
@@ -132,6 +135,36 @@ def export_experiment(
     """Export the experiment, every participant (with all saved work and exclusions) and every trial, as JSON or CSV."""
     experiment = store.get_experiment(session, experiment_id)
     return experiments.export(session, catalog, experiment, request, format, table, platform_ids)
+
+
+@router.get(
+    "/{experiment_id}/export/shareable",
+    summary="Export the data to share (a Psych-DS dataset)",
+    responses={
+        200: {"content": {"application/zip": BINARY}, "description": "The dataset as a ZIP file (bytes)."},
+        **error_responses(404),
+    },
+    response_class=Response,
+)
+def export_shareable(
+    experiment_id: uuid.UUID,
+    _: ResearchAccessDep,
+    session: SessionDep,
+    catalog: CatalogDep,
+    request: Request,
+    author: Annotated[
+        list[Annotated[str, Field(min_length=1, max_length=200)]],
+        Query(max_length=50, description="The dataset's authors (repeat the parameter for each), as they are cited."),
+    ] = [],  # noqa: B006 - FastAPI copies a default per request
+    license: Annotated[
+        str, Query(min_length=1, max_length=300, description="The dataset's license (a URL or an SPDX id).")
+    ] = DEFAULT_LICENSE,
+) -> Response:
+    """Return the experiment's data to share as a Psych-DS dataset (ZIP): no participant's link code, link or
+    client address, the crowd-platform ids hashed (see `dataset_description.json`); the data dictionary
+    describes every column. The export above is the researcher's own and keeps them all."""
+    experiment = store.get_experiment(session, experiment_id)
+    return shareable_zip(session, catalog, experiment, request, author, license)
 
 
 @router.get(

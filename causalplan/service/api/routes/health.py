@@ -1,4 +1,5 @@
-"""GET /health: the planners, the database, free space, the pools, the jobs, the cache and the limits."""
+"""GET /health (liveness: the planners, the database, free space, the pools, the jobs, the cache,
+the limits) and GET /health/ready (readiness: the planner pool has answered a plan)."""
 
 from __future__ import annotations
 
@@ -12,16 +13,20 @@ from fastapi import APIRouter
 from sqlalchemy.exc import SQLAlchemyError
 
 from causalplan.errors import CausalPlanError
+from causalplan.service.api.schemas.common import error_responses
 from causalplan.service.api.schemas.health import (
     DatabaseHealthOut,
     FastDownwardHealthOut,
     HealthOut,
     JobsHealthOut,
+    ReadyOut,
     StorageHealthOut,
 )
 from causalplan.service.deps import Services, ServicesDep
 from causalplan.service.documents import default_planner
+from causalplan.service.errors import NotReadyError
 from causalplan.service.jobs.kinds import KINDS
+from causalplan.service.readiness import STARTING
 from causalplan.service.storage import jobs as job_store
 from causalplan.service.storage.health import is_server_read_only, ping
 from causalplan.service.storage.migrate import current_revision
@@ -159,3 +164,23 @@ def read_health(services: ServicesDep) -> HealthOut:
             "anonymous_jobs_per_minute": settings.anonymous_jobs_per_minute,
         },
     )
+
+
+@router.get(
+    "/health/ready",
+    response_model=ReadyOut,
+    summary="Does this replica take participants now?",
+    responses=error_responses(503),
+)
+def read_readiness(services: ServicesDep) -> ReadyOut:
+    """Answer 200 once this replica's planner pool has answered a plan of its own; before, 503
+    (`not_ready`, with `Retry-After`).
+
+    `/health` answers as soon as the app is up (liveness: restart the replica when it fails);
+    this is what a load balancer or a deploy waits for before sending participants, so nobody
+    waits for the workers to warm.
+    """
+    readiness = services.readiness
+    if not readiness.is_ready():
+        raise NotReadyError(f"Not ready yet: {readiness.problem or STARTING}.")
+    return ReadyOut(status="ready")

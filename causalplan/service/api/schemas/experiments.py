@@ -8,6 +8,7 @@ from typing import Annotated, Any, Literal
 from pydantic import ConfigDict, Field, StrictBool
 
 from causalplan.service.api.schemas.common import DiagnosticOut, InputModel, OutputModel, UtcDatetime
+from causalplan.studies.recruitment import DEFAULT_PLACES_PER_CLIENT
 
 ObjectId = Annotated[str, Field(min_length=1, max_length=200)]
 MAX_RULES_TEXT = 200_000
@@ -87,6 +88,11 @@ class RecruitmentIn(StrictInputModel):
         default=False,
         description="Refuse arrivals without a crowd platform's ids (Prolific's PID and session, MTurk's worker).",
     )
+    places_per_client: int | None = Field(
+        default=DEFAULT_PLACES_PER_CLIENT,
+        description="Places one client address may hold admitted but not started (null: no limit); "
+        "more consents from it are asked to try again later.",
+    )
     quotas: dict[str, int | None] = Field(
         default={}, description="Condition name -> most participants on the public link (null: no limit)."
     )
@@ -103,6 +109,7 @@ class RecruitmentOut(OutputModel):
     too_fast_seconds: int | None
     demographics: list[str]
     require_platform_id: bool
+    places_per_client: int | None
     public_link: str
     places: list[dict[str, Any]] = Field(
         description="Per condition: places held (taken), completions (finished), the quota, how many more than "

@@ -69,3 +69,9 @@ class HealthOut(OutputModel):
     jobs: JobsHealthOut
     cache: dict[str, int]
     limits: dict[str, int | float]
+
+
+class ReadyOut(OutputModel):
+    """This replica takes participants now (``GET /health/ready``; 503 in the error shape before)."""
+
+    status: Literal["ready"]
