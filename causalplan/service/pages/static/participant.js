@@ -51,9 +51,143 @@
   const main = document.getElementById("main");
   const code = main ? main.dataset.code : null;
 
-  // -- saving drafts -----------------------------------------------------------------------------------
+  // -- saving: nothing typed is lost -------------------------------------------------------------------
 
-  function draftOf(form) {
+  // Each box (or group of boxes saved together) is a draft with a key and a revision that only
+  // grows. A change goes at once into this tab's outbox (sessionStorage) and to the server within
+  // SAVE_DELAY_MS, and again with a keepalive request when the page is hidden or left. The outbox
+  // entry goes only when the server acknowledges that revision; a page that finds an entry newer
+  // than the server's text (a reload or Back before the save arrived) puts it back and sends it.
+  // The server keeps the newest revision, so a late or repeated request never undoes newer text.
+  const SAVE_DELAY_MS = 300;
+  const drafts = [];
+
+  function outboxName(key) {
+    return "causalplan:" + code + ":" + key;
+  }
+
+  function readOutbox(key) {
+    try {
+      return JSON.parse(sessionStorage.getItem(outboxName(key)));
+    } catch (error) {
+      return null;
+    }
+  }
+
+  function writeOutbox(key, entry) {
+    try {
+      sessionStorage.setItem(outboxName(key), JSON.stringify(entry));
+    } catch (error) {
+      // storage full or refused: the save requests still carry the text
+    }
+  }
+
+  function clearOutbox(key, revision) {
+    const entry = readOutbox(key);
+    if (entry && entry.revision <= revision) sessionStorage.removeItem(outboxName(key));
+  }
+
+  // Forms posted by the browser carry the page's newest revision, so a form older than what
+  // the server has stored (posted again from an old page) changes nothing.
+  function stampForms() {
+    const newest = drafts.reduce(function (most, draft) { return Math.max(most, draft.revision); }, 0);
+    document.querySelectorAll('input[type="hidden"][name="revision"]').forEach(function (field) {
+      field.value = String(newest);
+    });
+  }
+
+  // options: key, stored (the server's revision of the text in the page), snapshot(), restore(snapshot
+  // or null for the text the server sent), send(snapshot, revision, keepalive) -> Promise of the answer.
+  function makeDraft(options) {
+    const draft = { key: options.key, revision: options.stored, send: options.send };
+    let timer = null;
+    let retry = 1000;
+
+    draft.changed = function () {
+      draft.revision = Math.max(Date.now(), draft.revision + 1);
+      writeOutbox(draft.key, { revision: draft.revision, snapshot: options.snapshot() });
+      stampForms();
+      say("Changes not saved yet…");
+      clearTimeout(timer);
+      timer = setTimeout(draft.save, SAVE_DELAY_MS);
+    };
+
+    draft.save = async function () {
+      clearTimeout(timer);
+      const entry = readOutbox(draft.key);
+      if (!entry) return;
+      say("Saving…");
+      try {
+        const data = await options.send(entry.snapshot, entry.revision, false);
+        retry = 1000;
+        clearOutbox(draft.key, entry.revision);
+        if (data && data.revision > draft.revision) draft.revision = data.revision;
+        if (!readOutbox(draft.key)) say(savedAt(data && data.saved_at)); // nothing newer typed meanwhile
+      } catch (error) {
+        if (error.status && error.status < 500 && error.status !== 429) {
+          clearOutbox(draft.key, entry.revision); // refused (a closed step): sending it again cannot help
+          say("Not saved: " + error.message, true);
+          return;
+        }
+        say("Not saved yet (no connection?): trying again…", true);
+        timer = setTimeout(draft.save, retry);
+        retry = Math.min(retry * 2, 30000);
+      }
+    };
+
+    // The page is hidden or going away: send what the server has not acknowledged, in a request
+    // that outlives the page. The outbox keeps it until an answer says it arrived.
+    draft.flush = function () {
+      const entry = readOutbox(draft.key);
+      if (!entry) return;
+      clearTimeout(timer);
+      options.send(entry.snapshot, entry.revision, true).then(
+        function () { clearOutbox(draft.key, entry.revision); },
+        function () { /* the next page sends it again */ }
+      );
+    };
+
+    // On arrival the boxes hold the server's text, not what the browser restored from its cache,
+    // unless this tab typed something newer that may not have reached the server.
+    options.restore(null);
+    const waiting = readOutbox(draft.key);
+    if (waiting && waiting.revision > options.stored) {
+      options.restore(waiting.snapshot);
+      draft.revision = waiting.revision;
+      setTimeout(draft.save, 0);
+    } else if (waiting) {
+      sessionStorage.removeItem(outboxName(draft.key));
+    }
+    drafts.push(draft);
+    stampForms();
+    return draft;
+  }
+
+  window.addEventListener("pagehide", function () {
+    drafts.forEach(function (draft) { draft.flush(); });
+  });
+  document.addEventListener("visibilitychange", function () {
+    if (document.visibilityState === "hidden") drafts.forEach(function (draft) { draft.flush(); });
+  });
+  window.addEventListener("pageshow", function (event) {
+    if (event.persisted && drafts.length) window.location.reload(); // from the back-forward cache: ask the server
+  });
+
+  function sendJson(url, body, keepalive) {
+    if (!keepalive) return postJson(url, body);
+    return fetch(url, {
+      method: "POST",
+      headers: { "Content-Type": "application/json", Accept: "application/json" },
+      body: JSON.stringify(body),
+      credentials: "same-origin",
+      keepalive: true,
+    }).then(function (response) {
+      if (!response.ok) throw new Error("The server answered " + response.status + ".");
+      return response.json();
+    });
+  }
+
+  function snapshotOf(form) {
     const kind = form.dataset.autosave;
     if (kind === "step1") {
       const functions = {};
@@ -81,47 +215,54 @@
     return { step: "tutorial", answers: answers };
   }
 
+  // Put a snapshot back into the form's boxes (null: the text the server sent with the page).
+  function restoreForm(form, snapshot) {
+    const kind = form.dataset.autosave;
+    form.querySelectorAll("textarea:not([data-check-url])").forEach(function (box) {
+      box.value = box.defaultValue;
+    });
+    form.querySelectorAll('input[type="checkbox"], input[type="radio"]').forEach(function (box) {
+      box.checked = box.defaultChecked;
+    });
+    if (!snapshot) return;
+    if (kind === "step1") {
+      form.querySelectorAll("textarea[data-part]").forEach(function (box) {
+        if (box.dataset.part in snapshot.functions) box.value = snapshot.functions[box.dataset.part];
+      });
+    } else if (kind === "step3") {
+      form.querySelectorAll("[data-part]").forEach(function (item) {
+        const entry = snapshot.mapping[item.dataset.part];
+        if (!entry) return;
+        item.querySelectorAll('input[type="checkbox"]').forEach(function (box) {
+          box.checked = entry.chosen.indexOf(box.value) >= 0;
+        });
+        const added = item.querySelector("textarea");
+        if (added) added.value = entry.added;
+      });
+    } else {
+      form.querySelectorAll('input[type="radio"]').forEach(function (box) {
+        box.checked = snapshot.answers[box.name.replace(/^answer:/, "")] === box.value;
+      });
+    }
+  }
+
   function autosave(form) {
     const url = "/p/" + code + "/draft";
-    let retry = 1000;
-    let pending = false;
-
-    async function save() {
-      pending = false;
-      say("Saving…");
-      try {
-        const data = await postJson(url, draftOf(form));
-        retry = 1000;
-        say(savedAt(data.saved_at));
-      } catch (error) {
-        if (error.status && error.status < 500 && error.status !== 429) {
-          say("Not saved: " + error.message, true);
-          return;
-        }
-        pending = true;
-        say("Not saved yet (no connection?): trying again…", true);
-        setTimeout(save, retry);
-        retry = Math.min(retry * 2, 30000);
-      }
-    }
-
-    const later = debounce(save, 600);
+    const draft = makeDraft({
+      key: form.dataset.draftKey,
+      stored: Number(form.dataset.revision || 0),
+      snapshot: function () { return snapshotOf(form); },
+      restore: function (snapshot) { restoreForm(form, snapshot); },
+      send: function (snapshot, revision, keepalive) {
+        return sendJson(url, Object.assign({}, snapshot, { revision: revision }), keepalive);
+      },
+    });
     const changed = function (event) {
-      if (event.target.matches("[data-check-url]")) return; // the rule box saves itself as it is checked
-      pending = true;
-      say("Changes not saved yet…");
-      later();
+      if (event.target.matches("[data-check-url]")) return; // the rule box is a draft of its own
+      draft.changed();
     };
     form.addEventListener("input", changed);
     form.addEventListener("change", changed);
-    form.addEventListener("submit", function () {
-      pending = false; // the form itself carries the work to the server
-    });
-    window.addEventListener("pagehide", function () {
-      if (pending && navigator.sendBeacon) {
-        navigator.sendBeacon(url, new Blob([JSON.stringify(draftOf(form))], { type: "application/json" }));
-      }
-    });
   }
 
   document.querySelectorAll("form[data-autosave]").forEach(autosave);
@@ -168,6 +309,7 @@
   }
 
   const rules = document.querySelector("textarea[data-check-url]");
+  let rulesDraft = null;
   if (rules) {
     const problems = document.getElementById("problems");
     const graph = document.getElementById("graph");
@@ -175,39 +317,49 @@
     let sent = 0;
     let shown = 0;
 
-    async function check() {
-      const number = ++sent;
-      const text = rules.value;
-      say("Checking…");
-      try {
-        const report = await postJson(rules.dataset.checkUrl, { rules: text, practice: practice });
-        if (number < shown) return; // an older answer arriving late
-        shown = number;
-        showProblems(problems, report);
-        setSubmittable(report.valid);
-        if (graph) {
-          if (report.graph_url) {
-            if (graph.getAttribute("src") !== report.graph_url) graph.src = report.graph_url;
-            graph.hidden = false;
-            const link = document.getElementById("graph-link");
-            if (link) link.href = report.graph_url;
-          } else {
-            graph.hidden = true;
-          }
+    function showCheck(report) {
+      showProblems(problems, report);
+      setSubmittable(report.valid);
+      if (graph) {
+        if (report.graph_url) {
+          if (graph.getAttribute("src") !== report.graph_url) graph.src = report.graph_url;
+          graph.hidden = false;
+          const link = document.getElementById("graph-link");
+          if (link) link.href = report.graph_url;
+        } else {
+          graph.hidden = true;
         }
-        // Typed on while this was checked: that text is saved by the next check, not this one.
-        say(rules.value === text ? savedAt(report.saved_at) : "Changes not saved yet…");
-      } catch (error) {
-        say("Not checked or saved: " + error.message, true);
       }
     }
 
-    const later = debounce(check, 350);
-    rules.addEventListener("input", function () {
-      say("Changes not saved yet…");
-      later();
+    // The rule box is saved by checking it: the check's answer says what is wrong and that it is saved.
+    async function check(text, revision, keepalive) {
+      const body = { rules: text, practice: practice, revision: revision };
+      if (keepalive) return sendJson(rules.dataset.checkUrl, body, true);
+      const number = ++sent;
+      const report = await postJson(rules.dataset.checkUrl, body);
+      if (number > shown && rules.value === text) {
+        shown = number; // an older answer arriving late is not shown
+        showCheck(report);
+      }
+      return report;
+    }
+
+    rulesDraft = makeDraft({
+      key: rules.dataset.draftKey,
+      stored: Number(rules.dataset.revision || 0),
+      snapshot: function () { return rules.value; },
+      restore: function (snapshot) { rules.value = snapshot === null ? rules.defaultValue : snapshot; },
+      send: check,
     });
-    check();
+    rules.addEventListener("input", function () { rulesDraft.changed(); });
+    if (!rules.value.trim()) {
+      setSubmittable(false); // nothing to check yet, and nothing to point out before anything is typed
+    } else if (!readOutbox(rulesDraft.key)) {
+      check(rules.value, rulesDraft.revision, false).catch(function (error) {
+        say("Not checked: " + error.message, true);
+      });
+    }
 
     document.querySelectorAll("button[data-insert]").forEach(function (button) {
       button.addEventListener("click", function () {
@@ -462,7 +614,7 @@
       section.hidden = false;
       body.textContent = "The robot is planning…";
       try {
-        const data = await postJson(planButton.dataset.planUrl, { rules: rules.value });
+        const data = await postJson(planButton.dataset.planUrl, { rules: rules.value, revision: rulesDraft.revision });
         body.textContent = "";
         data.plans.forEach(function (plan) {
           const block = document.createElement("div");
@@ -509,6 +661,36 @@
         planButton.disabled = false;
       }
     });
+  }
+
+  // -- the end: back to the platform once the server has confirmed everything is stored ----------------
+
+  const backLink = document.querySelector("a#back-to-platform[data-redirect-seconds]");
+  if (backLink) {
+    const arrived = Date.now();
+    const note = document.getElementById("redirect-note");
+    let retry = 1000;
+    const confirmSaved = async function () {
+      try {
+        const response = await fetch(backLink.dataset.progressUrl, {
+          headers: { Accept: "application/json" },
+          credentials: "same-origin",
+          cache: "no-store",
+        });
+        const progress = response.ok ? await response.json() : null;
+        if (!progress || !progress.finished) throw new Error("not confirmed");
+        Object.keys(sessionStorage).forEach(function (name) {
+          if (name.indexOf("causalplan:" + code + ":") === 0) sessionStorage.removeItem(name);
+        });
+        const wait = Math.max(0, Number(backLink.dataset.redirectSeconds) * 1000 - (Date.now() - arrived));
+        setTimeout(function () { window.location.assign(backLink.href); }, wait);
+      } catch (error) {
+        if (note) note.textContent = "Making sure your answers are stored… (you can also use the button above)";
+        setTimeout(confirmSaved, retry);
+        retry = Math.min(retry * 2, 15000);
+      }
+    };
+    confirmSaved();
   }
 
   // -- forms: one submission at a time ----------------------------------------------------------------
