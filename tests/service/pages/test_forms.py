@@ -38,7 +38,9 @@ def test_a_label_holding_a_keyword_is_noted_once_before_step_one_goes_on(client:
     noted = sent_back(client, f"/p/{code}/step1/1", functions)
     assert "keyword_in_label" in noted.text and "rock and roll" in noted.text
     fingerprint = noted.text.split('name="noted" value="')[1].split('"')[0]
-    changed = sent_back(client, f"/p/{code}/step1/1", {**functions, "part:shade": "heat causes glow", "noted": fingerprint})
+    changed = sent_back(
+        client, f"/p/{code}/step1/1", {**functions, "part:shade": "heat causes glow", "noted": fingerprint}
+    )
     assert "keyword_in_label" in changed.text  # other labels with a keyword: noted again
     again = changed.text.split('name="noted" value="')[1].split('"')[0]
     kept = post(client, f"/p/{code}/step1/1", {**functions, "part:shade": "heat causes glow", "noted": again})
