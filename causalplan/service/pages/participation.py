@@ -12,7 +12,9 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
+from causalplan.explain.questions import example_questions
 from causalplan.inputs import LoadedModel
+from causalplan.planners.result import PlanStep
 from causalplan.service.answers import default_planner, model_hash
 from causalplan.service.deps import Services
 from causalplan.service.documents import first_errors
@@ -53,6 +55,7 @@ def plans(services: Services, journey: ParticipantJourney, participant_model: Pa
             model_on(participant_model, obj.id), None, planner, services.settings.default_time_limit
         )
         steps = answer.data.get("plan") or []
+        attached = [PlanStep(str(s["action"]), tuple(s["args"]), str(s["fit"]), str(s["text"])) for s in steps]
         found.append(
             {
                 "object": obj.id,
@@ -63,6 +66,7 @@ def plans(services: Services, journey: ParticipantJourney, participant_model: Pa
                 "works": bool(answer.data.get("valid_under_true_mechanism")),
                 "picture_url": picture_url(journey.participant.code, obj.id, steps),
                 "fits": [str(step.get("fit") or "") for step in steps],
+                "questions": example_questions(obj, attached) if steps else [],
             }
         )
     return found

@@ -194,7 +194,7 @@ def test_an_invalid_rule_shows_its_error_inline_and_blocks_submission(live_serve
     expect(problem).to_contain_text("unknown_cause")
     submit = page.get_by_role("button", name="Submit my model")
     expect(submit).to_be_disabled()
-    expect(page.locator("#submit-note")).to_be_visible()
+    expect(page.locator("#model-status")).to_contain_text("Not ready to submit yet")
     saved(page)
     shoot(page, "invalid-rule-blocked")
 

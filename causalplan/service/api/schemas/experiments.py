@@ -318,6 +318,9 @@ class PlanForObjectOut(OutputModel):
     works: bool = Field(description="Whether the plan makes the real object produce its goal (replayed).")
     picture_url: str | None
     fits: list[str] = Field(description="The fits the plan makes, in order (what 'Watch the robot' films).")
+    questions: list[str] = Field(
+        default_factory=list, description="Example questions to ask the robot about this plan, in the object's words."
+    )
 
 
 class PlansOut(OutputModel):

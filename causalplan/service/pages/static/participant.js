@@ -310,6 +310,7 @@
 
   const rules = document.querySelector("textarea[data-check-url]");
   let rulesDraft = null;
+  let onChecked = null; // step 2's status hears of each check
   if (rules) {
     const problems = document.getElementById("problems");
     const graph = document.getElementById("graph");
@@ -320,6 +321,7 @@
     function showCheck(report) {
       showProblems(problems, report);
       setSubmittable(report.valid);
+      if (typeof onChecked === "function") onChecked(report);
       if (graph) {
         if (report.graph_url) {
           if (graph.getAttribute("src") !== report.graph_url) graph.src = report.graph_url;
@@ -529,7 +531,84 @@
     return frame;
   }
 
-  // -- "Why?" beside each step, and a "Why not…?" box: the robot explains its plan -------------------
+  // -- step 2's one status, and the plan on screen never stale -----------------------------------------
+
+  // One sentence says whether the rules can be submitted and whether the robot's plan works.
+  // The plan, its picture and the robot's answers belong to the rules they were made for: once
+  // the rule box says something else, they are marked out of date and their questions closed.
+  const modelStatus = document.getElementById("model-status");
+  const planSection = document.getElementById("plan");
+  const step2 = { valid: modelStatus ? modelStatus.dataset.valid === "true" : false, plan: null };
+
+  function planIsCurrent() {
+    return Boolean(step2.plan) && rules !== null && rules.value === step2.plan.rules;
+  }
+
+  function showStatus() {
+    if (!modelStatus || !rules) return;
+    const goal = modelStatus.dataset.goal;
+    const objects = modelStatus.dataset.objects;
+    let text = "";
+    let tone = "neutral";
+    if (!rules.value.trim()) {
+      text = "Write your rules: they are checked as you type.";
+    } else if (!step2.valid) {
+      text = "Not ready to submit yet: fix the problem shown under your rules.";
+      tone = "problem";
+    } else if (!step2.plan || step2.plan.failed) {
+      text = "Ready to submit: your rules have no problems. Show the robot's plan to see whether they make " +
+        objects + " produce " + goal + ".";
+    } else if (!planIsCurrent()) {
+      text = "Ready to submit. Your rules changed after the robot's plan: show the plan again to see whether they work.";
+    } else if (!step2.plan.failures.length) {
+      text = "Ready to submit: your rules have no problems, and the robot's plan makes " + objects + " produce " +
+        goal + ".";
+      tone = "good";
+    } else {
+      text = "You can submit, but following your rules the robot would not make the real " +
+        step2.plan.failures.join(" or the real ") + " produce " + goal +
+        ": something in how it works is missing. Change your rules, or submit them as they are.";
+      tone = "warning";
+    }
+    modelStatus.textContent = text;
+    modelStatus.dataset.tone = tone;
+  }
+
+  function markPlan() {
+    if (!planSection || !step2.plan) return;
+    const stale = !planIsCurrent();
+    planSection.classList.toggle("stale", stale);
+    const notice = document.getElementById("plan-stale");
+    if (notice) notice.hidden = !stale;
+    planSection.querySelectorAll("#plan-body button, #plan-body input").forEach(function (control) {
+      if (stale) {
+        control.dataset.wasDisabled = control.disabled ? "true" : "false";
+        control.disabled = true;
+      } else if (control.dataset.wasDisabled) {
+        control.disabled = control.dataset.wasDisabled === "true";
+        delete control.dataset.wasDisabled;
+      }
+    });
+    if (stale) {
+      planSection.querySelectorAll(".explanation, .why-not-plan, .why-not-suggestions").forEach(function (box) {
+        box.textContent = "";
+      });
+    }
+  }
+
+  if (rules) {
+    rules.addEventListener("input", function () {
+      showStatus();
+      markPlan();
+    });
+    onChecked = function (report) {
+      step2.valid = report.valid;
+      showStatus();
+    };
+    showStatus();
+  }
+
+  // -- "Why?" beside each step, and a "Why not…?" box: the robot explains the plan on screen ----------
 
   function explainUrl() {
     return document.getElementById("show-plan").dataset.planUrl.replace(/\/plan$/, "/explain");
@@ -542,22 +621,33 @@
     return box;
   }
 
+  // Ask about the plan on screen (its rules go with the question); an answer arriving after the
+  // rules changed is not shown.
+  async function ask(question) {
+    const asked = step2.plan ? step2.plan.rules : rules.value;
+    const data = await postJson(explainUrl(), Object.assign({ rules: asked }, question));
+    if (!step2.plan || step2.plan.rules !== asked || !planIsCurrent()) return null;
+    return data;
+  }
+
   function whyButton(plan, number) {
     const wrapper = document.createElement("span");
     const button = document.createElement("button");
     button.type = "button";
     button.className = "why";
     button.textContent = "Why?";
+    button.setAttribute("aria-label", "Why step " + number + "?");
     const answer = answerBox("why-answer");
     button.addEventListener("click", async function () {
       button.disabled = true;
       answer.textContent = "The robot is thinking…";
       try {
-        answer.textContent = (await postJson(explainUrl(), { object: plan.object, why: String(number) })).answer;
+        const data = await ask({ object: plan.object, why: String(number) });
+        answer.textContent = data ? data.answer : "";
       } catch (error) {
-        answer.textContent = error.message;
+        answer.textContent = planIsCurrent() ? error.message : "";
       } finally {
-        button.disabled = false;
+        button.disabled = !planIsCurrent();
       }
     });
     wrapper.appendChild(button);
@@ -569,37 +659,76 @@
     const form = document.createElement("form");
     form.className = "why-not";
     const label = document.createElement("label");
-    label.textContent = "Why not… ";
+    label.textContent = "Ask the robot about the " + plan.name + ": ";
     const input = document.createElement("input");
     input.name = "why_not";
-    input.placeholder = "leave out step 2 · shade before light bulb · attach shade";
+    input.type = "text";
+    input.placeholder = (plan.questions || []).slice(0, 2).join(" · ");
     input.maxLength = 200;
     label.appendChild(input);
     const button = document.createElement("button");
     button.type = "submit";
     button.textContent = "Ask the robot";
+    const examples = document.createElement("p");
+    examples.className = "small why-not-examples";
+    if (plan.questions && plan.questions.length) examples.textContent = "For example: " + plan.questions.join(" · ");
     const answer = answerBox("why-not-answer");
+    const suggestions = document.createElement("div");
+    suggestions.className = "why-not-suggestions";
     const alternative = document.createElement("ol");
     alternative.className = "why-not-plan";
-    form.append(label, button, answer, alternative);
+    form.append(label, button, examples, answer, suggestions, alternative);
+
+    function offer(questions) {
+      suggestions.textContent = "";
+      if (!questions || !questions.length) return;
+      const intro = document.createElement("p");
+      intro.className = "small";
+      intro.textContent = "Did you mean:";
+      suggestions.appendChild(intro);
+      questions.forEach(function (question) {
+        const choice = document.createElement("button");
+        choice.type = "button";
+        choice.className = "suggestion";
+        choice.textContent = question;
+        choice.addEventListener("click", function () {
+          input.value = question;
+          form.requestSubmit();
+        });
+        suggestions.appendChild(choice);
+      });
+    }
+
     form.addEventListener("submit", async function (event) {
       event.preventDefault();
       event.stopPropagation();
       button.disabled = true;
       answer.textContent = "The robot is planning again…";
       alternative.textContent = "";
+      suggestions.textContent = "";
       try {
-        const data = await postJson(explainUrl(), { object: plan.object, why_not: input.value });
+        const data = await ask({ object: plan.object, why_not: input.value });
+        if (!data) {
+          answer.textContent = "";
+          return;
+        }
         answer.textContent = data.answer;
+        offer(data.suggestions);
         data.alternative.forEach(function (step) {
           const item = document.createElement("li");
           item.textContent = step;
           alternative.appendChild(item);
         });
       } catch (error) {
+        if (!planIsCurrent()) {
+          answer.textContent = "";
+          return;
+        }
         answer.textContent = error.message;
+        const details = error.data && error.data.error ? error.data.error.details : null;
+        offer(details ? details.suggestions : null);
       } finally {
-        button.disabled = false;
+        button.disabled = !planIsCurrent();
       }
     });
     return form;
@@ -607,15 +736,24 @@
 
   const planButton = document.getElementById("show-plan");
   if (planButton && rules) {
-    const section = document.getElementById("plan");
     const body = document.getElementById("plan-body");
     planButton.addEventListener("click", async function () {
+      const asked = rules.value;
       planButton.disabled = true;
-      section.hidden = false;
+      planSection.hidden = false;
+      planSection.classList.remove("stale");
+      const notice = document.getElementById("plan-stale");
+      if (notice) notice.hidden = true;
+      step2.plan = null; // the old plan goes until the new one arrives
+      showStatus();
       body.textContent = "The robot is planning…";
       try {
-        const data = await postJson(planButton.dataset.planUrl, { rules: rules.value, revision: rulesDraft.revision });
+        const data = await postJson(planButton.dataset.planUrl, { rules: asked, revision: rulesDraft.revision });
         body.textContent = "";
+        step2.plan = {
+          rules: asked,
+          failures: data.plans.filter(function (plan) { return !plan.works; }).map(function (plan) { return plan.name; }),
+        };
         data.plans.forEach(function (plan) {
           const block = document.createElement("div");
           block.className = "plan-object";
@@ -640,10 +778,10 @@
             block.appendChild(none);
           }
           if (plan.steps.length && !plan.works && plan.message) {
-            const warning = document.createElement("p");
-            warning.className = "feedback";
-            warning.textContent = plan.message;
-            block.appendChild(warning);
+            const note = document.createElement("p");
+            note.className = "plan-note";
+            note.textContent = plan.message;
+            block.appendChild(note);
           }
           if (plan.picture_url) block.appendChild(planPicture(plan));
           if (planButton.dataset.filmUrl && plan.fits.length && plan.fits.every(Boolean)) {
@@ -656,9 +794,12 @@
         advice.textContent = "Not what you expected? Change your rules (or your functions in step 1) and look again.";
         body.appendChild(advice);
       } catch (error) {
+        step2.plan = { rules: asked, failures: [], failed: true };
         body.textContent = "No plan: " + error.message;
       } finally {
         planButton.disabled = false;
+        showStatus();
+        markPlan();
       }
     });
   }
