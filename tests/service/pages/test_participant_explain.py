@@ -93,3 +93,15 @@ def test_plain_questions_on_two_objects_are_answered_in_the_objects_words(client
     for question, answer in answers.items():
         words = " ".join([answer["answer"], *answer.get("alternative", []), *answer.get("suggestions", [])])
         assert not re.search(r"\w_\w", words), (question, words)  # no id like base_with_cables
+
+
+def test_why_answers_for_the_plan_on_screen_not_for_rules_saved_since(client: TestClient) -> None:
+    code = _at_step2(client)
+    on_screen = "provide electricity AND turn electricity into light CAUSES light"
+    saved_since = client.post(f"/p/{code}/check", json={"rules": LAMP_RULES}).json()
+    assert saved_since["applied"]
+    asked = {"object": "desk_lamp", "why": "1"}
+    about_screen = client.post(f"/p/{code}/explain", json={**asked, "rules": on_screen}).json()["answer"]
+    about_saved = client.post(f"/p/{code}/explain", json=asked).json()["answer"]
+    assert "rule 1 needs 'turn electricity into light'" in about_screen
+    assert "close the circuit" in about_saved and "close the circuit" not in about_screen
