@@ -804,6 +804,53 @@
     });
   }
 
+  // -- graphs: a tap (or a click) opens one full size ------------------------------------------------------
+
+  // The drawing in the page is scaled to its column, too small to read on a phone: the button
+  // around it opens a dialog with the drawing at full size, which scrolls inside the dialog.
+  let graphDialog = null;
+
+  function openGraph(image) {
+    if (!graphDialog) {
+      graphDialog = document.createElement("dialog");
+      graphDialog.className = "graph-dialog";
+      graphDialog.setAttribute("aria-label", "The graph, full size");
+      const bar = document.createElement("p");
+      bar.className = "actions";
+      const close = document.createElement("button");
+      close.type = "button";
+      close.textContent = "Close";
+      close.addEventListener("click", function () { graphDialog.close(); });
+      bar.appendChild(close);
+      const holder = document.createElement("div");
+      holder.className = "graph-full";
+      holder.appendChild(document.createElement("img"));
+      graphDialog.append(bar, holder);
+      graphDialog.addEventListener("click", function (event) {
+        if (event.target === graphDialog) graphDialog.close(); // a tap beside the drawing
+      });
+      document.body.appendChild(graphDialog);
+    }
+    const big = graphDialog.querySelector("img");
+    big.alt = image.alt;
+    big.src = image.currentSrc || image.src;
+    // Full size, but at least as wide as the dialog: a small drawing is enlarged, a large one scrolls.
+    big.style.width = Math.max(image.naturalWidth || 0, 0) ? image.naturalWidth * 1.5 + "px" : "";
+    graphDialog.showModal();
+  }
+
+  document.querySelectorAll("figure.graph img").forEach(function (image) {
+    const zoom = document.createElement("button");
+    zoom.type = "button";
+    zoom.className = "graph-zoom";
+    zoom.setAttribute("aria-label", "Open the graph full size");
+    image.replaceWith(zoom);
+    zoom.appendChild(image);
+    zoom.addEventListener("click", function () {
+      if (!image.hidden && image.getAttribute("src")) openGraph(image);
+    });
+  });
+
   // -- the end: back to the platform once the server has confirmed everything is stored ----------------
 
   const backLink = document.querySelector("a#back-to-platform[data-redirect-seconds]");
