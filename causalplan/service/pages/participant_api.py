@@ -28,6 +28,7 @@ from causalplan.service.pages.drawings import document_key, fresh_svg, graph_svg
 from causalplan.service.pages.journeys import JourneyDep
 from causalplan.service.pages.participant import check_view, graph_url
 from causalplan.service.pages.participation import invalid_model_error, plans
+from causalplan.service.pages.robot_films import run_ahead
 from causalplan.service.storage import experiments as store
 from causalplan.service.storage.experiments import ParticipantJourney
 from causalplan.service.storage.records import utc_now
@@ -162,6 +163,8 @@ def show_plan(
     if not check.is_valid:
         raise invalid_model_error(check)
     found = plans(services, journey, model)
+    objects = {obj.id: obj for obj in journey.training}
+    run_ahead(services, [(objects[plan["object"]], plan["fits"]) for plan in found])  # "Watch the robot" is next
     # Planning takes a while: the log goes onto the record as stored now, which a check may have changed.
     store.change_participant(session, journey.participant, lambda: journey.log_plan_request(utc_now(), model.rules))
     return PlansOut.model_validate({"plans": found})

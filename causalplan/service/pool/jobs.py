@@ -18,6 +18,7 @@ from causalplan.causal.model import CausalModel, Labelling
 from causalplan.errors import CausalPlanError
 from causalplan.pddl.task import catalog_task
 from causalplan.planners import fd, pipeline
+from causalplan.service.pool import robot_jobs
 from causalplan.service.pool.catalog import worker_catalog
 from causalplan.settings import Settings
 from causalplan.transfer.verdict import evaluate_transfer
@@ -42,6 +43,7 @@ def warm_up() -> None:
     fd.prestart(fd.CONFIGS["fd"])  # the default search, waiting for its first task
     with suppress(CausalPlanError):
         worker_catalog(())
+    robot_jobs.warm_simulator()  # so a worker's first robot run for the 3D player starts at once
 
 
 def plan_job(

@@ -7,6 +7,8 @@ socket carries only the job and its answer.
 
 from __future__ import annotations
 
+import contextlib
+import importlib
 import json
 import math
 import os
@@ -23,6 +25,27 @@ if TYPE_CHECKING:
 FORMATS = {"mp4": ".mp4", "gif": ".gif"}
 """Video formats a request may ask for, by name, and the file suffix each is written with."""
 CONTENT_TYPES = {"mp4": "video/mp4", "gif": "image/gif"}
+
+
+SIMULATOR_MODULES = (
+    "causalplan.sim.executor",
+    "causalplan.sim.robot.mover",
+    "causalplan.sim.robot.motion_planning",
+    "causalplan.sim.robot.playback",
+    "causalplan.transfer.robot_verdict",
+)
+"""What a robot's run imports: PyBullet, OMPL, TOP-RA, SciPy and the robot's own modules."""
+
+
+def warm_simulator() -> None:
+    """Import the simulator and the robot's libraries now, as a worker starts (``jobs.warm_up``).
+
+    A worker's first "Watch the robot" then pays for its run only, not for seconds of imports.
+    A simulator that cannot load says so in the answers that need it, as before.
+    """
+    for module in SIMULATOR_MODULES:
+        with contextlib.suppress(ImportError):
+            importlib.import_module(module)
 
 
 def write_progress(path: Path | None, frames: int, expected: int | None) -> None:

@@ -419,7 +419,23 @@
     return "Filming the robot: " + status.frames + " of " + status.expected_frames + " frames (" + seconds + ")";
   }
 
+  // The player's code and the arm's meshes load while the participant reads the plan (the server
+  // computes the robot's run meanwhile too), so "Watch the robot" starts moving at once.
+  let playerModule = null;
+
+  function loadPlayer() {
+    if (!playerModule) {
+      playerModule = import("/web/static/robot_player.js").then(function (module) {
+        module.loadPanda().catch(function () { /* tried again on the click */ });
+        return module;
+      });
+      playerModule.catch(function () { playerModule = null; });
+    }
+    return playerModule;
+  }
+
   function watchRobot(plan, filmUrl) {
+    loadPlayer().catch(function () { /* the click says why */ });
     const frame = document.createElement("div");
     frame.className = "robot-film";
     const watch = document.createElement("button");
@@ -485,10 +501,7 @@
       stageNote.textContent = "The robot is working out its motions…";
       try {
         const [player, run] = await Promise.all([
-          import("/web/static/robot_player.js").then(function (module) {
-            module.loadPanda(); // the arm's meshes load while the robot works out its motions
-            return module;
-          }),
+          loadPlayer(),
           postJson(filmUrl + "/playback", { object: plan.object, fits: plan.fits }),
         ]);
         await player.createPlayer(stage, run);
