@@ -871,7 +871,15 @@
     const arrived = Date.now();
     const note = document.getElementById("redirect-note");
     let retry = 1000;
+    const leave = function () {
+      const wait = Math.max(0, Number(backLink.dataset.redirectSeconds) * 1000 - (Date.now() - arrived));
+      setTimeout(function () { window.location.assign(backLink.href); }, wait);
+    };
     const confirmSaved = async function () {
+      if (!backLink.dataset.progressUrl) {
+        leave(); // nothing of theirs to store (they declined)
+        return;
+      }
       try {
         const response = await fetch(backLink.dataset.progressUrl, {
           headers: { Accept: "application/json" },
@@ -883,8 +891,7 @@
         Object.keys(sessionStorage).forEach(function (name) {
           if (name.indexOf("causalplan:" + code + ":") === 0) sessionStorage.removeItem(name);
         });
-        const wait = Math.max(0, Number(backLink.dataset.redirectSeconds) * 1000 - (Date.now() - arrived));
-        setTimeout(function () { window.location.assign(backLink.href); }, wait);
+        leave();
       } catch (error) {
         if (note) note.textContent = "Making sure your answers are stored… (you can also use the button above)";
         setTimeout(confirmSaved, retry);
