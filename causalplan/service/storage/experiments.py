@@ -71,6 +71,7 @@ def change_participant(session: Session, participant: ParticipantRecord, change:
             update(ParticipantRecord)
             .where(ParticipantRecord.id == participant.id)
             .values(position=ParticipantRecord.position)
+            .execution_options(synchronize_session=False)  # the record is read again just below
         )
         session.refresh(participant)
         result = change()
