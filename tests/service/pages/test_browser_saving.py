@@ -21,7 +21,6 @@ from tests.service.pages.test_browser import (  # noqa: F401 - fixtures
     playwright,
     prolific_link,
     public_study,
-    saved,
 )
 
 pytestmark = pytest.mark.slow  # a real Chromium drives the pages
@@ -34,6 +33,11 @@ def reload_soon(tab: Page) -> None:
     """Reload the page 100 ms after the last keystroke, as an impatient participant does."""
     tab.wait_for_timeout(TYPING_TO_RELOAD_MS)
     tab.reload()
+
+
+def all_saved(tab: Page) -> None:
+    """Wait until the server has acknowledged everything typed in this tab (its outbox is empty)."""
+    tab.wait_for_function("() => !Object.keys(sessionStorage).some((name) => name.startsWith('causalplan:'))")
 
 
 def in_new_tab(context: BrowserContext, url: str) -> Page:
@@ -54,7 +58,7 @@ def test_text_typed_just_before_a_reload_back_or_forward_is_kept(live_server: st
     expect(page.get_by_label("No: decorating does not make the car move.")).to_be_checked()
     page.get_by_label("No: light must already exist before it can be diffused.").check()
     page.get_by_label("One rule: FIRST AND SECOND CAUSES EFFECT").check()
-    saved(page)
+    all_saved(page)
     page.get_by_role("button", name="Continue to the study").click()
 
     expect(page).to_have_url(re.compile(r"/step1/1$"))
@@ -63,7 +67,7 @@ def test_text_typed_just_before_a_reload_back_or_forward_is_kept(live_server: st
     bulb.fill("turn electricity into light\nclose the circuit")
     reload_soon(page)
     expect(bulb).to_have_value("turn electricity into light\nclose the circuit")
-    saved(page)
+    all_saved(page)
     step1 = page.url
     tab = in_new_tab(page.context, step1)
     expect(tab.get_by_label("Functions of the light bulb (one per line)")).to_have_value(
@@ -96,7 +100,7 @@ def test_text_typed_just_before_a_reload_back_or_forward_is_kept(live_server: st
     rules.fill(LAMP_RULES)
     reload_soon(page)
     expect(rules).to_have_value(LAMP_RULES)
-    saved(page)
+    all_saved(page)
     tab = in_new_tab(page.context, page.url)
     expect(tab.get_by_label("Your rules, one per line")).to_have_value(LAMP_RULES)
     tab.close()
@@ -109,7 +113,7 @@ def test_text_typed_just_before_a_reload_back_or_forward_is_kept(live_server: st
     reload_soon(page)
     expect(head.get_by_label("turn electricity into light")).to_be_checked()
     expect(page.get_by_label("Other functions of the batteries (one per line)")).to_have_value("store electricity")
-    saved(page)
+    all_saved(page)
     tab = in_new_tab(page.context, page.url)
     expect(tab.get_by_label("Other functions of the batteries (one per line)")).to_have_value("store electricity")
     tab.close()

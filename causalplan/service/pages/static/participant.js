@@ -61,6 +61,8 @@
   // The server keeps the newest revision, so a late or repeated request never undoes newer text.
   const SAVE_DELAY_MS = 300;
   const drafts = [];
+  const arrival = performance.getEntriesByType ? performance.getEntriesByType("navigation")[0] : null;
+  const restoresForms = !arrival || arrival.type === "reload" || arrival.type === "back_forward";
 
   function outboxName(key) {
     return "causalplan:" + code + ":" + key;
@@ -147,18 +149,25 @@
       );
     };
 
-    // On arrival the boxes hold the server's text, not what the browser restored from its cache,
-    // unless this tab typed something newer that may not have reached the server.
+    // On arrival the boxes hold the server's text, not what the browser restored from its cache
+    // on a reload or Back/Forward, unless this tab typed something newer that may not have reached
+    // the server. On a plain visit the browser restores nothing: text already in a box was typed
+    // before this script ran, and is a change like any other.
+    const typed = JSON.stringify(options.snapshot());
     options.restore(null);
     const waiting = readOutbox(draft.key);
+    drafts.push(draft);
     if (waiting && waiting.revision > options.stored) {
       options.restore(waiting.snapshot);
       draft.revision = waiting.revision;
       setTimeout(draft.save, 0);
-    } else if (waiting) {
-      sessionStorage.removeItem(outboxName(draft.key));
+    } else {
+      if (waiting) sessionStorage.removeItem(outboxName(draft.key));
+      if (!restoresForms && typed !== JSON.stringify(options.snapshot())) {
+        options.restore(JSON.parse(typed));
+        draft.changed();
+      }
     }
-    drafts.push(draft);
     stampForms();
     return draft;
   }
