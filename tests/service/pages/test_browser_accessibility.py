@@ -92,6 +92,8 @@ def test_axe_finds_no_violation_on_any_page(live_server: str, checked: Page) -> 
     page.get_by_role("button", name="Why step 1?").click()
     expect(page.locator(".why-answer")).to_contain_text("light bulb")
     audit("step 2, the plan with answers and suggestions")
+    expect(page.locator("#graph")).to_have_attribute("src", re.compile(r"graph\.svg"))  # drawn
+    expect(page.locator("#graph")).to_be_visible()
     page.locator(".graph-zoom").first.click()
     expect(page.locator("dialog.graph-dialog")).to_be_visible()
     audit("step 2, the graph full size")

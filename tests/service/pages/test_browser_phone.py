@@ -107,7 +107,11 @@ def test_every_step_fits_a_phone_and_the_player_turns_by_touch(live_server: str,
     page.wait_for_function(turned, arg=view)  # the finger turned the view
 
     # The graph is enlarged by a tap, and closes again.
-    page.locator(".graph-zoom").first.tap()
+    expect(page.locator("#graph")).to_have_attribute("src", re.compile(r"graph\.svg"))  # drawn
+    expect(page.locator("#graph")).to_be_visible()
+    zoom = page.locator(".graph-zoom").first
+    zoom.scroll_into_view_if_needed()  # a tap lands where the graph is once the page has stopped moving
+    zoom.tap()
     dialog = page.locator("dialog.graph-dialog")
     expect(dialog).to_be_visible()
     fits_the_screen(page, "2-graph-enlarged", full_page=False)
