@@ -1,25 +1,22 @@
-"""Time "Watch the robot" in Chromium: from the click to the 3D player's first frame, against the robot's run.
+"""Time "Watch the robot" in Chromium: from the click to the 3D player's first frame, after reading the plan.
 
-    python benchmarks/player.py [--rounds K]
+    python benchmarks/player.py [--rounds K] [--reading SECONDS]
 
 Starts the service (``browser.served``: uvicorn in a thread; a temporary SQLite database, two
-planner workers), and for each of four participants' models (``browser.py``'s cases) shows the
-robot's plan on step 2 (and waits for its picture), then clicks "Watch the robot" in a fresh
-page with the browser's cache off (a first visit: three.js, urdf-loader and the Panda's meshes
-are fetched too, while the robot works out its motions). The page's own clock gives the time from the click to the
-player's first drawn frame, and the resource timing the wait for ``POST
-/p/<code>/films/playback`` (the robot's run, recording the parts' tracks as it goes, in a
-planner worker). The reference, measured in the same run on the same plan: the robot's run
-itself, ``simulate_plan(obj, steps, robot=True)`` in this process, with no film and no tracks.
-Each plan gets ``--rounds`` rounds of one robot run here, then one click, in turn (the machine
-may be shared: in turn, both meet the same load); the ratio is the median first frame over the
-median robot run, and round 1's ratio alone (each plan's first run here and first click: a
-worker runs a plan it has not seen) is shown too. The issue's target: the first frame within
-2x the robot's run. First each of the two workers runs the robot once, at the same time, on a
-plan not timed (the kerosene lamp's), reported apart (their imports: a long-running service's
-workers have done so). Before that, the server draws its plans' pictures ahead (as it does after
-every start, in the same workers) and the timing waits for it to finish, as ``browser.py`` does.
-Needs Chromium at /usr/bin/chromium.
+planner workers, which load the simulator as they start), waits for its plans' pictures drawn
+ahead, then for each of four participants' models (``browser.py``'s cases) shows the robot's
+plan on step 2 in a fresh page with the browser's cache off (a first visit), waits for the plan's
+picture, lets the participant read for ``--reading`` seconds (default 3; while they read, the
+page loads the player and the server computes the robot's run), and clicks "Watch the robot".
+The page's own clock gives the time from the click to the player's first drawn frame.
+
+The first click of the run is on a fresh server (its workers' first robot run: "fresh worker");
+each later round of a plan is a new participant with the same plan. The issue's targets (issue
+42 item 6): click to first frame, median at most 0.5 s, worst (the fresh worker) at most 1 s.
+The reference, measured in the same run: the robot's run itself, ``simulate_plan(obj, steps,
+robot=True)`` in this process (no tracks), for the ratio first frame / robot run. Whether the
+run was ready when the click came is read from the server's cache. Needs Chromium at
+/usr/bin/chromium.
 """
 
 from __future__ import annotations
@@ -28,13 +25,13 @@ import argparse
 import statistics
 import sys
 import tempfile
-import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import httpx
 from browser import CASES, CHROMIUM, CHROMIUM_ARGS, TOKEN, Case, open_step2, participant, served
+from fastapi import FastAPI
 from playwright.sync_api import Browser
 
 from causalplan.objects.catalog import load_catalog
@@ -43,7 +40,8 @@ from causalplan.service.work.robot import steps_of
 from causalplan.settings import Settings
 from causalplan.sim import RenderMode, simulate_plan
 
-TARGET_RATIO = 2.0
+TARGET_MEDIAN_MS = 500.0
+TARGET_WORST_MS = 1000.0
 TIMED = tuple(CASES[i] for i in (0, 1, 3, 4))
 """Desk lamp (bulb; bulb and shade), flashlight (all three parts), candle: one to four robot steps."""
 
@@ -54,8 +52,7 @@ CLICK_TO_FIRST_FRAME = """
   const check = () => {
     const stage = document.querySelector(".robot-player");
     if (stage && stage.dataset.firstFrame) {
-      const run = performance.getEntriesByType("resource").find((entry) => entry.name.endsWith("/films/playback"));
-      resolve([Number(stage.dataset.firstFrame) - started, run ? run.responseEnd - run.startTime : null]);
+      resolve(Number(stage.dataset.firstFrame) - started);
     } else if (performance.now() - started > 120000) {
       reject(new Error("no first frame in 120 s: " + document.querySelector(".robot-film").innerText));
     } else {
@@ -84,8 +81,8 @@ def robot_run_ms(case: Case, fits: list[str]) -> float:
     return (time.perf_counter() - began) * 1000
 
 
-def click(browser: Browser, base: str, code: str, case: Case) -> tuple[float, float]:
-    """Return (click to first frame, the playback request's wait) in ms, in a fresh page without cache."""
+def click(browser: Browser, base: str, code: str, case: Case, reading: float, app: FastAPI) -> tuple[float, bool]:
+    """Return (click to first frame in ms, whether the run was ready) in a fresh page without cache."""
     context = browser.new_context()
     page = context.new_page()
     devtools = context.new_cdp_session(page)
@@ -94,84 +91,61 @@ def click(browser: Browser, base: str, code: str, case: Case) -> tuple[float, fl
     open_step2(page, base, code, case.rules)
     page.get_by_role("button", name="Show the robot's plan").click()
     page.wait_for_selector("button.watch-robot")
-    # The plan's picture first (as a participant sees it): its drawing must not share the click's wait.
-    page.wait_for_function(PICTURES_SHOWN, timeout=120_000)
-    first_frame, request = page.evaluate(CLICK_TO_FIRST_FRAME)
+    page.wait_for_function(PICTURES_SHOWN, timeout=120_000)  # the picture first, as a participant sees it
+    page.wait_for_timeout(reading * 1000)  # the participant reads the plan
+    fits = plan_fits(base, code, case)
+    services = app.state.services
+    ready = services.caches.robot_runs.has(f"{services.catalog_key}:{case.training}:{','.join(fits)}")
+    first_frame = page.evaluate(CLICK_TO_FIRST_FRAME)
     context.close()
-    return float(first_frame), float(request)
+    return float(first_frame), ready
 
 
-def warm_up(http: httpx.Client, cases: tuple[Case, ...]) -> list[float]:
-    """Have each planner worker run the robot once, at the same time (untimed plans); return their ms."""
-    requests = []
-    for case in cases:
-        code = participant(http, case)
+def plan_fits(base: str, code: str, case: Case) -> list[str]:
+    """Return the fits of the participant's plan (the answer is cached: no planning, no second run)."""
+    with httpx.Client(base_url=base, timeout=120) as http:
         (plan,) = http.post(f"/p/{code}/plan", json={"rules": case.rules}).json()["plans"]
-        requests.append((f"/p/{code}/films/playback", {"object": case.training, "fits": plan["fits"]}))
-    took: list[float] = [0.0] * len(requests)
-
-    def run(index: int) -> None:
-        began = time.perf_counter()
-        http.post(requests[index][0], json=requests[index][1]).raise_for_status()
-        took[index] = (time.perf_counter() - began) * 1000
-
-    threads = [threading.Thread(target=run, args=(index,)) for index in range(len(requests))]
-    for thread in threads:
-        thread.start()
-    for thread in threads:
-        thread.join()
-    return took
+        fits: list[str] = plan["fits"]
+        return fits
 
 
 @dataclass
 class Row:
-    """One timed plan: per round, the robot's run here, the playback request's wait and the first frame (ms)."""
+    """One timed plan: per round, the robot's run here, the first frame (ms), and whether the run was ready."""
 
     name: str
     steps: int
     runs: list[float] = field(default_factory=list)
-    requests: list[float] = field(default_factory=list)
     first_frames: list[float] = field(default_factory=list)
-
-    @property
-    def first_ratio(self) -> float:
-        """The first click against the first run: both the first of this plan, here and in a worker."""
-        return self.first_frames[0] / self.runs[0]
-
-    @property
-    def ratio(self) -> float:
-        """The median first frame against the median robot run, over the rounds."""
-        return statistics.median(self.first_frames) / statistics.median(self.runs)
+    ready: list[bool] = field(default_factory=list)
 
 
-def measure(base: str, rounds: int) -> tuple[list[Row], list[float]]:
-    """Return the timed plans' rows (``rounds`` each, the run and the click in turn) and the workers' warm-ups."""
+def measure(base: str, app: FastAPI, rounds: int, reading: float) -> tuple[list[Row], float, bool]:
+    """Return the timed plans' rows and the fresh server's first click (ms, run ready)."""
     from playwright.sync_api import sync_playwright
 
     rows = []
     with httpx.Client(base_url=base, timeout=120) as http, sync_playwright() as playwright:
         browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        warm = warm_up(http, (CASES[5], CASES[5]))
-        kerosene = load_catalog().get("kerosene_lamp")  # this process too
-        first_fit = [kerosene.fits[0].id]
-        simulate_plan(kerosene, steps_of(kerosene, first_fit), render=RenderMode.NONE, robot=True)
+        fresh_case = TIMED[0]
+        fresh, fresh_ready = click(browser, base, participant(http, fresh_case), fresh_case, reading, app)
         for case in TIMED:
-            code = participant(http, case)
-            (plan,) = http.post(f"/p/{code}/plan", json={"rules": case.rules}).json()["plans"]
-            row = Row(case.name, len(plan["fits"]))
+            fits = plan_fits(base, participant(http, case), case)
+            row = Row(case.name, len(fits))
             for _ in range(rounds):  # in turn, so that both meet the same load on a shared machine
-                row.runs.append(robot_run_ms(case, plan["fits"]))
-                first_frame, request = click(browser, base, code, case)
+                row.runs.append(robot_run_ms(case, fits))
+                first_frame, ready = click(browser, base, participant(http, case), case, reading, app)
                 row.first_frames.append(first_frame)
-                row.requests.append(request)
+                row.ready.append(ready)
             rows.append(row)
         browser.close()
-    return rows, warm
+    return rows, fresh, fresh_ready
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rounds", type=int, default=3, help="robot runs and clicks per plan, in turn")
+    parser.add_argument("--reading", type=float, default=3.0, help="seconds the participant reads the plan")
     args = parser.parse_args()
     folder = Path(tempfile.mkdtemp(prefix="causalplan-player-"))
     settings = Settings(database_url=f"sqlite:///{folder / 'bench.sqlite3'}", research_token=TOKEN, planning_workers=2)
@@ -181,24 +155,29 @@ def main() -> int:
         while app.state.upkeep.drawn_ahead is None:  # the plans' pictures drawn ahead take the workers first
             time.sleep(0.05)
         print(f"{app.state.upkeep.drawn_ahead} plan pictures drawn ahead, {time.perf_counter() - began:.0f} s")
-        rows, warm = measure(base, args.rounds)
+        kerosene = load_catalog().get("kerosene_lamp")  # this process's imports, before its timed runs
+        simulate_plan(kerosene, steps_of(kerosene, [kerosene.fits[0].id]), render=RenderMode.NONE, robot=True)
+        rows, fresh, fresh_ready = measure(base, app, args.rounds, args.reading)
 
-    print("warm-up (each worker's first robot run: its imports), ms: " + ", ".join(f"{ms:.0f}" for ms in warm))
-    columns = f"{'robot run':>10} {'request':>8} {'first frame':>12} {'ratio':>6} {'first':>6}"
-    print(f"\n{'model':34} {'steps':>5} {columns}   (medians of {args.rounds} rounds, ms; first: round 1's ratio)")
+    print(
+        f"\nfresh server (its workers' first robot run): click to first frame {fresh:.0f} ms, run ready: {fresh_ready}"
+    )
+    columns = f"{'robot run':>10} {'first frame':>12} {'ratio':>6} {'ready':>6}"
+    print(f"\n{'model':34} {'steps':>5} {columns}   (medians of {args.rounds} rounds, ms; reading {args.reading} s)")
     for row in rows:
-        medians = (statistics.median(values) for values in (row.runs, row.requests, row.first_frames))
+        run, frame = statistics.median(row.runs), statistics.median(row.first_frames)
         print(
-            f"{row.name:34} {row.steps:5d} {next(medians):10.0f} {next(medians):8.0f} {next(medians):12.0f} "
-            f"{row.ratio:6.2f} {row.first_ratio:6.2f}"
+            f"{row.name:34} {row.steps:5d} {run:10.0f} {frame:12.0f} {frame / run:6.2f} "
+            f"{sum(row.ready):3d}/{len(row.ready)}"
         )
-    worst = max(row.ratio for row in rows)
-    median = statistics.median(row.ratio for row in rows)
-    firsts = [row.first_ratio for row in rows]
-    print(f"\nclick to first frame / robot run: median {median:.2f}, worst {worst:.2f} (target {TARGET_RATIO})")
-    first_median = statistics.median(firsts)
-    print(f"round 1 alone (each plan's first run and click): median {first_median:.2f}, worst {max(firsts):.2f}")
-    return 0 if worst <= TARGET_RATIO else 1
+    frames = [ms for row in rows for ms in row.first_frames]
+    median = statistics.median(frames)
+    worst = max([*frames, fresh])
+    print(
+        f"\nclick to first frame: median {median:.0f} ms (target {TARGET_MEDIAN_MS:.0f}), "
+        f"worst {worst:.0f} ms with the fresh server's (target {TARGET_WORST_MS:.0f})"
+    )
+    return 0 if median <= TARGET_MEDIAN_MS and worst <= TARGET_WORST_MS else 1
 
 
 if __name__ == "__main__":

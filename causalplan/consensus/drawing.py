@@ -101,7 +101,14 @@ def draw_consensus(consensus: Consensus, members: dict[str, CausalModel], folder
     if model is not None:
         # Rules keep their order, so rule i of the model is the i-th entered rule.
         widths = {index: 1.0 + 7.0 * rule.share for index, rule in enumerate(entered, start=1)}
-        _draw_model(main, model, widths, f"Consensus of {len(consensus.members)} (line width = support)", 9)
+        joined = len(consensus.members)
+        title = f"Consensus of {joined} participant{'s' if joined != 1 else ''}' models (line width = support)"
+        if consensus.left_out:
+            # How many, not who or why: the reasons name participants (the CLI's report lists them).
+            title += f"\n{len(consensus.left_out)} left out (no model to read, or another training object)"
+        if len(members) > len(shown):
+            title += f"\n{len(shown)} of the {len(members)} models shown on the right"
+        _draw_model(main, model, widths, title, 9)
     else:
         main.set_axis_off()
         main.set_title("No consensus model could be read")

@@ -159,8 +159,8 @@ def _blocked_words(obj: AssemblyObject, blocker: tuple[Fit, Fit, tuple[str, str]
     fit, other, (owner, connector) = blocker
     covers = "covers" if (owner, connector) in fit.blocks else "takes"
     words = (
-        f"then the {obj.part(fit.moving_part).name} {covers} the {connector} of the {obj.part(owner).name} and the "
-        f"{obj.part(other.moving_part).name} cannot go in ({fit.id} rules out {other.id})"
+        f"then the {obj.part(fit.moving_part).name} {covers} the {connector.replace('_', ' ')} of the "
+        f"{obj.part(owner).name} and the {obj.part(other.moving_part).name} cannot go in"
     )
     return words, {"fit": fit.id, "rules_out": other.id, "connector": f"{owner}.{connector}"}
 
@@ -230,8 +230,15 @@ def why_not(
             f"There is no plan to ask about: {plan.message}", details={"status": plan.status.value}
         )
     obj = task.obj
-    constraints = question.constraints(obj)
     text = question.text(obj)
+    if question.kind is Kind.LEAVE_OUT and question.parts[0] == obj.base:
+        name = obj.part(obj.base).name
+        words = (
+            f"The {name} is where the robot starts: every other part is attached to it, "
+            f"so the {obj.name} cannot be built without it"
+        )
+        return Contrast(question, text, "is_base", _sentence(words), {"part": obj.base}, plan, plan)
+    constraints = question.constraints(obj)
     in_plan = [step.args[0] for step in plan.steps]
     if not constraints.violations(obj, [step.fit for step in plan.steps]):
         doing = ", ".join(f"step {number}: {step.text.rstrip('.')}" for number, step in enumerate(plan.steps, start=1))

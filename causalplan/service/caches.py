@@ -19,6 +19,7 @@ MODEL_GRAPHS = 128
 PAGE_GRAPHS = 256
 PART_PICTURES = 512
 PLAN_PICTURES = 256
+ROBOT_RUNS = 64
 
 
 @dataclass(frozen=True)
@@ -35,6 +36,9 @@ class ServiceCaches(NamedCaches):
     """The simulator's picture of each part (PNG), by catalog fingerprint, object and part."""
     plan_pictures: PictureCache = field(default_factory=lambda: PictureCache(PLAN_PICTURES))
     """The simulator's picture of an object after a plan (PNG), by catalog fingerprint, object and fits."""
+    robot_runs: PictureCache = field(default_factory=lambda: PictureCache(ROBOT_RUNS))
+    """The 3D player's document of the robot's run (JSON), by catalog fingerprint, object and fits
+    (``pages.robot_films``): computed while a participant reads the plan, played at once on the click."""
 
     @classmethod
     def of(cls, settings: Settings) -> ServiceCaches:

@@ -258,17 +258,23 @@ def consensus_svg(session: Session, catalog: Catalog, experiment: ExperimentReco
 
     The graph beside the first members' own models; an arrow's width is its rule's support.
     """
+    import matplotlib
+
     from causalplan.consensus.build import NoCrowdError, build_consensus
     from causalplan.consensus.drawing import draw_consensus
     from causalplan.consensus.participants import participants_of_export
 
     data = export_data(session, catalog, experiment, request, platform_ids="omit")
     try:
-        consensus = build_consensus(participants_of_export(data, f"experiment {experiment.id}"), catalog)
+        people = participants_of_export(data, f"experiment {experiment.id}")
+        consensus = build_consensus(people, catalog)
     except (NoCrowdError, InputFileError) as exc:
         return exc.message
-    with tempfile.TemporaryDirectory() as folder:  # matplotlib writes the files; the SVG is read back
-        paths = draw_consensus(consensus, dict(consensus.models), Path(folder))
+    # Each model is titled by the participant's place in the table, never by their link code (a secret).
+    names = {person.id: f"participant {number}" for number, person in enumerate(people, start=1)}
+    members = {names.get(person, "a participant"): model for person, model in consensus.models.items()}
+    with tempfile.TemporaryDirectory() as folder, matplotlib.rc_context({"svg.fonttype": "none"}):
+        paths = draw_consensus(consensus, members, Path(folder))  # matplotlib writes the files; the SVG is read back
         return next(path for path in paths if path.suffix == ".svg").read_bytes()
 
 

@@ -14,6 +14,7 @@ undecided trials (the planner timed out) and excluded participants are counted, 
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -150,11 +151,16 @@ def _conclusion(comparison: Comparison) -> str:
             if significant
             else "no reliable difference, consistent with transfer to both"
         )
+    low, high = comparison.odds_ratio_interval
+    odds = (
+        f"odds ratio {comparison.odds_ratio:.2f} (95% CI {low:.2f}-{high:.2f})"
+        if all(math.isfinite(value) for value in (comparison.odds_ratio, low, high))
+        else "odds ratio not estimable from these counts"
+    )
     return (
         f"{comparison.name}: {_percent(comparison.first_share)} vs {_percent(comparison.second_share)}; "
         f"Fisher {comparison.alternative} p = {comparison.p_value:.3g}, Holm p = {comparison.p_holm:.3g}, "
-        f"odds ratio {comparison.odds_ratio:.2f} (95% CI {comparison.odds_ratio_interval[0]:.2f}-"
-        f"{comparison.odds_ratio_interval[1]:.2f}): {verdict}."
+        f"{odds}: {verdict}."
     )
 
 

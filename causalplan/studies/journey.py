@@ -241,13 +241,38 @@ class Journey:
         work.setdefault("mappings", {})[object_id] = entries
         self._save(work)
 
-    def log_plan_request(self, at: datetime) -> None:
-        """Remember that the participant asked for the robot's plan, with the rules at that moment."""
+    def log_plan_request(self, at: datetime, rules: tuple[str, ...] | None = None) -> None:
+        """Remember that the participant asked for the robot's plan, with the rules planned (default: the draft's)."""
         work = self._work()
         log = work.setdefault("plan_requests", [])
-        log.append({"at": at.isoformat(), "rules": list(self.draft_model().rules)})
+        log.append({"at": at.isoformat(), "rules": list(self.draft_model().rules if rules is None else rules)})
         work["plan_requests"] = log[-MAX_PLAN_REQUESTS_KEPT:]
         self._save(work)
+
+    def draft_revision(self, key: str) -> int:
+        """Return the revision of the draft ``key`` last saved (0: none saved with one).
+
+        A page stamps each save of one box or group of boxes (``step1:desk_lamp``, ``step2:rules``)
+        with a revision that only grows; a save older than the one stored (a request overtaken
+        by a newer one, an old form posted again) must not overwrite newer text.
+        """
+        revisions: dict[str, int] = self._saved().get("revisions", {})
+        return int(revisions.get(key, 0))
+
+    def accept_revision(self, key: str, revision: int | None) -> bool:
+        """Return whether a save of draft ``key`` stamped ``revision`` is the newest, and keep its revision.
+
+        ``None`` (a form posted without the page's script) is always accepted and keeps the stored
+        revision, so a later save of the script still counts as newer.
+        """
+        if revision is None:
+            return True
+        if revision < self.draft_revision(key):
+            return False
+        work = self._work()
+        work.setdefault("revisions", {})[key] = revision
+        self._save(work)
+        return True
 
     # -- moving on ----------------------------------------------------------------------------------
 

@@ -13,7 +13,7 @@ import io
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from causalplan.errors import UnknownObjectError
 from causalplan.objects.catalog import Catalog
@@ -21,6 +21,9 @@ from causalplan.studies.design import generalization_of
 from causalplan.studies.far_generalization import span_of
 from causalplan.studies.statistics import Proportion, wilson
 from causalplan.studies.trials import Study, TrialRow
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 @dataclass(frozen=True)
@@ -189,49 +192,68 @@ def rate_table(study: Study, catalog: Catalog) -> RateTable:
     return RateTable(tuple(rates), left_out)
 
 
-def rates_chart(table: RateTable, file_format: str = "svg") -> bytes:
-    """Return the chart of the rates (``svg`` or ``png``): each condition's rate per test object, 95% Wilson interval.
+def rates_figure(table: RateTable) -> Figure:
+    """Return the chart of the rates: each condition's rate per test object, with its 95% Wilson interval.
 
     Test objects along x (every one of the table, with or without analysed trials); above each
-    point, transfers/analysed trials.
+    interval, transfers/analysed trials, centred on its point so neighbours never overlap; the
+    legend beside the axes, never over the intervals.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from causalplan.causal.render import DRAW_LOCK
-
     rates = table.rates
     tests = list(dict.fromkeys(rate.test_object for rate in rates))
     conditions = list(dict.fromkeys(rate.condition for rate in rates))
-    with DRAW_LOCK:  # one lock for every matplotlib drawing in a process
-        figure = Figure(figsize=(max(5.0, 1.8 * len(tests) + 2.0), 3.8))
-        FigureCanvasAgg(figure)
-        axes = figure.add_subplot()
-        width = 0.6 / max(1, len(conditions))
-        for index, condition in enumerate(conditions):
-            shift = (index - (len(conditions) - 1) / 2) * width
-            shown = [rate for rate in rates if rate.condition == condition and rate.rate is not None]
-            xs = [tests.index(rate.test_object) + shift for rate in shown]
-            percents = [100 * (rate.rate or 0.0) for rate in shown]
-            # Wilson bounds can miss a rate of 0 or 1 by a rounding error; a bar is never negative.
-            below = [max(0.0, 100 * ((rate.rate or 0.0) - (rate.share.low or 0.0))) for rate in shown]
-            above = [max(0.0, 100 * ((rate.share.high or 0.0) - (rate.rate or 0.0))) for rate in shown]
-            axes.errorbar(xs, percents, yerr=[below, above], fmt="o", capsize=4, label=condition)
-            for x, percent, rate in zip(xs, percents, shown, strict=True):
-                label = f"{rate.transfers}/{rate.trials}"
-                axes.annotate(label, (x, percent), xytext=(6, -3), textcoords="offset points", fontsize=8)
-        axes.set_xticks(range(len(tests)), [test.replace("_", " ") for test in tests])
-        axes.set_xlim(-0.6, len(tests) - 0.4)
-        axes.set_ylim(0, 105)
-        axes.set_ylabel("models that transfer (%)")
-        axes.set_title(
-            "Transfer rate per condition and test object, with 95% Wilson intervals\n"
-            f"(transfers/analysed trials; {table.left_out.says()})",
-            fontsize=8,
+    figure = Figure(figsize=(max(5.0, 1.8 * len(tests) + 2.0), 3.8))
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    width = 0.6 / max(1, len(conditions))
+    crowded = len(conditions) > 3  # then the counts stand upright, each above its own interval
+    for index, condition in enumerate(conditions):
+        shift = (index - (len(conditions) - 1) / 2) * width
+        shown = [rate for rate in rates if rate.condition == condition and rate.rate is not None]
+        xs = [tests.index(rate.test_object) + shift for rate in shown]
+        percents = [100 * (rate.rate or 0.0) for rate in shown]
+        # Wilson bounds can miss a rate of 0 or 1 by a rounding error; a bar is never negative.
+        below = [max(0.0, 100 * ((rate.rate or 0.0) - (rate.share.low or 0.0))) for rate in shown]
+        above = [max(0.0, 100 * ((rate.share.high or 0.0) - (rate.rate or 0.0))) for rate in shown]
+        axes.errorbar(xs, percents, yerr=[below, above], fmt="o", capsize=4, label=condition)
+        for x, percent, high, rate in zip(xs, percents, above, shown, strict=True):
+            axes.annotate(
+                f"{rate.transfers}/{rate.trials}",
+                (x, percent + high),
+                xytext=(0, 6),
+                textcoords="offset points",
+                ha="center",
+                va="bottom",
+                fontsize=7 if crowded else 8,
+                rotation=90 if crowded else 0,
+            )
+    axes.set_xticks(range(len(tests)), [test.replace("_", " ") for test in tests])
+    axes.set_xlim(-0.6, len(tests) - 0.4)
+    axes.set_ylim(0, 125 if crowded else 115)  # room for the counts above an interval reaching 100%
+    axes.set_yticks(range(0, 101, 20))
+    axes.set_ylabel("models that transfer (%)")
+    axes.set_title(
+        "Transfer rate per condition and test object, with 95% Wilson intervals\n"
+        f"(transfers/analysed trials; {table.left_out.says()})",
+        fontsize=8,
+    )
+    axes.spines[["top", "right"]].set_visible(False)
+    if conditions:
+        axes.legend(
+            title="condition", fontsize=8, title_fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1)
         )
-        axes.spines[["top", "right"]].set_visible(False)
-        if conditions:
-            axes.legend(title="condition", fontsize=8, title_fontsize=8, frameon=False, loc="lower left")
+    return figure
+
+
+def rates_chart(table: RateTable, file_format: str = "svg") -> bytes:
+    """Return the chart of the rates (``rates_figure``) as ``svg`` or ``png``."""
+    from causalplan.causal.render import DRAW_LOCK
+
+    with DRAW_LOCK:  # one lock for every matplotlib drawing in a process
+        figure = rates_figure(table)
         buffer = io.BytesIO()
         figure.savefig(buffer, format=file_format, bbox_inches="tight", dpi=150 if file_format == "png" else None)
     return buffer.getvalue()

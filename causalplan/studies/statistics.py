@@ -180,6 +180,12 @@ def clustered_logistic(
         except (ConvergenceWarning, PerfectSeparationWarning, np.linalg.LinAlgError, ValueError) as exc:
             return ClusteredModel(formula, len(outcomes), participants, (), f"the model could not be fitted: {exc}")
     intervals = np.asarray(fitted.conf_int(alpha=1 - CONFIDENCE))
+    estimates = np.concatenate([np.asarray(fitted.params), intervals.ravel(), np.asarray(fitted.pvalues)])
+    if not np.all(np.isfinite(estimates)):
+        # Too few participants (or no variation within them) for robust errors: say so, never print nan.
+        return ClusteredModel(
+            formula, len(outcomes), participants, (), "its estimates are not finite: too few participants for it"
+        )
     effects = []
     for index, name in enumerate(usable, start=1):
         low, high = intervals[index]

@@ -52,3 +52,58 @@ def test_invalid_questions_have_stable_codes(catalog: Catalog, text: str, code: 
     with pytest.raises(QuestionError) as raised:
         parse_question(text, catalog.get("desk_lamp"), STEPS)
     assert raised.value.code == code
+
+
+FLASHLIGHT_STEPS = (
+    PlanStep("insert", ("batteries", "case"), "batteries_into_bay", "Insert the batteries into the case."),
+    PlanStep("screw", ("head", "case"), "head_onto_case", "Screw the head onto the case."),
+)
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("why not put the shade on first?", Question(Kind.ORDER, ("shade", "light_bulb"))),
+        ("Why not leave out the base?", Question(Kind.LEAVE_OUT, ("base_with_cables",))),
+        ("what if the bulb went in last?", Question(Kind.ORDER, ("shade", "light_bulb"))),
+        ("why don't you skip the lampshade", None),  # no part is called that: not understood
+        ("how about the bulb after the shade?", Question(Kind.ORDER, ("shade", "light_bulb"))),
+        ("why not put the shades on", Question(Kind.ATTACH, ("shade",))),
+    ],
+)
+def test_plain_questions_are_read_by_the_parts_names_and_the_question_words(
+    catalog: Catalog, text: str, expected: Question | None
+) -> None:
+    lamp = catalog.get("desk_lamp")
+    if expected is None:
+        with pytest.raises(QuestionError):
+            parse_question(text, lamp, STEPS)
+    else:
+        assert parse_question(text, lamp, STEPS) == expected
+
+
+def test_plain_questions_on_the_flashlight(catalog: Catalog) -> None:
+    flashlight = catalog.get("flashlight")
+    assert parse_question("why not put the head on first?", flashlight, FLASHLIGHT_STEPS) == Question(
+        Kind.ORDER, ("head", "batteries")
+    )
+    assert parse_question("what if the battery went in last?", flashlight, FLASHLIGHT_STEPS) == Question(
+        Kind.ORDER, ("head", "batteries")
+    )
+    assert parse_question("why not leave out the case?", flashlight, FLASHLIGHT_STEPS) == Question(
+        Kind.LEAVE_OUT, ("case",)
+    )
+
+
+def test_a_question_not_understood_comes_with_the_closest_answerable_ones_in_words(catalog: Catalog) -> None:
+    lamp = catalog.get("desk_lamp")
+    with pytest.raises(QuestionError) as raised:
+        parse_question("could the shade be nicer", lamp, STEPS)
+    suggestions = raised.value.details["suggestions"]
+    assert isinstance(suggestions, list) and len(suggestions) == 3
+    assert all("shade" in suggestion and "_" not in suggestion for suggestion in suggestions)
+    for suggestion in suggestions:  # each one can be asked as it is
+        parse_question(suggestion, lamp, STEPS)
+    with pytest.raises(QuestionError) as unknown:
+        parse_question("attach the wick", lamp, STEPS)
+    assert "_" not in unknown.value.message and unknown.value.details["suggestions"]

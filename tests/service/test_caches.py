@@ -65,14 +65,24 @@ def _plan_picture(client: TestClient) -> None:
         assert client.get(plan["picture_url"]).headers["content-type"] == "image/png"
 
 
+def _robot_run(client: TestClient) -> None:
+    code = new_participant(client)
+    post(client, f"/p/{code}/step1/1", LAMP_FUNCTIONS)
+    (plan,) = client.post(f"/p/{code}/plan", json={"rules": LAMP_RULES}).json()["plans"]  # computed ahead from here
+    for _ in range(2):
+        played = client.post(f"/p/{code}/films/playback", json={"object": "desk_lamp", "fits": plan["fits"]})
+        assert played.status_code == 200 and played.json()["outcome"]["carried_out"], played.text
+
+
 REPEATS: dict[str, Callable[[TestClient], None]] = {
     "answers": _plan,
     "model_graphs": _model_graph,
     "page_graphs": _page_graph,
     "part_pictures": _part_picture,
     "plan_pictures": _plan_picture,
+    "robot_runs": _robot_run,
 }
-SLOW = {"part_pictures", "plan_pictures"}  # the simulator draws them, in a worker
+SLOW = {"part_pictures", "plan_pictures", "robot_runs"}  # the simulator draws them, in a worker
 
 
 def test_every_cache_of_the_app_has_a_repeat_here() -> None:

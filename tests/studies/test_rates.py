@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from matplotlib.transforms import Bbox
+
 from causalplan.objects.catalog import Catalog
-from causalplan.studies.rates import rate_table, rates_chart
+from causalplan.studies.rates import rate_table, rates_chart, rates_figure
 from causalplan.studies.trials import read_study
 
 DESIGN = {
@@ -95,3 +97,50 @@ def test_the_chart_shows_every_row_and_its_counts(catalog: Catalog) -> None:
     svg = rates_chart(rate_table(read_study(export(), catalog), catalog)).decode()
     assert "<!-- 1/3 -->" in svg and "<!-- candle -->" in svg and "none left out" not in svg
     assert rates_chart(rate_table(read_study(export(), catalog), catalog), "png").startswith(b"\x89PNG")
+
+
+def crowded_export() -> dict[str, Any]:
+    """Four conditions on two test objects, twelve trials each: low rates on one object, full on the other."""
+    names = ("c1", "c2", "c3", "c4")
+    design = {"conditions": [{"name": n, "training": ["desk_lamp"], "tests": ["flashlight", "candle"]} for n in names]}
+    trials = [
+        {
+            "trial_id": f"{name}-{test}-{number}",
+            "participant_id": f"{name}-{number}",
+            "condition": name,
+            "training_order": ["desk_lamp"],
+            "test_object": test,
+            "verdict": "transfers" if test == "candle" or number == 0 else "fails",
+            "reasons": [],
+        }
+        for name in names
+        for test in ("flashlight", "candle")
+        for number in range(12)
+    ]
+    return {"experiment": {"design": design}, "participants": [], "trials": trials}
+
+
+def test_the_charts_legend_and_counts_cover_no_interval_and_no_other_count(catalog: Catalog) -> None:
+    figure = rates_figure(rate_table(read_study(crowded_export(), catalog), catalog))
+    renderer = figure.canvas.get_renderer()  # type: ignore[attr-defined]
+    axes = figure.axes[0]
+    drawn = axes.get_legend()
+    assert drawn is not None
+    legend = drawn.get_window_extent(renderer)
+    pixels = figure.dpi / 72
+    intervals = [  # each point and each cap, one marker at a time (a line's own box spans all of its points)
+        Bbox.from_extents(x - half, y - half, x + half, y + half)
+        for line in axes.get_lines()
+        for half in [line.get_markersize() * pixels / 2]
+        for x, y in axes.transData.transform(line.get_xydata())
+    ]
+    intervals += [  # the bars: each segment of the errorbars' line collections, in pixels
+        Bbox(axes.transData.transform(segment))
+        for bars in axes.collections
+        for segment in bars.get_segments()  # type: ignore[attr-defined]
+    ]
+    counts = [text.get_window_extent(renderer) for text in axes.texts]
+    assert sorted(text.get_text() for text in axes.texts) == ["1/12"] * 4 + ["12/12"] * 4
+    assert not any(legend.overlaps(interval) for interval in intervals)
+    assert not any(a.overlaps(b) for i, a in enumerate(counts) for b in counts[i + 1 :])
+    assert not any(count.overlaps(interval) for count in counts for interval in intervals)

@@ -7,9 +7,9 @@ A page that is closed (finished, or not reached yet) sends the participant to wh
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import APIRouter, Request, Response
+from fastapi import APIRouter, Query, Request, Response
 from starlette.concurrency import run_in_threadpool
 
 from causalplan.causal.diagnostics import Report
@@ -18,11 +18,13 @@ from causalplan.objects.model import AssemblyObject
 from causalplan.service.api.schemas.experiments import MAX_PART_TEXT, MAX_RULES_TEXT
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep
 from causalplan.service.errors import InvalidFormError
+from causalplan.service.pages import revisions
 from causalplan.service.pages.drawings import document_key
 from causalplan.service.pages.ending import save_progress
 from causalplan.service.pages.forms import Form, read_form
 from causalplan.service.pages.journeys import JourneyDep, Number, here, page
 from causalplan.service.pages.participation import picture_url, run_trial, submit_model
+from causalplan.service.pages.revisions import form_revision
 from causalplan.service.pages.templating import PageRoute, redirect
 from causalplan.service.storage import arrivals
 from causalplan.service.storage import experiments as store
@@ -48,6 +50,8 @@ from causalplan.studies.tutorial import (
 )
 
 router = APIRouter(prefix="/p/{code}", route_class=PageRoute, include_in_schema=False)
+
+Checked = Annotated[bool, Query(description="Sent back by a submission: show what it found to look at again.")]
 
 
 def _parts(obj: AssemblyObject) -> list[dict[str, str]]:
@@ -88,7 +92,6 @@ def _tutorial_page(
     catalog: CatalogDep,
     settings: SettingsDep,
     feedback: bool = False,
-    status_code: int = 200,
 ) -> Response:
     saved = journey.tutorial_work()
     rules_text = str(saved.get("rules", ""))
@@ -101,7 +104,8 @@ def _tutorial_page(
         request,
         journey,
         "tutorial.html",
-        status_code=status_code,
+        answers_revision=journey.draft_revision(revisions.TUTORIAL_ANSWERS),
+        rules_revision=journey.draft_revision(revisions.TUTORIAL_RULES),
         car=car,
         parts=_parts(car),
         functions=TUTORIAL_FUNCTIONS,
@@ -126,10 +130,12 @@ def _tries_left(journey: ParticipantJourney) -> int | None:
 
 
 @router.get("/tutorial")
-def tutorial(request: Request, journey: JourneyDep, catalog: CatalogDep, settings: SettingsDep) -> Response:
+def tutorial(
+    request: Request, journey: JourneyDep, catalog: CatalogDep, settings: SettingsDep, feedback: Checked = False
+) -> Response:
     if not journey.may_open(Stage.TUTORIAL):
         return here(journey)
-    return _tutorial_page(request, journey, catalog, settings)
+    return _tutorial_page(request, journey, catalog, settings, feedback=feedback)
 
 
 @router.post("/tutorial")
@@ -140,21 +146,28 @@ async def finish_tutorial(
     form = await read_form(request)
     answers = {question.id: form.text(f"answer:{question.id}", "", max_length=40) for question in QUESTIONS}
     rules_text = form.text("rules", "", max_length=MAX_RULES_TEXT)
-    journey.save_tutorial(rules_text, answers)
-    wrong = wrong_answers(answers)
-    excluded = comprehension_try(journey, answers, not wrong)
-    if excluded is not None:
-        store.save(
-            session, journey.participant, arrivals.exclusion(journey.participant, excluded.reason, excluded.detail)
-        )
+    revision = form_revision(form)
+
+    def submit() -> bool:
+        """Store the answers, the rules (unless newer are stored) and the try; return True when screened out."""
+        journey.require_open(Stage.TUTORIAL)
+        if journey.accept_revision(revisions.TUTORIAL_ANSWERS, revision):
+            journey.save_tutorial(answers=answers)
+        if journey.accept_revision(revisions.TUTORIAL_RULES, revision):
+            journey.save_tutorial(rules=rules_text)
+        excluded = comprehension_try(journey, answers, not wrong_answers(answers))
+        if excluded is not None:
+            session.add(arrivals.exclusion(journey.participant, excluded.reason, excluded.detail))
+        return excluded is not None
+
+    if store.change_participant(session, journey.participant, submit):
         return here(journey)
-    rules, _ = rules_from_text(rules_text)
+    rules, _ = rules_from_text(str(journey.tutorial_work().get("rules", "")))
     practice_ok = bool(rules) and check_model(practice_model(tuple(rules), catalog), catalog, settings).is_valid
-    if wrong or not practice_ok:
-        store.save(session, journey.participant)
-        return _tutorial_page(request, journey, catalog, settings, feedback=True, status_code=422)
-    journey.finish_tutorial()
-    store.save(session, journey.participant)
+    if wrong_answers(answers) or not practice_ok:
+        # Post/redirect/get: a reload shows the page as saved, never sends this form again.
+        return redirect(f"/p/{journey.participant.code}/tutorial?feedback=1")
+    store.change_participant(session, journey.participant, journey.finish_tutorial)
     return here(journey)
 
 
@@ -166,7 +179,6 @@ def _step1_page(
     journey: ParticipantJourney,
     index: int,
     report: Report | None = None,
-    status_code: int = 200,
     noted: str = "",
 ) -> Response:
     obj = journey.training[index]
@@ -174,7 +186,7 @@ def _step1_page(
         request,
         journey,
         "step1.html",
-        status_code=status_code,
+        revision=journey.draft_revision(revisions.functions_key(obj.id)),
         index=index,
         obj=obj,
         parts=_parts(obj),
@@ -187,10 +199,23 @@ def _step1_page(
 
 
 @router.get("/step1/{number}")
-def step1(request: Request, journey: JourneyDep, number: Number) -> Response:
+def step1(
+    request: Request,
+    journey: JourneyDep,
+    number: Number,
+    catalog: CatalogDep,
+    settings: SettingsDep,
+    check: Checked = False,
+) -> Response:
     if not journey.may_open(Stage.STEP1, number - 1):
         return here(journey)
-    return _step1_page(request, journey, number - 1)
+    if not check:
+        return _step1_page(request, journey, number - 1)
+    # Sent here by a submission that needs another look: its problems, or its notes to confirm.
+    obj = journey.training[number - 1]
+    report = check_functions(obj, journey.function_texts(obj.id), catalog, settings)
+    notes = unusable_label_notes(report) if report.is_valid else ""
+    return _step1_page(request, journey, number - 1, report, noted=notes)
 
 
 @router.post("/step1/{number}")
@@ -207,17 +232,21 @@ async def finish_step1(
     obj = journey.training[index]
     form = await read_form(request)
     texts = {part: form.text(f"part:{part}", "", max_length=MAX_PART_TEXT) for part in obj.part_ids}
-    journey.save_functions(obj.id, texts)
-    report = check_functions(obj, texts, catalog, settings)
-    if not report.is_valid:
-        store.save(session, journey.participant)
-        return _step1_page(request, journey, index, report, status_code=422)
+    revision = form_revision(form)
+
+    def save() -> None:
+        journey.require_open(Stage.STEP1, index)
+        if journey.accept_revision(revisions.functions_key(obj.id), revision):
+            journey.save_functions(obj.id, texts)
+
+    store.change_participant(session, journey.participant, save)
+    report = check_functions(obj, journey.function_texts(obj.id), catalog, settings)
     notes = unusable_label_notes(report)
-    if notes and form.text("noted", "", max_length=64) != notes:  # shown once; sent again as it is, it goes on
-        store.save(session, journey.participant)
-        return _step1_page(request, journey, index, report, noted=notes)
-    journey.finish_functions(index)
-    store.save(session, journey.participant)
+    # shown once; sent again as it is, it goes on
+    if not report.is_valid or (notes and form.text("noted", "", max_length=64) != notes):
+        # Post/redirect/get: a reload shows the page as saved, never sends this form again.
+        return redirect(f"/p/{journey.participant.code}/step1/{number}?check=1")
+    store.change_participant(session, journey.participant, lambda: journey.finish_functions(index))
     code = journey.participant.code
     return redirect(f"/p/{code}/step1/{number + 1}" if number < len(journey.training) else f"/p/{code}/step2")
 
@@ -226,7 +255,7 @@ async def finish_step1(
 
 
 def _step2_page(
-    request: Request, journey: ParticipantJourney, catalog: CatalogDep, settings: SettingsDep, status_code: int = 200
+    request: Request, journey: ParticipantJourney, catalog: CatalogDep, settings: SettingsDep, submitted: bool = False
 ) -> Response:
     model = journey.draft_model()
     rules_text = journey.rules_text()
@@ -235,7 +264,8 @@ def _step2_page(
         request,
         journey,
         "step2.html",
-        status_code=status_code,
+        submitted=submitted,
+        revision=journey.draft_revision(revisions.STEP2_RULES),
         functions=[
             (obj, [(part, model.functions[obj.id].get(part.id, [])) for part in obj.parts]) for obj in journey.training
         ],
@@ -247,10 +277,12 @@ def _step2_page(
 
 
 @router.get("/step2")
-def step2(request: Request, journey: JourneyDep, catalog: CatalogDep, settings: SettingsDep) -> Response:
+def step2(
+    request: Request, journey: JourneyDep, catalog: CatalogDep, settings: SettingsDep, check: Checked = False
+) -> Response:
     if not journey.may_open(Stage.STEP2):
         return here(journey)
-    return _step2_page(request, journey, catalog, settings)
+    return _step2_page(request, journey, catalog, settings, submitted=check)
 
 
 @router.post("/step2")
@@ -259,13 +291,21 @@ async def finish_step2(
 ) -> Response:
     journey.require_open(Stage.STEP2)
     form = await read_form(request)
-    journey.save_rules(form.text("rules", "", max_length=MAX_RULES_TEXT))
+    text = form.text("rules", "", max_length=MAX_RULES_TEXT)
+    revision = form_revision(form)
+
+    def save() -> None:
+        journey.require_open(Stage.STEP2)
+        if journey.accept_revision(revisions.STEP2_RULES, revision):
+            journey.save_rules(text)
+
+    store.change_participant(session, journey.participant, save)
     model = journey.draft_model()
     check = check_model(model, catalog, settings)
     if not check.is_valid:
-        # Submission is blocked while the model is invalid: the page comes back with the problems.
-        store.save(session, journey.participant)
-        return _step2_page(request, journey, catalog, settings, status_code=422)
+        # Submission is blocked while the model is invalid. Post/redirect/get: the page comes back
+        # with the problems, and a reload shows the rules as saved, never sends this form again.
+        return redirect(f"/p/{journey.participant.code}/step2?check=1")
     submit_model(session, journey, model, check)
     return here(journey)
 
@@ -279,7 +319,6 @@ def _step3_page(
     index: int,
     session: SessionDep,
     report: Report | None = None,
-    status_code: int = 200,
 ) -> Response:
     obj = journey.tests[index]
     model = journey.submitted_model()
@@ -291,7 +330,7 @@ def _step3_page(
         request,
         journey,
         "step3.html",
-        status_code=status_code,
+        revision=journey.draft_revision(revisions.mapping_key(obj.id)),
         index=index,
         obj=obj,
         parts=_parts(obj),
@@ -308,10 +347,22 @@ def _step3_page(
 
 
 @router.get("/step3/{number}")
-def step3(request: Request, journey: JourneyDep, number: Number, session: SessionDep) -> Response:
+def step3(
+    request: Request,
+    journey: JourneyDep,
+    number: Number,
+    session: SessionDep,
+    catalog: CatalogDep,
+    settings: SettingsDep,
+    check: Checked = False,
+) -> Response:
     if not journey.may_open(Stage.STEP3, number - 1):
         return here(journey)
-    return _step3_page(request, journey, number - 1, session)
+    report = None
+    if check and store.trial_of(session, journey.participant, journey.tests[number - 1].id) is None:
+        obj = journey.tests[number - 1]
+        report = check_mapping(mapping_document(obj, journey.mapping_entries(obj.id)), catalog, settings).report
+    return _step3_page(request, journey, number - 1, session, report)
 
 
 def mapping_entries_from_form(form_fields: Form, obj: AssemblyObject, labels: list[str]) -> dict[str, dict[str, Any]]:
@@ -346,12 +397,20 @@ async def submit_step3(
     assert model is not None, "step 3 begins when the model is submitted"
     if store.trial_of(session, journey.participant, obj.id) is not None:
         return here(journey)  # a second click of Submit: the answer is in
-    entries = mapping_entries_from_form(await read_form(request), obj, model.function_labels())
-    journey.save_mapping(obj.id, entries)
-    store.save(session, journey.participant)
-    checked = check_mapping(mapping_document(obj, entries), catalog, settings)
+    form = await read_form(request)
+    entries = mapping_entries_from_form(form, obj, model.function_labels())
+    revision = form_revision(form)
+
+    def save() -> None:
+        journey.require_open(Stage.STEP3, index)
+        if journey.accept_revision(revisions.mapping_key(obj.id), revision):
+            journey.save_mapping(obj.id, entries)
+
+    store.change_participant(session, journey.participant, save)
+    checked = check_mapping(mapping_document(obj, journey.mapping_entries(obj.id)), catalog, settings)
     if not checked.is_valid:
-        return _step3_page(request, journey, index, session, checked.report, status_code=422)
+        # Post/redirect/get: a reload shows the choices as saved, never sends this form again.
+        return redirect(f"/p/{journey.participant.code}/step3/{number}?check=1")
     # The trial waits on a planner worker for up to the time limit: off the event loop, so other
     # participants' pages are served meanwhile.
     await run_in_threadpool(run_trial, services, session, journey, index, checked)

@@ -9,6 +9,7 @@ from typing import Annotated
 
 from fastapi import APIRouter, Query, Response
 
+from causalplan.service.api.schemas.common import OutputModel, UtcDatetime
 from causalplan.service.api.schemas.experiments import (
     CheckIn,
     CheckOut,
@@ -22,10 +23,12 @@ from causalplan.service.api.schemas.experiments import (
 )
 from causalplan.service.deps import CatalogDep, ServicesDep, SessionDep, SettingsDep
 from causalplan.service.errors import InvalidRequestError, NotFoundError
+from causalplan.service.pages import revisions
 from causalplan.service.pages.drawings import document_key, fresh_svg, graph_svg, plan_picture
 from causalplan.service.pages.journeys import JourneyDep
 from causalplan.service.pages.participant import check_view, graph_url
 from causalplan.service.pages.participation import invalid_model_error, plans
+from causalplan.service.pages.robot_films import run_ahead
 from causalplan.service.storage import experiments as store
 from causalplan.service.storage.experiments import ParticipantJourney
 from causalplan.service.storage.records import utc_now
@@ -48,60 +51,97 @@ def _unknown_parts(parts: list[str], allowed: tuple[str, ...], object_name: str)
 
 def _save_draft(
     journey: ParticipantJourney, draft: TutorialDraftIn | FunctionsDraftIn | MappingDraftIn, session: SessionDep
-) -> None:
+) -> bool:
+    """Save a draft unless a newer one of its boxes is stored; return whether it was saved."""
     if isinstance(draft, TutorialDraftIn):
         journey.require_open(Stage.TUTORIAL)
+        if not journey.accept_revision(revisions.TUTORIAL_ANSWERS, draft.revision):
+            return False
         known = {question.id for question in QUESTIONS}
         journey.save_tutorial(answers={key: value for key, value in draft.answers.items() if key in known})
-        return
+        return True
     if isinstance(draft, FunctionsDraftIn):
         index = next((i for i, obj in enumerate(journey.training) if obj.id == draft.object), -1)
         journey.require_open(Stage.STEP1, index)
         obj = journey.training[index]
         _unknown_parts(list(draft.functions), obj.part_ids, obj.name)
+        if not journey.accept_revision(revisions.functions_key(obj.id), draft.revision):
+            return False
         journey.save_functions(obj.id, dict(draft.functions))
-        return
+        return True
     index = next((i for i, obj in enumerate(journey.tests) if obj.id == draft.object), -1)
     journey.require_open(Stage.STEP3, index)
     obj = journey.tests[index]
     if store.trial_of(session, journey.participant, obj.id) is not None:
         raise StepLockedError(f"Your answer for the {obj.name} is already recorded; it cannot change.")
     _unknown_parts(list(draft.mapping), obj.part_ids, obj.name)
+    if not journey.accept_revision(revisions.mapping_key(obj.id), draft.revision):
+        return False
     journey.save_mapping(obj.id, {part: entry.model_dump() for part, entry in draft.mapping.items()})
+    return True
+
+
+def _draft_key(draft: TutorialDraftIn | FunctionsDraftIn | MappingDraftIn) -> str:
+    if isinstance(draft, TutorialDraftIn):
+        return revisions.TUTORIAL_ANSWERS
+    if isinstance(draft, FunctionsDraftIn):
+        return revisions.functions_key(draft.object)
+    return revisions.mapping_key(draft.object)
 
 
 @router.post("/draft", response_model=SavedOut)
 def save_draft(draft: DraftIn, journey: JourneyDep, session: SessionDep) -> SavedOut:
-    """Save what the participant has typed so far on the step they are on."""
-    _save_draft(journey, draft, session)
-    store.save(session, journey.participant)
-    assert journey.participant.updated_at is not None
-    return SavedOut(saved=True, saved_at=journey.participant.updated_at)
+    """Save what the participant has typed so far on the step they are on (unless newer text is stored)."""
+    applied = store.change_participant(session, journey.participant, lambda: _save_draft(journey, draft, session))
+    saved_at = journey.participant.updated_at or utc_now()
+    return SavedOut(saved=True, saved_at=saved_at, revision=journey.draft_revision(_draft_key(draft)), applied=applied)
+
+
+def _save_rules(journey: ParticipantJourney, text: str, revision: int | None, practice: bool = False) -> bool:
+    """Save the rule box (the tutorial's when ``practice``) unless newer rules are stored; return whether saved."""
+    if practice:
+        journey.require_open(Stage.TUTORIAL)
+        if not journey.accept_revision(revisions.TUTORIAL_RULES, revision):
+            return False
+        journey.save_tutorial(rules=text)
+        return True
+    journey.require_open(Stage.STEP2)
+    if not journey.accept_revision(revisions.STEP2_RULES, revision):
+        return False
+    journey.save_rules(text)
+    return True
+
+
+def _typed_model(journey: ParticipantJourney, text: str) -> ParticipantModel:
+    """Return the draft model with the rules as typed (the saved functions, these rules)."""
+    rules, _ = rules_from_text(text)
+    draft = journey.draft_model()
+    return ParticipantModel(draft.goal, draft.functions, tuple(rules))
 
 
 @router.post("/check", response_model=CheckOut)
 def check_rules(
     body: CheckIn, journey: JourneyDep, session: SessionDep, catalog: CatalogDep, settings: SettingsDep
 ) -> CheckOut:
-    """Save the rule box and check the model as `causalplan check` does; say where its graph is."""
-    rules, _ = rules_from_text(body.rules)
+    """Save the rule box and check the rules as typed, as `causalplan check` does; say where its graph is."""
+    applied = store.change_participant(
+        session, journey.participant, lambda: _save_rules(journey, body.rules, body.revision, body.practice)
+    )
     model: ParticipantModel
     if body.practice:
-        journey.require_open(Stage.TUTORIAL)
-        journey.save_tutorial(rules=body.rules)
+        rules, _ = rules_from_text(body.rules)
         model = practice_model(tuple(rules), catalog)
     else:
-        journey.require_open(Stage.STEP2)
-        journey.save_rules(body.rules)
-        model = journey.draft_model()
-    store.save(session, journey.participant)
+        model = _typed_model(journey, body.rules)
     check = check_model(model, catalog, settings)
-    assert journey.participant.updated_at is not None
+    key = revisions.TUTORIAL_RULES if body.practice else revisions.STEP2_RULES
     return CheckOut.model_validate(
         {
             **check_view(check, body.rules),
             "graph_url": graph_url(journey.participant.code, check, model.merged_document(), body.practice),
-            "saved_at": journey.participant.updated_at,
+            "saved_at": journey.participant.updated_at or utc_now(),
+            "revision": journey.draft_revision(key),
+            "applied": applied,
         }
     )
 
@@ -115,18 +155,34 @@ def show_plan(
     catalog: CatalogDep,
     settings: SettingsDep,
 ) -> PlansOut:
-    """Save the rule box, then plan the model on each training object: the steps in words, and the picture."""
+    """Save the rule box, then plan the rules as typed on each training object: the steps in words, and the picture."""
     journey.require_open(Stage.STEP2)
-    journey.save_rules(body.rules)
-    store.save(session, journey.participant)
-    model = journey.draft_model()
+    store.change_participant(session, journey.participant, lambda: _save_rules(journey, body.rules, body.revision))
+    model = _typed_model(journey, body.rules)
     check = check_model(model, catalog, settings)
     if not check.is_valid:
         raise invalid_model_error(check)
     found = plans(services, journey, model)
-    journey.log_plan_request(utc_now())
-    store.save(session, journey.participant)
+    objects = {obj.id: obj for obj in journey.training}
+    run_ahead(services, [(objects[plan["object"]], plan["fits"]) for plan in found])  # "Watch the robot" is next
+    # Planning takes a while: the log goes onto the record as stored now, which a check may have changed.
+    store.change_participant(session, journey.participant, lambda: journey.log_plan_request(utc_now(), model.rules))
     return PlansOut.model_validate({"plans": found})
+
+
+class ProgressOut(OutputModel):
+    """Where the participant is, as stored: the end page leaves for the platform only once ``finished``."""
+
+    stage: str
+    finished: bool
+    saved_at: UtcDatetime | None
+
+
+@router.get("/progress", response_model=ProgressOut)
+def progress(journey: JourneyDep) -> ProgressOut:
+    """Say where the participant is as the database has it now (never cached)."""
+    finished = journey.stage in (Stage.DONE, Stage.SCREENED) and journey.participant.finished_at is not None
+    return ProgressOut(stage=journey.stage.value, finished=finished, saved_at=journey.participant.updated_at)
 
 
 NOTHING_TO_DRAW = (

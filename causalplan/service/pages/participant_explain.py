@@ -13,6 +13,7 @@ from fastapi import APIRouter
 from pydantic import Field
 
 from causalplan.service.api.schemas.common import InputModel, OutputModel
+from causalplan.service.api.schemas.experiments import MAX_RULES_TEXT
 from causalplan.service.deps import CatalogDep, ServicesDep, SettingsDep
 from causalplan.service.documents import default_planner
 from causalplan.service.errors import InvalidRequestError, NotFoundError
@@ -20,7 +21,7 @@ from causalplan.service.pages.journeys import JourneyDep
 from causalplan.service.pages.participation import invalid_model_error
 from causalplan.service.work.planning import ExplanationArguments
 from causalplan.service.work.registry import EXPLANATION
-from causalplan.studies.steps import Stage, check_model, model_on
+from causalplan.studies.steps import ParticipantModel, Stage, check_model, model_on, rules_from_text
 
 router = APIRouter(prefix="/p/{code}", include_in_schema=False)
 
@@ -31,10 +32,19 @@ class ExplainIn(InputModel):
     object: str = Field(max_length=64)
     why: str | None = Field(default=None, max_length=8)
     why_not: str | None = Field(default=None, max_length=200)
+    rules: str | None = Field(
+        default=None,
+        max_length=MAX_RULES_TEXT,
+        description="The rules of the plan on screen (default: the rules saved); the answer is about that plan.",
+    )
 
 
 class ExplainOut(OutputModel):
-    """The answer in words; for a why-not question the alternative plan's steps (none when there is none)."""
+    """The answer in words; for a why-not question the alternative plan's steps (none when there is none).
+
+    A question the robot did not understand is refused (422) with ``details["suggestions"]``: the
+    closest questions it can answer, in the object's words, for the page to offer as buttons.
+    """
 
     answer: str
     code: str | None
@@ -53,6 +63,8 @@ def explain(
     if (body.why is None) == (body.why_not is None):
         raise InvalidRequestError("Ask one question: 'why' (a step number) or 'why_not'.")
     draft = journey.draft_model()
+    if body.rules is not None:  # the plan on screen, which the rule box may have moved on from
+        draft = ParticipantModel(draft.goal, draft.functions, tuple(rules_from_text(body.rules)[0]))
     check = check_model(draft, catalog, settings)
     if not check.is_valid:
         raise invalid_model_error(check)
@@ -61,6 +73,7 @@ def explain(
     data: dict[str, Any] = services.work.run(EXPLANATION, arguments)
     contrast = data.get("why_not")
     if contrast is not None:
-        steps = (contrast["alternative"].get("plan") or []) if contrast["code"] != "already_does" else []
+        unchanged = contrast["code"] in ("already_does", "is_base")  # no other plan to show
+        steps = [] if unchanged else (contrast["alternative"].get("plan") or [])
         return ExplainOut(answer=contrast["message"], code=contrast["code"], alternative=[s["text"] for s in steps])
     return ExplainOut(answer=" ".join(why["message"] for why in data["why"]), code=None, alternative=[])

@@ -12,7 +12,9 @@ from typing import Any
 from sqlalchemy.orm import Session
 
 from causalplan.causal.canonical import model_hash
+from causalplan.explain.questions import example_questions
 from causalplan.inputs import LoadedModel
+from causalplan.planners.result import PlanStep
 from causalplan.service.deps import Services
 from causalplan.service.documents import default_planner, first_errors
 from causalplan.service.errors import InvalidModelError
@@ -55,6 +57,7 @@ def plans(services: Services, journey: ParticipantJourney, participant_model: Pa
         )
         answer = services.work.answer(PLAN, arguments)
         steps = answer.data.get("plan") or []
+        attached = [PlanStep(str(s["action"]), tuple(s["args"]), str(s["fit"]), str(s["text"])) for s in steps]
         found.append(
             {
                 "object": obj.id,
@@ -65,6 +68,7 @@ def plans(services: Services, journey: ParticipantJourney, participant_model: Pa
                 "works": bool(answer.data.get("valid_under_true_mechanism")),
                 "picture_url": picture_url(journey.participant.code, obj.id, steps),
                 "fits": [str(step.get("fit") or "") for step in steps],
+                "questions": example_questions(obj, attached) if steps else [],
             }
         )
     return found

@@ -185,6 +185,7 @@ def _experiment_page(
     catalog: CatalogDep,
     experiment: ExperimentRecord,
     recruitment_errors: list[str] | None = None,
+    saved: str | None = None,
 ) -> Response:
     view = experiments.study_view(session, catalog, experiment, request)
     analysis = view.analysis
@@ -195,6 +196,7 @@ def _experiment_page(
         record=experiment,
         recruitment=experiments.recruitment_out(session, experiment, request),
         recruitment_errors=recruitment_errors or [],
+        recruitment_saved=saved == "recruitment",
         demographics=DEMOGRAPHICS,
         analysis=None if isinstance(analysis, str) else analysis.as_dict(),
         crowd_size=view.crowd_size,
@@ -210,9 +212,14 @@ def _experiment_page(
 
 @router.get("/experiments/{experiment_id}")
 def experiment_page(
-    request: Request, experiment_id: uuid.UUID, _: ResearchPageDep, session: SessionDep, catalog: CatalogDep
+    request: Request,
+    experiment_id: uuid.UUID,
+    _: ResearchPageDep,
+    session: SessionDep,
+    catalog: CatalogDep,
+    saved: Annotated[str | None, Query(max_length=20, description="What was just saved, to confirm it.")] = None,
 ) -> Response:
-    return _experiment_page(request, session, catalog, store.get_experiment(session, experiment_id))
+    return _experiment_page(request, session, catalog, store.get_experiment(session, experiment_id), saved=saved)
 
 
 def _whole_number(form: Form, name: str, label: str) -> int | None:
@@ -251,7 +258,7 @@ async def set_recruitment(
         experiments.set_recruitment(session, experiment, body)
     except (ValidationError, InvalidRequestError, InvalidRecruitmentError) as exc:
         return _experiment_page(request, session, catalog, experiment, _problems(exc))
-    return redirect(f"/research/experiments/{experiment_id}#recruiting")
+    return redirect(f"/research/experiments/{experiment_id}?saved=recruitment#recruiting")
 
 
 @router.get("/experiments/{experiment_id}/rates.svg")

@@ -18,11 +18,15 @@ participant's pages may follow and fetch it, and the API's ``/v1/jobs`` does not
 
 from __future__ import annotations
 
+import logging
+import threading
 import uuid
+from collections.abc import Sequence
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Path, Request, Response
 
+from causalplan.errors import CausalPlanError
 from causalplan.objects.model import AssemblyObject
 from causalplan.service.api.schemas.experiments import FilmIn, FilmOut
 from causalplan.service.deps import Services, ServicesDep, client_address
@@ -37,6 +41,8 @@ from causalplan.service.storage.jobs import JobKind, JobStatus
 from causalplan.service.storage.records import JobRecord, utc_now
 from causalplan.service.work.registry import ROBOT_PLAYBACK
 from causalplan.service.work.robot import CONTENT_TYPES, PlaybackArguments
+
+logger = logging.getLogger(__name__)
 
 router = APIRouter(prefix="/p/{code}/films", include_in_schema=False)
 
@@ -98,14 +104,49 @@ def _training_object(body: FilmIn, journey: ParticipantJourney) -> AssemblyObjec
     return obj
 
 
-def playback_response(obj: AssemblyObject, fits: list[str], services: Services) -> Response:
-    """Return the robot's run of ``fits`` on ``obj`` for a page's 3D player, run in a planner worker.
+def robot_run_document(obj: AssemblyObject, fits: Sequence[str], services: Services) -> bytes:
+    """Return the robot's run of ``fits`` on ``obj`` for a page's 3D player (JSON), run in a planner worker.
 
     The robot's run alone (no film): ``sim.robot.playback``'s document, plus ``outcome``
-    (whether it carried out the plan), as the worker encoded it.
+    (whether it carried out the plan), as the worker encoded it. Kept by object and fits
+    (``caches.robot_runs``); a request for a run under way waits for that run, never starts another.
     """
-    document = services.work.run(ROBOT_PLAYBACK, PlaybackArguments(obj.id, tuple(fits)))
-    return Response(document, media_type="application/json")
+    key = f"{services.catalog_key}:{obj.id}:{','.join(fits)}"
+
+    def run() -> dict[str, bytes]:
+        return {key: services.work.run(ROBOT_PLAYBACK, PlaybackArguments(obj.id, tuple(fits)))}
+
+    document = services.caches.robot_runs.get(key, run)
+    assert document is not None, "run() makes the document of its key"
+    return document
+
+
+def playback_response(obj: AssemblyObject, fits: list[str], services: Services) -> Response:
+    """Return the robot's run of ``fits`` on ``obj`` for a page's 3D player (see ``robot_run_document``)."""
+    return Response(robot_run_document(obj, fits, services), media_type="application/json")
+
+
+def run_ahead(services: Services, runs: Sequence[tuple[AssemblyObject, Sequence[str]]]) -> threading.Thread | None:
+    """Start computing the robot's runs of plans just shown, in the background; return its thread (None: nothing to do).
+
+    A participant reads the plan before clicking "Watch the robot": the run is computed
+    meanwhile, so the click finds it ready (or joins the run under way). A run that cannot be
+    made now (the workers busy or closing) is left to the click, which asks again.
+    """
+    wanted = [(obj, tuple(fits)) for obj, fits in runs if fits and all(fits)]
+    if not wanted:
+        return None
+
+    def compute() -> None:
+        for obj, fits in wanted:
+            try:
+                robot_run_document(obj, fits, services)
+            except CausalPlanError as exc:
+                logger.info("robot run not computed ahead: %s %s: %s", obj.id, ",".join(fits), exc.message)
+
+    thread = threading.Thread(target=compute, name="causalplan-robot-ahead", daemon=True)
+    thread.start()
+    return thread
 
 
 @router.post("/playback")

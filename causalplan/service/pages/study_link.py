@@ -89,7 +89,6 @@ def _consent_page(
         "consent.html",
         visit.platform,
         experiment_id=experiment.id,
-        name=experiment.name,
         consent=recruiting,
         arrival=arrival,
     )

@@ -82,6 +82,27 @@ def remove_stale_folders(root: Path | None = None) -> list[Path]:
     return removed
 
 
+SIMULATOR_MODULES = (
+    "causalplan.sim.executor",
+    "causalplan.sim.robot.mover",
+    "causalplan.sim.robot.motion_planning",
+    "causalplan.sim.robot.playback",
+    "causalplan.transfer.robot_verdict",
+)
+"""What a robot's run imports: PyBullet, OMPL, TOPP-RA, SciPy and the robot's own modules."""
+
+
+def warm_simulator() -> None:
+    """Import the simulator and the robot's libraries now, as a worker starts (``warm_up``).
+
+    A worker's first "Watch the robot" then pays for its run only, not for seconds of imports.
+    A simulator that cannot load says so in the answers that need it, as before.
+    """
+    for module in SIMULATOR_MODULES:
+        with contextlib.suppress(ImportError):
+            importlib.import_module(module)
+
+
 def warm_up() -> None:
     """Do once, before the first call, what solves need: settings applied, translator imported, a search started.
 
@@ -96,6 +117,7 @@ def warm_up() -> None:
     fd.prestart(fd.CONFIGS["fd"])  # the default search, waiting for its first task
     with contextlib.suppress(CausalPlanError):
         worker_catalog(())
+    warm_simulator()  # so a worker's first robot run for the 3D player starts at once
 
 
 def initialize(

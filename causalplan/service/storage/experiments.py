@@ -7,9 +7,11 @@ import secrets
 import string
 import uuid
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeVar
 
-from sqlalchemy import Select, func, select
+from sqlalchemy import Select, func, select, update
 from sqlalchemy.orm import Session, selectinload
 
 from causalplan.service.errors import ExperimentNotFoundError, InvalidRequestError, ParticipantNotFoundError
@@ -50,6 +52,32 @@ def save(session: Session, *records: object) -> None:
     with storage_errors(session):
         session.add_all(records)
         session.commit()
+
+
+Changed = TypeVar("Changed")
+
+
+def change_participant(session: Session, participant: ParticipantRecord, change: Callable[[], Changed]) -> Changed:
+    """Apply ``change`` to the participant as stored now, holding their row, and store it; return its result.
+
+    Two requests of one participant may be in flight at once (a slow plan beside a check): each
+    read the record when it began, so storing that copy whole would undo what the other stored
+    meanwhile. This ends the session's transaction, locks the row with an update that changes
+    nothing (a row lock in PostgreSQL, the write lock in SQLite), reads the record again and
+    only then lets ``change`` edit it, so every change lands on the latest one.
+    """
+    with storage_errors(session):
+        session.rollback()
+        session.execute(
+            update(ParticipantRecord)
+            .where(ParticipantRecord.id == participant.id)
+            .values(position=ParticipantRecord.position)
+            .execution_options(synchronize_session=False)  # the record is read again just below
+        )
+        session.refresh(participant)
+        result = change()
+        session.commit()
+        return result
 
 
 def create_experiment(

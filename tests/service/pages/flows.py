@@ -86,3 +86,13 @@ def complete(client: TestClient, code: str, choices: dict[str, Any] | None = Non
     assert verdict.status_code == 200
     post(client, f"/p/{code}/step3/1/next", {})
     return str(verdict.text)
+
+
+def sent_back(client: TestClient, path: str, data: dict[str, Any]) -> Any:
+    """Post a form that needs another look; assert it is sent back (post/redirect/get); return the page got."""
+    response = post(client, path, data)
+    location = response.headers["location"]
+    assert location.startswith(path + "?"), location
+    page = client.get(location)
+    assert page.status_code == 200, page.text
+    return page

@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi.testclient import TestClient
 
 from tests.service.fixtures import error_of
-from tests.service.pages.flows import LAMP_FUNCTIONS, new_participant, post
+from tests.service.pages.flows import LAMP_FUNCTIONS, new_participant, post, sent_back
 
 DESK_LAMP = {
     "object": "desk_lamp",
@@ -35,11 +35,11 @@ def test_ordinary_line_breaks_and_tabs_are_text(client: TestClient) -> None:
 def test_a_label_holding_a_keyword_is_noted_once_before_step_one_goes_on(client: TestClient) -> None:
     code = new_participant(client)
     functions = {**LAMP_FUNCTIONS, "part:shade": "rock and roll"}
-    noted = post(client, f"/p/{code}/step1/1", functions, 200)
+    noted = sent_back(client, f"/p/{code}/step1/1", functions)
     assert "keyword_in_label" in noted.text and "rock and roll" in noted.text
     fingerprint = noted.text.split('name="noted" value="')[1].split('"')[0]
-    changed = post(
-        client, f"/p/{code}/step1/1", {**functions, "part:shade": "heat causes glow", "noted": fingerprint}, 200
+    changed = sent_back(
+        client, f"/p/{code}/step1/1", {**functions, "part:shade": "heat causes glow", "noted": fingerprint}
     )
     assert "keyword_in_label" in changed.text  # other labels with a keyword: noted again
     again = changed.text.split('name="noted" value="')[1].split('"')[0]
@@ -49,7 +49,7 @@ def test_a_label_holding_a_keyword_is_noted_once_before_step_one_goes_on(client:
 
 def test_step_two_keeps_saying_which_label_no_rule_can_name(client: TestClient) -> None:
     code = new_participant(client)
-    noted = post(client, f"/p/{code}/step1/1", {**LAMP_FUNCTIONS, "part:shade": "rock and roll"}, 200)
+    noted = sent_back(client, f"/p/{code}/step1/1", {**LAMP_FUNCTIONS, "part:shade": "rock and roll"})
     fingerprint = noted.text.split('name="noted" value="')[1].split('"')[0]
     post(client, f"/p/{code}/step1/1", {**LAMP_FUNCTIONS, "part:shade": "rock and roll", "noted": fingerprint})
     check = client.post(f"/p/{code}/check", json={"rules": "rock and roll CAUSES light"}).json()

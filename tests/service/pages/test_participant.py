@@ -17,6 +17,7 @@ from tests.service.pages.flows import (
     complete,
     new_participant,
     post,
+    sent_back,
     through_step2,
 )
 
@@ -52,7 +53,7 @@ def test_an_unknown_link_is_a_page_for_people_and_json_for_scripts(client: TestC
 
 def test_the_tutorial_explains_wrong_answers_and_needs_valid_practice_rules(client: TestClient) -> None:
     code = new_participant(client, tutorial=True)
-    wrong = post(client, f"/p/{code}/tutorial", {**TUTORIAL_ANSWERS, "answer:diffuse": "yes", "rules": ""}, 422)
+    wrong = sent_back(client, f"/p/{code}/tutorial", {**TUTORIAL_ANSWERS, "answer:diffuse": "yes", "rules": ""})
     assert "Not quite. Diffusing light changes light that is already there" in wrong.text
     assert "Write rules for the toy car that produce motion" in wrong.text
     check = client.post(f"/p/{code}/check", json={"rules": TUTORIAL_RULES, "practice": True}).json()
@@ -90,7 +91,7 @@ def test_work_is_saved_as_typed_and_shown_again(client: TestClient) -> None:
 
 def test_step_one_needs_a_function(client: TestClient) -> None:
     code = new_participant(client)
-    empty = post(client, f"/p/{code}/step1/1", {"part:shade": "  "}, 422)
+    empty = sent_back(client, f"/p/{code}/step1/1", {"part:shade": "  "})
     assert "No part of the desk lamp has a function yet." in empty.text
     assert post(client, f"/p/{code}/step1/1", LAMP_FUNCTIONS).headers["location"] == f"/p/{code}/step2"
 
@@ -100,7 +101,7 @@ def test_labels_are_shown_as_text_on_every_page(client: TestClient) -> None:
     functions = {**LAMP_FUNCTIONS, "part:shade": XSS}
     post(client, f"/p/{code}/step1/1", functions)
     step2 = client.get(f"/p/{code}/step2")
-    refused = post(client, f"/p/{code}/step2", {"rules": f"{XSS} AND <b>nothing</b> CAUSES light"}, 422)
+    refused = sent_back(client, f"/p/{code}/step2", {"rules": f"{XSS} AND <b>nothing</b> CAUSES light"})
     for page in (step2, refused):
         assert XSS not in page.text
         assert "&lt;script&gt;alert(1)&lt;/script&gt;" in page.text
@@ -128,7 +129,7 @@ def test_an_invalid_model_is_checked_as_typed_and_cannot_be_submitted(client: Te
     assert problem["hint"] == "Did you mean 'electricity flows'?"
     plan = client.post(f"/p/{code}/plan", json={"rules": typed})
     assert error_of(plan, 422)["code"] == "invalid_model"
-    blocked = post(client, f"/p/{code}/step2", {"rules": typed}, 422)
+    blocked = sent_back(client, f"/p/{code}/step2", {"rules": typed})
     assert "Problem (line 3):" in blocked.text and "disabled" in blocked.text
     assert client.get(f"/p/{code}", follow_redirects=False).headers["location"] == f"/p/{code}/step2"
     assert "electricity flow CAUSES light</textarea>" in client.get(f"/p/{code}/step2").text  # kept for fixing
@@ -161,7 +162,7 @@ def test_step_three_cannot_change_the_model_and_records_one_trial(client: TestCl
 
     foreign = post(client, f"/p/{code}/step3/1", {"chosen:head": "shine brightly"}, 422)
     assert "is not a function of your model" in foreign.text
-    assert "No part has a function yet." in post(client, f"/p/{code}/step3/1", {}, 422).text
+    assert "No part has a function yet." in sent_back(client, f"/p/{code}/step3/1", {}).text
     saved = client.post(
         f"/p/{code}/draft",
         json={"step": "step3", "object": "flashlight", "mapping": {"head": {"chosen": ["close the circuit"]}}},

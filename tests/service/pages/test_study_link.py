@@ -20,7 +20,7 @@ from causalplan.cli import app
 from causalplan.service.pages.upkeep import purge
 from causalplan.service.storage.records import ArrivalRecord, ParticipantRecord, TrialRecord, utc_now
 from tests.service.fixtures import AUTH, RESEARCH_TOKEN, running_client, services_of, settings_for, sqlite_url
-from tests.service.pages.flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, links, post
+from tests.service.pages.flows import TUTORIAL_ANSWERS, TUTORIAL_RULES, complete, experiment, links, post, sent_back
 
 WRONG_ANSWERS = {**TUTORIAL_ANSWERS, "answer:diffuse": "yes"}
 ARRIVALS_PER_MINUTE = 3
@@ -106,7 +106,7 @@ def test_failing_the_comprehension_check_twice_screens_out_with_the_other_code(c
     created = experiment(client, tutorial=True)
     recruiting(client, created["id"], completion_code="DONE1", screened_out_code="OUT1", comprehension_tries=2)
     code = join(client, created["id"], prolific("pid-screened"))
-    first = post(client, f"/p/{code}/tutorial", {**WRONG_ANSWERS, "rules": TUTORIAL_RULES}, status=422)
+    first = sent_back(client, f"/p/{code}/tutorial", {**WRONG_ANSWERS, "rules": TUTORIAL_RULES})
     assert "You have 1 try left" in first.text
     post(client, f"/p/{code}/tutorial", {**WRONG_ANSWERS, "rules": TUTORIAL_RULES})
     screened = client.get(f"/p/{code}")
@@ -221,7 +221,7 @@ def test_the_analyze_command_reads_the_export_of_a_real_run_and_skips_the_exclud
     left_out = "2 of 2 trials analysed; left out: 0 trials of 1 participant excluded by screening (comprehension 1)."
     assert analysis["left_out"] == left_out and left_out in page.text
     assert client.get(f"/research/experiments/{created['id']}/rates.svg", headers=AUTH).text.count("<svg") == 1
-    assert 'id="consensus-graph"' in page.text and "from the 2 participants' models" in page.text
+    assert 'id="consensus-graph"' in page.text and "One causal model from the participants' models" in page.text
     graph = client.get(f"/research/experiments/{created['id']}/consensus.svg", headers=AUTH)
     assert graph.status_code == 200, graph.text
     assert graph.headers["content-type"].startswith("image/svg+xml")

@@ -247,11 +247,17 @@ class ExperimentExportOut(OutputModel):
 
 class TutorialDraftIn(InputModel):
     step: Literal["tutorial"]
+    revision: int | None = Field(
+        default=None, ge=0, le=2**53, description="The page's stamp of this save; an older one than stored is ignored."
+    )
     answers: dict[Annotated[str, Field(max_length=40)], Annotated[str, Field(max_length=40)]] = Field(max_length=10)
 
 
 class FunctionsDraftIn(InputModel):
     step: Literal["step1"]
+    revision: int | None = Field(
+        default=None, ge=0, le=2**53, description="The page's stamp of this save; an older one than stored is ignored."
+    )
     object: ObjectId
     functions: dict[Annotated[str, Field(max_length=200)], Annotated[str, Field(max_length=MAX_PART_TEXT)]] = Field(
         max_length=64
@@ -265,6 +271,9 @@ class MappingEntryIn(InputModel):
 
 class MappingDraftIn(InputModel):
     step: Literal["step3"]
+    revision: int | None = Field(
+        default=None, ge=0, le=2**53, description="The page's stamp of this save; an older one than stored is ignored."
+    )
     object: ObjectId
     mapping: dict[Annotated[str, Field(max_length=200)], MappingEntryIn] = Field(max_length=64)
 
@@ -275,6 +284,8 @@ DraftIn = Annotated[TutorialDraftIn | FunctionsDraftIn | MappingDraftIn, Field(d
 class SavedOut(OutputModel):
     saved: bool
     saved_at: UtcDatetime
+    revision: int = Field(default=0, description="The revision stored (newer than the one sent if not applied).")
+    applied: bool = Field(default=True, description="False: a newer save was already stored; this one changed nothing.")
 
 
 class CheckIn(InputModel):
@@ -282,12 +293,18 @@ class CheckIn(InputModel):
 
     rules: str = Field(max_length=MAX_RULES_TEXT)
     practice: bool = Field(default=False, description="The tutorial's practice box (the toy car).")
+    revision: int | None = Field(
+        default=None, ge=0, le=2**53, description="The page's stamp of this save; an older one than stored is ignored."
+    )
 
 
 class PlanIn(InputModel):
     """The rule box as typed: saved, then planned on each training object."""
 
     rules: str = Field(max_length=MAX_RULES_TEXT)
+    revision: int | None = Field(
+        default=None, ge=0, le=2**53, description="The page's stamp of this save; an older one than stored is ignored."
+    )
 
 
 class LineDiagnosticOut(DiagnosticOut):
@@ -300,6 +317,8 @@ class CheckOut(OutputModel):
     warnings: list[LineDiagnosticOut]
     graph_url: str | None
     saved_at: UtcDatetime
+    revision: int = Field(default=0, description="The revision of the rule box stored.")
+    applied: bool = Field(default=True, description="False: newer rules were already stored; these were checked only.")
 
 
 class PlanForObjectOut(OutputModel):
@@ -311,6 +330,9 @@ class PlanForObjectOut(OutputModel):
     works: bool = Field(description="Whether the plan makes the real object produce its goal (replayed).")
     picture_url: str | None
     fits: list[str] = Field(description="The fits the plan makes, in order (what 'Watch the robot' films).")
+    questions: list[str] = Field(
+        default_factory=list, description="Example questions to ask the robot about this plan, in the object's words."
+    )
 
 
 class PlansOut(OutputModel):

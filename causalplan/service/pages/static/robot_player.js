@@ -115,7 +115,13 @@ export async function createPlayer(container, run) {
   camera.up.set(0, 0, 1);
   camera.position.set(0.55, -1.55, 1.0);
   const renderer = new THREE.WebGLRenderer({ antialias: true });
-  renderer.setSize(WIDTH, HEIGHT);
+  renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+  // As wide as the column (at most WIDTH), in the same proportions: a phone never scrolls sideways.
+  function fit() {
+    const width = Math.max(160, Math.min(WIDTH, Math.floor(container.clientWidth || WIDTH)));
+    renderer.setSize(width, Math.round((width * HEIGHT) / WIDTH));
+  }
+  fit();
   renderer.domElement.className = "robot-canvas";
   renderer.domElement.setAttribute("role", "img");
   renderer.domElement.setAttribute("aria-label", "The robot assembling the " + run.name + " in 3D (drag to turn the view)");
@@ -238,12 +244,22 @@ export async function createPlayer(container, run) {
     playing = false;
     redraw();
   });
-  controls.addEventListener("change", redraw); // the view turned by dragging
+  controls.addEventListener("change", redraw); // the view turned by dragging (a mouse or a finger)
+  if (typeof ResizeObserver === "function") {
+    let shown = renderer.domElement.width;
+    new ResizeObserver(function () {
+      fit();
+      if (renderer.domElement.width !== shown) {
+        shown = renderer.domElement.width;
+        redraw();
+      }
+    }).observe(container);
+  }
 
   const player = {
     // What is shown: the time, whether it plays, frames drawn, and every part's pose [x, y, z, qx, qy, qz, qw].
     state: function () {
-      return { time: time, seconds: seconds, playing: playing, frames: frames, parts: posed };
+      return { time: time, seconds: seconds, playing: playing, frames: frames, parts: posed, view: camera.position.toArray() };
     },
     seek: function (t) { time = Math.max(0, Math.min(seconds, t)); playing = false; redraw(); },
     play: play,
