@@ -131,8 +131,9 @@ def test_a_circle_of_two_packages_is_a_cycle() -> None:
 
 POOL = "causalplan.service.pool"
 WORK_LAYER = "causalplan.service.work"
-APP_WIRING = ("causalplan.service.main", "causalplan.service.deps")
-"""The app's wiring: it starts and stops the pools and holds them (``Services``)."""
+APP_WIRING = ("causalplan.service.main", "causalplan.service.deps", "causalplan.service.fair_share")
+"""The app's wiring: it starts and stops the pools and holds them (``Services``); the fair share is the
+interactive pool with each client's turn taken first (``FairSharePool``)."""
 
 
 def pool_importers(graph: nx.DiGraph) -> list[str]:

@@ -157,7 +157,7 @@ async def finish_tutorial(
             journey.save_tutorial(rules=rules_text)
         excluded = comprehension_try(journey, answers, not wrong_answers(answers))
         if excluded is not None:
-            session.add(arrivals.exclusion(journey.participant, excluded.reason, excluded.detail))
+            arrivals.exclude(session, journey.participant, excluded.reason, excluded.detail)
         return excluded is not None
 
     if store.change_participant(session, journey.participant, submit):

@@ -24,12 +24,12 @@ from fastapi import FastAPI
 from causalplan.errors import CausalPlanError
 from causalplan.service.deps import Services, open_session
 from causalplan.service.pages import ahead
-from causalplan.service.pool.turns import background
 from causalplan.service.storage.arrivals import purge_undecided
 from causalplan.service.storage.crud import purge_expired_records, purge_invalid_models
 from causalplan.service.storage.demo import DemoStarts, purge_demo_participants
 from causalplan.service.storage.records import utc_now
 from causalplan.service.storage.revocations import forget_lapsed_revocations
+from causalplan.service.work.calls import in_background
 
 logger = logging.getLogger(__name__)
 
@@ -106,7 +106,7 @@ class Upkeep:
         self._purge()
         if self.services.settings.draw_plans_ahead:
             objects = sorted(self.services.catalog.objects.values(), key=lambda o: (o.id not in FIRST_OBJECTS, o.id))
-            with background():  # a request never waits behind more than one of these drawings
+            with in_background():  # a request never waits behind more than one of these drawings
                 self.drawn_ahead = ahead.draw_ahead(self.services, objects, self.stop)
         while not self.stop.wait(purge_interval(self.services)):
             self._purge()

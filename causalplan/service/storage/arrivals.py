@@ -315,6 +315,11 @@ def exclusion(participant: ParticipantRecord, reason: str, detail: str) -> Exclu
     )
 
 
+def exclude(session: Session, participant: ParticipantRecord, reason: str, detail: str) -> None:
+    """Add an exclusion of ``participant`` to ``session`` (stored with the participant's change)."""
+    session.add(exclusion(participant, reason, detail))
+
+
 def arrival_counts(session: Session, experiment_id: uuid.UUID) -> dict[str, int]:
     """Return how many arrived on the public link, and how many of them consented, declined or have not decided."""
     with storage_errors(session):

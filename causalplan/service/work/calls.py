@@ -15,7 +15,8 @@ import json
 import pickle
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, fields
 from typing import Any, TypeVar
 
@@ -24,6 +25,7 @@ from causalplan.causal.canonical import mapping_text, model_text
 from causalplan.objects.catalog import Catalog
 from causalplan.service.errors import QueueFullError
 from causalplan.service.pool.pool import PlannerPool, RunStoppedError
+from causalplan.service.pool.turns import background
 from causalplan.service.work.planning import ProbeArguments
 from causalplan.service.work.registry import PROBE, Pool, Work, perform
 from causalplan.settings import Settings
@@ -99,6 +101,13 @@ def answer_key(work: str, arguments: str, catalog: str) -> str:
     """Return the cache key of the answer of ``work`` to arguments whose ``canonical_key`` is ``arguments``."""
     text = json.dumps([work, arguments, catalog], ensure_ascii=False)
     return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
+
+
+@contextmanager
+def in_background() -> Iterator[None]:
+    """Mark the work run inside as background work: it yields to every interactive request (``pool.turns``)."""
+    with background():
+        yield
 
 
 @dataclass(frozen=True)

@@ -7,8 +7,6 @@ its answer. Functions take typed arguments and the worker's catalog, as ``planni
 
 from __future__ import annotations
 
-import contextlib
-import importlib
 import json
 import math
 import os
