@@ -27,7 +27,9 @@ part's track for the 3D player (``episode_playback``). What is not simulated: re
 *base* (the spare base is put at the origin in place of the broken one, not carried by the
 robot); playing the episode's commands through the Panda's joint motors (``simulate --robot``
 does that for an assembly; here the run is kinematic, the arm posed at its commands); and the
-object's assembly before the episode (it is handed to the robot built).
+object's assembly before the episode (it is handed to the robot built). Where the robot
+cannot carry out a catalog episode today (a grasp touching a neighbour, an unscrew off the
+part's axis, a spare out of reach) is listed in docs/troubleshooting.md.
 """
 
 from __future__ import annotations
@@ -203,7 +205,16 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
     path = approach_path(fixed_pose, moving_frame, fixed_frame, motion)
     others = run.assembled - {part}
     start = approach_start(scene.bounds([part]), scene.bounds(others), fixed_pose.turn(fixed_frame.axis))
-    failure = robot.fetch(part, obj.part(part))
+    if motion.turns > 0:
+        thread = min(start, ENGAGEMENT)
+        spin_per_metre = 2 * math.pi * motion.turns / ENGAGEMENT
+        out = _distances(0.0, thread, min(LINE_STEP, SCREW_STEP / spin_per_metre))
+    else:
+        thread = min(start, PUSH_DEPTH)
+        out = _distances(0.0, thread, LINE_STEP)
+    way_out = [path(d) for d in [*out, *_distances(thread, start, LINE_STEP)]]
+    # An arm pose from which the gripper can also take the part out along its axis.
+    failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
     if failure is not None:
         return failure
     _unweld(scene, joint.fixed, part)
@@ -212,13 +223,9 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
     run.assembled.discard(part)
     what = f"taking the {name} off"
     if motion.turns > 0:
-        thread = min(start, ENGAGEMENT)
-        spin_per_metre = 2 * math.pi * motion.turns / ENGAGEMENT
-        step = min(LINE_STEP, SCREW_STEP / spin_per_metre)
-        failure = robot.screw([path(d) for d in _distances(0.0, thread, step)], what, joint.fixed)
+        failure = robot.screw([path(d) for d in out], what, joint.fixed)
     else:
-        thread = min(start, PUSH_DEPTH)
-        failure = robot.follow("push", [path(d) for d in _distances(0.0, thread, LINE_STEP)], what, joint.fixed)
+        failure = robot.follow("push", [path(d) for d in out], what, joint.fixed)
     if failure is None and thread < start:
         failure = robot.follow("approach", [path(d) for d in _distances(thread, start, LINE_STEP)], what, joint.fixed)
     if failure is not None:
