@@ -91,8 +91,9 @@ def troubleshoot(
         causalplan troubleshoot examples/paper/desk_lamp.yaml --fault light_bulb
         causalplan troubleshoot examples/paper/desk_lamp.yaml -m examples/paper/flashlight_mapping.yaml --all-faults
 
-    Exit codes: 0 done, 1 the rebuilt object gives no goal in physics (--physics), 2 invalid
-    input, 3 too large to solve exactly.
+    Exit codes: 0 done, 1 no goal in physics (--physics: the rebuilt object; --robot: the
+    Panda could not carry out the episode, or its last test gave no goal), 2 invalid input,
+    3 too large to solve exactly.
     """
     from causalplan.errors import CausalPlanError
     from causalplan.troubleshoot.errors import TooLargeError
