@@ -319,6 +319,8 @@ def _rename_spares(state: _Episode) -> None:
                 segment.held = (part + SPARE, segment.held[1])
 
 
+SPARE_ROW_GAP = 0.08
+"""Metres between the spares' row and the row of parts before it: room for the hand, and within reach."""
 SPARE_ROW_X = -0.1
 """Where (metres along the robot's x axis) the spares' rows are centred: a little nearer the robot than the object."""
 
@@ -346,9 +348,9 @@ def _spare_homes(
         for part, width in zip(row, widths, strict=True):
             solid = parts[part]
             y = (
-                outer[side] + ROBOT_ROW_GAP - solid.lower[1]
+                outer[side] + SPARE_ROW_GAP - solid.lower[1]
                 if side > 0
-                else -outer[side] - ROBOT_ROW_GAP - solid.upper[1]
+                else -outer[side] - SPARE_ROW_GAP - solid.upper[1]
             )
             placed[part + SPARE] = Pose((left - solid.lower[0], y, -solid.lower[2]))
             left += width + ROBOT_ROW_GAP
