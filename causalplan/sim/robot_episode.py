@@ -23,13 +23,13 @@ on the table, and the robot then does each action of the episode in the same sce
 
 All motions become one set of motor commands within the Panda's datasheet limits times the
 safety factor (TOPP-RA, ``sim.robot.timing``), which ``check-trajectory`` accepts, and every
-part's track for the 3D player (``episode_playback``). What is not simulated: replacing the
-*base* (the spare base is put at the origin in place of the broken one, not carried by the
-robot); playing the episode's commands through the Panda's joint motors (``simulate --robot``
-does that for an assembly; here the run is kinematic, the arm posed at its commands); and the
-object's assembly before the episode (it is handed to the robot built). Where the robot
-cannot carry out a catalog episode today (a grasp touching a neighbour, an unscrew off the
-part's axis, a spare out of reach) is listed in docs/troubleshooting.md.
+part's track for the 3D player (``sim.robot_episode_playback``). What is not simulated:
+replacing the *base* (the spare base is put at the origin in place of the broken one, not
+carried by the robot); playing the episode's commands through the Panda's joint motors
+(``simulate --robot`` does that for an assembly; here the run is kinematic, the arm posed at
+its commands); and the object's assembly before the episode (it is handed to the robot
+built). Where the robot cannot carry out a catalog episode today (a grasp beside a
+neighbouring part) is listed in docs/troubleshooting.md.
 """
 
 from __future__ import annotations
@@ -49,11 +49,9 @@ from causalplan.sim.motions import ENGAGEMENT, MOTIONS, approach_path, approach_
 from causalplan.sim.movers import PartsMoveThemselves
 from causalplan.sim.outcomes import RequirementCheck, RobotFailure, StepStatus
 from causalplan.sim.plan_steps import StepRequest
-from causalplan.sim.poses import Pose
+from causalplan.sim.poses import Pose, difference
 from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
 from causalplan.sim.robot.mover import PandaMovesThem
-from causalplan.sim.robot.panda import BASE_POSITION
-from causalplan.sim.robot.playback import DIGITS, FORMAT, _commands, _shape, pose_list
 from causalplan.sim.robot.robot import LIFT, LINE_STEP, SCREW_STEP, Robot, line_poses
 from causalplan.sim.robot.steps import PUSH_DEPTH, step_motions
 from causalplan.sim.robot.tracks import PartTrack
@@ -66,6 +64,12 @@ from causalplan.troubleshoot.solver import INSPECT, REPLACE, TEST
 from causalplan.troubleshoot.structure import structure_of
 
 SPARE = ":spare"
+ALONG_STEP = 0.0001
+"""Metres between the distances tried when finding where a part sits along its approach."""
+ALONG_METRES_PER_RADIAN = 0.01
+"""How a turn counts against a shift when matching a part's pose to its approach (1 cm a radian)."""
+SCREW_START_POSES = 9
+"""Poses of a screw's way out (10 degrees each) that choose the arm pose it is grasped with."""
 """The suffix of a spare's id in the scene and the player's document (``light_bulb:spare``)."""
 
 
@@ -172,6 +176,22 @@ def _distances(start: float, end: float, step: float) -> list[float]:
     return [start + (end - start) * k / count for k in range(1, count + 1)]
 
 
+def _along(path: Callable[[float], Pose], pose: Pose, start: float) -> float:
+    """Return how far (metres) along its approach ``path`` a part at ``pose`` sits from its seat.
+
+    A part can stop short of its seat (within the fit's tolerance); a screw stopped 1 mm
+    short is turned some 50 degrees back from the seat's angle, so its way out starts there.
+    """
+    count = max(1, math.ceil(start / ALONG_STEP))
+    distances = [start * k / count for k in range(count + 1)]
+    return min(distances, key=lambda d: _mismatch(path(d), pose))
+
+
+def _mismatch(a: Pose, b: Pose) -> float:
+    metres, radians = difference(a, b)
+    return metres + radians * ALONG_METRES_PER_RADIAN
+
+
 def _unweld(scene: Scene, fixed: str, moving: str) -> None:
     """Undo the weld between two parts (if any) and let them collide again."""
     pb, client = scene.pb, scene.client
@@ -205,14 +225,18 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
     path = approach_path(fixed_pose, moving_frame, fixed_frame, motion)
     others = run.assembled - {part}
     start = approach_start(scene.bounds([part]), scene.bounds(others), fixed_pose.turn(fixed_frame.axis))
+    here = _along(path, scene.pose(part), start)
     if motion.turns > 0:
-        thread = min(start, ENGAGEMENT)
+        thread = max(here, min(start, ENGAGEMENT))
         spin_per_metre = 2 * math.pi * motion.turns / ENGAGEMENT
-        out = _distances(0.0, thread, min(LINE_STEP, SCREW_STEP / spin_per_metre))
+        out = _distances(here, thread, min(LINE_STEP, SCREW_STEP / spin_per_metre))
     else:
-        thread = min(start, PUSH_DEPTH)
-        out = _distances(0.0, thread, LINE_STEP)
-    way_out = [path(d) for d in [*out, *_distances(thread, start, LINE_STEP)]]
+        thread = max(here, min(start, PUSH_DEPTH))
+        out = _distances(here, thread, LINE_STEP)
+    # A screw's way out turns the wrist further than it can go (it regrasps): the arm pose is
+    # chosen for the first quarter turn; a push's, for the whole line out.
+    first = out[:SCREW_START_POSES] if motion.turns > 0 else [*out, *_distances(thread, start, LINE_STEP)]
+    way_out = [path(d) for d in first]
     # An arm pose from which the gripper can also take the part out along its axis.
     failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
     if failure is not None:
@@ -366,7 +390,7 @@ def robot_episode(
 ) -> EpisodeInPhysics:
     """Have the Panda carry out ``episode`` on ``obj`` in physics, action by action, and judge its last test.
 
-    ``tracks`` keeps every body's pose over the motor commands (``episode_playback``);
+    ``tracks`` keeps every body's pose over the motor commands (``sim.robot_episode_playback``);
     ``on_action(done, total)`` hears of each action done. Raises LimitViolationError when no
     motor commands keep within the limits, SimulatorUnavailableError when PyBullet cannot start.
     """
@@ -440,38 +464,3 @@ def robot_episode(
         return EpisodeInPhysics(
             obj.id, tuple(actions), requirements, broken_replaced, mover.commands, dict(mover.tracks), placed, timing
         )
-
-
-def episode_playback(obj: AssemblyObject, result: EpisodeInPhysics) -> dict[str, object]:
-    """Return the 3D player's document (``causalplan-playback/2``, ``sim.robot.playback``) of the robot's episode.
-
-    A spare is a part of its own in the document (id ``PART:spare``, name "... (spare)").
-    Needs a run made with ``tracks``.
-    """
-    commands = result.commands
-    if commands is None or not commands.points or not result.tracks:
-        raise ValueError("the episode's run has no motor commands or tracks (run it with tracks=True)")
-    parts = solids(obj)
-
-    def solid(body_id: str) -> Solid:
-        return parts[body_id.removesuffix(SPARE)]
-
-    return {
-        "format": FORMAT,
-        "object": obj.id,
-        "name": obj.name,
-        "seconds": round(commands.seconds, DIGITS),
-        "robot": {"model": commands.limits.model, "base_position": list(BASE_POSITION)},
-        "trajectory": _commands(commands),
-        "parts": [
-            {
-                "id": body_id,
-                "name": solid(body_id).name + (" (spare)" if body_id.endswith(SPARE) else ""),
-                "shapes": [_shape(shape) for shape in solid(body_id).shapes],
-                "light": [_shape(shape) for shape in solid(body_id).light],
-                "track": {"times": [round(t, DIGITS) for t in track.times], "poses": list(map(pose_list, track.poses))},
-            }
-            for body_id, track in result.tracks.items()
-        ],
-        "assembled": {body_id: pose_list(pose) for body_id, pose in result.placed.items()},
-    }
