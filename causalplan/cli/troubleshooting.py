@@ -56,13 +56,13 @@ STRATEGY_WORDS = {
     "--physics",
     is_flag=True,
     help="With --fault: rebuild the object as the episode left it at its last test, in physics (PyBullet), "
-    "and say whether it gives its goal there (the robot's detaching is not simulated).",
+    "and say whether it gives its goal there (parts move themselves; --robot has the Panda do each action).",
 )
 @click.option(
     "--robot",
     is_flag=True,
-    help="With --fault: the Franka Panda rebuilds the object in physics, as --physics (implied), within its "
-    "datasheet's limits, driven by its motors.",
+    help="With --fault: the Franka Panda carries out the episode in physics, action by action (detach, set "
+    "aside, take the spare, attach, light), within its datasheet's limits.",
 )
 @click.option("--trajectory", type=FILE, help="With --robot: write the Panda's motor commands (check-trajectory).")
 @json_option
@@ -91,8 +91,9 @@ def troubleshoot(
         causalplan troubleshoot examples/paper/desk_lamp.yaml --fault light_bulb
         causalplan troubleshoot examples/paper/desk_lamp.yaml -m examples/paper/flashlight_mapping.yaml --all-faults
 
-    Exit codes: 0 done, 1 the rebuilt object gives no goal in physics (--physics), 2 invalid
-    input, 3 too large to solve exactly.
+    Exit codes: 0 done, 1 no goal in physics (--physics: the rebuilt object; --robot: the
+    Panda could not carry out the episode, or its last test gave no goal), 2 invalid input,
+    3 too large to solve exactly.
     """
     from causalplan.errors import CausalPlanError
     from causalplan.troubleshoot.errors import TooLargeError
@@ -111,7 +112,10 @@ def troubleshoot(
     try:
         task = troubleshooting_task(known.get(chosen), causal_model, labelling)
         if fault is not None:
-            _episode(task, fault, strategy, (physics or robot, robot, trajectory), as_json)
+            if robot:
+                _robot_episode(task, fault, strategy, trajectory, as_json)
+            else:
+                _episode(task, fault, strategy, physics, as_json)
         else:
             _table(task, as_json)
     except TooLargeError as exc:
@@ -128,24 +132,29 @@ def _refuse(code: str, message: str, as_json: bool, exit_code: int) -> None:
     exit_with(exit_code)
 
 
-def _episode(
-    task: TroubleshootingTask, fault: str, strategy: str, physics: tuple[bool, bool, Path | None], as_json: bool
-) -> None:
+def _say_episode(task: TroubleshootingTask, fault: str, strategy: str) -> None:
+    obj = task.obj
+    episode = task.episode(strategy, fault)
+    others = {name: task.episode(name, fault).actions for name in task.strategies}
+    looks = next((f.looks for f in obj.faults if f.part == fault), "a fault the catalog does not list")
+    say(f"The {obj.name} gives no {obj.goal}: the {obj.part(fault).name} is broken ({looks}).")
+    say(dim(f"Strategy {strategy}: {STRATEGY_WORDS[strategy]}."))
+    for number, step in enumerate(episode.steps, start=1):
+        say(f"{number:>3}. {step.text(obj.goal)}")
+    compared = ", ".join(f"{name} {actions}" for name, actions in others.items())
+    say(f"Repaired in {episode.actions} actions ({compared}).")
+
+
+def _episode(task: TroubleshootingTask, fault: str, strategy: str, in_physics: bool, as_json: bool) -> None:
     from causalplan.troubleshoot.answer import episode_answer
 
     obj = task.obj
     episode = task.episode(strategy, fault)
-    others = {name: task.episode(name, fault).actions for name in task.strategies}
-    in_physics, robot, trajectory = physics
     rebuilt = None
     if in_physics:
         from causalplan.sim.troubleshooting import repair_in_physics
 
-        rebuilt = repair_in_physics(obj, episode, robot=robot)
-        commands = rebuilt.report.motor_commands
-        if trajectory is not None and commands is not None:
-            with writing(trajectory):
-                trajectory.write_text(json.dumps(commands.as_dict()), encoding="utf-8")
+        rebuilt = repair_in_physics(obj, episode)
     works = rebuilt is None or rebuilt.produces_goal
     if as_json:
         answer = episode_answer(task, fault, strategy)
@@ -158,22 +167,50 @@ def _episode(
             }
         )
         exit_with(EXIT_OK if works else EXIT_NO_PLAN)
-    looks = next((f.looks for f in obj.faults if f.part == fault), "a fault the catalog does not list")
-    say(f"The {obj.name} gives no {obj.goal}: the {obj.part(fault).name} is broken ({looks}).")
-    say(dim(f"Strategy {strategy}: {STRATEGY_WORDS[strategy]}."))
-    for number, step in enumerate(episode.steps, start=1):
-        say(f"{number:>3}. {step.text(obj.goal)}")
-    compared = ", ".join(f"{name} {actions}" for name, actions in others.items())
-    say(f"Repaired in {episode.actions} actions ({compared}).")
+    _say_episode(task, fault, strategy)
     if rebuilt is not None:
         order = ", ".join(rebuilt.order)
-        who = "the Panda rebuilt it" if robot else "rebuilt"
         if works:
-            say(f"In physics, {who} in that order ({order}): the {obj.name} gives {obj.goal}.")
+            say(f"In physics, rebuilt in that order ({order}): the {obj.name} gives {obj.goal}.")
         else:
             why = rebuilt.report.explanation() or f"the broken {fault} was never replaced"
-            say(click.style(f"In physics, {who} in that order ({order}): no {obj.goal}, {why}.", fg="red"))
+            say(click.style(f"In physics, rebuilt in that order ({order}): no {obj.goal}, {why}.", fg="red"))
         exit_with(EXIT_OK if works else EXIT_NO_PLAN)
+
+
+def _robot_episode(
+    task: TroubleshootingTask, fault: str, strategy: str, trajectory: Path | None, as_json: bool
+) -> None:
+    from causalplan.sim.robot_episode import robot_episode
+    from causalplan.troubleshoot.answer import episode_answer
+
+    obj = task.obj
+    run = robot_episode(obj, task.episode(strategy, fault))
+    if trajectory is not None and run.commands is not None:
+        with writing(trajectory):
+            trajectory.write_text(json.dumps(run.commands.as_dict()), encoding="utf-8")
+    works = run.produces_goal
+    if as_json:
+        print_json(
+            {
+                "status": "repaired" if works else "not_repaired_in_physics",
+                "object": obj.id,
+                **episode_answer(task, fault, strategy),
+                "robot": run.as_dict(),
+            }
+        )
+        exit_with(EXIT_OK if works else EXIT_NO_PLAN)
+    _say_episode(task, fault, strategy)
+    for action in run.actions:
+        motions = ", ".join(action.motions) or "no motion"
+        said = f"{action.number:>3}. the Panda: {motions}" + (f" ({action.observed})" if action.observed else "")
+        say(said if action.passed else click.style(f"{said}: {action.failure}: {action.message}", fg="red"))
+    if works:
+        say(f"In physics, the Panda repaired the {obj.name}: it gives {obj.goal} ({run.as_dict()['seconds']} s).")
+    else:
+        why = "the broken part was never replaced" if run.carried_out else "the robot could not carry it out"
+        say(click.style(f"In physics, no {obj.goal}: {why}.", fg="red"))
+    exit_with(EXIT_OK if works else EXIT_NO_PLAN)
 
 
 def _table(task: TroubleshootingTask, as_json: bool) -> None:

@@ -9,12 +9,9 @@ it), and judges the true mechanism on what was built. The object gives its goal 
 says so *and* the broken part was swapped for a spare: a broken part looks whole to the
 simulator.
 
-With ``robot``, the Franka Panda does the rebuilding, from the parts laid out on the table
-(a replaced part's spare among them), within its datasheet's limits, and its motor commands
-are then played through its joint motors, as `simulate --robot` does. What this does not do:
-the robot detaching, setting aside and fetching parts (the Panda only assembles today), so a
-detach is not simulated, only the reassembly it leads to; and the robot rebuilds the whole
-object from the base, the parts that stayed on included.
+This is ``troubleshoot --physics``: a check of where the episode ends, not of its actions.
+The Franka Panda carrying out the episode itself, action by action (detach, set aside, take
+the spare, attach, light), is ``sim.robot_episode`` (``troubleshoot --robot``).
 """
 
 from __future__ import annotations
@@ -128,11 +125,8 @@ def _steps(obj: AssemblyObject, order: list[str]) -> list[StepRequest]:
     return steps
 
 
-def repair_in_physics(obj: AssemblyObject, episode: Episode, robot: bool = False) -> RepairInPhysics:
-    """Rebuild ``obj`` as ``episode`` left it at its last test, in physics, and judge whether it gives its goal.
-
-    ``robot``: the Panda rebuilds it (the report's ``motor_commands`` are its trajectory).
-    """
+def repair_in_physics(obj: AssemblyObject, episode: Episode) -> RepairInPhysics:
+    """Rebuild ``obj`` as ``episode`` left it at its last test, in physics, and judge whether it gives its goal."""
     structure = structure_of(obj)
     order = _first_build(assembly_graph(structure), structure.parts)
     last_test = max(index for index, step in enumerate(episode.steps) if step.kind == "test")
@@ -147,6 +141,6 @@ def repair_in_physics(obj: AssemblyObject, episode: Episode, robot: bool = False
         elif step.kind == REPLACE and step.part == episode.fault:
             replaced = True
     steps = _steps(obj, order)
-    report = simulate_plan(obj, steps, render=RenderMode.NONE, robot=robot, motors=robot)
+    report = simulate_plan(obj, steps, render=RenderMode.NONE)
     fits = tuple(step.fit for step in steps if step.fit is not None)
     return RepairInPhysics((obj.base, *order), fits, report, replaced)

@@ -76,16 +76,3 @@ def test_the_cli_checks_the_episode_in_physics() -> None:
     assert data["physics"]["simulation"]["passed"]
     alone = CliRunner().invoke(app, ["troubleshoot", str(LAMP), "--all-faults", "--physics"])
     assert alone.exit_code == 2 and "missing_option" in alone.output
-
-
-@pytest.mark.slow
-def test_the_panda_rebuilds_the_repaired_lamp_within_its_limits(tmp_path: Path) -> None:
-    out = tmp_path / "repair.json"
-    args = ["troubleshoot", str(LAMP), "--fault", "light_bulb", "--robot", "--trajectory", str(out), "--json"]
-    result = CliRunner().invoke(app, args)
-    assert result.exit_code == 0, result.output
-    data = json.loads(result.output)
-    assert data["physics"]["produces_goal"] and data["physics"]["simulation"]["passed"]
-    checked = CliRunner().invoke(app, ["check-trajectory", str(out), "--json"])
-    assert checked.exit_code == 0, checked.output
-    assert json.loads(checked.output)["violations"] == []

@@ -5,7 +5,7 @@ is wrong with a clear error before anything is queued, and return the request to
 model of ``jobs.requests``), ``read`` (that model from the job's row) and ``run`` (in a runner
 thread of whichever replica took the job). Adding a
 kind is one enum member and one entry in ``KINDS``; the longer kinds live in modules of their
-own (``video``, ``fit_estimation``).
+own (``video``, ``fit_estimation``, ``troubleshooting``).
 """
 
 from __future__ import annotations
@@ -23,8 +23,10 @@ from causalplan.service.jobs.requests import (
     ConsensusRequest,
     FitEstimationRequest,
     SimulationRequest,
+    TroubleshootingRequest,
     read_video_request,
 )
+from causalplan.service.jobs.troubleshooting import prepare_troubleshooting, run_troubleshooting_job
 from causalplan.service.jobs.video import prepare_video, run_video_job
 from causalplan.service.jobs.work import Kind, Progress, in_pool, in_pool_retried, worker_died
 from causalplan.service.storage.jobs import JobKind
@@ -252,4 +254,7 @@ KINDS: dict[JobKind, Kind[Any, Any]] = {
     JobKind.CONSENSUS: Kind(prepare_consensus, ConsensusRequest.model_validate, run_consensus_job),
     JobKind.VIDEO: Kind(prepare_video, read_video_request, run_video_job),
     JobKind.FIT_ESTIMATION: Kind(prepare_fit_estimation, FitEstimationRequest.model_validate, run_fit_estimation_job),
+    JobKind.TROUBLESHOOTING: Kind(
+        prepare_troubleshooting, TroubleshootingRequest.model_validate, run_troubleshooting_job
+    ),
 }

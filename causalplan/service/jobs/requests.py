@@ -95,6 +95,16 @@ read_video_request = TypeAdapter(VideoRequest).validate_python
 """Return the stored request of a film: the participant page's (it names ``fits``) or the API's."""
 
 
+class TroubleshootingRequest(JobRequest):
+    """A stored model's troubleshooting episode on a broken object, carried out by the robot."""
+
+    model_id: str
+    mapping: dict[str, Any] | None
+    object: str | None
+    fault: str
+    strategy: str
+
+
 class FitEstimationRequest(_Counted):
     """``causalplan estimate-fits`` of some fits of an object (``count``: trials times fits)."""
 

@@ -58,6 +58,8 @@ class JobKind(StrEnum):
     """The robot carrying out a plan, filmed; the film is served from the job (``service.jobs.video``)."""
     FIT_ESTIMATION = "fit_estimation"
     """Each fit's success probability by noisy robot insertions, as ``causalplan estimate-fits``."""
+    TROUBLESHOOTING = "troubleshooting"
+    """The robot carrying out a troubleshooting episode in physics (``service.jobs.troubleshooting``)."""
 
 
 class JobStatus(StrEnum):

@@ -20,7 +20,7 @@ from typing import Any, Generic, TypeVar
 from causalplan.objects.catalog import Catalog
 from causalplan.planners.result import PlanStatus
 from causalplan.service.pool.catalog import worker_catalog
-from causalplan.service.work import batches, pictures, planning, robot
+from causalplan.service.work import batches, pictures, planning, robot, troubleshooting
 from causalplan.service.work.batches import ConsensusArguments, FitEstimateArguments, TrialsArguments
 from causalplan.service.work.pictures import AssemblyPictureArguments, PartPicturesArguments
 from causalplan.service.work.planning import (
@@ -32,6 +32,7 @@ from causalplan.service.work.planning import (
     TransferArguments,
 )
 from causalplan.service.work.robot import FitsFilmArguments, PlanFilmArguments, PlaybackArguments
+from causalplan.service.work.troubleshooting import TroubleshootingArguments
 from causalplan.settings import Settings
 from causalplan.transfer.batch import TrialResult
 from causalplan.transfer.verdict import Verdict
@@ -49,6 +50,9 @@ PROBE_SECONDS = 60.0
 """Longest the probe's throwaway process may take (it imports every optional backend)."""
 TRIAL_SECONDS = 0.1
 """A generous bound on one noisy insertion, for a fit's time limit in a worker (a trial is far quicker)."""
+TROUBLESHOOTING_SECONDS = 30.0
+"""Longest a worker may take for a troubleshooting table (a catalog object's takes milliseconds; the solve is
+bounded by ``MAX_SERVICE_STATES``)."""
 CONSENSUS_GRACE_SECONDS = 60.0
 """A consensus's worker may take this long beyond its trials' time limits (building, aligning)."""
 
@@ -153,6 +157,14 @@ ASSEMBLY_PICTURE: Work[AssemblyPictureArguments, bytes] = Work(
 ROBOT_PLAYBACK: Work[PlaybackArguments, bytes] = Work(
     "robot_playback", robot.playback, PlaybackArguments, Pool.INTERACTIVE, lambda a, s: s.robot_seconds
 )
+TROUBLESHOOTING: Work[TroubleshootingArguments, dict[str, Any]] = Work(
+    "troubleshooting",
+    troubleshooting.troubleshoot,
+    TroubleshootingArguments,
+    Pool.INTERACTIVE,
+    lambda a, s: TROUBLESHOOTING_SECONDS,
+    lambda data: True,  # exact and deterministic: the same arguments, the same answer
+)
 PROBE: Work[ProbeArguments, dict[str, object]] = Work(
     "probe", planning.probe, ProbeArguments, Pool.ISOLATED, lambda a, s: PROBE_SECONDS
 )
@@ -162,6 +174,13 @@ QUEUED_SIMULATION: Work[SimulationArguments, dict[str, Any]] = Work(
     SimulationArguments,
     Pool.JOBS,
     lambda a, s: _solve(a.time_limit, s) + (s.robot_seconds if a.robot else 0.0),
+)
+QUEUED_TROUBLESHOOTING: Work[TroubleshootingArguments, dict[str, Any]] = Work(
+    "queued_troubleshooting",
+    troubleshooting.troubleshoot,
+    TroubleshootingArguments,
+    Pool.JOBS,
+    lambda a, s: TROUBLESHOOTING_SECONDS + s.robot_seconds,
 )
 FILM_OF_FITS: Work[FitsFilmArguments, dict[str, Any]] = Work(
     "film_of_fits", robot.film_of_fits, FitsFilmArguments, Pool.JOBS, lambda a, s: s.robot_seconds
@@ -207,10 +226,12 @@ WORK: dict[str, Work[Any, Any]] = {
         PART_PICTURES,
         ASSEMBLY_PICTURE,
         ROBOT_PLAYBACK,
+        TROUBLESHOOTING,
         PROBE,
         QUEUED_SIMULATION,
         FILM_OF_FITS,
         FILM_OF_PLAN,
+        QUEUED_TROUBLESHOOTING,
         FIT_ESTIMATE,
         JUDGED_TRIALS,
         CONSENSUS,

@@ -305,8 +305,14 @@ class Robot:
         self._command(kind, gripper, positions)
         return None, len(positions)
 
-    def fetch(self, part_id: str, part: Part) -> RobotFailure | None:
-        """Transit to the part, go straight to its grasp, and close the fingers on it."""
+    def fetch(
+        self, part_id: str, part: Part, then: Sequence[Pose] = (), allowed: frozenset[str] = frozenset()
+    ) -> RobotFailure | None:
+        """Transit to the part, go straight to its grasp, and close the fingers on it.
+
+        ``then``: the part's poses after the grasp (taking it off an assembly along its
+        connector axis, where its gripper may brush ``allowed``), which choose the arm pose.
+        """
         name = self.scene.solids[part_id].name
         found = grasp_of(part, self.scene.solids[part_id])
         if isinstance(found, str):
@@ -316,7 +322,8 @@ class Robot:
         backed = grasp.translated(scale(grasp.turn((0.0, 0.0, 1.0)), -PREGRASP))
         self.ignored = {part_id}
         try:
-            failure = self._go("transit", "open", backed, f"above the {name}")
+            way = [*line_poses(backed, grasp), *(pose * grasp_pose for pose in then)] if then else []
+            failure = self._go("transit", "open", backed, f"above the {name}", way, allowed)
             if failure is None:
                 failure, _ = self._line("transit", "open", line_poses(backed, grasp), f"at the {name}'s grasp")
         finally:

@@ -7,8 +7,17 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
+from causalplan.service.api.schemas.troubleshooting import TroubleshootingRobotOut
 from causalplan.service.main import create_app
-from tests.service.fixtures import DESK_LAMP, FAILED_DESK_LAMP, FLASHLIGHT_MAPPING, error_of, settings_for
+from tests.service.fixtures import (
+    DESK_LAMP,
+    FAILED_DESK_LAMP,
+    FLASHLIGHT_MAPPING,
+    error_of,
+    services_of,
+    settings_for,
+)
+from tests.service.jobs.test_runner import finished
 
 
 def post(client: TestClient, **body: Any) -> Any:
@@ -67,3 +76,57 @@ def test_the_route_is_typed_in_the_openapi_document() -> None:
     assert {"TroubleshootingIn", "StrategyOut", "EpisodeOut", "FaultResultOut"} <= set(schemas)
     assert set(schemas["StrategyOut"]["required"]) >= {"expected_actions", "worst_actions", "reward_share"}
     assert "422" in operation["responses"]
+
+
+def test_the_table_is_solved_by_a_worker_and_a_repeat_comes_from_the_kept_answers(client: TestClient) -> None:
+    cache = services_of(client).work.cache
+    body = {"model": DESK_LAMP, "fault": "light_bulb", "strategy": "oracle"}
+    first = post(client, **body)
+    hits = cache.stats()["hits"]
+    again = post(client, **body)
+    assert first.status_code == again.status_code == 200
+    assert cache.stats()["hits"] == hits + 1
+    assert {k: v for k, v in again.json().items() if k != "model_id"} == {
+        k: v for k, v in first.json().items() if k != "model_id"
+    }
+
+
+@pytest.mark.parametrize(
+    ("extra", "status", "code"),
+    [
+        ({}, 422, "invalid_request"),  # the robot carries out one episode: a fault is needed
+        ({"fault": "lid"}, 422, "unknown_fault_part"),
+        ({"fault": "shade"}, 422, "fault_not_needed"),
+        ({"fault": "light_bulb", "object": "no_such_object"}, 404, "unknown_object"),
+    ],
+)
+def test_a_robot_run_of_bad_input_is_refused_at_once_and_nothing_is_queued(
+    client: TestClient, extra: dict[str, Any], status: int, code: str
+) -> None:
+    before = client.get("/v1/jobs").json()
+    assert error_of(post(client, model=DESK_LAMP, robot=True, **extra), status)["code"] == code
+    assert client.get("/v1/jobs").json() == before
+
+
+def test_the_robot_s_run_is_typed_in_the_openapi_document() -> None:
+    document = create_app(settings_for("sqlite://")).openapi()
+    operation = document["paths"]["/v1/troubleshooting"]["post"]
+    queued = operation["responses"]["202"]["content"]["application/json"]["schema"]
+    assert queued == {"$ref": "#/components/schemas/JobOut"}
+    schemas = document["components"]["schemas"]
+    assert {"TroubleshootingRobotOut", "RobotEpisodeOut", "RobotActionOut", "TroubleshootingJobIn"} <= set(schemas)
+    assert "robot" in schemas["TroubleshootingIn"]["properties"]
+
+
+@pytest.mark.slow
+def test_the_robot_carries_out_the_episode_as_a_job(client: TestClient) -> None:
+    response = post(client, model=DESK_LAMP, fault="light_bulb", strategy="oracle", robot=True)
+    assert response.status_code == 202, response.text
+    job = response.json()
+    assert job["kind"] == "troubleshooting" and response.headers["location"] == job["url"]
+    done = finished(client, job["url"], 300.0)
+    assert done["status"] == "succeeded", done
+    result = done["result"]
+    assert result["status"] == "repaired" and result["robot"]["produces_goal"]
+    assert [a["action"] for a in result["robot"]["actions"]] == [s["action"] for s in result["episode"]["steps"]]
+    TroubleshootingRobotOut.model_validate(result)

@@ -254,7 +254,7 @@ def test_health_counts_the_jobs_of_every_replica_and_this_ones_runners(tmp_path:
             "running": 0,
             "runners": 0,
             "runners_busy": 0,
-            "kinds": ["batch", "simulation", "consensus", "video", "fit_estimation"],
+            "kinds": ["batch", "simulation", "consensus", "video", "fit_estimation", "troubleshooting"],
             "cluster": False,
             "problem": None,
         }
@@ -274,7 +274,8 @@ def test_each_documented_example_is_a_job_that_succeeds(kinds_client: TestClient
 def test_openapi_documents_each_kind_with_an_example_and_the_video_route(kinds_client: TestClient) -> None:
     document = kinds_client.get("/openapi.json").json()
     body = document["paths"]["/v1/jobs"]["post"]["requestBody"]["content"]["application/json"]
-    assert set(body["examples"]) == set(JOB_EXAMPLES) == {"batch", "simulation", "consensus", "video", "fit_estimation"}
+    kinds = {"batch", "simulation", "consensus", "video", "fit_estimation", "troubleshooting"}
+    assert set(body["examples"]) == set(JOB_EXAMPLES) == kinds
     video = document["paths"]["/v1/jobs/{job_id}/video"]["get"]["responses"]["200"]["content"]
     assert set(video) == {"video/mp4", "image/gif"}
 

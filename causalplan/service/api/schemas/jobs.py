@@ -19,6 +19,7 @@ from causalplan.service.api.schemas.common import (
 from causalplan.service.api.schemas.job_results import BatchResultOut, ConsensusResultOut, FitEstimationResultOut
 from causalplan.service.api.schemas.plans import SimulationIn, _Solve
 from causalplan.service.api.schemas.simulations import SimulationResultOut
+from causalplan.service.api.schemas.troubleshooting import TroubleshootingIn, TroubleshootingRobotOut
 from causalplan.service.storage.jobs import JobKind, JobStatus
 
 _PLANNER = Field(default="auto", min_length=1, max_length=64, description="A planner name from GET /health.")
@@ -132,12 +133,22 @@ class FitEstimationJobIn(InputModel):
     )
 
 
-JobBody = BatchJobIn | SimulationJobIn | ConsensusJobIn | VideoJobIn | FitEstimationJobIn
+class TroubleshootingJobIn(TroubleshootingIn):
+    """The Panda carries out a troubleshooting episode in physics: POST /v1/troubleshooting with `robot` as a job.
+
+    The result is `TroubleshootingRobotOut`: the strategies' table, the episode, and `robot`.
+    """
+
+    kind: Literal["troubleshooting"]
+
+
+JobBody = BatchJobIn | SimulationJobIn | ConsensusJobIn | VideoJobIn | FitEstimationJobIn | TroubleshootingJobIn
 JobIn = Annotated[JobBody, Field(discriminator="kind")]
 
 
-JobResult = SimulationResultOut | BatchResultOut | ConsensusResultOut | FitEstimationResultOut
-"""A succeeded job's result: a simulation's (kinds simulation and video), a batch's, a consensus's, fit estimates."""
+JobResult = SimulationResultOut | BatchResultOut | ConsensusResultOut | FitEstimationResultOut | TroubleshootingRobotOut
+"""A succeeded job's result: a simulation's (kinds simulation and video), a batch's, a consensus's, fit estimates,
+a troubleshooting episode carried out by the robot."""
 
 
 class ProgressOut(OutputModel):
@@ -162,7 +173,8 @@ class JobOut(OutputModel):
     result: SkipValidation[SerializeAsAny[JobResult | None]] = Field(
         description="When succeeded: batch {trials, verdicts, results}; simulation as POST /v1/simulations; "
         "consensus as `causalplan consensus`'s report.json; video as POST /v1/simulations with robot, its "
-        "`video.url` where the film is; fit_estimation as `causalplan estimate-fits --json`, with `overlay`."
+        "`video.url` where the film is; fit_estimation as `causalplan estimate-fits --json`, with `overlay`; "
+        "troubleshooting as `causalplan troubleshoot --robot --json` (`TroubleshootingRobotOut`)."
     )
     error: ErrorDetailOut | None = Field(description="When failed: why, in the one error shape.")
 
@@ -188,6 +200,10 @@ def _examples() -> dict[str, dict[str, Any]]:
         JobKind.CONSENSUS: ("Three people's models and mappings", {"trials": crowd, "simulate": False}),
         JobKind.VIDEO: ("Film the robot assembling the flashlight", {"model": model, "mapping": mapping}),
         JobKind.FIT_ESTIMATION: ("The flashlight's fits, 50 trials each", {"object": "flashlight", "trials": 50}),
+        JobKind.TROUBLESHOOTING: (
+            "The robot repairs a flashlight with flat batteries",
+            {"model": model, "mapping": mapping, "fault": "batteries", "strategy": "model"},
+        ),
     }
     return {
         kind.value: {"summary": summary, "value": {"kind": kind.value, **value}}

@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from causalplan.service.api.schemas.common import DiagnosticOut, InputModel, MappingDocument, ModelDocument, OutputModel
+from causalplan.service.api.schemas.simulations import RequirementCheckOut
 
 
 class TroubleshootingIn(InputModel):
@@ -28,11 +29,18 @@ class TroubleshootingIn(InputModel):
     strategy: Literal["model", "uniform", "oracle"] = Field(
         default="model", description="Whose policy runs the episode."
     )
+    robot: bool = Field(
+        default=False,
+        description="With `fault`: the Franka Panda carries out the episode in physics, action by action; "
+        "a job (answered 202), whose result is `TroubleshootingRobotOut`.",
+    )
 
     @model_validator(mode="after")
     def _one_model(self) -> TroubleshootingIn:
         if (self.model is None) == (self.model_id is None):
             raise ValueError("give exactly one of 'model' (the model inline) and 'model_id' (a stored model)")
+        if self.robot and self.fault is None:
+            raise ValueError("'robot' carries out one episode: name the broken part ('fault')")
         return self
 
 
@@ -84,3 +92,42 @@ class TroubleshootingOut(OutputModel):
     episode: EpisodeOut | None = None
     model_id: uuid.UUID
     warnings: list[DiagnosticOut]
+
+
+class RobotActionOut(OutputModel):
+    number: int
+    action: Literal["test", "inspect", "detach", "attach", "replace"]
+    part: str | None
+    robot: list[str] = Field(
+        description="The Panda's motions: transit, grasp, carry, approach, screw, push, ignite, release, retreat."
+    )
+    observed: Literal["goal", "no goal"] | None = Field(description="What a test showed in physics.")
+    passed: bool
+    failure: str | None = Field(description="Why the robot could not do it: a robot or simulator failure code.")
+    message: str
+
+
+class RobotEpisodeOut(OutputModel):
+    """The Panda's run of the episode in physics (``causalplan troubleshoot --robot --json``'s ``robot``)."""
+
+    produces_goal: bool = Field(description="Every action carried out, and the last test showed the goal.")
+    carried_out: bool
+    broken_part_replaced: bool
+    actions: list[RobotActionOut]
+    mechanism: list[RequirementCheckOut] = Field(description="The true mechanism at the robot's last test.")
+    seconds: float = Field(description="How long the motor commands take.")
+    timing: dict[str, float]
+
+
+class TroubleshootingRobotOut(OutputModel):
+    """A `troubleshooting` job's result: `TroubleshootingOut` with the robot's run of the episode."""
+
+    status: Literal["repaired", "not_repaired_in_physics"]
+    object: str
+    fault_priors: str | None
+    repair_bonus: float
+    faults: dict[str, float]
+    strategies: dict[str, StrategyOut]
+    episode: EpisodeOut
+    robot: RobotEpisodeOut
+    model_id: uuid.UUID

@@ -1,0 +1,466 @@
+"""The Panda carries out a troubleshooting episode in physics, action by action.
+
+The broken object stands assembled at the origin (its parts put it together themselves: it
+is handed to the robot that way), a working spare of every part the episode replaces waits
+on the table, and the robot then does each action of the episode in the same scene:
+
+- ``detach PART``: the assembly's motion in reverse. The robot grasps the part where it sits
+  on the object, the weld to its mate is undone, the part goes back along its connector axis
+  (a screw turns out its thread, regrasping as it goes in), and is carried to its place on
+  the table and set down (``robot.fetch``, ``robot.screw``/``robot.follow``, ``robot.carry``,
+  ``robot.release``: the motions, IK and OMPL paths the assembly uses).
+- ``replace PART``: the spare on the table becomes the part: the next ``attach`` (or the
+  ``test``'s lighting, for a match or lighter) fetches it from the table; the broken one stays
+  where it was set aside.
+- ``attach PART``: an assembly step (``sim.executor``), with every physics check (blocked
+  path, contact, alignment, stability).
+- ``test``: a part to light is lit with the match or lighter (a part that covers its wick,
+  such as a chimney, is lifted off first and put back after, as one does; these motions are
+  not part of the episode's cost), and the true mechanism is judged on the object as it
+  stands. Physics cannot see a broken part, so a test shows the goal when the mechanism works
+  *and* a spare has replaced the broken part since the last test.
+- ``inspect PART``: looking; the robot does not move.
+
+All motions become one set of motor commands within the Panda's datasheet limits times the
+safety factor (TOPP-RA, ``sim.robot.timing``), which ``check-trajectory`` accepts, and every
+part's track for the 3D player (``sim.robot_episode_playback``). What is not simulated:
+replacing the *base* (the spare base is put at the origin in place of the broken one, not
+carried by the robot); playing the episode's commands through the Panda's joint motors
+(``simulate --robot`` does that for an assembly; here the run is kinematic, the arm posed at
+its commands); and the object's assembly before the episode (it is handed to the robot
+built). Where the robot cannot carry out a catalog episode today (a grasp beside a
+neighbouring part) is listed in docs/troubleshooting.md.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+from causalplan.objects.model import AssemblyObject, Fit
+from causalplan.sim import checks
+from causalplan.sim.executor import _Run, _settle, _step
+from causalplan.sim.geometry import Solid, solids
+from causalplan.sim.layout import ROBOT_ROW_GAP, layout
+from causalplan.sim.mechanism import evaluate
+from causalplan.sim.motions import ENGAGEMENT, MOTIONS, approach_path, approach_start
+from causalplan.sim.movers import PartsMoveThemselves
+from causalplan.sim.outcomes import RequirementCheck, RobotFailure, StepStatus
+from causalplan.sim.plan_steps import StepRequest
+from causalplan.sim.poses import Pose, difference
+from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
+from causalplan.sim.robot.mover import PandaMovesThem
+from causalplan.sim.robot.robot import LIFT, LINE_STEP, SCREW_STEP, Robot, line_poses
+from causalplan.sim.robot.steps import PUSH_DEPTH, step_motions
+from causalplan.sim.robot.tracks import PartTrack
+from causalplan.sim.robot.trajectory import Trajectory
+from causalplan.sim.scene import Scene
+from causalplan.sim.troubleshooting import _first_build, _steps
+from causalplan.troubleshoot.assembly import ATTACH, DETACH, assembly_graph
+from causalplan.troubleshoot.episode import GOAL, NO_GOAL, Episode
+from causalplan.troubleshoot.solver import INSPECT, REPLACE, TEST
+from causalplan.troubleshoot.structure import structure_of
+
+SPARE = ":spare"
+ALONG_STEP = 0.0001
+"""Metres between the distances tried when finding where a part sits along its approach."""
+ALONG_METRES_PER_RADIAN = 0.01
+"""How a turn counts against a shift when matching a part's pose to its approach (1 cm a radian)."""
+SCREW_START_POSES = 9
+"""Poses of a screw's way out (10 degrees each) that choose the arm pose it is grasped with."""
+"""The suffix of a spare's id in the scene and the player's document (``light_bulb:spare``)."""
+
+
+@dataclass(frozen=True)
+class ActionInPhysics:
+    """What the robot did for one action of the episode, and what physics showed."""
+
+    number: int
+    kind: str
+    part: str | None
+    motions: tuple[str, ...]
+    """The robot's motions (transit, grasp, carry, approach, screw, push, ignite, release, retreat)."""
+    observed: str | None = None
+    """For a test: ``goal`` or ``no goal`` in physics (the mechanism, and the broken part replaced)."""
+    failure: str | None = None
+    message: str = ""
+
+    @property
+    def passed(self) -> bool:
+        return self.failure is None
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "number": self.number,
+            "action": self.kind,
+            "part": self.part,
+            "robot": list(self.motions),
+            "observed": self.observed,
+            "passed": self.passed,
+            "failure": self.failure,
+            "message": self.message,
+        }
+
+
+@dataclass(frozen=True)
+class EpisodeInPhysics:
+    """The robot's run of an episode: each action, the last test's mechanism, its motor commands and tracks."""
+
+    object_id: str
+    actions: tuple[ActionInPhysics, ...]
+    requirements: tuple[RequirementCheck, ...]
+    """The true mechanism at the last test the robot made."""
+    broken_part_replaced: bool
+    commands: Trajectory | None
+    tracks: dict[str, PartTrack]
+    placed: dict[str, Pose]
+    """Where every body (spares by their ``:spare`` id) is at the end."""
+    timing: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def carried_out(self) -> bool:
+        return all(action.passed for action in self.actions)
+
+    @property
+    def mechanism_works(self) -> bool:
+        return bool(self.requirements) and all(requirement.met for requirement in self.requirements)
+
+    @property
+    def produces_goal(self) -> bool:
+        """Return whether the robot carried out every action and its last test showed the goal in physics."""
+        return self.carried_out and self.mechanism_works and self.broken_part_replaced
+
+    @property
+    def failed(self) -> ActionInPhysics | None:
+        return next((action for action in self.actions if not action.passed), None)
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "produces_goal": self.produces_goal,
+            "carried_out": self.carried_out,
+            "broken_part_replaced": self.broken_part_replaced,
+            "actions": [action.as_dict() for action in self.actions],
+            "mechanism": [check.as_dict() for check in self.requirements],
+            "seconds": round(self.commands.seconds, 3) if self.commands is not None else 0.0,
+            "timing": {name: round(seconds, 3) for name, seconds in self.timing.items()},
+        }
+
+
+@dataclass
+class _Episode:
+    """The state of the robot's run of an episode as it goes."""
+
+    obj: AssemblyObject
+    run: _Run
+    mover: PandaMovesThem
+    fits: dict[str, Fit]
+    """Each attached part's fit (the one the object was built with)."""
+    bodies: dict[int, str]
+    """Each body's id for the player: the part it started as, or its spare's id."""
+    swaps: list[tuple[str, int]] = field(default_factory=list)
+    """Each part swapped for its spare, and the number of planned segments before the swap."""
+
+    @property
+    def scene(self) -> Scene:
+        return self.run.scene
+
+    @property
+    def robot(self) -> Robot:
+        return self.mover.robot
+
+
+def _distances(start: float, end: float, step: float) -> list[float]:
+    count = max(1, math.ceil(abs(start - end) / step))
+    return [start + (end - start) * k / count for k in range(1, count + 1)]
+
+
+def _along(path: Callable[[float], Pose], pose: Pose, start: float) -> float:
+    """Return how far (metres) along its approach ``path`` a part at ``pose`` sits from its seat.
+
+    A part can stop short of its seat (within the fit's tolerance); a screw stopped 1 mm
+    short is turned some 50 degrees back from the seat's angle, so its way out starts there.
+    """
+    count = max(1, math.ceil(start / ALONG_STEP))
+    distances = [start * k / count for k in range(count + 1)]
+    return min(distances, key=lambda d: _mismatch(path(d), pose))
+
+
+def _mismatch(a: Pose, b: Pose) -> float:
+    metres, radians = difference(a, b)
+    return metres + radians * ALONG_METRES_PER_RADIAN
+
+
+def _unweld(scene: Scene, fixed: str, moving: str) -> None:
+    """Undo the weld between two parts (if any) and let them collide again."""
+    pb, client = scene.pb, scene.client
+    pair = {scene.bodies[fixed], scene.bodies[moving]}
+    for index in range(pb.getNumConstraints(physicsClientId=client)):
+        constraint = pb.getConstraintUniqueId(index, physicsClientId=client)
+        info = pb.getConstraintInfo(constraint, physicsClientId=client)
+        if {info[0], info[2]} == pair:
+            pb.removeConstraint(constraint, physicsClientId=client)
+            break
+
+
+def _collide_again(scene: Scene, a: str, b: str) -> None:
+    pb, client = scene.pb, scene.client
+    body_a, body_b = scene.bodies[a], scene.bodies[b]
+    for link_a in range(-1, pb.getNumJoints(body_a, physicsClientId=client)):
+        for link_b in range(-1, pb.getNumJoints(body_b, physicsClientId=client)):
+            pb.setCollisionFilterPair(body_a, body_b, link_a, link_b, 1, physicsClientId=client)
+
+
+def _detach(state: _Episode, part: str) -> RobotFailure | None:
+    """Take ``part`` off the object as its assembly step put it on, backwards, and set it down at its table place."""
+    obj, scene, run, robot = state.obj, state.scene, state.run, state.robot
+    fit = state.fits[part]
+    joint = next(joint for joint in run.joints if joint.moving == part and not joint.touch_only)
+    motion = MOTIONS[fit.primitive]
+    name = obj.part(part).name
+    moving_frame = scene.solids[part].frames[joint.moving_connector]
+    fixed_frame = scene.solids[joint.fixed].frames[joint.fixed_connector]
+    fixed_pose = scene.pose(joint.fixed)
+    path = approach_path(fixed_pose, moving_frame, fixed_frame, motion)
+    others = run.assembled - {part}
+    start = approach_start(scene.bounds([part]), scene.bounds(others), fixed_pose.turn(fixed_frame.axis))
+    here = _along(path, scene.pose(part), start)
+    if motion.turns > 0:
+        thread = max(here, min(start, ENGAGEMENT))
+        spin_per_metre = 2 * math.pi * motion.turns / ENGAGEMENT
+        out = _distances(here, thread, min(LINE_STEP, SCREW_STEP / spin_per_metre))
+    else:
+        thread = max(here, min(start, PUSH_DEPTH))
+        out = _distances(here, thread, LINE_STEP)
+    # A screw's way out turns the wrist further than it can go (it regrasps): the arm pose is
+    # chosen for the first quarter turn; a push's, for the whole line out.
+    first = out[:SCREW_START_POSES] if motion.turns > 0 else [*out, *_distances(thread, start, LINE_STEP)]
+    way_out = [path(d) for d in first]
+    # An arm pose from which the gripper can also take the part out along its axis.
+    failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
+    if failure is not None:
+        return failure
+    _unweld(scene, joint.fixed, part)
+    scene.set_dynamic(part, False)
+    run.joints.remove(joint)
+    run.assembled.discard(part)
+    what = f"taking the {name} off"
+    if motion.turns > 0:
+        failure = robot.screw([path(d) for d in out], what, joint.fixed)
+    else:
+        failure = robot.follow("push", [path(d) for d in out], what, joint.fixed)
+    if failure is None and thread < start:
+        failure = robot.follow("approach", [path(d) for d in _distances(thread, start, LINE_STEP)], what, joint.fixed)
+    if failure is not None:
+        return failure
+    _collide_again(scene, joint.fixed, part)
+    return _set_down(state, part, run.homes[part])
+
+
+def _set_down(state: _Episode, part: str, home: Pose) -> RobotFailure | None:
+    """Carry the held part above ``home`` on the table, lower it there and let go."""
+    robot, name = state.robot, state.obj.part(part).name
+    above = home.translated((0.0, 0.0, LIFT))
+    failure = robot.carry(above, f"setting the {name} aside")
+    if failure is None:
+        failure = robot.follow("carry", line_poses(above, home), f"putting the {name} down", "ground")
+    if failure is None:
+        failure = robot.release()
+    state.scene.place(part, home)
+    return failure
+
+
+def _swap(state: _Episode, part: str) -> None:
+    """Make the spare on the table the part (the broken one stays where it lies, as the spare's id)."""
+    scene, run = state.scene, state.run
+    spare = part + SPARE
+    state.swaps.append((part, len(state.robot.waypoints.segments)))
+    scene.bodies[part], scene.bodies[spare] = scene.bodies[spare], scene.bodies[part]
+    scene.names[scene.bodies[part]], scene.names[scene.bodies[spare]] = part, spare
+    run.homes[part], run.homes[spare] = run.homes[spare], run.homes[part]
+
+
+def _replace_base(state: _Episode, part: str) -> None:
+    """Put the spare base where the broken one stands, and the broken one on the table (not by the robot)."""
+    scene = state.scene
+    here, table = scene.pose(part), state.run.homes[part + SPARE]
+    _swap(state, part)
+    scene.place(part + SPARE, table)
+    scene.set_dynamic(part + SPARE, False)
+    scene.place(part, here)
+    scene.set_dynamic(part, True)
+    state.run.homes[part] = here
+
+
+def _step_failure(state: _Episode, number: int, request: StepRequest) -> tuple[str, str] | None:
+    """Make one assembly step (attach or light) by the robot; return its failure code and message, if any."""
+    report = _step(state.run, number, request)
+    if report.status is StepStatus.PASSED:
+        return None
+    code = report.failure.value if report.failure is not None else "failed"
+    return code, report.message
+
+
+def _test(state: _Episode, number: int, lights: list[Fit]) -> tuple[str, str] | None:
+    """Light what the object lights (lifting off what covers it, and putting it back), then let it settle."""
+    run = state.run
+    run.joints[:] = [joint for joint in run.joints if not joint.touch_only]  # a failed test's flame is out
+    for light in lights:
+        if light.fixed_part not in run.assembled:
+            continue
+        covering = [
+            part
+            for part in sorted(run.assembled - {state.obj.base}, key=lambda p: -run.attached_at.get(p, 0))
+            if (light.fixed_part, light.fixed_connector) in state.fits[part].blocks
+        ]
+        for part in covering:
+            failure = _detach(state, part)
+            if failure is not None:
+                return failure.failure.value, failure.check.detail
+        request = StepRequest(light.primitive, light.moving_part, light.fixed_part, light.id)
+        failed = _step_failure(state, number, request)
+        if failed is not None:
+            return failed
+        for part in reversed(covering):
+            fit = state.fits[part]
+            failed = _step_failure(state, number, StepRequest(fit.primitive, part, fit.fixed_part, fit.id))
+            if failed is not None:
+                return failed
+    _settle(run, checks.STEP_SETTLE_SECONDS)
+    return None
+
+
+def _rename_spares(state: _Episode) -> None:
+    """Name each planned segment's held part by its body's id (a spare by its ``:spare`` id), for the tracks.
+
+    After a swap the part's id names its spare; segments before it held the part itself.
+    """
+    segments = state.robot.waypoints.segments
+    for part, first in state.swaps:
+        for segment in segments[first:]:
+            if segment.held is not None and segment.held[0] == part:
+                segment.held = (part + SPARE, segment.held[1])
+
+
+SPARE_ROW_GAP = 0.08
+"""Metres between the spares' row and the row of parts before it: room for the hand, and within reach."""
+SPARE_ROW_X = -0.1
+"""Where (metres along the robot's x axis) the spares' rows are centred: a little nearer the robot than the object."""
+
+
+def _spare_homes(
+    obj: AssemblyObject, parts: dict[str, Solid], homes: dict[str, Pose], spares: list[str]
+) -> dict[str, Pose]:
+    """Return where each spare waits: in a row of spares beyond its part's row on the table.
+
+    The object's own parts keep the places ``layout`` gives them (which ``simulate --robot``
+    uses), so the spares do not push them out of the arm's reach.
+    """
+    outer = {1.0: 0.0, -1.0: 0.0}
+    for part, pose in homes.items():
+        solid = parts[part]
+        outer[1.0] = max(outer[1.0], pose.position[1] + solid.upper[1])
+        outer[-1.0] = max(outer[-1.0], -(pose.position[1] + solid.lower[1]))
+    rows: dict[float, list[str]] = {1.0: [], -1.0: []}
+    for part in spares:
+        rows[-1.0 if part != obj.base and homes[part].position[1] < 0 else 1.0].append(part)
+    placed: dict[str, Pose] = {}
+    for side, row in rows.items():
+        widths = [parts[part].upper[0] - parts[part].lower[0] for part in row]
+        left = SPARE_ROW_X - (sum(widths) + ROBOT_ROW_GAP * (len(row) - 1)) / 2
+        for part, width in zip(row, widths, strict=True):
+            solid = parts[part]
+            y = (
+                outer[side] + SPARE_ROW_GAP - solid.lower[1]
+                if side > 0
+                else -outer[side] - SPARE_ROW_GAP - solid.upper[1]
+            )
+            placed[part + SPARE] = Pose((left - solid.lower[0], y, -solid.lower[2]))
+            left += width + ROBOT_ROW_GAP
+    return placed
+
+
+def robot_episode(
+    obj: AssemblyObject,
+    episode: Episode,
+    safety_factor: float = DEFAULT_SAFETY_FACTOR,
+    tracks: bool = False,
+    on_action: Callable[[int, int], None] | None = None,
+) -> EpisodeInPhysics:
+    """Have the Panda carry out ``episode`` on ``obj`` in physics, action by action, and judge its last test.
+
+    ``tracks`` keeps every body's pose over the motor commands (``sim.robot_episode_playback``);
+    ``on_action(done, total)`` hears of each action done. Raises LimitViolationError when no
+    motor commands keep within the limits, SimulatorUnavailableError when PyBullet cannot start.
+    """
+    clock = time.perf_counter()
+    structure = structure_of(obj)
+    order = _first_build(assembly_graph(structure), structure.parts)
+    build = [step for step in _steps(obj, order) if not MOTIONS[step.action].touches_only]
+    lights = [fit for fit in obj.fits if MOTIONS[fit.primitive].touches_only]
+    spares = sorted({step.part for step in episode.steps if step.kind == REPLACE and step.part is not None})
+    parts: dict[str, Solid] = dict(solids(obj))  # a copy: solids() is cached
+    homes, _design = layout(obj, parts, tuple(build), ROBOT_ROW_GAP)
+    homes.update(_spare_homes(obj, parts, homes, spares))
+    parts.update({part + SPARE: parts[part] for part in spares})
+    actions: list[ActionInPhysics] = []
+    requirements: tuple[RequirementCheck, ...] = ()
+    replaced = broken_replaced = False
+    with Scene(parts, drawn=False) as scene:
+        for part, pose in homes.items():
+            scene.add_part(part, pose, dynamic=part == obj.base)
+        run = _Run(obj, scene, homes, {obj.base}, PartsMoveThemselves(scene))
+        for number, request in enumerate(build, start=1):
+            report = _step(run, number, request)
+            if report.status is not StepStatus.PASSED:
+                raise RuntimeError(f"the {obj.name} cannot be built in physics: {report.message}")
+        _settle(run, checks.FINAL_SETTLE_SECONDS)
+        # The object was handed over built: its joints come before every action of the episode
+        # (the mechanism checks that a light comes after what it must follow by step number).
+        run.joints[:] = [replace(joint, step=0) for joint in run.joints]
+        run.attached_at = dict.fromkeys(run.attached_at, 0)
+        fits = {request.moving: obj.fit(request.fit) for request in build if request.fit is not None}
+        mover = PandaMovesThem(scene, None, safety_factor, tracks)
+        run.mover = mover
+        state = _Episode(obj, run, mover, fits, {body: part for part, body in scene.bodies.items()})
+        timing = {"build": time.perf_counter() - clock}
+        clock = time.perf_counter()
+        for number, step in enumerate(episode.steps, start=1):
+            mover.robot.step = number
+            failed: tuple[str, str] | None = None
+            observed = None
+            if step.kind == DETACH and step.part is not None:
+                failure = _detach(state, step.part)
+                failed = (failure.failure.value, failure.check.detail) if failure is not None else None
+            elif step.kind == ATTACH and step.part is not None:
+                fit = fits[step.part]
+                failed = _step_failure(state, number, StepRequest(fit.primitive, step.part, fit.fixed_part, fit.id))
+            elif step.kind == REPLACE and step.part is not None:
+                (_replace_base if step.part == obj.base else _swap)(state, step.part)
+                replaced = replaced or step.part == episode.fault
+            elif step.kind == TEST:
+                failed = _test(state, number, lights)
+                if failed is None:
+                    requirements = evaluate(obj, scene, run.joints)
+                    works = all(requirement.met for requirement in requirements)
+                    observed = GOAL if works and replaced else NO_GOAL
+                    broken_replaced = replaced
+                    replaced = False
+            else:
+                assert step.kind == INSPECT
+            motions = step_motions(mover.robot.waypoints, number)
+            code, message = failed if failed is not None else (None, "")
+            actions.append(ActionInPhysics(number, step.kind, step.part, motions, observed, code, message))
+            if on_action is not None:
+                on_action(number, len(episode.steps))
+            if failed is not None:
+                break
+        timing["episode"] = time.perf_counter() - clock
+        _rename_spares(state)
+        carried_out = all(action.passed for action in actions)
+        timing.update(mover.finish(len(episode.steps), carried_out))
+        placed = {state.bodies[body]: scene.pose(part) for part, body in scene.bodies.items()}
+        return EpisodeInPhysics(
+            obj.id, tuple(actions), requirements, broken_replaced, mover.commands, dict(mover.tracks), placed, timing
+        )

@@ -1,0 +1,170 @@
+"""The Panda carries out a troubleshooting episode in physics, action by action."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from causalplan.cli import app
+from causalplan.objects.catalog import Catalog
+from causalplan.sim.robot.checker import violations
+from causalplan.sim.robot_episode import SPARE, robot_episode
+from causalplan.sim.robot_episode_playback import episode_playback
+from causalplan.troubleshoot.episode import Episode, Step
+from causalplan.troubleshoot.task import troubleshooting_task
+
+LAMP = Path(__file__).resolve().parents[2] / "examples" / "paper" / "desk_lamp.yaml"
+
+
+def _distance(a: list[float], b: list[float]) -> float:
+    return math.dist(a[:3], b[:3])
+
+
+def test_the_panda_unscrews_the_bulb_sets_it_aside_and_screws_in_the_spare(catalog: Catalog) -> None:
+    lamp = catalog.get("desk_lamp")
+    episode = troubleshooting_task(lamp).episode("oracle", "light_bulb")
+    done = [(step.kind, step.part) for step in episode.steps]
+    assert done == [
+        ("detach", "shade"),
+        ("inspect", "light_bulb"),
+        ("detach", "light_bulb"),
+        ("replace", "light_bulb"),
+        ("attach", "light_bulb"),
+        ("attach", "shade"),
+        ("test", None),
+    ]
+    run = robot_episode(lamp, episode, tracks=True)
+    assert run.produces_goal, run.as_dict()
+    motions = [action.motions for action in run.actions]
+    assert motions[0][:2] == ("transit", "grasp") and "push" in motions[0]  # the shade's clip, in reverse
+    assert "screw" in motions[2] and motions[2][-2:] == ("release", "retreat")  # unscrewed, set down
+    assert motions[1] == motions[3] == motions[6] == ()  # looking; the spare waits on the table; the test
+    assert "screw" in motions[4] and "push" in motions[5]
+    assert run.commands is not None and violations(run.commands) == []
+    # The player's document: the broken bulb ends where it was set aside, the spare on the lamp.
+    document = episode_playback(lamp, run)
+    parts = {part["id"]: part for part in document["parts"]}  # type: ignore[attr-defined]
+    assert set(parts) == {"base_with_cables", "light_bulb", "shade", "light_bulb" + SPARE}
+    assembled = document["assembled"]
+    assert isinstance(assembled, dict)
+    for part, entry in parts.items():
+        poses = entry["track"]["poses"]
+        assert _distance(poses[-1], assembled[part]) < 1e-3, part
+    broken, spare = parts["light_bulb"]["track"]["poses"], parts["light_bulb" + SPARE]["track"]["poses"]
+    assert _distance(broken[0], broken[-1]) > 0.05  # taken off the lamp and set down on the table
+    assert _distance(spare[0], spare[-1]) > 0.05  # fetched from the table and screwed in
+    assert _distance(spare[-1], broken[0]) < 0.003  # where the broken bulb sat
+
+
+def test_each_test_in_physics_shows_what_the_episode_observed(catalog: Catalog) -> None:
+    # A spare shade first: the lamp is whole and its mechanism works, but the bulb is still broken.
+    lamp = catalog.get("desk_lamp")
+    steps = (
+        Step("detach", "shade"),
+        Step("replace", "shade"),
+        Step("attach", "shade"),
+        Step("test", None, "no goal"),
+        Step("detach", "shade"),
+        Step("detach", "light_bulb"),
+        Step("replace", "light_bulb"),
+        Step("attach", "light_bulb"),
+        Step("attach", "shade"),
+        Step("test", None, "goal"),
+    )
+    run = robot_episode(lamp, Episode("light_bulb", steps))
+    assert [a.observed for a in run.actions if a.kind == "test"] == ["no goal", "goal"]
+    assert run.produces_goal
+
+
+def test_a_broken_part_never_replaced_gives_no_goal_though_the_robot_carries_it_out(catalog: Catalog) -> None:
+    lamp = catalog.get("desk_lamp")
+    steps = (Step("detach", "shade"), Step("replace", "shade"), Step("attach", "shade"), Step("test", None, "goal"))
+    run = robot_episode(lamp, Episode("light_bulb", steps))
+    assert run.carried_out and run.mechanism_works and not run.produces_goal
+
+
+def test_the_robot_cannot_put_the_shade_back_before_the_bulb(catalog: Catalog) -> None:
+    lamp = catalog.get("desk_lamp")
+    steps = (
+        Step("detach", "shade"),
+        Step("detach", "light_bulb"),
+        Step("replace", "light_bulb"),
+        Step("attach", "shade"),
+        Step("attach", "light_bulb"),
+        Step("test", None, "goal"),
+    )
+    run = robot_episode(lamp, Episode("light_bulb", steps))
+    failed = run.failed
+    assert failed is not None and failed.kind == "attach" and failed.part == "light_bulb"
+    assert failed.failure == "blocked_path" and not run.produces_goal
+
+
+@pytest.mark.slow
+def test_the_robot_lifts_the_chimney_to_light_the_lamp_and_puts_it_back(catalog: Catalog) -> None:
+    lamp = catalog.get("kerosene_lamp")
+    run = robot_episode(lamp, troubleshooting_task(lamp).episode("oracle", "wick"))
+    assert run.produces_goal, run.as_dict()
+    test = run.actions[-1]
+    assert test.kind == "test" and "ignite" in test.motions
+
+
+KNOWN_FAILURES = {
+    # The hand, from above, touches the glass globe around the valve knob (2.2-2.5 mm deep).
+    ("gas_lantern", "valve_knob"): ("detach", "no_collision_free_path"),
+    # A finger touches the wind-up motor beside the wheels' axle at the wheels' grasp (2.1 mm).
+    ("toy_car", "wheels"): ("detach", "collision"),
+    # Turning the LED lamp out, a finger (the grasp is round the wide globe) sweeps into the battery.
+    ("solar_lantern", "led_lamp"): ("detach", "no_collision_free_path"),
+}
+"""Where the robot cannot carry out an episode today: (object, the part acted on) -> (action, failure code)."""
+
+
+@pytest.mark.slow
+def test_every_episode_of_every_strategy_is_carried_out_by_the_robot_to_the_goal_but_the_known_ones(
+    catalog: Catalog,
+) -> None:
+    failed: set[tuple[str, str]] = set()
+    carried_out = 0
+    for obj in catalog.objects.values():
+        task = troubleshooting_task(obj)
+        done: set[tuple[Step, ...]] = set()
+        for strategy in task.strategies:
+            for fault in obj.faults:
+                episode = task.episode(strategy, fault.part)
+                if episode.steps in done:
+                    continue
+                done.add(episode.steps)
+                run = robot_episode(obj, episode)
+                where = (obj.id, strategy, fault.part)
+                assert run.commands is not None and violations(run.commands) == [], where
+                stopped = run.failed
+                if stopped is not None:
+                    assert stopped.part is not None, (*where, stopped)
+                    known = KNOWN_FAILURES.get((obj.id, stopped.part))
+                    assert known == (stopped.kind, stopped.failure), (*where, stopped)
+                    failed.add((obj.id, stopped.part))
+                    continue
+                assert run.produces_goal, (*where, run.as_dict())
+                observed = [step.observed for step in episode.steps if step.kind == "test"]
+                assert [a.observed for a in run.actions if a.kind == "test"] == observed, where
+                carried_out += 1
+    assert failed == set(KNOWN_FAILURES)  # one fixed: take it off the list (and docs/troubleshooting.md)
+    assert carried_out >= 33
+
+
+@pytest.mark.slow
+def test_the_cli_has_the_panda_carry_out_the_episode_and_check_trajectory_passes_it(tmp_path: Path) -> None:
+    out = tmp_path / "repair.json"
+    args = ["troubleshoot", str(LAMP), "--fault", "light_bulb", "--robot", "--trajectory", str(out), "--json"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output)
+    assert data["status"] == "repaired" and data["robot"]["produces_goal"]
+    assert [a["action"] for a in data["robot"]["actions"]] == [a["action"] for a in data["steps"]]
+    checked = CliRunner().invoke(app, ["check-trajectory", str(out), "--json"])
+    assert checked.exit_code == 0, checked.output
+    assert json.loads(checked.output)["violations"] == []
