@@ -8,8 +8,11 @@ import pytest
 
 from causalplan.service.errors import WorkerCrashedError
 from causalplan.service.jobs.work import Progress, in_pool_retried, worker_died
+from causalplan.service.work.registry import Pool, Work
 from tests.service.fixtures import running_client, services_of, settings_for, sqlite_url
-from tests.service.pool.jobs_for_tests import die_once
+from tests.service.pool.jobs_for_tests import DieOnce, die_once
+
+DIE_ONCE: Work[DieOnce, str] = Work("die_once", die_once, DieOnce, Pool.JOBS, lambda arguments, settings: 60.0)
 
 
 def test_work_whose_worker_dies_runs_once_more_then_fails(tmp_path: Path) -> None:
@@ -18,12 +21,12 @@ def test_work_whose_worker_dies_runs_once_more_then_fails(tmp_path: Path) -> Non
     with running_client(settings) as client:
         services = services_of(client)
         progress = Progress(lambda done, total: None)
-        assert in_pool_retried(services, progress, die_once, (str(marker), "filmed"), 60.0) == "filmed"
+        assert in_pool_retried(services, progress, DIE_ONCE, DieOnce(str(marker), "filmed")) == "filmed"
         assert marker.exists()  # the first worker died; its replacement did the work
         with pytest.raises(WorkerCrashedError) as twice:
-            in_pool_retried(services, progress, die_once, ("", "never"), 60.0)
+            in_pool_retried(services, progress, DIE_ONCE, DieOnce("", "never"))
         assert worker_died(twice.value)
         services.job_pool.close()
         with pytest.raises(WorkerCrashedError) as closed:  # a closed pool is no dead worker: not run again
-            in_pool_retried(services, progress, die_once, (str(marker), "never"), 60.0)
+            in_pool_retried(services, progress, DIE_ONCE, DieOnce(str(marker), "never"))
         assert not worker_died(closed.value)

@@ -95,13 +95,21 @@ def judge_or_die(arguments: DyingTrials, catalog: Any) -> list[Any]:
     return judged_trials(arguments, catalog)
 
 
-def die_once(marker: str, value: str) -> str:
-    """Kill this worker the first time (leaving ``marker``), return ``value`` after; ``marker`` '': always die."""
+@dataclass(frozen=True)
+class DieOnce:
+    """``die_once``'s arguments: the marker file its first death leaves ('': always die), and what it returns."""
+
+    marker: str
+    value: str
+
+
+def die_once(arguments: DieOnce, catalog: Any) -> str:
+    """Kill this worker the first time (leaving the marker), return the value after; marker '': always die."""
     import signal
     from pathlib import Path
 
-    if not marker or not Path(marker).exists():
-        if marker:
-            Path(marker).touch()
+    if not arguments.marker or not Path(arguments.marker).exists():
+        if arguments.marker:
+            Path(arguments.marker).touch()
         os.kill(os.getpid(), signal.SIGKILL)
-    return value
+    return arguments.value
