@@ -70,6 +70,7 @@ class _Splitter:
         self.all_fits = (1 << len(compiled.fits)) - 1
         self.holds_cache: dict[tuple[int, str], bool] = {}
         self.chance_cache: dict[int, float] = {}
+        self.upper_cache: dict[Key, float] = {}
         count = len(compiled.fits)
         self.fits_of_bit: dict[int, int] = {}
         for index in range(count):
@@ -117,7 +118,8 @@ class _Splitter:
         waiting = tuple(key for key in keys if not self.holds(parts, key))
         if not waiting:
             return ()
-        if any(not self.key_fits[key] & open_mask for key in waiting):
+        open_mask = self.useful(parts, open_mask, waiting)
+        if open_mask is None or any(not self.key_fits[key] & open_mask for key in waiting):
             return None  # nothing open can make this goal node
         found: list[Key] = []
         remaining = open_mask
@@ -148,6 +150,43 @@ class _Splitter:
                 found.append((group, own, parts & depends))
         return tuple(sorted(found))
 
+    def useful(self, parts: int, open_mask: int, waiting: tuple[str, ...]) -> int | None:
+        """Return the open fits that can still help a waiting goal node; None when one can no longer hold.
+
+        A fit whose holder can never join is dropped, and so is one whose part neither carries
+        a waiting goal node's function nor holds (by open fits) a part that leads to one:
+        attaching such a part only takes connectors, so no policy loses by never trying it.
+        Dropping them lets the rest fall apart into smaller groups, and makes residuals that
+        differ only in dead fits one.
+        """
+        c = self.c
+        reach = c.reachable_parts(parts, self.all_fits & ~open_mask)
+        if not all(self.holds(reach, key) for key in waiting):
+            return None
+        kept, bits = 0, open_mask
+        while bits:
+            low = bits & -bits
+            bits ^= low
+            if c.fixed[low.bit_length() - 1] & reach:
+                kept |= low
+        needed = 0
+        for key in waiting:
+            needed |= self.support[key]
+        needed &= reach & ~parts
+        frontier = needed
+        while frontier:
+            low = frontier & -frontier
+            frontier ^= low
+            holders = self.fits_of_bit.get(low, 0) & kept
+            while holders:
+                fit = holders & -holders
+                holders ^= fit
+                holder = c.fixed[fit.bit_length() - 1]
+                if not (holder & (needed | parts)):
+                    needed |= holder
+                    frontier |= holder
+        return kept & self.fits_moving_into(needed)
+
     def fits_moving_into(self, parts: int) -> int:
         """Return the fits whose moving part is among ``parts`` (attached: nothing left to attach)."""
         mask = 0
@@ -171,35 +210,62 @@ class _Splitter:
         return success, attempts, tuple(residual for _, residual in solved)
 
     def upper(self, residuals: tuple[Key, ...] | None) -> float:
-        """Return an upper bound on the success of running ``residuals`` (independent, so a product).
-
-        A goal node still waiting needs one more of the parts under it to join, and a part joins
-        only by one of its own draws (one per connector of its own, at best its most reliable
-        open fit's). Draws of different parts are independent, so over goal nodes with disjoint
-        parts the chances multiply.
-        """
+        """Return an upper bound on the success of running ``residuals`` (independent, so a product)."""
         if residuals is None:
             return 0.0
         bound = 1.0
         for residual in residuals:
             known = self.memo.get(residual)
-            if known is not None:
-                bound *= known.success
-                continue
-            within, keys, parts = residual
-            counted = 0
-            for key in keys:
-                carriers = self.support[key] & ~parts
-                if carriers & counted:
-                    continue
-                counted |= carriers
-                missing, bits = 1.0, carriers
-                while bits:
-                    low = bits & -bits
-                    bits ^= low
-                    missing *= 1.0 - self.chance(low, within)
-                bound *= 1.0 - missing
+            bound *= known.success if known is not None else self.residual_upper(residual)
         return bound
+
+    def residual_upper(self, residual: Key) -> float:
+        """Return an upper bound on one residual's success: its necessary parts' draws, then its ORs'.
+
+        A part is necessary when a waiting goal node cannot hold without it even if every other
+        open fit succeeded; every successful run attaches it, by one of its own draws (one per
+        connector of its own, at best its most reliable open fit's). A goal node still waiting
+        with no necessary carrier needs one more of its carriers to join, by their draws. Draws
+        of different parts are independent, so over the necessary parts and the goal nodes with
+        disjoint carriers outside them the chances multiply (each part counted once).
+        """
+        known = self.upper_cache.get(residual)
+        if known is not None:
+            return known
+        within, keys, parts = residual
+        unusable = self.all_fits & ~within
+        reach = self.c.reachable_parts(parts, unusable)
+        bound, counted = 1.0, 0
+        candidates = reach & ~parts & self.group_parts(within)
+        while candidates:
+            low = candidates & -candidates
+            candidates ^= low
+            without = self.c.reachable_parts(parts, unusable, without=low)
+            if not all(self.holds(without, key) for key in keys):
+                counted |= low
+                bound *= self.chance(low, within)
+        for key in keys:
+            carriers = self.support[key] & ~parts & reach
+            if carriers & counted:
+                continue
+            counted |= carriers
+            missing, bits = 1.0, carriers
+            while bits:
+                low = bits & -bits
+                bits ^= low
+                missing *= 1.0 - self.chance(low, within)
+            bound *= 1.0 - missing
+        self.upper_cache[residual] = bound
+        return bound
+
+    def group_parts(self, within: int) -> int:
+        """Return the moving parts of ``within``'s fits."""
+        found, bits = 0, within
+        while bits:
+            low = bits & -bits
+            bits ^= low
+            found |= self.c.moving[low.bit_length() - 1]
+        return found
 
     def chance(self, part: int, within: int) -> float:
         """Return the best chance that ``part`` joins by ``within``'s fits: one draw per connector of its own."""
@@ -218,6 +284,44 @@ class _Splitter:
             self.chance_cache[fits] = known
         return known
 
+    def forced(self, applicable: list[int], parts: int, unusable: int, keys: tuple[str, ...], within: int) -> int:
+        """Return an attempt that loses no success probability when taken first (-1: none).
+
+        A fit is *clean* when no usable fit of its part is more reliable and neither its success
+        nor its failure takes any open fit but its part's own. Attempting a clean fit now is as reliable as any
+        policy (docs/planners.md, "Forced attempts"): its outcome changes nothing for the other
+        fits, so any policy can be replayed after it, and having its part earlier only adds
+        options. Necessary parts (a waiting goal node cannot hold without them even if every
+        other open fit succeeded) go first, the least likely first (the most likely to end the
+        run, Smith's rule for single tests); then the other clean fits, the most likely first.
+        """
+        c = self.c
+        open_fits = within & ~unusable
+        best, best_rank = -1, (2, 0.0)
+        for index in applicable:
+            own = self.fits_of_bit[c.moving[index]]
+            taken = (c.taken_on_success[index] | c.taken_on_failure[index]) & open_fits & ~own
+            p = c.probability[index]
+            if taken or p < self.best_chance(open_fits & own):
+                continue
+            rank = (1, -p)
+            if p < best_rank[1] or best_rank[0] > 0:
+                reach = c.reachable_parts(parts, unusable, without=c.moving[index])
+                if not all(self.holds(reach, key) for key in keys):
+                    rank = (0, p)
+            if rank < best_rank:
+                best, best_rank = index, rank
+        return best
+
+    def best_chance(self, fits: int) -> float:
+        """Return the highest probability among ``fits``."""
+        best, bits = 0.0, fits
+        while bits:
+            low = bits & -bits
+            bits ^= low
+            best = max(best, self.c.probability[low.bit_length() - 1])
+        return best
+
     def solve(self, residual: Key) -> _Entry:
         known = self.memo.get(residual)
         if known is not None:
@@ -231,7 +335,9 @@ class _Splitter:
         best = _Entry(0.0, 0.0, -1)
         if all(self.holds(reach, key) for key in keys):
             options = []
-            for index in c.applicable(parts, unusable):
+            applicable = c.applicable(parts, unusable)
+            forced = self.forced(applicable, parts, unusable, keys, within)
+            for index in applicable if forced < 0 else (forced,):
                 p = c.probability[index]
                 won = self.groups(parts | c.moving[index], unusable | c.taken_on_success[index], keys, within)
                 lost = self.groups(parts, unusable | c.taken_on_failure[index], keys, within) if p < 1.0 else None
