@@ -70,7 +70,6 @@ class _Splitter:
         self.all_fits = (1 << len(compiled.fits)) - 1
         self.holds_cache: dict[tuple[int, str], bool] = {}
         self.chance_cache: dict[int, float] = {}
-        self.upper_cache: dict[Key, float] = {}
         count = len(compiled.fits)
         self.fits_of_bit: dict[int, int] = {}
         for index in range(count):
@@ -220,32 +219,18 @@ class _Splitter:
         return bound
 
     def residual_upper(self, residual: Key) -> float:
-        """Return an upper bound on one residual's success: its necessary parts' draws, then its ORs'.
+        """Return an upper bound on one residual's success.
 
-        A part is necessary when a waiting goal node cannot hold without it even if every other
-        open fit succeeded; every successful run attaches it, by one of its own draws (one per
-        connector of its own, at best its most reliable open fit's). A goal node still waiting
-        with no necessary carrier needs one more of its carriers to join, by their draws. Draws
-        of different parts are independent, so over the necessary parts and the goal nodes with
-        disjoint carriers outside them the chances multiply (each part counted once).
+        A goal node still waiting needs one more of the parts under it to join, and a part joins
+        only by one of its own draws (one per connector of its own, at best its most reliable
+        open fit's). Draws of different parts are independent, so over goal nodes with disjoint
+        parts the chances multiply. (Counting the necessary parts on the way too made the bound
+        tighter but pruned no more residuals once clean attempts are forced, at six times the cost.)
         """
-        known = self.upper_cache.get(residual)
-        if known is not None:
-            return known
         within, keys, parts = residual
-        unusable = self.all_fits & ~within
-        reach = self.c.reachable_parts(parts, unusable)
         bound, counted = 1.0, 0
-        candidates = reach & ~parts & self.group_parts(within)
-        while candidates:
-            low = candidates & -candidates
-            candidates ^= low
-            without = self.c.reachable_parts(parts, unusable, without=low)
-            if not all(self.holds(without, key) for key in keys):
-                counted |= low
-                bound *= self.chance(low, within)
         for key in keys:
-            carriers = self.support[key] & ~parts & reach
+            carriers = self.support[key] & ~parts
             if carriers & counted:
                 continue
             counted |= carriers
@@ -255,17 +240,7 @@ class _Splitter:
                 bits ^= low
                 missing *= 1.0 - self.chance(low, within)
             bound *= 1.0 - missing
-        self.upper_cache[residual] = bound
         return bound
-
-    def group_parts(self, within: int) -> int:
-        """Return the moving parts of ``within``'s fits."""
-        found, bits = 0, within
-        while bits:
-            low = bits & -bits
-            bits ^= low
-            found |= self.c.moving[low.bit_length() - 1]
-        return found
 
     def chance(self, part: int, within: int) -> float:
         """Return the best chance that ``part`` joins by ``within``'s fits: one draw per connector of its own."""
