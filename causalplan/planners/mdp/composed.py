@@ -151,7 +151,7 @@ def _chain(compiled: CompiledMdp, solution: MdpSolution, step_cost: float) -> tu
     return tuple(path)
 
 
-FIRST_SEARCH_SHARE = 0.2
+FIRST_SEARCH_SHARE = 0.05
 """The share of a component's time the heuristic search has first (it proves small components quickly)."""
 SPLIT_SHARE = 0.5
 """The share of what is left that the splitting solver has next, before the search has the rest."""
