@@ -19,7 +19,8 @@ parts, with probability ``q = 1 - prod(1 - max p)`` over the part's connectors. 
   is. A route onto a holder that must join first also needs that holder (and its own single
   holder, and so on) to join: their chances multiply the route's. A holder that several
   tests' routes go through is counted in the first of them only (the others' walks stop
-  before it), so the tests draw on disjoint parts and their chances still multiply. The cheapest order of tests with forest precedences is found by merging the best ratio
+  before it), so the tests draw on disjoint parts and their chances still multiply. The
+  cheapest order of tests with forest precedences is found by merging the best ratio
   ``(1 - q) / expected cost`` into its parent (Horn's rule, as in Garey 1973).
 
 The bound is exact at the goal (1) and at dead ends (-1), and exact whenever the remaining

@@ -62,9 +62,7 @@ def _with_chances(task: PlanningTask, seed: int, chances: tuple[float, ...]) -> 
 
 @pytest.mark.parametrize(("parts", "seed"), [(12, 0), (16, 3), (20, 4), (24, 5), (22, 1)])
 @pytest.mark.parametrize("chances", [(0.7, 0.8, 0.8, 1.0), (0.5, 0.9, 1.0)])
-def test_forced_attempts_and_dropped_fits_keep_the_optimum(
-    parts: int, seed: int, chances: tuple[float, ...]
-) -> None:
+def test_forced_attempts_and_dropped_fits_keep_the_optimum(parts: int, seed: int, chances: tuple[float, ...]) -> None:
     # Equal chances on alternative sockets and certain fits: where the dominance rules apply most.
     task = _with_chances(synthetic_task(parts, seed), seed * 7 + parts, chances)
     exact = solve_mdp(task, 60.0, step_cost=1e-9)
