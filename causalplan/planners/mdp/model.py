@@ -274,4 +274,7 @@ def search_outcome(solution: MdpSolution, seconds: float) -> SearchOutcome:
         success_bounds=bounds,
         required_success=solution.required_success,
         states=solution.states,
+        fewest_attempts=solution.fewest_attempts and solution.optimality is Optimality.OPTIMAL
+        if solution.status is PlanStatus.SOLVED
+        else None,
     )

@@ -151,6 +151,14 @@ def test_an_anytime_plan_says_so_in_its_json() -> None:
     assert data["expected_actions"] is None and "no policy does better" in str(data["message"])
 
 
+def test_the_json_says_whether_the_attempts_are_proved_fewest() -> None:
+    # The search closes on the small tree (fewest proved); the split solver proves only the reliability.
+    closed = plan_task(_with_probabilities(synthetic_task(12, 1), 12), "mdp", 30.0).as_dict()
+    split = plan_task(_with_probabilities(synthetic_task(120, 0), 120), "mdp", 30.0).as_dict()
+    assert closed["optimality"] == split["optimality"] == "optimal"
+    assert closed["fewest_attempts"] is True and split["fewest_attempts"] is False
+
+
 def test_it_stops_optimal_as_soon_as_the_bounds_meet() -> None:
     # Four independent components: the policy's success meets the bound long before every state is solved.
     family = independent_components(4)
