@@ -31,7 +31,7 @@ from causalplan.planners.mdp.components import Component, independent_components
 from causalplan.planners.mdp.exact import solve_compiled_mdp
 from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, Optimality, State, compile_mdp, policy_entries
 from causalplan.planners.mdp.search import ResumableSearch, decide, tie_breaking_step_cost
-from causalplan.planners.mdp.split import solve_split
+from causalplan.planners.mdp.split_solve import solve_split
 from causalplan.planners.result import PlanStatus
 
 EXACT_FITS = 10

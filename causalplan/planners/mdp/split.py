@@ -7,7 +7,9 @@ once a holder is on, the subtrees on its sockets are independent. This solver me
 attached parts they depend on), not whole states: a tree of holders is solved as a product
 of small pieces, where the state graph has exponentially many states.
 
-At each residual it tries every applicable fit of its group, splits each outcome's residual
+At each residual it tries the applicable fits of its group (one clean fit only, where forcing
+applies: ``Splitter.forced``; fits that can no longer help are dropped: ``Splitter.useful``),
+splits each outcome's residual
 into independent groups, and combines them: the success probability is the product (proved
 as for the components), and the groups run one after another, whole, in decreasing
 ``(1 - success) / attempts`` (Smith's ratio rule), which gives the fewest expected attempts
@@ -15,21 +17,19 @@ among such orders. The attempt kept is the most reliable, then the one with the 
 expected attempts. The policy is the *agenda* of groups: ``decide`` replays the outcomes of a
 state from the start, so it follows exactly the policy whose figures were computed.
 
-It is exhaustive inside a group that does not split, so it stops (``None``) beyond
-``MAX_RESIDUALS`` residuals or at the time limit, and the caller falls back to the heuristic search.
+It is exhaustive inside a group that does not split, so it stops (``SplitStopped``) beyond its
+residual budget or at the time limit. ``split_solve.py`` runs its passes and turns the memo into a policy.
 """
 
 from __future__ import annotations
 
 import math
-import sys
 import time
 from dataclasses import dataclass
 
 from causalplan.causal.graph import active_nodes
 from causalplan.planners.mdp.components import goal_conjuncts
-from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, State, policy_entries
-from causalplan.planners.result import PlanStatus
+from causalplan.planners.mdp.model import CompiledMdp
 
 MAX_RESIDUALS = 400_000
 TIE = 1e-12
@@ -39,7 +39,7 @@ Key = tuple[int, tuple[str, ...], int]
 
 
 @dataclass(frozen=True)
-class _Entry:
+class Entry:
     success: float
     attempts: float
     action: int  # -1: done (its goal holds) or dead
@@ -47,22 +47,22 @@ class _Entry:
     on_failure: tuple[Key, ...] = ()
 
 
-def _ratio(entry: _Entry) -> float:
+def _ratio(entry: Entry) -> float:
     """Smith's ratio: the chance of failing per expected attempt (a dead residual first, a sure one last)."""
     if entry.attempts == 0.0:
         return math.inf if entry.success < 1.0 else 0.0
     return (1.0 - entry.success) / entry.attempts
 
 
-class _Stop(Exception):
+class SplitStopped(Exception):
     """Raised when the residual budget or the time is exhausted."""
 
 
-class _Splitter:
-    def __init__(self, compiled: CompiledMdp, deadline: float, force: int = 2, oracle: _Splitter | None = None) -> None:
+class Splitter:
+    def __init__(self, compiled: CompiledMdp, deadline: float, force: int = 2, oracle: Splitter | None = None) -> None:
         self.c = compiled
         self.deadline = deadline
-        self.memo: dict[Key, _Entry] = {}
+        self.memo: dict[Key, Entry] = {}
         self.force = force  # which clean attempts are forced: 2 all, 1 the necessary parts', 0 none
         self.oracle = oracle  # gives each residual's exact success, the bound (a pass forcing every clean attempt)
         self.max_residuals = MAX_RESIDUALS if oracle is None else MAX_RESIDUALS // 4
@@ -116,13 +116,13 @@ class _Splitter:
         each other, or when one goal node still waiting depends on both.
         """
         c = self.c
-        open_mask = within & ~unusable & ~self.fits_moving_into(parts)
         waiting = tuple(key for key in keys if not self.holds(parts, key))
         if not waiting:
             return ()
-        open_mask = self.useful(parts, open_mask, waiting)
-        if open_mask is None or any(not self.key_fits[key] & open_mask for key in waiting):
+        useful = self.useful(parts, within & ~unusable & ~self.fits_moving_into(parts), waiting)
+        if useful is None or any(not self.key_fits[key] & useful for key in waiting):
             return None  # nothing open can make this goal node
+        open_mask = useful
         found: list[Key] = []
         remaining = open_mask
         while remaining:
@@ -305,17 +305,17 @@ class _Splitter:
             best = max(best, self.c.probability[low.bit_length() - 1])
         return best
 
-    def solve(self, residual: Key) -> _Entry:
+    def solve(self, residual: Key) -> Entry:
         known = self.memo.get(residual)
         if known is not None:
             return known
         if len(self.memo) >= self.max_residuals or time.monotonic() > self.deadline:
-            raise _Stop
+            raise SplitStopped
         within, keys, parts = residual
         c = self.c
         unusable = self.all_fits & ~within
         reach = c.reachable_parts(parts, unusable)
-        best = _Entry(0.0, 0.0, -1)
+        best = Entry(0.0, 0.0, -1)
         if all(self.holds(reach, key) for key in keys):
             options = []
             applicable = c.applicable(parts, unusable)
@@ -343,112 +343,8 @@ class _Splitter:
                     or (success > best.success - TIE and attempts < best.attempts - TIE)
                     or (success > best.success - TIE and attempts < best.attempts + TIE and index < best.action)
                 ):
-                    best = _Entry(success, attempts, index, after_success, after_failure)
+                    best = Entry(success, attempts, index, after_success, after_failure)
         if best.success == 0.0:
-            best = _Entry(0.0, 0.0, -1)  # nothing left to gain: the run ends here
+            best = Entry(0.0, 0.0, -1)  # nothing left to gain: the run ends here
         self.memo[residual] = best
         return best
-
-
-class SplitPolicy:
-    """The agenda policy: replay a state's outcomes from the start; the first fit not yet tried is next."""
-
-    def __init__(self, splitter: _Splitter, start: tuple[Key, ...]) -> None:
-        self.splitter = splitter
-        self.start = start
-
-    def agenda(self, state: State) -> tuple[list[Key], int]:
-        """Return the residuals still to run in ``state`` and the fit to attempt (-1: the run is over)."""
-        made, failed = state
-        agenda = list(self.start)
-        while agenda:
-            entry = self.splitter.memo[agenda[0]]
-            if entry.action < 0:
-                if entry.success == 0.0:
-                    return agenda, -1
-                agenda.pop(0)
-                continue
-            bit = 1 << entry.action
-            if made & bit:
-                agenda[:1] = entry.on_success
-            elif failed & bit:
-                agenda[:1] = entry.on_failure
-            else:
-                return agenda, entry.action
-        return agenda, -1
-
-    def __call__(self, state: State) -> int:
-        return self.agenda(state)[1]
-
-    def success(self, state: State) -> float:
-        """Return the policy's success probability from ``state``."""
-        agenda, _ = self.agenda(state)
-        return math.prod(self.splitter.memo[residual].success for residual in agenda)
-
-
-def solve_split(compiled: CompiledMdp, time_limit: float) -> MdpSolution | None:
-    """Return the exact solution by splitting after every attempt; None when it does not finish in time.
-
-    First with every clean attempt forced (``_Splitter.forced``): the most reliable policy,
-    proved, quickly. Its exact values then bound two finer passes, so only equally reliable
-    options are solved, for fewer expected attempts: nothing forced (a tenth of the time), else
-    only the necessary parts' clean attempts (a fifth). The policy with the fewest expected
-    attempts among the passes that finished is the answer (the success probability is the same).
-    """
-    started = time.monotonic()
-    deadline = started + time_limit
-    limit = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(limit, 8 * len(compiled.fits) + 200))
-    try:
-        first = splitter = _Splitter(compiled, deadline)
-        start = splitter.groups(compiled.base, 0, tuple(splitter.support), splitter.all_fits)
-        success, attempts, order = splitter.combined(start)
-        finer: list[_Splitter] = []
-        for force, share in ((0, 0.1), (1, 0.2)):
-            finer.append(_Splitter(compiled, min(deadline, time.monotonic() + share * time_limit), force, first))
-            try:
-                fine_success, fine_attempts, fine_order = finer[-1].combined(start)
-            except _Stop:
-                continue
-            if abs(fine_success - success) <= TIE and fine_attempts < attempts - TIE:
-                splitter, success, attempts, order = finer[-1], fine_success, fine_attempts, fine_order
-            if force == 0:
-                break  # nothing forced: the fewest attempts of this solver
-    except _Stop:
-        return None
-    finally:
-        sys.setrecursionlimit(limit)
-    residuals = len(first.memo) + sum(len(each.memo) for each in finer)
-    fits = compiled.fits
-    if success == 0.0:
-        return MdpSolution(
-            PlanStatus.UNSOLVABLE,
-            success_probability=0.0,
-            expected_actions=0.0,
-            states=residuals,
-            relevant_fits=len(fits),
-            message="No policy reaches the goal.",
-            success_upper=0.0,
-            fits=fits,
-        )
-    policy = SplitPolicy(splitter, order)
-    actions: list[tuple[str, tuple[str, ...]]] = []
-    made = 0
-    while (index := policy((made, 0))) >= 0:
-        actions.append((fits[index].primitive, (fits[index].moving_part, fits[index].fixed_part, fits[index].id)))
-        made |= 1 << index
-    return MdpSolution(
-        PlanStatus.SOLVED,
-        tuple(actions),
-        success,
-        attempts,
-        policy_entries(compiled, policy, policy.success),
-        residuals,
-        len(fits),
-        f"Proved the most reliable policy by splitting the rest into independent groups after every attempt "
-        f"({residuals:,} residual groups); the groups run whole, in Smith's ratio order.",
-        success_upper=success,
-        fits=fits,
-        decider=policy,
-        fewest_attempts=False,
-    )

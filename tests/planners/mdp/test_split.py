@@ -12,7 +12,7 @@ from causalplan.pddl.task import PlanningTask
 from causalplan.planners.mdp import solve_mdp
 from causalplan.planners.mdp.model import compile_mdp, relevant_fits
 from causalplan.planners.mdp.search import decide
-from causalplan.planners.mdp.split import solve_split
+from causalplan.planners.mdp.split_solve import solve_split
 from causalplan.planners.result import PlanStatus
 
 
