@@ -166,7 +166,8 @@ def solve_one(
     fewest attempts) on small problems within moments; the splitting solver (``split.py``)
     proves the most reliable policy where holders make the problem fall apart; whatever
     neither proves, the search (resumed where it stopped) answers with bounds in the time left.
-    ``search`` is one that already had its first share.
+    After a split answer the search has one more short share: where it closes, its answer
+    (the fewest attempts proved too) is kept. ``search`` is one that already had its first share.
     """
     started = time.monotonic()
     if search is None:
@@ -176,7 +177,10 @@ def solve_one(
             return first
     split = solve_split(compiled, SPLIT_SHARE * max(0.0, started + time_limit - time.monotonic()))
     if split is not None:
-        return split
+        # The split proves the reliability only; a search that closes a little later proves the fewest attempts too.
+        later = search.run(min(FIRST_SEARCH_SHARE * time_limit, max(0.0, started + time_limit - time.monotonic())))
+        closed = later.status is PlanStatus.SOLVED and later.optimality is Optimality.OPTIMAL
+        return later if closed and later.fewest_attempts else split
     return search.run(max(0.0, started + time_limit - time.monotonic()))
 
 
