@@ -269,10 +269,11 @@ class Splitter:
         """Return an attempt that loses no success probability when taken first (-1: none).
 
         A fit is *clean* when no usable fit of its part is more reliable and neither its success
-        nor its failure takes any open fit but its part's own. Attempting a clean fit now is as reliable as any
-        policy (docs/planners.md, "Forced attempts"): its outcome changes nothing for the other
-        fits, so any policy can be replayed after it, and having its part earlier only adds
-        options. Necessary parts (a waiting goal node cannot hold without them even if every
+        nor its failure takes any open fit but its part's own. Attempting a clean fit now is as
+        reliable as any policy (docs/planners.md, "Forced attempts"): its outcome changes nothing
+        for the other fits, so any policy can be replayed after it, and having its part earlier
+        only adds options. ``force`` says which are forced: 2 every clean fit, 1 the necessary
+        parts' only, 0 none. Necessary parts (a waiting goal node cannot hold without them even if every
         other open fit succeeded) go first, the least likely first (the most likely to end the
         run, Smith's rule for single tests); then the other clean fits, the most likely first.
         """
