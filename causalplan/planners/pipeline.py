@@ -272,6 +272,7 @@ def _mdp_figures(outcome: SearchOutcome) -> dict[str, object] | None:
         "required_success": outcome.required_success,
         "optimality": outcome.optimality,
         "states": outcome.states,
+        "fewest_attempts": outcome.fewest_attempts,
     }
     if outcome.success_bounds is not None:
         low, high = outcome.success_bounds

@@ -57,6 +57,7 @@ class SearchOutcome:
     success_bounds: tuple[float, float] | None = None  # lower and upper bound on the success probability
     required_success: float | None = None
     states: int | None = None  # states the MDP solver stored
+    fewest_attempts: bool | None = None  # the MDP's: whether the expected attempts are proved the fewest
 
 
 @dataclass(frozen=True)

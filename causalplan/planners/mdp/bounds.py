@@ -17,8 +17,10 @@ parts, with probability ``q = 1 - prod(1 - max p)`` over the part's connectors. 
   is tested after that part (an out-forest of precedences). Two carriers of which one is
   needed (an OR of the rules: the goal fails without both) are one test, passed if either
   is. A route onto a holder that must join first also needs that holder (and its own single
-  holder, and so on) to join: their chances multiply the route's, as long as no other test
-  draws on the same holders. The cheapest order of tests with forest precedences is found by merging the best ratio
+  holder, and so on) to join: their chances multiply the route's. A holder that several
+  tests' routes go through is counted in the first of them only (the others' walks stop
+  before it), so the tests draw on disjoint parts and their chances still multiply. The
+  cheapest order of tests with forest precedences is found by merging the best ratio
   ``(1 - q) / expected cost`` into its parent (Horn's rule, as in Garey 1973).
 
 The bound is exact at the goal (1) and at dead ends (-1), and exact whenever the remaining
@@ -248,18 +250,24 @@ def bound(compiled: CompiledMdp, parts: int, unusable: int, known_necessary: int
         chances[first] = 1.0 - miss
         paired |= first | second
     # A necessary part's routes through holders that must join first count those holders'
-    # chances, up to the first holder another test draws on too (the tests stay independent:
-    # a second walk stops earlier, so it only keeps holders no one else claimed).
-    chained = {bit: _chained_chance(compiled, bit, parts | necessary, unusable, reach) for bit in _bits(necessary)}
-    shared = paired
-    claimed = 0
-    for _, chain in chained.values():
-        shared |= claimed & chain
-        claimed |= chain
-    for bit, (chance, chain) in chained.items():
-        if chain & shared:  # walk again, stopping before the holders others draw on too
-            chance = _chained_chance(compiled, bit, parts | necessary | shared, unusable, reach)[0]
-        chances[bit] = chance
+    # chances. Each holder is counted once: the first test (in bit order) whose walk reaches
+    # it keeps it, later walks stop before it, so the tests draw on disjoint parts and stay
+    # independent (a shared holder counted in no test was the loose spot before).
+    claimed = paired
+    if compiled.holders_counted_once:
+        for bit in _bits(necessary):
+            chances[bit], chain = _chained_chance(compiled, bit, parts | necessary | claimed, unusable, reach)
+            claimed |= chain
+    else:  # the earlier bound, kept to measure the difference (benchmarks/mdp.py)
+        chained = {bit: _chained_chance(compiled, bit, parts | necessary, unusable, reach) for bit in _bits(necessary)}
+        shared, seen = paired, 0
+        for _, chain in chained.values():
+            shared |= seen & chain
+            seen |= chain
+        for bit, (chance, chain) in chained.items():
+            if chain & shared:  # walk again, stopping before the holders others draw on too
+                chance = _chained_chance(compiled, bit, parts | necessary | shared, unusable, reach)[0]
+            chances[bit] = chance
     success = 1.0
     for chance in chances.values():
         success *= chance

@@ -31,7 +31,7 @@ from causalplan.planners.mdp.components import Component, independent_components
 from causalplan.planners.mdp.exact import solve_compiled_mdp
 from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, Optimality, State, compile_mdp, policy_entries
 from causalplan.planners.mdp.search import ResumableSearch, decide, tie_breaking_step_cost
-from causalplan.planners.mdp.split import solve_split
+from causalplan.planners.mdp.split_solve import solve_split
 from causalplan.planners.result import PlanStatus
 
 EXACT_FITS = 10
@@ -151,7 +151,7 @@ def _chain(compiled: CompiledMdp, solution: MdpSolution, step_cost: float) -> tu
     return tuple(path)
 
 
-FIRST_SEARCH_SHARE = 0.2
+FIRST_SEARCH_SHARE = 0.05
 """The share of a component's time the heuristic search has first (it proves small components quickly)."""
 SPLIT_SHARE = 0.5
 """The share of what is left that the splitting solver has next, before the search has the rest."""
@@ -166,7 +166,8 @@ def solve_one(
     fewest attempts) on small problems within moments; the splitting solver (``split.py``)
     proves the most reliable policy where holders make the problem fall apart; whatever
     neither proves, the search (resumed where it stopped) answers with bounds in the time left.
-    ``search`` is one that already had its first share.
+    After a split answer the search has one more short share: where it closes, its answer
+    (the fewest attempts proved too) is kept. ``search`` is one that already had its first share.
     """
     started = time.monotonic()
     if search is None:
@@ -176,7 +177,10 @@ def solve_one(
             return first
     split = solve_split(compiled, SPLIT_SHARE * max(0.0, started + time_limit - time.monotonic()))
     if split is not None:
-        return split
+        # The split proves the reliability only; a search that closes a little later proves the fewest attempts too.
+        later = search.run(min(FIRST_SEARCH_SHARE * time_limit, max(0.0, started + time_limit - time.monotonic())))
+        closed = later.status is PlanStatus.SOLVED and later.optimality is Optimality.OPTIMAL
+        return later if closed and later.fewest_attempts else split
     return search.run(max(0.0, started + time_limit - time.monotonic()))
 
 

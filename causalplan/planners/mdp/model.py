@@ -98,6 +98,7 @@ class CompiledMdp:
     cutting_pairs: list[tuple[int, int]] | None = None  # worked out once by ``bounds``
     completions: dict[State, Completion] = field(default_factory=dict)  # kept by ``completion``
     completion_dead_ends: set[tuple[int, int]] = field(default_factory=set)  # (parts, unusable) with none
+    holders_counted_once: bool = True  # False: the earlier, looser bound (shared holders counted nowhere)
 
     def goal_holds(self, parts: int) -> bool:
         """Return whether the goal (the model's, or every one of ``goal_keys``) holds with ``parts`` assembled."""
@@ -273,4 +274,7 @@ def search_outcome(solution: MdpSolution, seconds: float) -> SearchOutcome:
         success_bounds=bounds,
         required_success=solution.required_success,
         states=solution.states,
+        fewest_attempts=solution.fewest_attempts and solution.optimality is Optimality.OPTIMAL
+        if solution.status is PlanStatus.SOLVED
+        else None,
     )

@@ -86,12 +86,14 @@ def solve_for(
     The MDP is compiled once: every solve of the bisection shares it (and its goal cache).
     """
     solve: Solver = solve_compiled_mdp if exact else search_compiled_mdp
-    if objective is Objective.PROBABILITY and not exact:
-        solve = solve_by_components  # the product of independent components' optima: see composed.py
+    # The most reliable policy (and, for ``attempts``, whether ``required_success`` is reachable
+    # at all) by the independent components and splitting (composed.py); the bisection's steps
+    # weigh attempts against success, which only the plain search and the exact solver optimise.
+    most_reliable: Solver = solve_compiled_mdp if exact else solve_by_components
     deadline = time.monotonic() + time_limit
     compiled = compile_mdp(task, relevant_fits(task))
     step_cost = tie_breaking_step_cost(compiled)
-    reliable = solve(compiled, max(0.0, deadline - time.monotonic()), step_cost)
+    reliable = most_reliable(compiled, max(0.0, deadline - time.monotonic()), step_cost)
     if objective is Objective.PROBABILITY:
         return reliable
     assert required_success is not None

@@ -7,7 +7,9 @@ once a holder is on, the subtrees on its sockets are independent. This solver me
 attached parts they depend on), not whole states: a tree of holders is solved as a product
 of small pieces, where the state graph has exponentially many states.
 
-At each residual it tries every applicable fit of its group, splits each outcome's residual
+At each residual it tries the applicable fits of its group (one clean fit only, where forcing
+applies: ``Splitter.forced``; fits that can no longer help are dropped: ``Splitter.useful``),
+splits each outcome's residual
 into independent groups, and combines them: the success probability is the product (proved
 as for the components), and the groups run one after another, whole, in decreasing
 ``(1 - success) / attempts`` (Smith's ratio rule), which gives the fewest expected attempts
@@ -15,21 +17,19 @@ among such orders. The attempt kept is the most reliable, then the one with the 
 expected attempts. The policy is the *agenda* of groups: ``decide`` replays the outcomes of a
 state from the start, so it follows exactly the policy whose figures were computed.
 
-It is exhaustive inside a group that does not split, so it stops (``None``) beyond
-``MAX_RESIDUALS`` residuals or at the time limit, and the caller falls back to the heuristic search.
+It is exhaustive inside a group that does not split, so it stops (``SplitStopped``) beyond its
+residual budget or at the time limit. ``split_solve.py`` runs its passes and turns the memo into a policy.
 """
 
 from __future__ import annotations
 
 import math
-import sys
 import time
 from dataclasses import dataclass
 
 from causalplan.causal.graph import active_nodes
 from causalplan.planners.mdp.components import goal_conjuncts
-from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, State, policy_entries
-from causalplan.planners.result import PlanStatus
+from causalplan.planners.mdp.model import CompiledMdp
 
 MAX_RESIDUALS = 400_000
 TIE = 1e-12
@@ -39,7 +39,7 @@ Key = tuple[int, tuple[str, ...], int]
 
 
 @dataclass(frozen=True)
-class _Entry:
+class Entry:
     success: float
     attempts: float
     action: int  # -1: done (its goal holds) or dead
@@ -47,22 +47,25 @@ class _Entry:
     on_failure: tuple[Key, ...] = ()
 
 
-def _ratio(entry: _Entry) -> float:
+def _ratio(entry: Entry) -> float:
     """Smith's ratio: the chance of failing per expected attempt (a dead residual first, a sure one last)."""
     if entry.attempts == 0.0:
         return math.inf if entry.success < 1.0 else 0.0
     return (1.0 - entry.success) / entry.attempts
 
 
-class _Stop(Exception):
+class SplitStopped(Exception):
     """Raised when the residual budget or the time is exhausted."""
 
 
-class _Splitter:
-    def __init__(self, compiled: CompiledMdp, deadline: float) -> None:
+class Splitter:
+    def __init__(self, compiled: CompiledMdp, deadline: float, force: int = 2, oracle: Splitter | None = None) -> None:
         self.c = compiled
         self.deadline = deadline
-        self.memo: dict[Key, _Entry] = {}
+        self.memo: dict[Key, Entry] = {}
+        self.force = force  # which clean attempts are forced: 2 all, 1 the necessary parts', 0 none
+        self.oracle = oracle  # gives each residual's exact success, the bound (a pass forcing every clean attempt)
+        self.max_residuals = MAX_RESIDUALS if oracle is None else MAX_RESIDUALS // 4
         conjuncts = goal_conjuncts(compiled) or {}
         part_bit = {part_id: 1 << index for index, part_id in enumerate(compiled.task.obj.part_ids)}
         keys = compiled.goal_keys or tuple(conjuncts) or (compiled.task.goal_key,)
@@ -113,12 +116,13 @@ class _Splitter:
         each other, or when one goal node still waiting depends on both.
         """
         c = self.c
-        open_mask = within & ~unusable & ~self.fits_moving_into(parts)
         waiting = tuple(key for key in keys if not self.holds(parts, key))
         if not waiting:
             return ()
-        if any(not self.key_fits[key] & open_mask for key in waiting):
+        useful = self.useful(parts, within & ~unusable & ~self.fits_moving_into(parts), waiting)
+        if useful is None or any(not self.key_fits[key] & useful for key in waiting):
             return None  # nothing open can make this goal node
+        open_mask = useful
         found: list[Key] = []
         remaining = open_mask
         while remaining:
@@ -148,6 +152,43 @@ class _Splitter:
                 found.append((group, own, parts & depends))
         return tuple(sorted(found))
 
+    def useful(self, parts: int, open_mask: int, waiting: tuple[str, ...]) -> int | None:
+        """Return the open fits that can still help a waiting goal node; None when one can no longer hold.
+
+        A fit whose holder can never join is dropped, and so is one whose part neither carries
+        a waiting goal node's function nor holds (by open fits) a part that leads to one:
+        attaching such a part only takes connectors, so no policy loses by never trying it.
+        Dropping them lets the rest fall apart into smaller groups, and makes residuals that
+        differ only in dead fits one.
+        """
+        c = self.c
+        reach = c.reachable_parts(parts, self.all_fits & ~open_mask)
+        if not all(self.holds(reach, key) for key in waiting):
+            return None
+        kept, bits = 0, open_mask
+        while bits:
+            low = bits & -bits
+            bits ^= low
+            if c.fixed[low.bit_length() - 1] & reach:
+                kept |= low
+        needed = 0
+        for key in waiting:
+            needed |= self.support[key]
+        needed &= reach & ~parts
+        frontier = needed
+        while frontier:
+            low = frontier & -frontier
+            frontier ^= low
+            holders = self.fits_of_bit.get(low, 0) & kept
+            while holders:
+                fit = holders & -holders
+                holders ^= fit
+                holder = c.fixed[fit.bit_length() - 1]
+                if not (holder & (needed | parts)):
+                    needed |= holder
+                    frontier |= holder
+        return kept & self.fits_moving_into(needed)
+
     def fits_moving_into(self, parts: int) -> int:
         """Return the fits whose moving part is among ``parts`` (attached: nothing left to attach)."""
         mask = 0
@@ -171,34 +212,40 @@ class _Splitter:
         return success, attempts, tuple(residual for _, residual in solved)
 
     def upper(self, residuals: tuple[Key, ...] | None) -> float:
-        """Return an upper bound on the success of running ``residuals`` (independent, so a product).
-
-        A goal node still waiting needs one more of the parts under it to join, and a part joins
-        only by one of its own draws (one per connector of its own, at best its most reliable
-        open fit's). Draws of different parts are independent, so over goal nodes with disjoint
-        parts the chances multiply.
-        """
+        """Return an upper bound on the success of running ``residuals`` (independent, so a product)."""
         if residuals is None:
             return 0.0
         bound = 1.0
         for residual in residuals:
-            known = self.memo.get(residual)
-            if known is not None:
-                bound *= known.success
+            if self.oracle is not None:
+                bound *= self.oracle.solve(residual).success  # exact: only equally reliable options are solved
                 continue
-            within, keys, parts = residual
-            counted = 0
-            for key in keys:
-                carriers = self.support[key] & ~parts
-                if carriers & counted:
-                    continue
-                counted |= carriers
-                missing, bits = 1.0, carriers
-                while bits:
-                    low = bits & -bits
-                    bits ^= low
-                    missing *= 1.0 - self.chance(low, within)
-                bound *= 1.0 - missing
+            known = self.memo.get(residual)
+            bound *= known.success if known is not None else self.residual_upper(residual)
+        return bound
+
+    def residual_upper(self, residual: Key) -> float:
+        """Return an upper bound on one residual's success.
+
+        A goal node still waiting needs one more of the parts under it to join, and a part joins
+        only by one of its own draws (one per connector of its own, at best its most reliable
+        open fit's). Draws of different parts are independent, so over goal nodes with disjoint
+        parts the chances multiply. (Counting the necessary parts on the way too made the bound
+        tighter but pruned no more residuals once clean attempts are forced, at six times the cost.)
+        """
+        within, keys, parts = residual
+        bound, counted = 1.0, 0
+        for key in keys:
+            carriers = self.support[key] & ~parts
+            if carriers & counted:
+                continue
+            counted |= carriers
+            missing, bits = 1.0, carriers
+            while bits:
+                low = bits & -bits
+                bits ^= low
+                missing *= 1.0 - self.chance(low, within)
+            bound *= 1.0 - missing
         return bound
 
     def chance(self, part: int, within: int) -> float:
@@ -218,20 +265,63 @@ class _Splitter:
             self.chance_cache[fits] = known
         return known
 
-    def solve(self, residual: Key) -> _Entry:
+    def forced(self, applicable: list[int], parts: int, unusable: int, keys: tuple[str, ...], within: int) -> int:
+        """Return an attempt that loses no success probability when taken first (-1: none).
+
+        A fit is *clean* when no usable fit of its part is more reliable and neither its success
+        nor its failure takes any open fit but its part's own. Attempting a clean fit now is as
+        reliable as any policy (docs/planners.md, "Forced attempts"): its outcome changes nothing
+        for the other fits, so any policy can be replayed after it, and having its part earlier
+        only adds options. ``force`` says which are forced: 2 every clean fit, 1 the necessary
+        parts' only, 0 none. Necessary parts (a waiting goal node cannot hold without them even if every
+        other open fit succeeded) go first, the least likely first (the most likely to end the
+        run, Smith's rule for single tests); then the other clean fits, the most likely first.
+        """
+        c = self.c
+        open_fits = within & ~unusable
+        best, best_rank = -1, (2, 0.0)
+        if not self.force:
+            return best
+        for index in applicable:
+            own = self.fits_of_bit[c.moving[index]]
+            taken = (c.taken_on_success[index] | c.taken_on_failure[index]) & open_fits & ~own
+            p = c.probability[index]
+            if taken or p < self.best_chance(open_fits & own):
+                continue
+            rank = (1, -p)
+            if p < best_rank[1] or best_rank[0] > 0:
+                reach = c.reachable_parts(parts, unusable, without=c.moving[index])
+                if not all(self.holds(reach, key) for key in keys):
+                    rank = (0, p)
+            if rank < best_rank and rank[0] < self.force:
+                best, best_rank = index, rank
+        return best
+
+    def best_chance(self, fits: int) -> float:
+        """Return the highest probability among ``fits``."""
+        best, bits = 0.0, fits
+        while bits:
+            low = bits & -bits
+            bits ^= low
+            best = max(best, self.c.probability[low.bit_length() - 1])
+        return best
+
+    def solve(self, residual: Key) -> Entry:
         known = self.memo.get(residual)
         if known is not None:
             return known
-        if len(self.memo) >= MAX_RESIDUALS or time.monotonic() > self.deadline:
-            raise _Stop
+        if len(self.memo) >= self.max_residuals or time.monotonic() > self.deadline:
+            raise SplitStopped
         within, keys, parts = residual
         c = self.c
         unusable = self.all_fits & ~within
         reach = c.reachable_parts(parts, unusable)
-        best = _Entry(0.0, 0.0, -1)
+        best = Entry(0.0, 0.0, -1)
         if all(self.holds(reach, key) for key in keys):
             options = []
-            for index in c.applicable(parts, unusable):
+            applicable = c.applicable(parts, unusable)
+            forced = self.forced(applicable, parts, unusable, keys, within)
+            for index in applicable if forced < 0 else (forced,):
                 p = c.probability[index]
                 won = self.groups(parts | c.moving[index], unusable | c.taken_on_success[index], keys, within)
                 lost = self.groups(parts, unusable | c.taken_on_failure[index], keys, within) if p < 1.0 else None
@@ -254,91 +344,8 @@ class _Splitter:
                     or (success > best.success - TIE and attempts < best.attempts - TIE)
                     or (success > best.success - TIE and attempts < best.attempts + TIE and index < best.action)
                 ):
-                    best = _Entry(success, attempts, index, after_success, after_failure)
+                    best = Entry(success, attempts, index, after_success, after_failure)
         if best.success == 0.0:
-            best = _Entry(0.0, 0.0, -1)  # nothing left to gain: the run ends here
+            best = Entry(0.0, 0.0, -1)  # nothing left to gain: the run ends here
         self.memo[residual] = best
         return best
-
-
-class SplitPolicy:
-    """The agenda policy: replay a state's outcomes from the start; the first fit not yet tried is next."""
-
-    def __init__(self, splitter: _Splitter, start: tuple[Key, ...]) -> None:
-        self.splitter = splitter
-        self.start = start
-
-    def agenda(self, state: State) -> tuple[list[Key], int]:
-        """Return the residuals still to run in ``state`` and the fit to attempt (-1: the run is over)."""
-        made, failed = state
-        agenda = list(self.start)
-        while agenda:
-            entry = self.splitter.memo[agenda[0]]
-            if entry.action < 0:
-                if entry.success == 0.0:
-                    return agenda, -1
-                agenda.pop(0)
-                continue
-            bit = 1 << entry.action
-            if made & bit:
-                agenda[:1] = entry.on_success
-            elif failed & bit:
-                agenda[:1] = entry.on_failure
-            else:
-                return agenda, entry.action
-        return agenda, -1
-
-    def __call__(self, state: State) -> int:
-        return self.agenda(state)[1]
-
-    def success(self, state: State) -> float:
-        """Return the policy's success probability from ``state``."""
-        agenda, _ = self.agenda(state)
-        return math.prod(self.splitter.memo[residual].success for residual in agenda)
-
-
-def solve_split(compiled: CompiledMdp, time_limit: float) -> MdpSolution | None:
-    """Return the exact solution by splitting after every attempt; None when it does not finish in time."""
-    splitter = _Splitter(compiled, time.monotonic() + time_limit)
-    limit = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(limit, 8 * len(compiled.fits) + 200))
-    try:
-        start = splitter.groups(compiled.base, 0, tuple(splitter.support), splitter.all_fits)
-        success, attempts, order = splitter.combined(start)
-    except _Stop:
-        return None
-    finally:
-        sys.setrecursionlimit(limit)
-    fits = compiled.fits
-    if success == 0.0:
-        return MdpSolution(
-            PlanStatus.UNSOLVABLE,
-            success_probability=0.0,
-            expected_actions=0.0,
-            states=len(splitter.memo),
-            relevant_fits=len(fits),
-            message="No policy reaches the goal.",
-            success_upper=0.0,
-            fits=fits,
-        )
-    policy = SplitPolicy(splitter, order)
-    actions: list[tuple[str, tuple[str, ...]]] = []
-    made = 0
-    while (index := policy((made, 0))) >= 0:
-        actions.append((fits[index].primitive, (fits[index].moving_part, fits[index].fixed_part, fits[index].id)))
-        made |= 1 << index
-    return MdpSolution(
-        PlanStatus.SOLVED,
-        tuple(actions),
-        success,
-        attempts,
-        policy_entries(compiled, policy, policy.success),
-        len(splitter.memo),
-        len(fits),
-        f"Proved the most reliable policy by splitting the rest into independent groups after every attempt "
-        f"({len(splitter.memo):,} residual groups); the groups run whole, in Smith's ratio order.",
-        success_upper=success,
-        fits=fits,
-        decider=policy,
-        fewest_attempts=False,
-    )

@@ -140,7 +140,8 @@ def test_the_most_reliable_policy_is_not_traded_for_fewer_attempts_when_success_
 
 
 def test_an_anytime_plan_says_so_in_its_json() -> None:
-    task = _with_probabilities(synthetic_task(120, 0), 120)
+    # 142 relevant fits whose alternatives keep the splitting solver from finishing in seconds.
+    task = _with_probabilities(synthetic_task(320, 2), 322)
     data = plan_task(task, "mdp", 2.0).as_dict()
     assert data["status"] == "solved" and data["optimality"] == "bounded" and data["objective"] == "probability"
     low, high = data["success_probability_bounds"]  # type: ignore[misc]
@@ -148,6 +149,14 @@ def test_an_anytime_plan_says_so_in_its_json() -> None:
         high - low, abs=2e-6
     )  # each rounded to 6 places
     assert data["expected_actions"] is None and "no policy does better" in str(data["message"])
+
+
+def test_the_json_says_whether_the_attempts_are_proved_fewest() -> None:
+    # The search closes on the small tree (fewest proved); the split solver proves only the reliability.
+    closed = plan_task(_with_probabilities(synthetic_task(12, 1), 12), "mdp", 30.0).as_dict()
+    split = plan_task(_with_probabilities(synthetic_task(120, 0), 120), "mdp", 30.0).as_dict()
+    assert closed["optimality"] == split["optimality"] == "optimal"
+    assert closed["fewest_attempts"] is True and split["fewest_attempts"] is False
 
 
 def test_it_stops_optimal_as_soon_as_the_bounds_meet() -> None:

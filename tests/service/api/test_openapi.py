@@ -99,7 +99,9 @@ def test_the_plan_and_transfer_fields_the_service_returns_are_declared() -> None
     components = DOCUMENT["components"]["schemas"]
     plan = components["PlanOut"]
     assert {"success_probability", "expected_actions", "fallback_reason", "validated_by_up"} <= set(plan["required"])
-    assert {"policy", "objective", "optimality", "success_probability_bounds"} <= set(plan["properties"])
+    assert {"policy", "objective", "optimality", "success_probability_bounds", "fewest_attempts"} <= set(
+        plan["properties"]
+    )
     transfer = components["TransferOut"]["properties"]
     assert transfer["simulation"]["anyOf"][0] == {"$ref": "#/components/schemas/SimulationSummaryOut"}
     assert transfer["planning"]["anyOf"][0] == {"$ref": "#/components/schemas/PlanResultOut"}

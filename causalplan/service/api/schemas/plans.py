@@ -148,6 +148,11 @@ class PlanResultOut(OutputModel):
         default=None, description="'optimal' (proved) or 'bounded' (the time limit came first)."
     )
     states: int | None = Field(default=None, description="States the MDP solver stored.")
+    fewest_attempts: bool | None = Field(
+        default=None,
+        description="Whether the expected attempts are proved the fewest among the most reliable policies "
+        "(false: they are the returned policy's, exact, but another equally reliable policy may need fewer).",
+    )
     success_probability_bounds: list[float] | None = Field(
         default=None, min_length=2, max_length=2, description="Lower and upper bound on the success probability."
     )
