@@ -29,10 +29,11 @@ def test_a_part_the_object_does_not_have_is_an_error() -> None:
     assert "error[unknown_part]: The desk lamp has no part 'batteries'" in result.stderr
 
 
-def test_an_unreadable_question_names_the_grammar() -> None:
+def test_an_unreadable_question_offers_questions_it_can_answer() -> None:
     result = run("explain", FAILED_DESK_LAMP, "--why-not", "make it brighter")
     assert result.exit_code == 2
-    assert "error[invalid_question]" in result.stderr and "PART before PART" in result.stderr
+    assert "error[invalid_question]" in result.stderr and "It can answer, for example:" in result.stderr
+    assert "Why not leave out the light bulb?" in result.stderr  # in the object's words, never an id
 
 
 def test_transfer_repair_lists_the_heads_missing_function() -> None:

@@ -36,7 +36,7 @@ def model_and_mapping(catalog: Catalog) -> tuple[CausalModel, Labelling]:
 
 
 def test_every_entry_is_named_by_its_name_and_crosses_to_a_worker() -> None:
-    assert len(WORK) == 15
+    assert len(WORK) == 17
     for name, work in WORK.items():
         assert work.name == name
         assert pickle.loads(pickle.dumps(work.function)) is work.function  # sent by reference
@@ -55,12 +55,21 @@ def test_each_pool_has_its_work() -> None:
             "robot_playback",
             "simulation",
             "transfer",
+            "troubleshooting",
         ],
-        Pool.JOBS: ["consensus", "film_of_fits", "film_of_plan", "fit_estimate", "judged_trials", "queued_simulation"],
+        Pool.JOBS: [
+            "consensus",
+            "film_of_fits",
+            "film_of_plan",
+            "fit_estimate",
+            "judged_trials",
+            "queued_simulation",
+            "queued_troubleshooting",
+        ],
         Pool.ISOLATED: ["probe"],
     }
     kept = sorted(name for name, work in WORK.items() if work.is_final is not None)
-    assert kept == ["plan", "simulation", "transfer"]
+    assert kept == ["plan", "simulation", "transfer", "troubleshooting"]
 
 
 def test_time_limits_follow_the_request_and_the_settings(model_and_mapping: tuple[CausalModel, Labelling]) -> None:
