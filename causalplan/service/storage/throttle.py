@@ -176,6 +176,9 @@ class WindowCounter:
                         session.commit()
                         return self.admit(client)
                     counted = 1
+                elif existing < self.per_window:  # counted by another replica between our update and this read
+                    session.commit()
+                    return self.admit(client)
             session.commit()
             if counted:
                 return None
