@@ -23,6 +23,7 @@ plan that fails replay.
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 
@@ -288,8 +289,13 @@ def _solution(
             fits=fits,
         )
     deadline = started + time_limit
-    evaluation = proved or evaluate_policy(compiled, step_cost, _policy_table(search, root), _start(root), deadline)
-    if optimality is Optimality.OPTIMAL and evaluation.success == 0.0:  # as the exact solver says it
+    table = _policy_table(search, root)
+    evaluation = proved or evaluate_policy(compiled, step_cost, table, _start(root), deadline)
+    if optimality is Optimality.OPTIMAL and not evaluation.exact:
+        # The search finished, so its policy is evaluated whole even past the deadline (the state
+        # cap still bounds it): a deadline-cut evaluation would call a solvable task unsolvable.
+        evaluation = evaluate_policy(compiled, step_cost, table, _start(root), math.inf)
+    if optimality is Optimality.OPTIMAL and evaluation.exact and evaluation.success == 0.0:  # as mdp-exact says it
         return MdpSolution(
             PlanStatus.UNSOLVABLE,
             success_probability=0.0,

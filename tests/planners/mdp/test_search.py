@@ -167,3 +167,11 @@ def test_it_stops_optimal_as_soon_as_the_bounds_meet() -> None:
     assert solution.success_probability == pytest.approx(family.success_probability, rel=1e-9)
     assert solution.expected_actions is not None and not solution.fewest_attempts
     assert solution.states < 1000
+
+
+def test_a_search_out_of_time_never_calls_a_solvable_task_unsolvable(catalog: Catalog) -> None:
+    # A finished search's policy evaluated past the deadline, not cut at it: cut, its success
+    # read 0.0 and the desk lamp came back "unsolvable" at the smallest time limit.
+    task = build_task(example_model("paper/desk_lamp.yaml", catalog), catalog.objects["desk_lamp"])
+    statuses = {plan_task(task, "mdp", 0.001).status for _ in range(40)}
+    assert PlanStatus.UNSOLVABLE not in statuses
