@@ -33,7 +33,7 @@ from __future__ import annotations
 import heapq
 from dataclasses import dataclass
 
-from causalplan.planners.mdp.model import CompiledMdp
+from causalplan.planners.mdp.model import CompiledMdp, single_bits
 
 
 @dataclass(frozen=True)
@@ -49,15 +49,6 @@ class Bound:
 
 GOAL = Bound(1.0, 1.0, 0, False, True)
 DEAD_END = Bound(-1.0, 0.0, 0, True, False)
-
-
-def _bits(mask: int) -> list[int]:
-    bits = []
-    while mask:
-        low = mask & -mask
-        bits.append(low)
-        mask ^= low
-    return bits
 
 
 def cheapest_test_cost(chances: dict[int, float], parent: dict[int, int]) -> float:
@@ -167,7 +158,7 @@ def _lost_without(compiled: CompiledMdp, parts: int, unusable: int, reach: int) 
     seen, frontier = parts, parts
     while frontier:
         new = 0
-        for holder in _bits(frontier):
+        for holder in single_bits(frontier):
             for index in compiled.fits_onto_part.get(holder, ()):
                 moving = compiled.moving[index]
                 if not unusable >> index & 1 and not (seen | new) & moving:
@@ -191,7 +182,7 @@ def _lost_without(compiled: CompiledMdp, parts: int, unusable: int, reach: int) 
                 changed = True
     lost = {bit: 0 for bit in order}
     for bit, above in dominators.items():
-        for dominator in _bits(above):
+        for dominator in single_bits(above):
             lost[dominator] |= bit
     return lost
 
@@ -203,7 +194,7 @@ def _cutting_pairs(compiled: CompiledMdp) -> list[tuple[int, int]]:
         reach = compiled.reachable_parts(parts, 0)
         carriers = [
             bit
-            for bit in _bits(reach & ~parts)
+            for bit in single_bits(reach & ~parts)
             if bit in compiled.functions_of_part
             and compiled.goal_holds(compiled.reachable_parts(parts, 0, without=bit))
         ]
@@ -231,11 +222,11 @@ def bound(compiled: CompiledMdp, parts: int, unusable: int, known_necessary: int
     candidates = reach & ~parts & ~necessary
     if candidates:
         lost = _lost_without(compiled, parts, unusable, reach)
-        for bit in _bits(candidates):
+        for bit in single_bits(candidates):
             if not compiled.goal_holds(reach & ~lost[bit]):
                 necessary |= bit
     parent: dict[int, int] = {}
-    for bit in _bits(necessary):
+    for bit in single_bits(necessary):
         holders = {compiled.fixed[index] for index in _usable_fits(compiled, bit, unusable, reach)}
         if len(holders) == 1 and (holder := holders.pop()) & necessary:
             parent[bit] = holder
@@ -255,11 +246,13 @@ def bound(compiled: CompiledMdp, parts: int, unusable: int, known_necessary: int
     # independent (a shared holder counted in no test was the loose spot before).
     claimed = paired
     if compiled.holders_counted_once:
-        for bit in _bits(necessary):
+        for bit in single_bits(necessary):
             chances[bit], chain = _chained_chance(compiled, bit, parts | necessary | claimed, unusable, reach)
             claimed |= chain
     else:  # the earlier bound, kept to measure the difference (benchmarks/mdp.py)
-        chained = {bit: _chained_chance(compiled, bit, parts | necessary, unusable, reach) for bit in _bits(necessary)}
+        chained = {
+            bit: _chained_chance(compiled, bit, parts | necessary, unusable, reach) for bit in single_bits(necessary)
+        }
         shared, seen = paired, 0
         for _, chain in chained.values():
             shared |= seen & chain

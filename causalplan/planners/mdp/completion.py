@@ -22,7 +22,7 @@ import time
 from dataclasses import dataclass
 
 from causalplan.planners.mdp.bounds import bound
-from causalplan.planners.mdp.model import STEP_COST, CompiledMdp, Completion, State
+from causalplan.planners.mdp.model import STEP_COST, CompiledMdp, Completion, State, single_bits
 
 NODES_PER_FIT = 4
 """The depth-first search's budget: this many states per relevant fit; beyond it, no completion."""
@@ -42,7 +42,7 @@ def _sockets_suffice(compiled: CompiledMdp, necessary: int, unusable: int) -> bo
     parts to connectors (Kuhn's augmenting paths) sees a cycle of shared sockets at once.
     """
     options: dict[int, list[tuple[int, str]]] = {}
-    for bit in _bits(necessary):
+    for bit in single_bits(necessary):
         options[bit] = [
             (compiled.fixed[index], compiled.fits[index].fixed_connector)
             for index in compiled.fits_of_part.get(bit, ())
@@ -61,15 +61,6 @@ def _sockets_suffice(compiled: CompiledMdp, necessary: int, unusable: int) -> bo
         return False
 
     return all(place(bit, set()) for bit in options)
-
-
-def _bits(mask: int) -> list[int]:
-    bits = []
-    while mask:
-        low = mask & -mask
-        bits.append(low)
-        mask ^= low
-    return bits
 
 
 def _search(compiled: CompiledMdp, parts: int, unusable: int, step_cost: float) -> tuple[int, ...] | None:

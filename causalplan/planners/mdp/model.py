@@ -50,6 +50,16 @@ class Optimality(StrEnum):
     BOUNDED = "bounded"  # the limit came first: the best policy so far, its success probability bounded
 
 
+def single_bits(mask: int) -> list[int]:
+    """Return the set bits of ``mask`` as one-bit masks, lowest first."""
+    bits = []
+    while mask:
+        low = mask & -mask
+        bits.append(low)
+        mask ^= low
+    return bits
+
+
 def relevant_fits(task: PlanningTask) -> tuple[Fit, ...]:
     """Return the fits that can matter: attaching parts that carry a used function, or lead to them."""
     obj = task.obj
