@@ -29,7 +29,17 @@ from dataclasses import dataclass
 
 from causalplan.planners.mdp.components import Component, independent_components
 from causalplan.planners.mdp.exact import solve_compiled_mdp
-from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, Optimality, State, compile_mdp, policy_entries
+from causalplan.planners.mdp.model import (
+    CompiledMdp,
+    MdpSolution,
+    Optimality,
+    State,
+    all_success_path,
+    compile_mdp,
+    out_of_time,
+    policy_entries,
+    unsolvable,
+)
 from causalplan.planners.mdp.search import ResumableSearch, decide, tie_breaking_step_cost
 from causalplan.planners.mdp.split_solve import solve_split
 from causalplan.planners.result import PlanStatus
@@ -253,38 +263,21 @@ def _combined(compiled: CompiledMdp, solved: list[SolvedComponent], started: flo
     sizes = ", ".join(str(len(part.component.fits)) for part in solved)
     split = f"{len(solved)} independent components ({sizes} fits)"
     if PlanStatus.UNSOLVABLE in statuses:
-        return MdpSolution(
-            PlanStatus.UNSOLVABLE,
-            success_probability=0.0,
-            expected_actions=0.0,
-            states=states,
-            relevant_fits=len(fits),
-            message=f"No policy reaches the goal: one of {split} cannot succeed.",
-            success_upper=0.0,
-            fits=fits,
-        )
+        return unsolvable(fits, states, f"No policy reaches the goal: one of {split} cannot succeed.")
     upper = math.prod(part.solution.success_upper or 0.0 for part in solved)
     if statuses != {PlanStatus.SOLVED}:
-        return MdpSolution(
-            PlanStatus.TIMEOUT,
-            states=states,
-            relevant_fits=len(fits),
-            message=f"The time limit ({time_limit:g} s) came before every one of {split} had a plan; "
+        return out_of_time(
+            fits,
+            states,
+            f"The time limit ({time_limit:g} s) came before every one of {split} had a plan; "
             f"no policy does better than {upper:.4f}.",
-            optimality=Optimality.BOUNDED,
-            success_upper=upper,
-            fits=fits,
+            upper,
         )
     success = math.prod(part.solution.success_probability or 0.0 for part in solved)
     optimal = all(part.solution.optimality is Optimality.OPTIMAL for part in solved)
     modules = schedule(solved) if optimal else [Module(number, -1, 0.0, 0.0) for number in range(len(solved))]
     policy = ComposedPolicy(solved, modules)
-    actions: list[tuple[str, tuple[str, ...]]] = []
-    made = 0
-    while (index := policy((made, 0))) >= 0:
-        fit = fits[index]
-        actions.append((fit.primitive, (fit.moving_part, fit.fixed_part, fit.id)))
-        made |= 1 << index
+    actions, _ = all_success_path(fits, policy)
 
     def success_at(state: State) -> float:
         return math.prod(part.solution.state_success.get(part.local(state), 0.0) for part in solved)
@@ -304,7 +297,7 @@ def _combined(compiled: CompiledMdp, solved: list[SolvedComponent], started: flo
         )
     return MdpSolution(
         PlanStatus.SOLVED,
-        tuple(actions),
+        actions,
         success,
         expected_attempts(modules) if optimal else None,
         policy_entries(compiled, policy, success_at),

@@ -19,6 +19,7 @@ from causalplan.planners.mdp.model import (
     CompiledMdp,
     MdpSolution,
     State,
+    all_success_path,
     compile_mdp,
     policy_entries,
     relevant_fits,
@@ -139,15 +140,9 @@ def solve_compiled_mdp(compiled: CompiledMdp, time_limit: float, step_cost: floa
         )
     table = {state: value.action for state, value in solver.values.items() if value.action >= 0}
     successes = {state: value.success for state, value in solver.values.items()}
-    actions: list[tuple[str, tuple[str, ...]]] = []
-    made, failed = start
-    while (value := solver.values[(made, failed)]).action >= 0:
-        fit = fits[value.action]
-        actions.append((fit.primitive, (fit.moving_part, fit.fixed_part, fit.id)))
-        made |= 1 << value.action
     return MdpSolution(
         PlanStatus.SOLVED,
-        tuple(actions),
+        all_success_path(fits, lambda state: solver.values[state].action)[0],
         root.success,
         root.attempts,
         policy_entries(compiled, lambda state: table.get(state, -1), lambda state: successes.get(state, 0.0)),

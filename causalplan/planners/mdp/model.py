@@ -26,6 +26,7 @@ from enum import StrEnum
 
 from causalplan.causal.graph import active_nodes
 from causalplan.objects.model import Fit
+from causalplan.pddl.canonical import Action
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.result import PlanStatus, SearchOutcome
 
@@ -217,7 +218,7 @@ class MdpSolution:
     """
 
     status: PlanStatus
-    actions: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    actions: tuple[Action, ...] = ()
     success_probability: float | None = None
     expected_actions: float | None = None
     policy: tuple[dict[str, object], ...] = ()
@@ -233,6 +234,44 @@ class MdpSolution:
     state_success: dict[State, float] = field(default_factory=dict, repr=False, compare=False)
     fewest_attempts: bool = True  # the expected attempts are proved the fewest among the most reliable policies
     decider: Callable[[State], int] | None = field(default=None, repr=False, compare=False)
+
+
+def unsolvable(fits: tuple[Fit, ...], states: int, message: str) -> MdpSolution:
+    """Return the answer that no policy reaches the goal: success 0, proved (its upper bound is 0 too)."""
+    return MdpSolution(
+        PlanStatus.UNSOLVABLE,
+        success_probability=0.0,
+        expected_actions=0.0,
+        states=states,
+        relevant_fits=len(fits),
+        message=message,
+        success_upper=0.0,
+        fits=fits,
+    )
+
+
+def out_of_time(fits: tuple[Fit, ...], states: int, message: str, upper: float) -> MdpSolution:
+    """Return the answer that the limit came before a plan that reaches the goal; ``upper`` bounds every policy."""
+    return MdpSolution(
+        PlanStatus.TIMEOUT,
+        states=states,
+        relevant_fits=len(fits),
+        message=message,
+        optimality=Optimality.BOUNDED,
+        success_upper=upper,
+        fits=fits,
+    )
+
+
+def all_success_path(fits: tuple[Fit, ...], decide: Callable[[State], int]) -> tuple[tuple[Action, ...], int]:
+    """Return the attempts ``decide`` makes from the start when every one succeeds, and the fits made then."""
+    actions: list[Action] = []
+    made = 0
+    while (index := decide((made, 0))) >= 0:
+        fit = fits[index]
+        actions.append((fit.primitive, (fit.moving_part, fit.fixed_part, fit.id)))
+        made |= 1 << index
+    return tuple(actions), made
 
 
 def policy_entries(

@@ -27,6 +27,7 @@ import math
 import sys
 import time
 
+from causalplan.pddl.canonical import Action
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.mdp.bounds import DEAD_END, Bound, bound
 from causalplan.planners.mdp.completion import Evaluation, completion, default_attempt, evaluate_policy
@@ -36,9 +37,12 @@ from causalplan.planners.mdp.model import (
     MdpSolution,
     Optimality,
     State,
+    all_success_path,
     compile_mdp,
+    out_of_time,
     policy_entries,
     relevant_fits,
+    unsolvable,
 )
 from causalplan.planners.result import PlanStatus
 
@@ -200,19 +204,13 @@ def decide(compiled: CompiledMdp, solution: MdpSolution, state: State, step_cost
     return default_attempt(compiled, state, step_cost)
 
 
-def _all_success_path(
-    compiled: CompiledMdp, table: dict[State, int], step_cost: float
-) -> tuple[tuple[str, tuple[str, ...]], ...] | None:
+def _all_success_path(compiled: CompiledMdp, table: dict[State, int], step_cost: float) -> tuple[Action, ...] | None:
     """Return the policy's attempts (``table``, then the default) when all succeed; None unless the goal holds."""
-    actions: list[tuple[str, tuple[str, ...]]] = []
-    made = 0
-    while (index := table.get((made, 0), -2)) >= 0 or (
-        index == -2 and (index := default_attempt(compiled, (made, 0), step_cost)) >= 0
-    ):
-        fit = compiled.fits[index]
-        actions.append((fit.primitive, (fit.moving_part, fit.fixed_part, fit.id)))
-        made |= 1 << index
-    return tuple(actions) if compiled.goal_holds(compiled.parts_of((made, 0))[0]) else None
+    actions, made = all_success_path(
+        compiled.fits,
+        lambda state: table[state] if state in table else default_attempt(compiled, state, step_cost),
+    )
+    return actions if compiled.goal_holds(compiled.parts_of((made, 0))[0]) else None
 
 
 def solve_mdp_search(task: PlanningTask, time_limit: float = 10.0, step_cost: float = STEP_COST) -> MdpSolution:
@@ -278,16 +276,7 @@ def _solution(
 ) -> MdpSolution:
     compiled, fits, step_cost = search.c, search.c.fits, search.step_cost
     if root.solved and root.success == 0.0:
-        return MdpSolution(
-            PlanStatus.UNSOLVABLE,
-            success_probability=0.0,
-            expected_actions=0.0,
-            states=search.expanded,
-            relevant_fits=len(fits),
-            message="No policy reaches the goal: even if every attempt succeeded.",
-            success_upper=0.0,
-            fits=fits,
-        )
+        return unsolvable(fits, search.expanded, "No policy reaches the goal: even if every attempt succeeded.")
     deadline = started + time_limit
     table = _policy_table(search, root)
     evaluation = proved or evaluate_policy(compiled, step_cost, table, _start(root), deadline)
@@ -296,16 +285,7 @@ def _solution(
         # cap still bounds it): a deadline-cut evaluation would call a solvable task unsolvable.
         evaluation = evaluate_policy(compiled, step_cost, table, _start(root), math.inf)
     if optimality is Optimality.OPTIMAL and evaluation.exact and evaluation.success == 0.0:  # as mdp-exact says it
-        return MdpSolution(
-            PlanStatus.UNSOLVABLE,
-            success_probability=0.0,
-            expected_actions=0.0,
-            states=search.expanded,
-            relevant_fits=len(fits),
-            message="The optimal policy never reaches the goal.",
-            success_upper=0.0,
-            fits=fits,
-        )
+        return unsolvable(fits, search.expanded, "The optimal policy never reaches the goal.")
     path = _all_success_path(compiled, evaluation.table, step_cost)
     if path is None:  # an optimum that counts on a failure (never seen): not a plan to replay
         optimality = Optimality.BOUNDED
@@ -318,15 +298,12 @@ def _solution(
             path = _all_success_path(compiled, {}, step_cost)
     upper = root.success
     if path is None:
-        return MdpSolution(
-            PlanStatus.TIMEOUT,
-            states=search.expanded,
-            relevant_fits=len(fits),
-            message=f"The time limit ({time_limit:g} s) or the state budget came first after {search.expanded:,} "
+        return out_of_time(
+            fits,
+            search.expanded,
+            f"The time limit ({time_limit:g} s) or the state budget came first after {search.expanded:,} "
             f"expansions, before a plan that reaches the goal was found; no policy does better than {upper:.4f}.",
-            optimality=Optimality.BOUNDED,
-            success_upper=upper,
-            fits=fits,
+            upper,
         )
     success = evaluation.success
     message = ""

@@ -11,7 +11,7 @@ import math
 import sys
 import time
 
-from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, State, policy_entries
+from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, State, all_success_path, policy_entries, unsolvable
 from causalplan.planners.mdp.split import TIE, Key, SplitStopped, Splitter
 from causalplan.planners.result import PlanStatus
 
@@ -87,25 +87,11 @@ def solve_split(compiled: CompiledMdp, time_limit: float) -> MdpSolution | None:
     residuals = len(first.memo) + sum(len(each.memo) for each in finer)
     fits = compiled.fits
     if success == 0.0:
-        return MdpSolution(
-            PlanStatus.UNSOLVABLE,
-            success_probability=0.0,
-            expected_actions=0.0,
-            states=residuals,
-            relevant_fits=len(fits),
-            message="No policy reaches the goal.",
-            success_upper=0.0,
-            fits=fits,
-        )
+        return unsolvable(fits, residuals, "No policy reaches the goal.")
     policy = SplitPolicy(splitter, order)
-    actions: list[tuple[str, tuple[str, ...]]] = []
-    made = 0
-    while (index := policy((made, 0))) >= 0:
-        actions.append((fits[index].primitive, (fits[index].moving_part, fits[index].fixed_part, fits[index].id)))
-        made |= 1 << index
     return MdpSolution(
         PlanStatus.SOLVED,
-        tuple(actions),
+        all_success_path(fits, policy)[0],
         success,
         attempts,
         policy_entries(compiled, policy, policy.success),
