@@ -13,11 +13,9 @@ Only open-loop plans are reordered; an MDP's policy fixes its own order.
 
 from __future__ import annotations
 
+from causalplan.pddl.canonical import Action
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.replay import AssemblyState
-
-Action = tuple[str, tuple[str, ...]]
-"""A plan's action: the primitive and (moving part, fixed part, fit id)."""
 
 
 def _waits(task: PlanningTask, planned: list[str]) -> dict[str, list[str]]:
