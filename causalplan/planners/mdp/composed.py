@@ -46,6 +46,9 @@ from causalplan.planners.result import PlanStatus
 
 EXACT_FITS = 10
 """Components with at most this many fits are solved by ``mdp-exact`` (it stores every state, a few thousand)."""
+EXACT_SHARE = 0.5
+"""The share of such a component's time ``mdp-exact`` has; should it not finish, ``solve_one`` has the whole
+share again (so the component can overrun its share by this much)."""
 
 
 @dataclass(frozen=True)
@@ -200,7 +203,7 @@ def _solve_component(compiled: CompiledMdp, component: Component, count: int, ti
     step_cost = tie_breaking_step_cost(own) / count
     solution: MdpSolution | None = None
     if len(fits) <= EXACT_FITS:
-        solution = solve_compiled_mdp(own, time_limit / 2, step_cost)
+        solution = solve_compiled_mdp(own, EXACT_SHARE * time_limit, step_cost)
         if solution.status is not PlanStatus.SOLVED:
             solution = None
     if solution is None:

@@ -48,7 +48,9 @@ from causalplan.planners.result import PlanStatus
 
 MAX_NODES = 1_000_000
 SEARCH_SHARE = 0.9
+"""The share of the time limit the search has; the rest evaluates the policy it returns."""
 MIN_SUCCESS_SCALE = 1e-9
+"""The least success probability ``tie_breaking_step_cost`` scales by (so the step cost never vanishes)."""
 PROOF_PRECISION = 1e-9
 """The optimum is proved when the returned policy's success probability is within this share of the bound."""
 FIRST_CHECK = 64

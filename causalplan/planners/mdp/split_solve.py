@@ -15,6 +15,11 @@ from causalplan.planners.mdp.model import CompiledMdp, MdpSolution, State, all_s
 from causalplan.planners.mdp.split import TIE, Key, SplitStopped, Splitter
 from causalplan.planners.result import PlanStatus
 
+FINER_PASSES = ((0, 0.1), (1, 0.2))
+"""The passes after the first: (``Splitter.force``, their share of the time). Nothing forced
+branches the most, so it has the smaller share; when it finishes its attempts are this
+solver's fewest and the second pass is skipped."""
+
 
 class SplitPolicy:
     """The agenda policy: replay a state's outcomes from the start; the first fit not yet tried is next."""
@@ -70,7 +75,7 @@ def solve_split(compiled: CompiledMdp, time_limit: float) -> MdpSolution | None:
         start = splitter.groups(compiled.base, 0, tuple(splitter.support), splitter.all_fits)
         success, attempts, order = splitter.combined(start)
         finer: list[Splitter] = []
-        for force, share in ((0, 0.1), (1, 0.2)):
+        for force, share in FINER_PASSES:
             finer.append(Splitter(compiled, min(deadline, time.monotonic() + share * time_limit), force, first))
             try:
                 fine_success, fine_attempts, fine_order = finer[-1].combined(start)
