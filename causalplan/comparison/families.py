@@ -31,7 +31,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from causalplan.causal.diagnostics import Location
 from causalplan.causal.model import CausalModel, Labelling
@@ -84,27 +84,56 @@ def _chance(rng: random.Random, low: float, high: float) -> float:
     return round(rng.uniform(low, high), 2)
 
 
+@dataclass
+class _Lamp:
+    """A lamp being built: the base with one socket per group, and the parts, fits and rules added to it."""
+
+    groups: int
+    parts: list[Part] = field(default_factory=list)
+    fits: list[Fit] = field(default_factory=list)
+    mechanism: list[Requirement] = field(default_factory=list)
+    functions: dict[str, tuple[str, ...]] = field(default_factory=lambda: {"base": (BASE_FUNCTION,)})
+    texts: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.parts.append(_plug("base", "base", tuple(f"socket_{j}" for j in range(1, self.groups + 1))))
+
+    def task(self, ready: list[str], obj_id: str, name: str, description: str, explanation: str) -> PlanningTask:
+        """Return the task: the goal made from every ``ready`` effect, the model's rules, the object."""
+        obj = AssemblyObject(
+            id=obj_id,
+            name=name,
+            category="electric",
+            goal=GOAL,
+            description=description,
+            base="base",
+            parts=tuple(self.parts),
+            fits=tuple(self.fits),
+            mechanism=tuple(self.mechanism),
+            mechanism_explanation=explanation,
+        )
+        model = CausalModel(Labelling(obj.id, self.functions), GOAL, _rules([*self.texts, *_chained_goal(ready)]))
+        return build_task(model, obj)
+
+
 def independent_components(count: int, seed: int = 0) -> KnownOptimum:
     """Return ``count`` independent five-part components (see the module's docstring) and their optimum."""
     rng = random.Random(f"components/{count}/{seed}")
-    base = _plug("base", "base", tuple(f"socket_{j}" for j in range(1, count + 1)))
-    parts, fits, mechanism = [base], [], []
-    functions: dict[str, tuple[str, ...]] = {"base": (BASE_FUNCTION,)}
-    texts: list[str] = []
+    lamp = _Lamp(count)
     optimum = 1.0
     for j in range(1, count + 1):
         h, x, y, u, v = (f"c{j:02d}_{name}" for name in ("h", "x", "y", "u", "v"))
         p_h, p_v = _chance(rng, 0.85, 0.99), _chance(rng, 0.7, 0.99)
         p_x1, p_x2 = _chance(rng, 0.5, 0.9), _chance(rng, 0.5, 0.9)
         p_y, p_u2, p_u = _chance(rng, 0.5, 0.9), _chance(rng, 0.5, 0.9), _chance(rng, 0.3, 0.6)
-        parts += [
+        lamp.parts += [
             _plug(h, f"holder {j}", ("plug", "s1", "s2", "s3", "s4", "s5")),
             _plug(x, f"switch {j}", ("plug_a", "plug_b")),
             _plug(y, f"cable {j}", ("plug",)),
             _plug(u, f"spare cable {j}", ("plug",)),
             _plug(v, f"lens {j}", ("plug",)),
         ]
-        fits += [
+        lamp.fits += [
             Fit(f"{h}_on_base", "insert", h, "plug", "base", f"socket_{j}", p_h),
             Fit(f"{x}_a", "plug", x, "plug_a", h, "s1", p_x1),
             Fit(f"{x}_b", "plug", x, "plug_b", h, "s2", p_x2),
@@ -113,20 +142,20 @@ def independent_components(count: int, seed: int = 0) -> KnownOptimum:
             Fit(f"{u}_own", "connect", u, "plug", h, "s4", p_u2),
             Fit(f"{v}_on_h", "insert", v, "plug", h, "s5", p_v),
         ]
-        mechanism += [
+        lamp.mechanism += [
             Requirement((f"{h}_on_base",), f"holder {j} is on the base"),
             Requirement((f"{x}_a", f"{x}_b"), f"switch {j} is plugged in"),
             Requirement((f"{y}_shared", f"{u}_shared", f"{u}_own"), f"a cable of component {j} is connected"),
             Requirement((f"{v}_on_h",), f"lens {j} is in"),
         ]
-        functions |= {
+        lamp.functions |= {
             h: (f"hold component {j}",),
             x: (f"switch current {j}",),
             y: (f"carry current {j}",),
             u: (f"carry spare current {j}",),
             v: (f"focus light {j}",),
         }
-        texts += [
+        lamp.texts += [
             f"{BASE_FUNCTION} AND hold component {j} AND switch current {j} AND focus light {j} "
             f"CAUSES circuit {j} is closed",
             f"carry current {j} CAUSES current {j} flows",
@@ -134,21 +163,14 @@ def independent_components(count: int, seed: int = 0) -> KnownOptimum:
             f"circuit {j} is closed AND current {j} flows CAUSES component {j} works",
         ]
         optimum *= p_h * (1 - (1 - p_x1) * (1 - p_x2)) * (1 - (1 - p_y) * (1 - p_u2)) * p_v
-    texts += _chained_goal([f"component {j} works" for j in range(1, count + 1)])
-    obj = AssemblyObject(
-        id=f"components_{count}_{seed}",
-        name=f"lamp of {count} independent components (seed {seed})",
-        category="electric",
-        goal=GOAL,
-        description=f"{count} five-part components, each on its own socket of the base.",
-        base="base",
-        parts=tuple(parts),
-        fits=tuple(fits),
-        mechanism=tuple(mechanism),
-        mechanism_explanation="Every component works: its holder, switch and lens in, and one of its cables.",
+    task = lamp.task(
+        [f"component {j} works" for j in range(1, count + 1)],
+        f"components_{count}_{seed}",
+        f"lamp of {count} independent components (seed {seed})",
+        f"{count} five-part components, each on its own socket of the base.",
+        "Every component works: its holder, switch and lens in, and one of its cables.",
     )
-    model = CausalModel(Labelling(obj.id, functions), GOAL, _rules(texts))
-    return KnownOptimum(build_task(model, obj), optimum)
+    return KnownOptimum(task, optimum)
 
 
 def cyclic_components(count: int, seed: int = 0) -> KnownOptimum:
@@ -162,93 +184,73 @@ def cyclic_components(count: int, seed: int = 0) -> KnownOptimum:
     round half-way and strand the last part.
     """
     rng = random.Random(f"cyclic/{count}/{seed}")
-    base = _plug("base", "base", tuple(f"socket_{j}" for j in range(1, count + 1)))
-    parts, fits, mechanism = [base], [], []
-    functions: dict[str, tuple[str, ...]] = {"base": (BASE_FUNCTION,)}
-    texts: list[str] = []
+    lamp = _Lamp(count)
     optimum = 1.0
     for j in range(1, count + 1):
         h = f"r{j:02d}_h"
         p_h = _chance(rng, 0.85, 0.99)
-        parts.append(_plug(h, f"ring {j}", ("plug", "s1", "s2", "s3", "s4")))
-        fits.append(Fit(f"{h}_on_base", "insert", h, "plug", "base", f"socket_{j}", p_h))
-        mechanism.append(Requirement((f"{h}_on_base",), f"ring {j} is on the base"))
-        functions[h] = (f"hold ring {j}",)
+        lamp.parts.append(_plug(h, f"ring {j}", ("plug", "s1", "s2", "s3", "s4")))
+        lamp.fits.append(Fit(f"{h}_on_base", "insert", h, "plug", "base", f"socket_{j}", p_h))
+        lamp.mechanism.append(Requirement((f"{h}_on_base",), f"ring {j} is on the base"))
+        lamp.functions[h] = (f"hold ring {j}",)
         rotations = [1.0, 1.0]
         for k, name in enumerate("abcd"):
             part = f"r{j:02d}_{name}"
-            parts.append(_plug(part, f"contact {j}{name}", ("plug",)))
+            lamp.parts.append(_plug(part, f"contact {j}{name}", ("plug",)))
             own, next_one = k + 1, (k + 1) % 4 + 1
             chances = (_chance(rng, 0.6, 0.95), _chance(rng, 0.6, 0.95))
-            fits += [
+            lamp.fits += [
                 Fit(f"{part}_s{own}", "clip", part, "plug", h, f"s{own}", chances[0]),
                 Fit(f"{part}_s{next_one}", "clip", part, "plug", h, f"s{next_one}", chances[1]),
             ]
             rotations = [rotations[0] * chances[0], rotations[1] * chances[1]]
-            mechanism.append(Requirement((f"{part}_s{own}", f"{part}_s{next_one}"), f"contact {j}{name} is in"))
-            functions[part] = (f"touch ring {j} {name}",)
-        texts.append(
+            lamp.mechanism.append(Requirement((f"{part}_s{own}", f"{part}_s{next_one}"), f"contact {j}{name} is in"))
+            lamp.functions[part] = (f"touch ring {j} {name}",)
+        lamp.texts.append(
             f"hold ring {j} AND "
             + " AND ".join(f"touch ring {j} {name}" for name in "abcd")
             + f" CAUSES ring {j} conducts"
         )
         optimum *= p_h * max(rotations)
-    texts += _chained_goal([f"ring {j} conducts" for j in range(1, count + 1)])
-    obj = AssemblyObject(
-        id=f"rings_{count}_{seed}",
-        name=f"lamp of {count} rings of contacts (seed {seed})",
-        category="electric",
-        goal=GOAL,
-        description=f"{count} rings, each a holder on its own socket of the base with four contacts around it.",
-        base="base",
-        parts=tuple(parts),
-        fits=tuple(fits),
-        mechanism=tuple(mechanism),
-        mechanism_explanation="Every ring is on the base with its four contacts in.",
+    task = lamp.task(
+        [f"ring {j} conducts" for j in range(1, count + 1)],
+        f"rings_{count}_{seed}",
+        f"lamp of {count} rings of contacts (seed {seed})",
+        f"{count} rings, each a holder on its own socket of the base with four contacts around it.",
+        "Every ring is on the base with its four contacts in.",
     )
-    model = CausalModel(Labelling(obj.id, functions), GOAL, _rules(texts))
-    return KnownOptimum(build_task(model, obj), optimum)
+    return KnownOptimum(task, optimum)
 
 
 def riskiest_first_chains(count: int, length: int, seed: int = 0) -> KnownOptimum:
     """Return ``count`` chains of ``length`` needed parts (see the module's docstring) and their optimum."""
     rng = random.Random(f"chains/{count}/{length}/{seed}")
-    base = _plug("base", "base", tuple(f"socket_{c}" for c in range(1, count + 1)))
-    parts, fits, mechanism = [base], [], []
-    functions: dict[str, tuple[str, ...]] = {"base": (BASE_FUNCTION,)}
-    texts: list[str] = []
+    lamp = _Lamp(count)
     chances: list[float] = []
     for c in range(1, count + 1):
         along = sorted(_chance(rng, 0.6, 0.999) for _ in range(length))
         holder, socket = "base", f"socket_{c}"
         for k, p in enumerate(along, start=1):
             part = f"k{c:02d}_{k:02d}"
-            parts.append(_plug(part, f"link {c}.{k}", ("plug", "socket")))
-            fits.append(Fit(f"{part}_in", "insert", part, "plug", holder, socket, p))
-            mechanism.append(Requirement((f"{part}_in",), f"link {c}.{k} is in"))
-            functions[part] = (f"pass current {c} {k}",)
+            lamp.parts.append(_plug(part, f"link {c}.{k}", ("plug", "socket")))
+            lamp.fits.append(Fit(f"{part}_in", "insert", part, "plug", holder, socket, p))
+            lamp.mechanism.append(Requirement((f"{part}_in",), f"link {c}.{k} is in"))
+            lamp.functions[part] = (f"pass current {c} {k}",)
             holder, socket = part, "socket"
-        texts.append(
+        lamp.texts.append(
             " AND ".join(f"pass current {c} {k}" for k in range(1, length + 1)) + f" CAUSES chain {c} conducts"
         )
         chances += along
-    texts += _chained_goal([f"chain {c} conducts" for c in range(1, count + 1)])
-    obj = AssemblyObject(
-        id=f"chains_{count}x{length}_{seed}",
-        name=f"lamp of {count} chains of {length} links (seed {seed})",
-        category="electric",
-        goal=GOAL,
-        description=f"{count} chains of {length} links, each chain on its own socket of the base.",
-        base="base",
-        parts=tuple(parts),
-        fits=tuple(fits),
-        mechanism=tuple(mechanism),
-        mechanism_explanation="Every link of every chain is in.",
+    task = lamp.task(
+        [f"chain {c} conducts" for c in range(1, count + 1)],
+        f"chains_{count}x{length}_{seed}",
+        f"lamp of {count} chains of {length} links (seed {seed})",
+        f"{count} chains of {length} links, each chain on its own socket of the base.",
+        "Every link of every chain is in.",
     )
-    model = CausalModel(Labelling(obj.id, functions), GOAL, _rules(texts))
     ordered = sorted(chances)
     attempts = sum(math.prod(ordered[:k]) for k in range(len(ordered)))
-    return KnownOptimum(build_task(model, obj), math.prod(chances), attempts)
+    return KnownOptimum(task, math.prod(chances), attempts)
 
 
 def uncertain_tree(n_parts: int, uncertain: int, seed: int = 0) -> PlanningTask:
