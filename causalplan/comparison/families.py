@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 from causalplan.causal.diagnostics import Location
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.causal.rules import Rule, parse_rule
-from causalplan.comparison.synthetic import synthetic_task
+from causalplan.comparison.synthetic import object_document, synthetic_task
 from causalplan.objects.model import AssemblyObject, Connector, Fit, Part, Requirement
 from causalplan.pddl.task import PlanningTask, build_task
 from causalplan.planners.mdp.model import relevant_fits
@@ -267,44 +267,10 @@ def uncertain_tree(n_parts: int, uncertain: int, seed: int = 0) -> PlanningTask:
 
 def documents(task: PlanningTask) -> tuple[dict[str, object], dict[str, object]]:
     """Return the task's object and model as the documents a user writes (object file, model file)."""
-    obj = task.obj
-    fits = []
-    for fit in obj.fits:
-        entry: dict[str, object] = {
-            "id": fit.id,
-            "primitive": fit.primitive,
-            "moving": f"{fit.moving_part}.{fit.moving_connector}",
-            "fixed": f"{fit.fixed_part}.{fit.fixed_connector}",
-            "probability": fit.probability,
-        }
-        if fit.blocks:
-            entry["blocks"] = [f"{part}.{connector}" for part, connector in fit.blocks]
-        fits.append(entry)
-    object_document: dict[str, object] = {
-        "id": obj.id,
-        "name": obj.name,
-        "category": obj.category,
-        "goal": obj.goal,
-        "description": obj.description,
-        "base": obj.base,
-        "parts": [
-            {
-                "id": part.id,
-                "name": part.name,
-                "connectors": [{"id": c.id, "kind": c.kind, "spec": c.spec} for c in part.connectors],
-            }
-            for part in obj.parts
-        ],
-        "fits": fits,
-        "mechanism": {
-            "explanation": obj.mechanism_explanation,
-            "requires": [{"any": list(item.any_of), "says": item.says} for item in obj.mechanism],
-        },
-    }
     model_document: dict[str, object] = {
-        "object": obj.id,
+        "object": task.obj.id,
         "goal": task.goal,
         "functions": {part: list(labels) for part, labels in task.labelling.functions.items()},
         "rules": [rule.text for rule in task.rules],
     }
-    return object_document, model_document
+    return object_document(task.obj), model_document

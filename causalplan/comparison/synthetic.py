@@ -278,6 +278,42 @@ def synthetic_model(obj: AssemblyObject, seed: int = 0) -> CausalModel:
     return CausalModel(Labelling(obj.id, functions), GOAL, tuple(rules))
 
 
+def object_document(obj: AssemblyObject) -> dict[str, object]:
+    """Return ``obj`` as the catalog's object file holds it (``objects/schema.py``)."""
+    return {
+        "id": obj.id,
+        "name": obj.name,
+        "category": obj.category,
+        "goal": obj.goal,
+        "description": obj.description,
+        "base": obj.base,
+        "parts": [
+            {
+                "id": part.id,
+                "name": part.name,
+                "connectors": [{"id": c.id, "kind": c.kind, "spec": c.spec} for c in part.connectors],
+            }
+            for part in obj.parts
+        ],
+        "fits": [
+            {
+                "id": fit.id,
+                "primitive": fit.primitive,
+                "moving": f"{fit.moving_part}.{fit.moving_connector}",
+                "fixed": f"{fit.fixed_part}.{fit.fixed_connector}",
+                "probability": fit.probability,
+                "blocks": [f"{part}.{connector}" for part, connector in fit.blocks],
+                **({"text": fit.text} if fit.text is not None else {}),
+            }
+            for fit in obj.fits
+        ],
+        "mechanism": {
+            "explanation": obj.mechanism_explanation,
+            "requires": [{"any": list(req.any_of), "says": req.says} for req in obj.mechanism],
+        },
+    }
+
+
 def synthetic_task(n_parts: int, seed: int = 0) -> PlanningTask:
     """Return the planning task of the synthetic object and model of this size and seed."""
     obj = synthetic_object(n_parts, seed)

@@ -7,9 +7,8 @@ from pathlib import Path
 
 import yaml
 
-from causalplan.comparison.synthetic import synthetic_model, synthetic_object
+from causalplan.comparison.synthetic import object_document, synthetic_model, synthetic_object
 from tests.cli.test_cli import DESK_LAMP, FAILED_DESK_LAMP, run, write
-from tests.comparison.test_synthetic import object_as_dict
 
 
 def write_synthetic(folder: Path, parts: int) -> tuple[Path, Path]:
@@ -17,7 +16,7 @@ def write_synthetic(folder: Path, parts: int) -> tuple[Path, Path]:
     obj = synthetic_object(parts)
     catalog = folder / "catalog"
     catalog.mkdir()
-    (catalog / f"{obj.id}.yaml").write_text(yaml.safe_dump(object_as_dict(obj), sort_keys=False), encoding="utf-8")
+    (catalog / f"{obj.id}.yaml").write_text(yaml.safe_dump(object_document(obj), sort_keys=False), encoding="utf-8")
     model = synthetic_model(obj)
     functions = {part: list(labels) for part, labels in model.labelling.functions.items()}
     data = {"object": obj.id, "goal": model.goal, "functions": functions, "rules": [r.text for r in model.rules]}

@@ -9,6 +9,7 @@ from causalplan.causal.graph import goal_holds
 from causalplan.causal.validation import ObjectSummary, validate_model
 from causalplan.comparison.synthetic import (
     GOAL,
+    object_document,
     synthetic_model,
     synthetic_object,
     synthetic_task,
@@ -20,42 +21,6 @@ from causalplan.pddl.task import PlanningTask
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanStatus
-
-
-def object_as_dict(obj: AssemblyObject) -> dict[str, object]:
-    """Return ``obj`` in the catalog's file schema, to check it as the catalog checks object files."""
-    return {
-        "id": obj.id,
-        "name": obj.name,
-        "category": obj.category,
-        "goal": obj.goal,
-        "description": obj.description,
-        "base": obj.base,
-        "parts": [
-            {
-                "id": part.id,
-                "name": part.name,
-                "connectors": [{"id": c.id, "kind": c.kind, "spec": c.spec} for c in part.connectors],
-            }
-            for part in obj.parts
-        ],
-        "fits": [
-            {
-                "id": fit.id,
-                "primitive": fit.primitive,
-                "moving": f"{fit.moving_part}.{fit.moving_connector}",
-                "fixed": f"{fit.fixed_part}.{fit.fixed_connector}",
-                "probability": fit.probability,
-                "blocks": [f"{part}.{connector}" for part, connector in fit.blocks],
-                **({"text": fit.text} if fit.text is not None else {}),
-            }
-            for fit in obj.fits
-        ],
-        "mechanism": {
-            "explanation": obj.mechanism_explanation,
-            "requires": [{"any": list(req.any_of), "says": req.says} for req in obj.mechanism],
-        },
-    }
 
 
 def _primary_parents(obj: AssemblyObject) -> dict[str, str]:
@@ -114,7 +79,7 @@ def test_sizes_outside_two_to_four_hundred_are_refused() -> None:
 
 def test_the_object_is_a_valid_catalog_object_shaped_like_a_tree() -> None:
     obj = synthetic_object(80)
-    assert build_object(ObjectSchema.model_validate(object_as_dict(obj))) == obj  # ids, specs, blocks all check
+    assert build_object(ObjectSchema.model_validate(object_document(obj))) == obj  # ids, specs, blocks all check
     parents = _primary_parents(obj)
     assert sorted(parents) == sorted(obj.part_ids[1:])  # every part but the base has a fit
     assert all(obj.part_ids.index(parent) < obj.part_ids.index(part) for part, parent in parents.items())
