@@ -170,10 +170,7 @@ def evaluate_policy(
             exact[0] = False
             return 0.0, 0.0
         else:
-            index = table.get(state)
-            if index is None:
-                found = completion(c, state, step_cost)
-                index = found.fits[0] if found.fits else -1
+            index = table[state] if state in table else default_attempt(c, state, step_cost)
             if index < 0:
                 result = (0.0, 0.0)
             else:
