@@ -20,7 +20,6 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass
 
-from causalplan.causal.graph import active_nodes
 from causalplan.planners.mdp.model import CompiledMdp
 
 
@@ -96,7 +95,7 @@ def independent_components(compiled: CompiledMdp) -> list[Component]:
         for other in range(len(fits)):
             if excluded >> other & 1:
                 graph.add_edge(fit.moving_part, fits[other].moving_part)
-    from_base = active_nodes(compiled.functions_of_part.get(compiled.base, frozenset()), compiled.task.rules)
+    from_base = compiled.active(compiled.base)
     for key, parts in list(conjuncts.items()):
         inside = sorted(part for part in parts if part in graph)
         if not inside:

@@ -111,15 +111,19 @@ class CompiledMdp:
     completion_dead_ends: set[tuple[int, int]] = field(default_factory=set)  # (parts, unusable) with none
     holders_counted_once: bool = True  # False: the earlier, looser bound (shared holders counted nowhere)
 
+    def active(self, parts: int) -> set[str]:
+        """Return the model's nodes that hold with ``parts`` assembled (their functions, and what they cause)."""
+        functions: set[str] = set()
+        for bit, keys in self.functions_of_part.items():
+            if parts & bit:
+                functions |= keys
+        return active_nodes(functions, self.task.rules)
+
     def goal_holds(self, parts: int) -> bool:
         """Return whether the goal (the model's, or every one of ``goal_keys``) holds with ``parts`` assembled."""
         cached = self.goal_cache.get(parts)
         if cached is None:
-            functions: set[str] = set()
-            for bit, keys in self.functions_of_part.items():
-                if parts & bit:
-                    functions |= keys
-            active = active_nodes(functions, self.task.rules)
+            active = self.active(parts)
             cached = all(key in active for key in self.goal_keys or (self.task.goal_key,))
             self.goal_cache[parts] = cached
         return cached

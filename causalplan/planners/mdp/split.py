@@ -27,7 +27,6 @@ import math
 import time
 from dataclasses import dataclass
 
-from causalplan.causal.graph import active_nodes
 from causalplan.planners.mdp.components import goal_conjuncts
 from causalplan.planners.mdp.model import CompiledMdp
 
@@ -100,11 +99,7 @@ class Splitter:
         relevant = parts & self.support[key]
         known = self.holds_cache.get((relevant, key))
         if known is None:
-            functions: set[str] = set()
-            for bit, labels in self.c.functions_of_part.items():
-                if relevant & bit:
-                    functions |= labels
-            known = key in active_nodes(functions, self.c.task.rules)
+            known = key in self.c.active(relevant)
             self.holds_cache[(relevant, key)] = known
         return known
 
