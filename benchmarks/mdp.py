@@ -20,8 +20,6 @@ with bounds.
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import random
 import time
 from collections.abc import Callable
 from typing import TypeVar
@@ -35,6 +33,7 @@ from causalplan.comparison.families import (
     independent_components,
     riskiest_first_chains,
     uncertain_tree,
+    with_probabilities,
 )
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.pddl.task import PlanningTask
@@ -47,13 +46,6 @@ from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult, PlanStatus
 
 T = TypeVar("T")
-
-
-def with_probabilities(task: PlanningTask, seed: int) -> PlanningTask:
-    """Return the task with random fit probabilities in [0.7, 1]."""
-    rng = random.Random(seed)
-    fits = tuple(dataclasses.replace(fit, probability=round(rng.uniform(0.7, 1.0), 2)) for fit in task.obj.fits)
-    return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
 
 
 def fresh_plan(task: PlanningTask, planner: str) -> PlanResult:

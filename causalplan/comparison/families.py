@@ -253,6 +253,13 @@ def riskiest_first_chains(count: int, length: int, seed: int = 0) -> KnownOptimu
     return KnownOptimum(task, math.prod(chances), attempts)
 
 
+def with_probabilities(task: PlanningTask, seed: int, low: float = 0.7) -> PlanningTask:
+    """Return the task with every fit's probability drawn (seeded) in [``low``, 1], to two places."""
+    rng = random.Random(seed)
+    fits = tuple(dataclasses.replace(fit, probability=round(rng.uniform(low, 1.0), 2)) for fit in task.obj.fits)
+    return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
+
+
 def uncertain_tree(n_parts: int, uncertain: int, seed: int = 0) -> PlanningTask:
     """Return the synthetic object of this size and seed with ``uncertain`` of the fits that matter in [0.6, 0.95]."""
     task = synthetic_task(n_parts, seed)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import random
 from pathlib import Path
 
 import pyRDDLGym
@@ -12,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 
 from causalplan.cli import app
-from causalplan.comparison.families import independent_components, uncertain_tree
+from causalplan.comparison.families import independent_components, uncertain_tree, with_probabilities
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
@@ -25,12 +24,6 @@ from tests.conftest import EXAMPLES, example_mapping, example_model
 
 EPISODES = 2000
 Z_99 = 2.5758  # two-sided 99% normal quantile
-
-
-def _with_probabilities(task: PlanningTask, seed: int, low: float) -> PlanningTask:
-    rng = random.Random(seed)
-    fits = tuple(dataclasses.replace(fit, probability=round(rng.uniform(low, 1.0), 2)) for fit in task.obj.fits)
-    return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
 
 
 def _simulated_success(
@@ -82,7 +75,7 @@ PAPER_TASKS = [
 def test_pyrddlgym_agrees_with_our_success_probability_on_the_paper_objects(
     model_file: str, mapping_file: str | None, catalog: Catalog, tmp_path: Path
 ) -> None:
-    task = _with_probabilities(_paper_task(model_file, mapping_file, catalog), 3, low=0.5)
+    task = with_probabilities(_paper_task(model_file, mapping_file, catalog), 3, low=0.5)
     solution = solve_mdp_search(task)
     assert solution.success_probability is not None
     low, high = _interval(solution.success_probability)
@@ -91,7 +84,7 @@ def test_pyrddlgym_agrees_with_our_success_probability_on_the_paper_objects(
 
 @pytest.mark.slow
 def test_pyrddlgym_agrees_on_a_synthetic_object_with_several_uncertain_fits(tmp_path: Path) -> None:
-    task = _with_probabilities(synthetic_task(9, 0), 0, low=0.6)
+    task = with_probabilities(synthetic_task(9, 0), 0, low=0.6)
     assert sum(fit.probability < 1 for fit in task.obj.fits) >= 4
     solution = solve_mdp_search(task)
     assert solution.success_probability is not None and 0.1 < solution.success_probability < 0.9
@@ -102,7 +95,7 @@ def test_pyrddlgym_agrees_on_a_synthetic_object_with_several_uncertain_fits(tmp_
 
 @pytest.mark.slow
 def test_a_wrong_probability_is_caught(tmp_path: Path) -> None:
-    task = _with_probabilities(synthetic_task(9, 0), 0, low=0.6)
+    task = with_probabilities(synthetic_task(9, 0), 0, low=0.6)
     solution = solve_mdp_search(task)
     assert solution.success_probability is not None and solution.actions
     first = solution.actions[0][1][2]  # the first fit the policy attempts: lower it in what we plan with

@@ -2,27 +2,18 @@
 
 from __future__ import annotations
 
-import dataclasses
-import random
-
 import pytest
 
+from causalplan.comparison.families import with_probabilities
 from causalplan.comparison.synthetic import synthetic_task
-from causalplan.pddl.task import PlanningTask
 from causalplan.planners.mdp.bounds import bound
 from causalplan.planners.mdp.exact import solve_compiled_mdp
 from causalplan.planners.mdp.model import compile_mdp, relevant_fits
 
 
-def _with_probabilities(task: PlanningTask, seed: int) -> PlanningTask:
-    rng = random.Random(seed)
-    fits = tuple(dataclasses.replace(fit, probability=round(rng.uniform(0.7, 1.0), 2)) for fit in task.obj.fits)
-    return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
-
-
 @pytest.mark.parametrize(("parts", "seed"), [(12, 1), (16, 2), (24, 0)])
 def test_holders_counted_once_bound_every_state_between_the_optimum_and_the_old_bound(parts: int, seed: int) -> None:
-    task = _with_probabilities(synthetic_task(parts, seed), parts)
+    task = with_probabilities(synthetic_task(parts, seed), parts)
     compiled = compile_mdp(task, relevant_fits(task))
     exact = solve_compiled_mdp(compiled, 60.0, 1e-9)
     tighter = 0

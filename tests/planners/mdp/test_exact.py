@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from causalplan.comparison.families import with_probabilities
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
@@ -19,12 +20,6 @@ from causalplan.planners.replay import replay
 from causalplan.planners.result import PlanStatus
 from tests.conftest import example_mapping, example_model
 from tests.planners.test_pipeline import PAPER_PLANS
-
-
-def _with_probabilities(task: PlanningTask, seed: int, low: float = 0.6) -> PlanningTask:
-    rng = random.Random(seed)
-    fits = tuple(dataclasses.replace(fit, probability=round(rng.uniform(low, 1.0), 2)) for fit in task.obj.fits)
-    return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
 
 
 def _certain(task: PlanningTask) -> PlanningTask:
@@ -79,7 +74,7 @@ def _monte_carlo(task: PlanningTask, solution: MdpSolution, rollouts: int, seed:
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_reported_success_probability_matches_monte_carlo(seed: int) -> None:
-    task = _with_probabilities(synthetic_task(9, seed), seed)
+    task = with_probabilities(synthetic_task(9, seed), seed, low=0.6)
     solution = solve_mdp(task)
     assert solution.status is PlanStatus.SOLVED and solution.success_probability is not None
     assert 0.0 < solution.success_probability < 1.0
@@ -135,7 +130,7 @@ def test_an_unreachable_goal_is_unsolvable_not_a_hang(catalog: Catalog) -> None:
 
 
 def test_sixteen_relevant_parts_solve_exactly() -> None:
-    task = _with_probabilities(synthetic_task(20, 0), 0, low=0.7)
+    task = with_probabilities(synthetic_task(20, 0), 0, low=0.7)
     parts = {p for fit in relevant_fits(task) for p in (fit.moving_part, fit.fixed_part)}
     assert len(parts) >= 16
     assert solve_mdp(task, time_limit=60).status is PlanStatus.SOLVED

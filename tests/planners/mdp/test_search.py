@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
-import random
 
 import pytest
 
-from causalplan.comparison.families import independent_components
+from causalplan.comparison.families import independent_components, with_probabilities
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.objects.catalog import Catalog
 from causalplan.pddl.task import PlanningTask, build_task
@@ -19,12 +18,6 @@ from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanStatus
 from tests.conftest import example_mapping, example_model
 from tests.planners.test_pipeline import PAPER_PLANS
-
-
-def _with_probabilities(task: PlanningTask, seed: int, low: float = 0.7) -> PlanningTask:
-    rng = random.Random(seed)
-    fits = tuple(dataclasses.replace(fit, probability=round(rng.uniform(low, 1.0), 2)) for fit in task.obj.fits)
-    return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
 
 
 def _value(success: float, attempts: float) -> float:
@@ -57,31 +50,31 @@ def test_it_finds_the_exact_optimum_on_the_paper_objects(
     model = example_model(model_file, catalog)
     mapping = example_mapping(mapping_file, catalog) if mapping_file else None
     task = build_task(model, catalog.get(mapping.object_id if mapping else model.object_id), mapping)
-    _assert_same_optimum(task if seed is None else _with_probabilities(task, seed, low=0.5))
+    _assert_same_optimum(task if seed is None else with_probabilities(task, seed, low=0.5))
 
 
 @pytest.mark.parametrize("parts", [3, 4, 6, 8, 10, 12, 16])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_it_finds_the_exact_optimum_on_synthetic_tasks(parts: int, seed: int) -> None:
-    _assert_same_optimum(_with_probabilities(synthetic_task(parts, seed), seed))
+    _assert_same_optimum(with_probabilities(synthetic_task(parts, seed), seed))
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("parts", "seed"), [(20, 0), (20, 1), (24, 0), (24, 1), (28, 0)])
 def test_it_finds_the_exact_optimum_up_to_the_exact_solvers_limit(parts: int, seed: int) -> None:
-    task = _with_probabilities(synthetic_task(parts, seed), parts)
+    task = with_probabilities(synthetic_task(parts, seed), parts)
     _assert_same_optimum(task)
     assert solve_mdp_search(task, 60.0).states * 5 <= solve_mdp(task, 60.0).states
 
 
 def test_it_expands_far_fewer_states_than_the_exact_solver_stores() -> None:
-    task = _with_probabilities(synthetic_task(16, 1), 1)
+    task = with_probabilities(synthetic_task(16, 1), 1)
     assert solve_mdp_search(task).states * 10 <= solve_mdp(task).states
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_the_bound_at_the_start_is_never_below_the_optimum(seed: int) -> None:
-    task = _with_probabilities(synthetic_task(12, seed), seed)
+    task = with_probabilities(synthetic_task(12, seed), seed)
     exact = solve_mdp(task)
     assert exact.success_probability is not None and exact.expected_actions is not None
     compiled = compile_mdp(task, relevant_fits(task))
@@ -102,7 +95,7 @@ def test_the_cheapest_test_order_respects_precedence() -> None:
 
 
 def test_at_the_time_limit_it_answers_with_bounds_not_a_hang() -> None:
-    task = _with_probabilities(synthetic_task(120, 0), 120)
+    task = with_probabilities(synthetic_task(120, 0), 120)
     solution = solve_mdp_search(task, time_limit=1.0)
     assert solution.status is PlanStatus.SOLVED and solution.optimality is Optimality.BOUNDED
     assert solution.success_probability is not None and solution.success_upper is not None
@@ -119,7 +112,7 @@ def test_an_unreachable_goal_is_unsolvable(catalog: Catalog) -> None:
 
 @pytest.mark.parametrize(("parts", "seed"), [(8, 0), (12, 1), (16, 2)])
 def test_as_planned_both_solvers_agree_with_the_tie_breaking_step_cost(parts: int, seed: int) -> None:
-    task = _with_probabilities(synthetic_task(parts, seed), seed)
+    task = with_probabilities(synthetic_task(parts, seed), seed)
     exact, heuristic = solve_for(task, 60.0, exact=True), solve_for(task, 60.0)
     assert exact.success_probability is not None and heuristic.success_probability is not None
     assert abs(exact.success_probability - heuristic.success_probability) < 1e-9
@@ -141,7 +134,7 @@ def test_the_most_reliable_policy_is_not_traded_for_fewer_attempts_when_success_
 
 def test_an_anytime_plan_says_so_in_its_json() -> None:
     # 142 relevant fits whose alternatives keep the splitting solver from finishing in seconds.
-    task = _with_probabilities(synthetic_task(320, 2), 322)
+    task = with_probabilities(synthetic_task(320, 2), 322)
     data = plan_task(task, "mdp", 2.0).as_dict()
     assert data["status"] == "solved" and data["optimality"] == "bounded" and data["objective"] == "probability"
     low, high = data["success_probability_bounds"]  # type: ignore[misc]
@@ -153,8 +146,8 @@ def test_an_anytime_plan_says_so_in_its_json() -> None:
 
 def test_the_json_says_whether_the_attempts_are_proved_fewest() -> None:
     # The search closes on the small tree (fewest proved); the split solver proves only the reliability.
-    closed = plan_task(_with_probabilities(synthetic_task(12, 1), 12), "mdp", 30.0).as_dict()
-    split = plan_task(_with_probabilities(synthetic_task(120, 0), 120), "mdp", 30.0).as_dict()
+    closed = plan_task(with_probabilities(synthetic_task(12, 1), 12), "mdp", 30.0).as_dict()
+    split = plan_task(with_probabilities(synthetic_task(120, 0), 120), "mdp", 30.0).as_dict()
     assert closed["optimality"] == split["optimality"] == "optimal"
     assert closed["fewest_attempts"] is True and split["fewest_attempts"] is False
 

@@ -7,6 +7,7 @@ import random
 
 import pytest
 
+from causalplan.comparison.families import with_probabilities
 from causalplan.comparison.synthetic import synthetic_task
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.mdp import solve_mdp
@@ -16,17 +17,11 @@ from causalplan.planners.mdp.split_solve import solve_split
 from causalplan.planners.result import PlanStatus
 
 
-def _with_probabilities(task: PlanningTask, seed: int) -> PlanningTask:
-    rng = random.Random(seed)
-    fits = tuple(dataclasses.replace(fit, probability=round(rng.uniform(0.7, 1.0), 2)) for fit in task.obj.fits)
-    return dataclasses.replace(task, obj=dataclasses.replace(task.obj, fits=fits))
-
-
 @pytest.mark.parametrize(
     ("parts", "seed"), [(8, 0), (12, 1), (16, 2), (20, 0), pytest.param(28, 0, marks=pytest.mark.slow)]
 )
 def test_it_finds_the_exact_solvers_success_probability(parts: int, seed: int) -> None:
-    task = _with_probabilities(synthetic_task(parts, seed), parts)
+    task = with_probabilities(synthetic_task(parts, seed), parts)
     exact = solve_mdp(task, 60.0, step_cost=1e-9)
     solution = solve_split(compile_mdp(task, relevant_fits(task)), 60.0)
     assert solution is not None and solution.status is exact.status is PlanStatus.SOLVED
@@ -37,7 +32,7 @@ def test_it_finds_the_exact_solvers_success_probability(parts: int, seed: int) -
 
 def test_its_policy_is_the_one_it_evaluated() -> None:
     # Walk every outcome of the policy ``decide`` follows and add the chances of reaching the goal.
-    task = _with_probabilities(synthetic_task(12, 1), 12)
+    task = with_probabilities(synthetic_task(12, 1), 12)
     compiled = compile_mdp(task, relevant_fits(task))
     solution = solve_split(compiled, 60.0)
     assert solution is not None and solution.success_probability is not None
@@ -74,7 +69,7 @@ def test_forced_attempts_and_dropped_fits_keep_the_optimum(parts: int, seed: int
 @pytest.mark.slow
 def test_it_proves_a_tree_with_79_relevant_parts() -> None:
     # The benchmark's 200-part tree: alternative sockets tie it into one group at the start.
-    task = _with_probabilities(synthetic_task(200, 0), 200)
+    task = with_probabilities(synthetic_task(200, 0), 200)
     compiled = compile_mdp(task, relevant_fits(task))
     solution = solve_split(compiled, 20.0)
     assert len(compiled.fits) == 96
