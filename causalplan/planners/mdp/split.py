@@ -31,6 +31,9 @@ from causalplan.planners.mdp.components import goal_conjuncts
 from causalplan.planners.mdp.model import CompiledMdp
 
 MAX_RESIDUALS = 400_000
+"""The residuals one pass may memoise before it stops (``SplitStopped``): it bounds the memory."""
+FINER_RESIDUALS = MAX_RESIDUALS // 4
+"""A finer pass's budget (``split_solve.FINER_PASSES``): it only looks for fewer attempts, so it gives up sooner."""
 TIE = 1e-12
 
 Key = tuple[int, tuple[str, ...], int]
@@ -64,7 +67,7 @@ class Splitter:
         self.memo: dict[Key, Entry] = {}
         self.force = force  # which clean attempts are forced: 2 all, 1 the necessary parts', 0 none
         self.oracle = oracle  # gives each residual's exact success, the bound (a pass forcing every clean attempt)
-        self.max_residuals = MAX_RESIDUALS if oracle is None else MAX_RESIDUALS // 4
+        self.max_residuals = MAX_RESIDUALS if oracle is None else FINER_RESIDUALS
         conjuncts = goal_conjuncts(compiled) or {}
         part_bit = {part_id: 1 << index for index, part_id in enumerate(compiled.task.obj.part_ids)}
         keys = compiled.goal_keys or tuple(conjuncts) or (compiled.task.goal_key,)
