@@ -39,9 +39,11 @@ from causalplan.comparison.synthetic import synthetic_task
 from causalplan.pddl.task import PlanningTask
 from causalplan.planners.fd.solve import DEFAULT_TIME_LIMIT
 from causalplan.planners.mdp import MdpSolution, Optimality, relevant_fits
+from causalplan.planners.mdp.composed import ComposedPolicy
 from causalplan.planners.mdp.model import compile_mdp
 from causalplan.planners.mdp.objective import solve_for
 from causalplan.planners.mdp.search import search_compiled_mdp, tie_breaking_step_cost
+from causalplan.planners.mdp.split_solve import SplitPolicy
 from causalplan.planners.pipeline import plan_task
 from causalplan.planners.result import PlanResult, PlanStatus
 
@@ -62,14 +64,14 @@ def timed(function: Callable[[], T]) -> tuple[T, float]:
 
 
 def how(solution: MdpSolution) -> str:
-    """Return how the answer was proved, or where it stopped."""
+    """Return how the answer was proved (by the policy it returns), or where it stopped."""
     if solution.status is not PlanStatus.SOLVED or solution.optimality is Optimality.BOUNDED:
         return "time limit"
-    if "independent components" in solution.message:
-        return solution.message.split(" as ")[1].split(" independent")[0] + " components"
-    if solution.message.startswith("Proved the most reliable policy by splitting"):
+    if isinstance(solution.decider, ComposedPolicy):
+        return f"{len(solution.decider.solved)} components"
+    if isinstance(solution.decider, SplitPolicy):
         return "split after each attempt"
-    if solution.message.startswith("Proved optimal after"):
+    if not solution.fewest_attempts:  # the search stopped when its bounds met, before it closed
         return "bounds met"
     return "search closed"
 
