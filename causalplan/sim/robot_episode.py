@@ -41,7 +41,7 @@ from dataclasses import dataclass, field, replace
 
 from causalplan.objects.model import AssemblyObject, Fit
 from causalplan.sim import checks
-from causalplan.sim.executor import _Run, _settle, _step
+from causalplan.sim.executor import SimulationRun, execute_step, settle
 from causalplan.sim.geometry import Solid, solids
 from causalplan.sim.layout import ROBOT_ROW_GAP, layout
 from causalplan.sim.mechanism import evaluate
@@ -153,7 +153,7 @@ class _Episode:
     """The state of the robot's run of an episode as it goes."""
 
     obj: AssemblyObject
-    run: _Run
+    run: SimulationRun
     mover: PandaMovesThem
     fits: dict[str, Fit]
     """Each attached part's fit (the one the object was built with)."""
@@ -295,7 +295,7 @@ def _replace_base(state: _Episode, part: str) -> None:
 
 def _step_failure(state: _Episode, number: int, request: StepRequest) -> tuple[str, str] | None:
     """Make one assembly step (attach or light) by the robot; return its failure code and message, if any."""
-    report = _step(state.run, number, request)
+    report = execute_step(state.run, number, request)
     if report.status is StepStatus.PASSED:
         return None
     code = report.failure.value if report.failure is not None else "failed"
@@ -327,7 +327,7 @@ def _test(state: _Episode, number: int, lights: list[Fit]) -> tuple[str, str] | 
             failed = _step_failure(state, number, StepRequest(fit.primitive, part, fit.fixed_part, fit.id))
             if failed is not None:
                 return failed
-    _settle(run, checks.STEP_SETTLE_SECONDS)
+    settle(run, checks.STEP_SETTLE_SECONDS)
     return None
 
 
@@ -410,12 +410,12 @@ def robot_episode(
     with Scene(parts, drawn=False) as scene:
         for part, pose in homes.items():
             scene.add_part(part, pose, dynamic=part == obj.base)
-        run = _Run(obj, scene, homes, {obj.base}, PartsMoveThemselves(scene))
+        run = SimulationRun(obj, scene, homes, {obj.base}, PartsMoveThemselves(scene))
         for number, request in enumerate(build, start=1):
-            report = _step(run, number, request)
+            report = execute_step(run, number, request)
             if report.status is not StepStatus.PASSED:
                 raise RuntimeError(f"the {obj.name} cannot be built in physics: {report.message}")
-        _settle(run, checks.FINAL_SETTLE_SECONDS)
+        settle(run, checks.FINAL_SETTLE_SECONDS)
         # The object was handed over built: its joints come before every action of the episode
         # (the mechanism checks that a light comes after what it must follow by step number).
         run.joints[:] = [replace(joint, step=0) for joint in run.joints]
