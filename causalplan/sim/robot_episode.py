@@ -57,11 +57,10 @@ from causalplan.sim.robot.steps import PUSH_DEPTH, step_motions
 from causalplan.sim.robot.tracks import PartTrack
 from causalplan.sim.robot.trajectory import Trajectory
 from causalplan.sim.scene import Scene
-from causalplan.sim.troubleshooting import _first_build, _steps
-from causalplan.troubleshoot.assembly import ATTACH, DETACH, assembly_graph
+from causalplan.sim.troubleshooting import first_build_order, rebuild_steps
+from causalplan.troubleshoot.assembly import ATTACH, DETACH
 from causalplan.troubleshoot.episode import GOAL, NO_GOAL, Episode
 from causalplan.troubleshoot.solver import INSPECT, REPLACE, TEST
-from causalplan.troubleshoot.structure import structure_of
 
 SPARE = ":spare"
 ALONG_STEP = 0.0001
@@ -395,9 +394,7 @@ def robot_episode(
     motor commands keep within the limits, SimulatorUnavailableError when PyBullet cannot start.
     """
     clock = time.perf_counter()
-    structure = structure_of(obj)
-    order = _first_build(assembly_graph(structure), structure.parts)
-    build = [step for step in _steps(obj, order) if not MOTIONS[step.action].touches_only]
+    build = [step for step in rebuild_steps(obj, first_build_order(obj)) if not MOTIONS[step.action].touches_only]
     lights = [fit for fit in obj.fits if MOTIONS[fit.primitive].touches_only]
     spares = sorted({step.part for step in episode.steps if step.kind == REPLACE and step.part is not None})
     parts: dict[str, Solid] = dict(solids(obj))  # a copy: solids() is cached
