@@ -52,8 +52,8 @@ from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.poses import Pose, difference
 from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
 from causalplan.sim.robot.mover import PandaMovesThem
-from causalplan.sim.robot.robot import LIFT, LINE_STEP, SCREW_STEP, Robot, line_poses
-from causalplan.sim.robot.steps import PUSH_DEPTH, step_motions
+from causalplan.sim.robot.robot import LIFT, LINE_STEP, Robot, line_poses
+from causalplan.sim.robot.steps import PUSH_DEPTH, screw_spacing, spaced_distances, step_motions
 from causalplan.sim.robot.tracks import PartTrack
 from causalplan.sim.robot.trajectory import Trajectory
 from causalplan.sim.scene import Scene
@@ -170,11 +170,6 @@ class _Episode:
         return self.mover.robot
 
 
-def _distances(start: float, end: float, step: float) -> list[float]:
-    count = max(1, math.ceil(abs(start - end) / step))
-    return [start + (end - start) * k / count for k in range(1, count + 1)]
-
-
 def _along(path: Callable[[float], Pose], pose: Pose, start: float) -> float:
     """Return how far (metres) along its approach ``path`` a part at ``pose`` sits from its seat.
 
@@ -227,14 +222,13 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
     here = _along(path, scene.pose(part), start)
     if motion.turns > 0:
         thread = max(here, min(start, ENGAGEMENT))
-        spin_per_metre = 2 * math.pi * motion.turns / ENGAGEMENT
-        out = _distances(here, thread, min(LINE_STEP, SCREW_STEP / spin_per_metre))
+        out = spaced_distances(here, thread, screw_spacing(motion))
     else:
         thread = max(here, min(start, PUSH_DEPTH))
-        out = _distances(here, thread, LINE_STEP)
+        out = spaced_distances(here, thread, LINE_STEP)
     # A screw's way out turns the wrist further than it can go (it regrasps): the arm pose is
     # chosen for the first quarter turn; a push's, for the whole line out.
-    first = out[:SCREW_START_POSES] if motion.turns > 0 else [*out, *_distances(thread, start, LINE_STEP)]
+    first = out[:SCREW_START_POSES] if motion.turns > 0 else [*out, *spaced_distances(thread, start, LINE_STEP)]
     way_out = [path(d) for d in first]
     # An arm pose from which the gripper can also take the part out along its axis.
     failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
@@ -250,7 +244,9 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
     else:
         failure = robot.follow("push", [path(d) for d in out], what, joint.fixed)
     if failure is None and thread < start:
-        failure = robot.follow("approach", [path(d) for d in _distances(thread, start, LINE_STEP)], what, joint.fixed)
+        failure = robot.follow(
+            "approach", [path(d) for d in spaced_distances(thread, start, LINE_STEP)], what, joint.fixed
+        )
     if failure is not None:
         return failure
     _collide_again(scene, joint.fixed, part)
