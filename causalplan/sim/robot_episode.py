@@ -63,13 +63,13 @@ from causalplan.troubleshoot.episode import GOAL, NO_GOAL, Episode
 from causalplan.troubleshoot.solver import INSPECT, REPLACE, TEST
 
 SPARE = ":spare"
+"""The suffix of a spare's id in the scene and the player's document (``light_bulb:spare``)."""
 ALONG_STEP = 0.0001
 """Metres between the distances tried when finding where a part sits along its approach."""
 ALONG_METRES_PER_RADIAN = 0.01
 """How a turn counts against a shift when matching a part's pose to its approach (1 cm a radian)."""
 SCREW_START_POSES = 9
 """Poses of a screw's way out (10 degrees each) that choose the arm pose it is grasped with."""
-"""The suffix of a spare's id in the scene and the player's document (``light_bulb:spare``)."""
 
 
 @dataclass(frozen=True)
