@@ -26,7 +26,7 @@ from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.report import SimulationReport
 from causalplan.troubleshoot.assembly import ATTACH, DETACH, assembly_graph
 from causalplan.troubleshoot.episode import Episode
-from causalplan.troubleshoot.solver import REPLACE
+from causalplan.troubleshoot.solver import REPLACE, TEST
 from causalplan.troubleshoot.structure import structure_of
 
 
@@ -130,14 +130,14 @@ def rebuild_steps(obj: AssemblyObject, order: list[str]) -> list[StepRequest]:
 def repair_in_physics(obj: AssemblyObject, episode: Episode) -> RepairInPhysics:
     """Rebuild ``obj`` as ``episode`` left it at its last test, in physics, and judge whether it gives its goal."""
     order = first_build_order(obj)
-    last_test = max(index for index, step in enumerate(episode.steps) if step.kind == "test")
+    last_test = max(index for index, step in enumerate(episode.steps) if step.kind == TEST)
     replaced = False
     for step in episode.steps[:last_test]:
         if step.kind == DETACH and step.part in order:
             order.remove(step.part)
         elif step.kind == ATTACH and step.part is not None:
             order.append(step.part)
-        elif step.kind == "test":
+        elif step.kind == TEST:
             replaced = False  # an earlier test showed no goal: the spares so far were not the answer
         elif step.kind == REPLACE and step.part == episode.fault:
             replaced = True
