@@ -220,10 +220,10 @@ def _table(task: TroubleshootingTask, as_json: bool) -> None:
     from causalplan.troubleshoot.measures import REPAIR_BONUS
 
     obj = task.obj
-    table = task.table()
     if as_json:
         print_json(table_answer(task))
         return
+    table = task.table()
     console = make_console()
     columns = ["strategy", "expected actions", "worst", "reward share"] + [
         f"{fault.part} ({fault.probability:g})" for fault in obj.faults

@@ -70,10 +70,8 @@ def _build_fit(schema: FitSchema, specs: dict[tuple[str, str], str]) -> Fit:
 FAULT_PRIORS_SUM_TOLERANCE = 1e-6
 
 
-def _build_faults(schema: FaultsSchema | None, obj: AssemblyObject) -> tuple[Fault, ...]:
+def _build_faults(schema: FaultsSchema, obj: AssemblyObject) -> tuple[Fault, ...]:
     """Cross-check the faults against the object (known parts, once each, needed, priors summing to 1)."""
-    if schema is None:
-        return ()
     parts = [fault.part for fault in schema.parts]
     unknown = sorted(set(parts) - set(obj.part_ids))
     if unknown:
@@ -152,10 +150,9 @@ def build_object(schema: ObjectSchema) -> AssemblyObject:
         ),
         mechanism_explanation=schema.mechanism.explanation,
     )
-    faults = _build_faults(schema.faults, obj)
-    if not faults:
+    if schema.faults is None:
         return obj
-    return replace(obj, faults=faults, fault_priors=schema.faults.priors if schema.faults else None)
+    return replace(obj, faults=_build_faults(schema.faults, obj), fault_priors=schema.faults.priors)
 
 
 def _describe_validation_error(exc: ValidationError) -> str:

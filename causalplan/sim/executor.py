@@ -38,7 +38,7 @@ from causalplan.sim.video import VIDEO_SIZE, VideoRecorder
 
 
 @dataclass
-class _Run:
+class SimulationRun:
     """The state of one simulation as it goes."""
 
     obj: AssemblyObject
@@ -53,7 +53,7 @@ class _Run:
         return "table" if part_or_ground == GROUND else self.obj.part(part_or_ground).name
 
 
-def _settle(run: _Run, seconds: float) -> tuple[tuple[Check, Check], str | None]:
+def settle(run: SimulationRun, seconds: float) -> tuple[tuple[Check, Check], str | None]:
     """Let the assembly settle; return the stability checks and the part that moved too much, if any."""
     parts = sorted(run.assembled)
     before = {part: run.scene.pose(part) for part in parts}
@@ -72,7 +72,7 @@ def _settle(run: _Run, seconds: float) -> tuple[tuple[Check, Check], str | None]
 class _StepChecks:
     """The checks of one step as they are made; the first that fails ends the step."""
 
-    run: _Run
+    run: SimulationRun
     number: int
     request: StepRequest
     made: list[Check] = field(default_factory=list)
@@ -107,7 +107,7 @@ class _StepChecks:
         return self.report(failure, check.detail)
 
 
-def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
+def execute_step(run: SimulationRun, number: int, request: StepRequest) -> StepReport:
     """Execute one step and return its report (the scene is left as the step left it)."""
     obj, scene, step, mover = run.obj, run.scene, _StepChecks(run, number, request), run.mover
     motion = MOTIONS[request.action]
@@ -180,7 +180,7 @@ def _step(run: _Run, number: int, request: StepRequest) -> StepReport:
         scene.place(request.moving, run.homes[request.moving])  # and goes back to the table
         return step.report()
 
-    stability, culprit = _settle(run, checks.STEP_SETTLE_SECONDS)
+    stability, culprit = settle(run, checks.STEP_SETTLE_SECONDS)
     for check in stability:
         if not check.passed:
             assert culprit is not None
@@ -235,7 +235,7 @@ def simulate_plan(
             mover = PandaMovesThem(scene, recorder.observe if recorder else None, safety_factor, tracks)
         else:
             mover = PartsMoveThemselves(scene, Arm(scene) if arm else None)
-        run = _Run(obj, scene, homes, {obj.base}, mover)
+        run = SimulationRun(obj, scene, homes, {obj.base}, mover)
         pictures = None
         if render is not RenderMode.NONE:
             pictures = Pictures(scene, Camera.around(scene, *design, size=size), render, obj.name)
@@ -248,7 +248,7 @@ def simulate_plan(
                 continue
             for observer in observers:
                 observer.step_started(number, len(requests), request.text(obj))
-            reports.append(replace(_step(run, number, request), motions=mover.motions(number)))
+            reports.append(replace(execute_step(run, number, request), motions=mover.motions(number)))
             for observer in observers:
                 observer.step_ended(
                     reports[-1], len(requests), lambda: _lit_parts(run, evaluate(obj, scene, run.joints))
@@ -256,7 +256,7 @@ def simulate_plan(
         carried_out = not reports or reports[-1].status is StepStatus.PASSED
         timing.update(mover.finish(len(requests), carried_out))
         timing["steps"], clock = time.perf_counter() - clock, time.perf_counter()
-        stability, culprit = _settle(run, checks.FINAL_SETTLE_SECONDS)
+        stability, culprit = settle(run, checks.FINAL_SETTLE_SECONDS)
         timing["settle"], clock = time.perf_counter() - clock, time.perf_counter()
         requirements = evaluate(obj, scene, run.joints)
         produces_goal = all(requirement.met for requirement in requirements)
@@ -295,7 +295,7 @@ def simulate_plan(
     )
 
 
-def _lit_parts(run: _Run, requirements: tuple[RequirementCheck, ...]) -> tuple[str, ...]:
+def _lit_parts(run: SimulationRun, requirements: tuple[RequirementCheck, ...]) -> tuple[str, ...]:
     """Return the assembled parts whose light shows: all of them when every requirement is met."""
     if not all(requirement.met for requirement in requirements):
         return ()

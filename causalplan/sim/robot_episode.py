@@ -41,7 +41,7 @@ from dataclasses import dataclass, field, replace
 
 from causalplan.objects.model import AssemblyObject, Fit
 from causalplan.sim import checks
-from causalplan.sim.executor import _Run, _settle, _step
+from causalplan.sim.executor import SimulationRun, execute_step, settle
 from causalplan.sim.geometry import Solid, solids
 from causalplan.sim.layout import ROBOT_ROW_GAP, layout
 from causalplan.sim.mechanism import evaluate
@@ -52,25 +52,24 @@ from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.poses import Pose, difference
 from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
 from causalplan.sim.robot.mover import PandaMovesThem
-from causalplan.sim.robot.robot import LIFT, LINE_STEP, SCREW_STEP, Robot, line_poses
-from causalplan.sim.robot.steps import PUSH_DEPTH, step_motions
+from causalplan.sim.robot.robot import LIFT, LINE_STEP, Robot, line_poses
+from causalplan.sim.robot.steps import PUSH_DEPTH, screw_spacing, spaced_distances, step_motions
 from causalplan.sim.robot.tracks import PartTrack
 from causalplan.sim.robot.trajectory import Trajectory
 from causalplan.sim.scene import Scene
-from causalplan.sim.troubleshooting import _first_build, _steps
-from causalplan.troubleshoot.assembly import ATTACH, DETACH, assembly_graph
+from causalplan.sim.troubleshooting import first_build_order, rebuild_steps
+from causalplan.troubleshoot.assembly import ATTACH, DETACH
 from causalplan.troubleshoot.episode import GOAL, NO_GOAL, Episode
 from causalplan.troubleshoot.solver import INSPECT, REPLACE, TEST
-from causalplan.troubleshoot.structure import structure_of
 
 SPARE = ":spare"
+"""The suffix of a spare's id in the scene and the player's document (``light_bulb:spare``)."""
 ALONG_STEP = 0.0001
 """Metres between the distances tried when finding where a part sits along its approach."""
 ALONG_METRES_PER_RADIAN = 0.01
 """How a turn counts against a shift when matching a part's pose to its approach (1 cm a radian)."""
 SCREW_START_POSES = 9
 """Poses of a screw's way out (10 degrees each) that choose the arm pose it is grasped with."""
-"""The suffix of a spare's id in the scene and the player's document (``light_bulb:spare``)."""
 
 
 @dataclass(frozen=True)
@@ -153,7 +152,7 @@ class _Episode:
     """The state of the robot's run of an episode as it goes."""
 
     obj: AssemblyObject
-    run: _Run
+    run: SimulationRun
     mover: PandaMovesThem
     fits: dict[str, Fit]
     """Each attached part's fit (the one the object was built with)."""
@@ -169,11 +168,6 @@ class _Episode:
     @property
     def robot(self) -> Robot:
         return self.mover.robot
-
-
-def _distances(start: float, end: float, step: float) -> list[float]:
-    count = max(1, math.ceil(abs(start - end) / step))
-    return [start + (end - start) * k / count for k in range(1, count + 1)]
 
 
 def _along(path: Callable[[float], Pose], pose: Pose, start: float) -> float:
@@ -228,14 +222,13 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
     here = _along(path, scene.pose(part), start)
     if motion.turns > 0:
         thread = max(here, min(start, ENGAGEMENT))
-        spin_per_metre = 2 * math.pi * motion.turns / ENGAGEMENT
-        out = _distances(here, thread, min(LINE_STEP, SCREW_STEP / spin_per_metre))
+        out = spaced_distances(here, thread, screw_spacing(motion))
     else:
         thread = max(here, min(start, PUSH_DEPTH))
-        out = _distances(here, thread, LINE_STEP)
+        out = spaced_distances(here, thread, LINE_STEP)
     # A screw's way out turns the wrist further than it can go (it regrasps): the arm pose is
     # chosen for the first quarter turn; a push's, for the whole line out.
-    first = out[:SCREW_START_POSES] if motion.turns > 0 else [*out, *_distances(thread, start, LINE_STEP)]
+    first = out[:SCREW_START_POSES] if motion.turns > 0 else [*out, *spaced_distances(thread, start, LINE_STEP)]
     way_out = [path(d) for d in first]
     # An arm pose from which the gripper can also take the part out along its axis.
     failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
@@ -251,7 +244,9 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
     else:
         failure = robot.follow("push", [path(d) for d in out], what, joint.fixed)
     if failure is None and thread < start:
-        failure = robot.follow("approach", [path(d) for d in _distances(thread, start, LINE_STEP)], what, joint.fixed)
+        failure = robot.follow(
+            "approach", [path(d) for d in spaced_distances(thread, start, LINE_STEP)], what, joint.fixed
+        )
     if failure is not None:
         return failure
     _collide_again(scene, joint.fixed, part)
@@ -295,7 +290,7 @@ def _replace_base(state: _Episode, part: str) -> None:
 
 def _step_failure(state: _Episode, number: int, request: StepRequest) -> tuple[str, str] | None:
     """Make one assembly step (attach or light) by the robot; return its failure code and message, if any."""
-    report = _step(state.run, number, request)
+    report = execute_step(state.run, number, request)
     if report.status is StepStatus.PASSED:
         return None
     code = report.failure.value if report.failure is not None else "failed"
@@ -327,7 +322,7 @@ def _test(state: _Episode, number: int, lights: list[Fit]) -> tuple[str, str] | 
             failed = _step_failure(state, number, StepRequest(fit.primitive, part, fit.fixed_part, fit.id))
             if failed is not None:
                 return failed
-    _settle(run, checks.STEP_SETTLE_SECONDS)
+    settle(run, checks.STEP_SETTLE_SECONDS)
     return None
 
 
@@ -395,9 +390,7 @@ def robot_episode(
     motor commands keep within the limits, SimulatorUnavailableError when PyBullet cannot start.
     """
     clock = time.perf_counter()
-    structure = structure_of(obj)
-    order = _first_build(assembly_graph(structure), structure.parts)
-    build = [step for step in _steps(obj, order) if not MOTIONS[step.action].touches_only]
+    build = [step for step in rebuild_steps(obj, first_build_order(obj)) if not MOTIONS[step.action].touches_only]
     lights = [fit for fit in obj.fits if MOTIONS[fit.primitive].touches_only]
     spares = sorted({step.part for step in episode.steps if step.kind == REPLACE and step.part is not None})
     parts: dict[str, Solid] = dict(solids(obj))  # a copy: solids() is cached
@@ -410,12 +403,12 @@ def robot_episode(
     with Scene(parts, drawn=False) as scene:
         for part, pose in homes.items():
             scene.add_part(part, pose, dynamic=part == obj.base)
-        run = _Run(obj, scene, homes, {obj.base}, PartsMoveThemselves(scene))
+        run = SimulationRun(obj, scene, homes, {obj.base}, PartsMoveThemselves(scene))
         for number, request in enumerate(build, start=1):
-            report = _step(run, number, request)
+            report = execute_step(run, number, request)
             if report.status is not StepStatus.PASSED:
                 raise RuntimeError(f"the {obj.name} cannot be built in physics: {report.message}")
-        _settle(run, checks.FINAL_SETTLE_SECONDS)
+        settle(run, checks.FINAL_SETTLE_SECONDS)
         # The object was handed over built: its joints come before every action of the episode
         # (the mechanism checks that a light comes after what it must follow by step number).
         run.joints[:] = [replace(joint, step=0) for joint in run.joints]

@@ -9,8 +9,7 @@ from __future__ import annotations
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.sim.geometry import Solid, solids
-from causalplan.sim.robot.panda import BASE_POSITION
-from causalplan.sim.robot.playback import DIGITS, FORMAT, _commands, _shape, pose_list
+from causalplan.sim.robot.playback import player_document
 from causalplan.sim.robot_episode import SPARE, EpisodeInPhysics
 
 
@@ -28,22 +27,8 @@ def episode_playback(obj: AssemblyObject, result: EpisodeInPhysics) -> dict[str,
     def solid(body_id: str) -> Solid:
         return parts[body_id.removesuffix(SPARE)]
 
-    return {
-        "format": FORMAT,
-        "object": obj.id,
-        "name": obj.name,
-        "seconds": round(commands.seconds, DIGITS),
-        "robot": {"model": commands.limits.model, "base_position": list(BASE_POSITION)},
-        "trajectory": _commands(commands),
-        "parts": [
-            {
-                "id": body_id,
-                "name": solid(body_id).name + (" (spare)" if body_id.endswith(SPARE) else ""),
-                "shapes": [_shape(shape) for shape in solid(body_id).shapes],
-                "light": [_shape(shape) for shape in solid(body_id).light],
-                "track": {"times": [round(t, DIGITS) for t in track.times], "poses": list(map(pose_list, track.poses))},
-            }
-            for body_id, track in result.tracks.items()
-        ],
-        "assembled": {body_id: pose_list(pose) for body_id, pose in result.placed.items()},
-    }
+    bodies = [
+        (body_id, solid(body_id).name + (" (spare)" if body_id.endswith(SPARE) else ""), solid(body_id), track)
+        for body_id, track in result.tracks.items()
+    ]
+    return player_document(obj, commands, bodies, result.placed)

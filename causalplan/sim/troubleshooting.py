@@ -24,9 +24,9 @@ from causalplan.sim.executor import simulate_plan
 from causalplan.sim.outcomes import RenderMode
 from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.report import SimulationReport
-from causalplan.troubleshoot.assembly import ATTACH, DETACH, AssemblyGraph, assembly_graph
+from causalplan.troubleshoot.assembly import ATTACH, DETACH, assembly_graph
 from causalplan.troubleshoot.episode import Episode
-from causalplan.troubleshoot.solver import REPLACE
+from causalplan.troubleshoot.solver import REPLACE, TEST
 from causalplan.troubleshoot.structure import structure_of
 
 
@@ -56,8 +56,10 @@ class RepairInPhysics:
         }
 
 
-def _first_build(graph: AssemblyGraph, parts: tuple[str, ...]) -> list[str]:
-    """Return the parts in an order that builds the object from the bare base (fewest attaches)."""
+def first_build_order(obj: AssemblyObject) -> list[str]:
+    """Return ``obj``'s body parts in an order that builds it from the bare base (fewest attaches)."""
+    structure = structure_of(obj)
+    graph, parts = assembly_graph(structure), structure.parts
     came_from: dict[int, tuple[int, str]] = {}
     queue = deque([0])
     seen = {0}
@@ -76,7 +78,7 @@ def _first_build(graph: AssemblyGraph, parts: tuple[str, ...]) -> list[str]:
     return order[::-1]
 
 
-def _steps(obj: AssemblyObject, order: list[str]) -> list[StepRequest]:
+def rebuild_steps(obj: AssemblyObject, order: list[str]) -> list[StepRequest]:
     """Return the steps that attach ``order`` and light the object, in an order the object allows.
 
     Each ignite fit is made as soon as its part is in place and the fits its requirement must
@@ -127,20 +129,19 @@ def _steps(obj: AssemblyObject, order: list[str]) -> list[StepRequest]:
 
 def repair_in_physics(obj: AssemblyObject, episode: Episode) -> RepairInPhysics:
     """Rebuild ``obj`` as ``episode`` left it at its last test, in physics, and judge whether it gives its goal."""
-    structure = structure_of(obj)
-    order = _first_build(assembly_graph(structure), structure.parts)
-    last_test = max(index for index, step in enumerate(episode.steps) if step.kind == "test")
+    order = first_build_order(obj)
+    last_test = max(index for index, step in enumerate(episode.steps) if step.kind == TEST)
     replaced = False
     for step in episode.steps[:last_test]:
         if step.kind == DETACH and step.part in order:
             order.remove(step.part)
         elif step.kind == ATTACH and step.part is not None:
             order.append(step.part)
-        elif step.kind == "test":
+        elif step.kind == TEST:
             replaced = False  # an earlier test showed no goal: the spares so far were not the answer
         elif step.kind == REPLACE and step.part == episode.fault:
             replaced = True
-    steps = _steps(obj, order)
+    steps = rebuild_steps(obj, order)
     report = simulate_plan(obj, steps, render=RenderMode.NONE)
     fits = tuple(step.fit for step in steps if step.fit is not None)
     return RepairInPhysics((obj.base, *order), fits, report, replaced)

@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING
 from causalplan.troubleshoot.assembly import AssemblyGraph, Move, assembly_graph
 from causalplan.troubleshoot.errors import TooLargeError
 from causalplan.troubleshoot.priors import Suspicion
-from causalplan.troubleshoot.structure import Structure, bits
+from causalplan.troubleshoot.structure import NO_PART, Structure, bits
 
 if TYPE_CHECKING:
     import numpy as np
@@ -51,7 +51,6 @@ if TYPE_CHECKING:
 TEST, INSPECT, REPLACE = "test", "inspect", "replace"
 MAX_STATES = 10_000_000
 """The (belief, assembly state) pairs the solver may hold: about 18 bytes each, 180 MB in all."""
-NO_PART = -1
 SMALL_GRAPH = 32
 """Up to this many assembly states, a belief's values are summed in Python; above, with numpy."""
 TOLERANCE = 1e-9

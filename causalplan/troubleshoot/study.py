@@ -21,7 +21,7 @@ from causalplan.causal.model import CausalModel, read_model
 from causalplan.errors import CausalPlanError
 from causalplan.inputs import mapping_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
-from causalplan.troubleshoot.measures import score
+from causalplan.troubleshoot.measures import StrategyResult, score
 from causalplan.troubleshoot.priors import model_suspicion
 from causalplan.troubleshoot.solver import solve
 from causalplan.troubleshoot.task import TroubleshootingTask, troubleshooting_task
@@ -112,7 +112,8 @@ def troubleshooting_by_object(export: Mapping[str, Any], catalog: Catalog) -> li
     """Return, per (condition, test object) in the order met, the models' troubleshooting against the baselines."""
     trials = export.get("trials")
     rows: dict[tuple[str, str], TroubleshootingByObject] = {}
-    baselines: dict[str, TroubleshootingTask | None] = {}
+    # Each test object's task and its baselines' table, made once (None: it cannot be troubleshot).
+    baselines: dict[str, tuple[TroubleshootingTask, dict[str, StrategyResult]] | None] = {}
     excluded = _excluded(export)
     for item in trials if isinstance(trials, list) else []:
         if not isinstance(item, dict) or str(item.get("participant_id")) in excluded:
@@ -122,14 +123,16 @@ def troubleshooting_by_object(export: Mapping[str, Any], catalog: Catalog) -> li
         row = rows.setdefault(key, TroubleshootingByObject(*key))
         if test_object not in baselines:
             try:
-                baselines[test_object] = troubleshooting_task(catalog.get(test_object), max_states=MAX_TRIAL_STATES)
+                task = troubleshooting_task(catalog.get(test_object), max_states=MAX_TRIAL_STATES)
             except CausalPlanError:
                 baselines[test_object] = None
-        base = baselines[test_object]
-        if base is None:
+            else:
+                baselines[test_object] = (task, task.table())
+        baseline = baselines[test_object]
+        if baseline is None:
             row.not_scored += 1
             continue
-        table = base.table()
+        base, table = baseline
         row.uniform, row.oracle = table["uniform"].expected_actions, table["oracle"].expected_actions
         model = _model_of(item.get("model"), catalog)
         mapping = mapping_from_data(item.get("mapping"), SourceMap(), catalog)

@@ -7,6 +7,7 @@ import itertools
 from causalplan.objects.catalog import parse_object
 from causalplan.objects.model import AssemblyObject
 from causalplan.sim import StepRequest
+from causalplan.troubleshoot.episode import Episode, Step
 
 # A board with a 20 mm square hole, 30 mm deep. The thin peg (16 mm) goes in; the thick one
 # (30 mm) rests on the rim, 30 mm short of its seat: a misaligned weld.
@@ -202,3 +203,23 @@ def goal_plans(obj: AssemblyObject, most: int = 6) -> list[tuple[StepRequest, ..
         if len(plans) == most:
             break
     return plans
+
+
+SHADE_BEFORE_BULB = Episode(
+    "light_bulb",
+    (
+        Step("detach", "shade"),
+        Step("detach", "light_bulb"),
+        Step("replace", "light_bulb"),
+        Step("attach", "shade"),
+        Step("attach", "light_bulb"),
+        Step("test", None, "goal"),
+    ),
+)
+"""The desk lamp's bulb replaced, but its shade put back first: physics finds the socket covered."""
+
+SPARE_SHADE_ONLY = Episode(
+    "light_bulb",
+    (Step("detach", "shade"), Step("replace", "shade"), Step("attach", "shade"), Step("test", None, "goal")),
+)
+"""The desk lamp with a broken bulb and only its shade replaced: whole, its mechanism works, yet no light."""

@@ -16,6 +16,7 @@ from causalplan.sim.robot_episode import SPARE, robot_episode
 from causalplan.sim.robot_episode_playback import episode_playback
 from causalplan.troubleshoot.episode import Episode, Step
 from causalplan.troubleshoot.task import troubleshooting_task
+from tests.sim.fixtures import SHADE_BEFORE_BULB, SPARE_SHADE_ONLY
 
 LAMP = Path(__file__).resolve().parents[2] / "examples" / "paper" / "desk_lamp.yaml"
 
@@ -82,22 +83,13 @@ def test_each_test_in_physics_shows_what_the_episode_observed(catalog: Catalog) 
 
 def test_a_broken_part_never_replaced_gives_no_goal_though_the_robot_carries_it_out(catalog: Catalog) -> None:
     lamp = catalog.get("desk_lamp")
-    steps = (Step("detach", "shade"), Step("replace", "shade"), Step("attach", "shade"), Step("test", None, "goal"))
-    run = robot_episode(lamp, Episode("light_bulb", steps))
+    run = robot_episode(lamp, SPARE_SHADE_ONLY)
     assert run.carried_out and run.mechanism_works and not run.produces_goal
 
 
 def test_the_robot_cannot_put_the_shade_back_before_the_bulb(catalog: Catalog) -> None:
     lamp = catalog.get("desk_lamp")
-    steps = (
-        Step("detach", "shade"),
-        Step("detach", "light_bulb"),
-        Step("replace", "light_bulb"),
-        Step("attach", "shade"),
-        Step("attach", "light_bulb"),
-        Step("test", None, "goal"),
-    )
-    run = robot_episode(lamp, Episode("light_bulb", steps))
+    run = robot_episode(lamp, SHADE_BEFORE_BULB)
     failed = run.failed
     assert failed is not None and failed.kind == "attach" and failed.part == "light_bulb"
     assert failed.failure == "blocked_path" and not run.produces_goal

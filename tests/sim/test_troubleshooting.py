@@ -11,8 +11,8 @@ from click.testing import CliRunner
 from causalplan.cli import app
 from causalplan.objects.catalog import Catalog
 from causalplan.sim.troubleshooting import repair_in_physics
-from causalplan.troubleshoot.episode import Episode, Step
 from causalplan.troubleshoot.task import troubleshooting_task
+from tests.sim.fixtures import SHADE_BEFORE_BULB, SPARE_SHADE_ONLY
 
 LAMP = Path(__file__).resolve().parents[2] / "examples" / "paper" / "desk_lamp.yaml"
 
@@ -29,15 +29,7 @@ def test_the_desk_lamp_rebuilt_after_a_new_bulb_gives_light_in_physics(catalog: 
 def test_physics_refuses_a_rebuild_in_an_order_the_geometry_blocks(catalog: Catalog) -> None:
     # Shade back on before the bulb: physics finds the socket covered, whatever the catalog says.
     lamp = catalog.get("desk_lamp")
-    steps = (
-        Step("detach", "shade"),
-        Step("detach", "light_bulb"),
-        Step("replace", "light_bulb"),
-        Step("attach", "shade"),
-        Step("attach", "light_bulb"),
-        Step("test", None, "goal"),
-    )
-    rebuilt = repair_in_physics(lamp, Episode("light_bulb", steps))
+    rebuilt = repair_in_physics(lamp, SHADE_BEFORE_BULB)
     assert not rebuilt.produces_goal
     failed = rebuilt.report.failed_step
     assert failed is not None and failed.failure is not None and failed.failure.value == "blocked_path"
@@ -53,8 +45,7 @@ def test_a_lamp_to_light_is_lit_before_anything_covers_its_wick(catalog: Catalog
 
 def test_a_broken_part_never_replaced_gives_no_goal_though_physics_builds_it(catalog: Catalog) -> None:
     lamp = catalog.get("desk_lamp")
-    steps = (Step("detach", "shade"), Step("replace", "shade"), Step("attach", "shade"), Step("test", None, "goal"))
-    rebuilt = repair_in_physics(lamp, Episode("light_bulb", steps))
+    rebuilt = repair_in_physics(lamp, SPARE_SHADE_ONLY)
     assert rebuilt.report.passed and not rebuilt.broken_part_replaced and not rebuilt.produces_goal
 
 

@@ -17,8 +17,8 @@ from causalplan.causal.model import CausalModel, Labelling
 from causalplan.objects.catalog import Catalog
 
 MAX_SERVICE_STATES = 500_000
-"""The (belief, assembly) states one request may solve, about a second of work: the catalog's objects need
-at most a few thousand. Beyond this it is refused (``troubleshooting_too_large``, 422)."""
+"""The (belief, assembly) states one request may solve: the catalog's objects need at most a few thousand
+(benchmarks/RESULTS.md). Beyond this it is refused (``troubleshooting_too_large``, 422)."""
 
 
 @dataclass(frozen=True)

@@ -25,17 +25,18 @@ time, and it makes the document far smaller (sizes in benchmarks/RESULTS.md, `pl
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 from causalplan.errors import CausalPlanError
 from causalplan.objects.model import AssemblyObject, Shape
 from causalplan.planners.result import PlanStep
-from causalplan.sim.geometry import solids
+from causalplan.sim.geometry import Solid, solids
 from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.poses import Pose
 from causalplan.sim.report import SimulationReport
 from causalplan.sim.robot.panda import BASE_POSITION
 from causalplan.sim.robot.replay import part_tracks
+from causalplan.sim.robot.tracks import PartTrack
 from causalplan.sim.robot.trajectory import Trajectory
 
 FORMAT = "causalplan-playback/2"
@@ -94,6 +95,17 @@ def playback(
         raise NoMotorCommandsError(f"The run of the {obj.name} has no motor commands to play.")
     tracks = report.tracks or part_tracks(obj, steps, commands)
     parts = solids(obj)
+    bodies = [(part, parts[part].name, parts[part], track) for part, track in tracks.items()]
+    return player_document(obj, commands, bodies, report.placed)
+
+
+def player_document(
+    obj: AssemblyObject,
+    commands: Trajectory,
+    bodies: Iterable[tuple[str, str, Solid, PartTrack]],
+    placed: Mapping[str, Pose],
+) -> dict[str, object]:
+    """Return the player's document of ``commands``: each body's id, name, solid and track; where each ends."""
     return {
         "format": FORMAT,
         "object": obj.id,
@@ -103,13 +115,13 @@ def playback(
         "trajectory": _commands(commands),
         "parts": [
             {
-                "id": part,
-                "name": parts[part].name,
-                "shapes": [_shape(shape) for shape in parts[part].shapes],
-                "light": [_shape(shape) for shape in parts[part].light],
+                "id": body_id,
+                "name": name,
+                "shapes": [_shape(shape) for shape in solid.shapes],
+                "light": [_shape(shape) for shape in solid.light],
                 "track": {"times": _rounded(track.times), "poses": list(map(pose_list, track.poses))},
             }
-            for part, track in tracks.items()
+            for body_id, name, solid, track in bodies
         ],
-        "assembled": {part: pose_list(pose) for part, pose in report.placed.items()},
+        "assembled": {body_id: pose_list(pose) for body_id, pose in placed.items()},
     }

@@ -30,14 +30,21 @@ def bring(
     failure = robot.fetch(part_id, part)
     if failure is None:
         end = min(start, ENGAGEMENT) if motion.turns > 0 else 0.0
-        line = [path(d) for d in _distances(start, end, LINE_STEP)]
+        line = [path(d) for d in spaced_distances(start, end, LINE_STEP)]
         failure = robot.carry(path(start), f"at the approach of the {part.name}", line, mate)
     return failure
 
 
-def _distances(start: float, end: float, step: float) -> list[float]:
+def spaced_distances(start: float, end: float, step: float) -> list[float]:
+    """Return the distances from ``start`` (left out) to ``end`` (kept), evenly spaced at most ``step`` apart."""
     count = max(1, math.ceil(abs(start - end) / step))
     return [start + (end - start) * k / count for k in range(1, count + 1)]
+
+
+def screw_spacing(motion: Motion) -> float:
+    """Return the metres between a screw's poses along its thread: a line's step, or less for the turn's step."""
+    spin_per_metre = 2 * math.pi * motion.turns / ENGAGEMENT
+    return min(LINE_STEP, SCREW_STEP / spin_per_metre)
 
 
 def drive(
@@ -47,18 +54,16 @@ def drive(
     what = f"driving the {name} home"
     if motion.turns > 0:
         thread = max(stopped, min(start, ENGAGEMENT))
-        failure = robot.follow("approach", [path(d) for d in _distances(start, thread, LINE_STEP)], what, mate)
+        failure = robot.follow("approach", [path(d) for d in spaced_distances(start, thread, LINE_STEP)], what, mate)
         if failure is not None or thread <= stopped:
             return failure
-        spin_per_metre = 2 * math.pi * motion.turns / ENGAGEMENT
-        step = min(LINE_STEP, SCREW_STEP / spin_per_metre)
-        return robot.screw([path(d) for d in _distances(thread, stopped, step)], what, mate)
+        return robot.screw([path(d) for d in spaced_distances(thread, stopped, screw_spacing(motion))], what, mate)
     push = max(stopped, min(start, PUSH_DEPTH))
-    failure = robot.follow("approach", [path(d) for d in _distances(start, push, LINE_STEP)], what, mate)
+    failure = robot.follow("approach", [path(d) for d in spaced_distances(start, push, LINE_STEP)], what, mate)
     if failure is not None or push <= stopped:
         return failure
     kind = "ignite" if motion.touches_only else "push"
-    return robot.follow(kind, [path(d) for d in _distances(push, stopped, LINE_STEP)], what, mate)
+    return robot.follow(kind, [path(d) for d in spaced_distances(push, stopped, LINE_STEP)], what, mate)
 
 
 def let_go(
@@ -67,7 +72,7 @@ def let_go(
     """Release the joined part and retreat; a flame first goes back along its line and to its place on the table."""
     if motion.touches_only:
         back = robot.follow(
-            "ignite", [path(d) for d in _distances(0.0, start, LINE_STEP)], f"taking the {name} back", mate
+            "ignite", [path(d) for d in spaced_distances(0.0, start, LINE_STEP)], f"taking the {name} back", mate
         )
         if back is not None:
             return back

@@ -80,15 +80,21 @@ class EpisodeOut(OutputModel):
     strategies: dict[str, StrategyActionsOut] = Field(description="Each strategy's actions on the same fault.")
 
 
-class TroubleshootingOut(OutputModel):
-    """The same JSON as `causalplan troubleshoot --all-faults --json`, with the episode when a fault was given."""
+class _StrategiesTable(OutputModel):
+    """The strategies' table on the broken object (`causalplan troubleshoot --all-faults --json`)."""
 
-    status: Literal["solved"]
+    status: str
     object: str
     fault_priors: str | None = Field(description="Where the catalog's priors come from: 'illustrative' or 'measured'.")
     repair_bonus: float = Field(description="The reward for the repair; each action costs 1.")
     faults: dict[str, float] = Field(description="The catalog's fault priors, by part.")
     strategies: dict[str, StrategyOut] = Field(description="model (with a model), uniform and oracle.")
+
+
+class TroubleshootingOut(_StrategiesTable):
+    """The same JSON as `causalplan troubleshoot --all-faults --json`, with the episode when a fault was given."""
+
+    status: Literal["solved"]
     episode: EpisodeOut | None = None
     model_id: uuid.UUID
     warnings: list[DiagnosticOut]
@@ -119,15 +125,10 @@ class RobotEpisodeOut(OutputModel):
     timing: dict[str, float]
 
 
-class TroubleshootingRobotOut(OutputModel):
+class TroubleshootingRobotOut(_StrategiesTable):
     """A `troubleshooting` job's result: `TroubleshootingOut` with the robot's run of the episode."""
 
     status: Literal["repaired", "not_repaired_in_physics"]
-    object: str
-    fault_priors: str | None
-    repair_bonus: float
-    faults: dict[str, float]
-    strategies: dict[str, StrategyOut]
     episode: EpisodeOut
     robot: RobotEpisodeOut
     model_id: uuid.UUID
