@@ -181,6 +181,7 @@ def test_a_full_queue_with_a_waiting_line(tmp_path: Path, monkeypatch: pytest.Mo
         waiting = post_in_background(client, {"model": with_unique_effect(DESK_LAMP)})
         # The waiting line is the fair share's, in front of the pool (service/fair_share.py).
         wait_until(lambda: pool.fair_share.stats()["waiting"] == 1)
+        assert pool.stats().waiting == 1  # what /health shows of the interactive pool
         assert error_of(client.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}), 429)
         for thread, responses in (running, waiting):
             thread.join()
