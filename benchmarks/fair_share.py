@@ -1,6 +1,6 @@
 """Fair shares under the round-four probe attacks (issue 40), repeated on one machine, in-process.
 
-Three probes, each on a fresh SQLite database and an app run through Starlette's TestClient (no
+Four probes, each on a fresh SQLite database and an app run through Starlette's TestClient (no
 socket is opened: every request stays in this process; the clients' addresses are the test
 client's ``client=(address, port)``, documentation addresses):
 
@@ -12,7 +12,7 @@ client's ``client=(address, port)``, documentation addresses):
 2. wrong tokens: ``--addresses`` addresses send wrong bearer tokens as fast as they can for
    ``--token-seconds`` while a valid API key reads its own job and the research token lists
    trials; reports their answers by code;
-3. storage: one client without a key posts plans with ~40 KB inline models (stored, then 422) from
+3. storage: one client without a key posts plans with ~15 KB inline models (stored, then 422) from
    4 threads for ``--growth-seconds``; reports the answers by code and the database's growth
    (file and write-ahead log, then the file after a checkpoint) against the client's allowance;
 4. films: one address starts ``--participants`` demo participants (``POST /try``) and each asks
@@ -268,7 +268,11 @@ def _checkpoint(folder: Path) -> None:
 
 
 def _big_model(number: int) -> dict[str, Any]:
-    """Return an invalid model of ~40 KB within the document limits: stored (as every inline model is), then a 422."""
+    """Return an invalid model of ~15 KB within the document limits: stored (as every inline model is), then a 422.
+
+    Its row holds the reader's report of 150 bad rules too: about 95 KB counted a row (39.9 MB in
+    418 rows in RESULTS.md's 2026-12-05 run).
+    """
     labels = [f"function {number} {index} " + "x" * 60 for index in range(150)]
     return {"object": "desk_lamp", "functions": {}, "rules": [f"{label} CAUSES light" for label in labels]}
 

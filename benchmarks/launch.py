@@ -32,7 +32,6 @@ import json  # noqa: E402
 import math  # noqa: E402
 import os  # noqa: E402
 import random  # noqa: E402
-import re  # noqa: E402
 import shutil  # noqa: E402
 import signal  # noqa: E402
 import socket  # noqa: E402
@@ -41,19 +40,15 @@ import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
-import uuid  # noqa: E402
 from collections import Counter  # noqa: E402
-from dataclasses import dataclass, field  # noqa: E402
 from datetime import UTC, datetime  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
 import gevent  # noqa: E402
 import requests  # noqa: E402
-from gevent.event import Event  # noqa: E402
-from locust import HttpUser, task  # noqa: E402
+from launch_participant import Participant, Replica, Run  # noqa: E402  # this folder, launch.py's own
 from locust.env import Environment  # noqa: E402
-from locust.exception import StopUser  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "launch.json"
@@ -61,7 +56,6 @@ CAUSALPLAN = str(Path(sys.executable).parent / "causalplan")
 TOKEN = "launch-day-research-token-0123456789"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 READY_SECONDS = 300.0
-REQUEST_SECONDS = 120.0
 KILL_WAIT_SECONDS = 30.0
 """Halfway, the kill waits this long at most for a request in flight to the doomed replica."""
 OVER_ADMISSION = 0.1
@@ -70,68 +64,6 @@ CONDITIONS = [
     {"name": "near", "training": ["desk_lamp"], "tests": ["flashlight"]},
     {"name": "far", "training": ["desk_lamp"], "tests": ["candle"]},
 ]
-TUTORIAL = {
-    "answer:sticker": "no",
-    "answer:diffuse": "no",
-    "answer:and": "and",
-    "rules": "store energy AND turn the axle CAUSES the axle spins\n"
-    "the axle spins AND roll on the ground CAUSES motion",
-}
-STEP1 = {
-    "part:base_with_cables": "provide electricity",
-    "part:light_bulb": "turn electricity into light\nclose the circuit",
-}
-STEP2 = {
-    "rules": "provide electricity AND close the circuit CAUSES electricity flows\n"
-    "electricity flows AND turn electricity into light CAUSES light"
-}
-STEP3_CHOICES: dict[str, str | list[str]] = {
-    "batteries": "provide electricity",
-    "head": ["turn electricity into light", "close the circuit"],
-    "wax": "provide electricity",
-    "wick": "turn electricity into light",
-    "match": "close the circuit",
-}
-"""What a participant maps to each test object's part (an electric model on the candle too: it transfers)."""
-CHOICE_FIELD = re.compile(r'name="chosen:([a-z_]+)"')
-ARRIVAL_FIELD = re.compile(r'name="arrival" value="([A-Za-z0-9]+)"')
-
-
-@dataclass
-class Replica:
-    """One ``causalplan serve`` process and what it answered."""
-
-    url: str
-    process: subprocess.Popen[bytes]
-    log: Path
-    alive: bool = True
-    in_flight: int = 0
-    server_errors: int = 0
-    answers: int = 0
-
-
-@dataclass
-class Run:
-    """What every participant did and saw, shared by the Locust users (greenlets of one thread)."""
-
-    replicas: list[Replica]
-    study: str
-    think: tuple[float, float]
-    latencies: list[float] = field(default_factory=list)
-    acknowledged: list[tuple[str, str]] = field(default_factory=list)
-    """(participant code, what was saved) for every form the service answered with 303."""
-    outcomes: Counter[str] = field(default_factory=Counter)
-    retries: int = 0
-    participants: int = 0
-    failed_requests: int = 0
-    next_participant: int = 0
-    ended: int = 0
-    """Participants whose journey has ended (finished, turned away, or stopped by a refusal)."""
-    over: Event = field(default_factory=Event)
-    """Set when the run ends: the participants who have ended wait for it."""
-
-
-RUN: Run | None = None
 
 
 def free_port() -> int:
@@ -139,147 +71,6 @@ def free_port() -> int:
         probe.bind(("127.0.0.1", 0))
         port: int = probe.getsockname()[1]
         return port
-
-
-class Participant(HttpUser):
-    """A Prolific participant: study link, consent, tutorial, steps 1-3, the end; then gone."""
-
-    host = "http://127.0.0.1"  # every request names its replica in full
-
-    def on_start(self) -> None:
-        assert RUN is not None
-        self.run_state = RUN
-        number = RUN.next_participant
-        RUN.next_participant += 1
-        self.number = number
-        self.address = f"10.{(number >> 16) & 255}.{(number >> 8) & 255}.{number & 255}"
-        self.ids = {
-            "PROLIFIC_PID": uuid.uuid4().hex[:24],
-            "STUDY_ID": "launchday0000000000000001",
-            "SESSION_ID": uuid.uuid4().hex,
-        }
-
-    def _replica(self, avoid: Replica | None = None) -> Replica | None:
-        live = [replica for replica in self.run_state.replicas if replica.alive and replica is not avoid]
-        return random.choice(live) if live else None
-
-    def send(self, method: str, path: str, name: str, data: dict[str, Any] | None = None) -> requests.Response | None:
-        """Send one page request to a random live replica; once more to another if that one is gone."""
-        started = time.perf_counter()
-        tried: Replica | None = None
-        for attempt in range(2):
-            replica = self._replica(avoid=tried)
-            if replica is None:
-                break
-            tried = replica
-            replica.in_flight += 1
-            with self.client.request(
-                method,
-                replica.url + path,
-                name=name,
-                data=data,
-                headers={"X-Forwarded-For": self.address},
-                allow_redirects=False,
-                timeout=REQUEST_SECONDS,
-                catch_response=True,
-            ) as response:
-                replica.in_flight -= 1
-                if response.status_code == 0:  # no answer: the replica died under it, or before
-                    response.success()  # counted below as a retry, not as the page's failure
-                    if attempt == 0:
-                        self.run_state.retries += 1
-                    continue
-                replica.answers += 1
-                if response.status_code >= 500:
-                    replica.server_errors += 1
-                    response.failure(f"{response.status_code}")
-                else:
-                    response.success()
-                self.run_state.latencies.append(time.perf_counter() - started)
-                return response
-        self.run_state.failed_requests += 1
-        return None
-
-    def think(self) -> None:
-        gevent.sleep(random.uniform(*self.run_state.think))
-
-    def form(self, path: str, name: str, data: dict[str, Any], saved: str, code: str) -> str:
-        """Post a form; return where it sends the participant (StopUser when it was not accepted)."""
-        self.think()
-        answer = self.send("POST", path, name, data)
-        if answer is None or answer.status_code != 303:
-            self.run_state.outcomes[
-                f"refused at {name}: {answer.status_code if answer is not None else 'no answer'}"
-            ] += 1
-            raise StopUser
-        if saved:
-            self.run_state.acknowledged.append((code, saved))
-        return str(answer.headers["location"])
-
-    def page(self, path: str, name: str) -> str:
-        answer = self.send("GET", path, name)
-        if answer is None or answer.status_code not in (200, 303):
-            self.run_state.outcomes[
-                f"no page at {name}: {answer.status_code if answer is not None else 'no answer'}"
-            ] += 1
-            raise StopUser
-        return answer.text
-
-    @task
-    def take_part(self) -> None:
-        """Take part once, then wait for the run's end (a user that stopped would be replaced by a new one)."""
-        if self.number >= self.run_state.participants:  # a replacement Locust started: not a participant
-            self.run_state.over.wait()
-            raise StopUser
-        try:
-            self.journey()
-        except StopUser:
-            pass
-        finally:
-            self.run_state.ended += 1
-        self.run_state.over.wait()
-        raise StopUser
-
-    def journey(self) -> None:
-        study = self.run_state.study
-        query = "&".join(f"{key}={value}" for key, value in self.ids.items())
-        consent = self.page(f"/s/{study}?{query}", "/s/[study]")
-        found = ARRIVAL_FIELD.search(consent)
-        if found is None:
-            self.run_state.outcomes["turned away: study full" if "study is full" in consent else "no consent form"] += 1
-            return
-        self.think()
-        agreed = self.send(
-            "POST", f"/s/{study}/consent", "/s/[study]/consent", {"arrival": found.group(1), "decision": "agree"}
-        )
-        if agreed is None or agreed.status_code != 303:
-            full = agreed is not None and "study is full" in agreed.text
-            self.run_state.outcomes[
-                "turned away at consent: study full" if full else f"consent: {_status(agreed)}"
-            ] += 1
-            return
-        code = str(agreed.headers["location"]).removeprefix("/p/")
-        self.run_state.acknowledged.append((code, "consent"))
-        base = f"/p/{code}"
-        self.page(f"{base}/tutorial", "/p/[code]/tutorial")
-        self.form(f"{base}/tutorial", "/p/[code]/tutorial", TUTORIAL, "tutorial", code)
-        self.page(f"{base}/step1/1", "/p/[code]/step1/1")
-        self.form(f"{base}/step1/1", "/p/[code]/step1/1", STEP1, "step1", code)
-        self.page(f"{base}/step2", "/p/[code]/step2")
-        self.form(f"{base}/step2", "/p/[code]/step2", STEP2, "step2", code)
-        step3 = self.page(f"{base}/step3/1", "/p/[code]/step3/1")
-        choices = {
-            f"chosen:{part}": STEP3_CHOICES[part] for part in CHOICE_FIELD.findall(step3) if part in STEP3_CHOICES
-        }
-        self.form(f"{base}/step3/1", "/p/[code]/step3/1", choices, "step3", code)
-        self.page(f"{base}/step3/1", "/p/[code]/step3/1 (verdict)")
-        after = self.form(f"{base}/step3/1/next", "/p/[code]/step3/1/next", {}, "", code)
-        if after.endswith("/about"):
-            self.page(after, "/p/[code]/about")
-            after = self.form(after, "/p/[code]/about", {}, "", code)
-        self.page(after, "/p/[code]/done")
-        self.run_state.acknowledged.append((code, "finished"))
-        self.run_state.outcomes["completed the journey"] += 1
 
 
 def start_postgres(folder: Path) -> tuple[Any, str]:
@@ -395,7 +186,6 @@ def missing_saves(export: dict[str, Any], acknowledged: list[tuple[str, str]]) -
 
 
 def main() -> int:
-    global RUN
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--participants", type=int, default=300)
     parser.add_argument("--arrival-seconds", type=float, default=600.0, help="Participants arrive evenly over this.")
@@ -420,7 +210,7 @@ def main() -> int:
         ]
         ready_seconds = [round(wait_ready(replica), 1) for replica in replicas]
         study = define_study(replicas[0].url, quota)
-        RUN = Run(replicas, study, (low, high), participants=options.participants)
+        run = Participant.run_state = Run(replicas, study, (low, high), participants=options.participants)
         environment = Environment(user_classes=[Participant])
         runner = environment.create_local_runner()
         started = time.monotonic()
@@ -437,9 +227,9 @@ def main() -> int:
             replicas[0].alive = False  # ...and the balancer, noticing, sends nothing new there
             killed_at = round(time.monotonic() - started, 1)
         deadline = started + options.arrival_seconds + 60 * (high + 5) + 300  # bounded: a journey has ~8 forms
-        while time.monotonic() < deadline and RUN.ended < options.participants:
+        while time.monotonic() < deadline and run.ended < options.participants:
             gevent.sleep(1.0)
-        RUN.over.set()
+        run.over.set()
         runner.quit()
         took = round(time.monotonic() - started, 1)
         live = replicas[-1]
@@ -454,8 +244,8 @@ def main() -> int:
     per_condition = Counter(p["condition"] for p in finished)
     admitted = Counter(p["condition"] for p in export["participants"])
     allowed = {condition["name"]: quota + math.floor(quota * OVER_ADMISSION) for condition in CONDITIONS}
-    missing = missing_saves(export, RUN.acknowledged)
-    latencies = RUN.latencies
+    missing = missing_saves(export, run.acknowledged)
+    latencies = run.latencies
     report = {
         "when": datetime.now(UTC).isoformat(timespec="seconds"),
         "command": " ".join(["python", "benchmarks/launch.py", *sys.argv[1:]]),
@@ -473,15 +263,15 @@ def main() -> int:
         "completions_allowed_per_condition": allowed,
         "admitted": dict(admitted),
         "places": recruitment["places"],
-        "outcomes": dict(RUN.outcomes),
-        "acknowledged_saves": len(RUN.acknowledged),
+        "outcomes": dict(run.outcomes),
+        "acknowledged_saves": len(run.acknowledged),
         "acknowledged_saves_missing": len(missing),
         "missing": missing[:20],
         "server_errors_live_replica": live.server_errors,
         "server_errors_killed_replica": replicas[0].server_errors if len(replicas) > 1 else 0,
         "answers_per_replica": [replica.answers for replica in replicas],
-        "retried_on_the_other_replica": RUN.retries,
-        "requests_without_answer": RUN.failed_requests,
+        "retried_on_the_other_replica": run.retries,
+        "requests_without_answer": run.failed_requests,
         "page_seconds": {
             "count": len(latencies),
             "p50": percentile(latencies, 0.50),
@@ -505,18 +295,14 @@ def main() -> int:
         f"launch: {options.participants} participants over {options.arrival_seconds:g} s, "
         f"replica killed at {killed_at} s with {in_flight_at_kill} request(s) in flight to it; done in {took} s\n"
         f"completions {dict(per_condition)} (quota {quota} each, at most {allowed}); admitted {dict(admitted)}\n"
-        f"acknowledged saves {len(RUN.acknowledged)}, missing from the export {len(missing)}; "
-        f"5xx live replica {live.server_errors}; retried {RUN.retries}; unanswered {RUN.failed_requests}\n"
+        f"acknowledged saves {len(run.acknowledged)}, missing from the export {len(missing)}; "
+        f"5xx live replica {live.server_errors}; retried {run.retries}; unanswered {run.failed_requests}\n"
         f"page latency p50 {_ms(pages['p50'])} p95 {_ms(pages['p95'])} p99 {_ms(pages['p99'])} "
-        f"({pages['count']} pages); outcomes {dict(RUN.outcomes)}"
+        f"({pages['count']} pages); outcomes {dict(run.outcomes)}"
     )
     for name, held in checks.items():
         print(f"  {'ok ' if held else 'NOT'} {name}")
     return 0 if all(checks.values()) else 1
-
-
-def _status(answer: requests.Response | None) -> str:
-    return str(answer.status_code) if answer is not None else "no answer"
 
 
 def _ms(seconds: float | None) -> str:

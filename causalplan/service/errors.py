@@ -187,6 +187,14 @@ class WorkerCrashedError(ServiceError):
         super().__init__(message, details=details, headers={"Retry-After": "1"})
 
 
+class WorkerDiedError(WorkerCrashedError):
+    """The worker process died under the work (killed, out of memory, crashed); ``details`` has its ``exit_code``.
+
+    Not a closed pool (the server stopping) nor a call no worker could take: a job's work is
+    run once more only after this one.
+    """
+
+
 class NotReadyError(ServiceError):
     """This replica's planner pool has not answered its first plan yet (``GET /health/ready``)."""
 

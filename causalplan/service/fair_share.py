@@ -27,6 +27,7 @@ this process's own (each replica has its own workers).
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import threading
@@ -44,7 +45,7 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 from causalplan.service.deps import ALLOWANCE_STATE, client_address
 from causalplan.service.errors import QueueFullError, TooManyRequestsInFlightError
 from causalplan.service.owners import PARTICIPANT_PREFIX, address_owner, owner_of_token, storage_allowance
-from causalplan.service.pool.pool import PlannerPool
+from causalplan.service.pool.pool import PlannerPool, PoolStats
 from causalplan.settings import Settings
 
 T = TypeVar("T")
@@ -289,6 +290,14 @@ class FairSharePool(PlannerPool):
             settings.planning_workers, settings.queue_size, settings.worker_memory_mb, settings.queue_wait_seconds
         )
         self.fair_share = fair_share_of(settings)
+
+    def stats(self) -> PoolStats:
+        """Return the pool's numbers; ``waiting`` counts the requests waiting for their turn here.
+
+        A request enters the pool only with a turn, so the pool's own waiting line stays empty.
+        """
+        stats = super().stats()
+        return dataclasses.replace(stats, waiting=stats.waiting + self.fair_share.stats()["waiting"])
 
     def run(
         self,

@@ -68,7 +68,8 @@ def serve(tmp_path: Path, *options: str) -> tuple[subprocess.Popen[str], str]:
             if httpx.get(f"{base}/health/ready", timeout=5).status_code == 200:
                 return process, base
         except httpx.TransportError:
-            time.sleep(0.1)
+            pass
+        time.sleep(0.1)  # a 503 (not ready yet) waits too: no stream of requests at the warming server
     process.kill()
     pytest.fail(f"the server was not ready within {START_SECONDS} s: {process.communicate()[0]}")
 

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from causalplan.errors import InputFileError
 from causalplan.limits import LimitExceededError
-from causalplan.service.errors import InvalidRequestError, WorkerCrashedError
+from causalplan.service.errors import InvalidRequestError, WorkerDiedError
 from causalplan.service.jobs.fit_estimation import prepare_fit_estimation, run_fit_estimation_job
 from causalplan.service.jobs.requests import (
     BatchRequest,
@@ -28,7 +28,7 @@ from causalplan.service.jobs.requests import (
 )
 from causalplan.service.jobs.troubleshooting import prepare_troubleshooting, run_troubleshooting_job
 from causalplan.service.jobs.video import prepare_video, run_video_job
-from causalplan.service.jobs.work import Kind, Progress, in_pool, in_pool_retried, worker_died
+from causalplan.service.jobs.work import Kind, Progress, in_pool, in_pool_retried
 from causalplan.service.storage.jobs import JobKind
 from causalplan.service.work.batches import ConsensusArguments, TrialsArguments
 from causalplan.service.work.planning import SimulationArguments
@@ -150,9 +150,7 @@ def judge_in_chunks(
         chunk = tuple(trials[start : start + CHUNK_SIZE])
         try:
             judged = in_pool_retried(services, progress, work, arguments(chunk))
-        except WorkerCrashedError as exc:
-            if not worker_died(exc):
-                raise
+        except WorkerDiedError as exc:
             message = (
                 f"The worker judging trials {start + 1}-{start + len(chunk)} died twice "
                 f"(exit code {exc.details['exit_code']}); they were not judged."

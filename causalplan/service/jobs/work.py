@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from pydantic import BaseModel
 
-from causalplan.service.errors import WorkerCrashedError
+from causalplan.service.errors import WorkerDiedError
 from causalplan.service.jobs.requests import JobRequest
 from causalplan.service.work.calls import WorkStoppedError
 from causalplan.service.work.registry import Work
@@ -86,24 +86,16 @@ def in_pool(services: Services, progress: Progress, work: Work[A, T], arguments:
         raise JobCancelledError from None
 
 
-def worker_died(exc: WorkerCrashedError) -> bool:
-    """Return whether ``exc`` says the worker process died under the work (killed, out of memory, crashed).
-
-    Not when the pool closed (the server stopping: the job goes back to the queue) or no worker
-    could take the work: only a dead worker's error carries its ``exit_code``.
-    """
-    return "exit_code" in exc.details
-
-
 def in_pool_retried(services: Services, progress: Progress, work: Work[A, T], arguments: A) -> T:
     """Return ``work`` done on ``arguments`` as ``in_pool`` does; when its worker dies, once more on a fresh worker.
 
-    The pool replaces a dead worker at once. A second death raises its ``WorkerCrashedError``.
+    The pool replaces a dead worker at once. A second death raises its ``WorkerDiedError``; a
+    closed pool or a call no worker could take (other ``WorkerCrashedError``s) is not run again.
     """
     try:
         return in_pool(services, progress, work, arguments)
-    except WorkerCrashedError as exc:
-        if not worker_died(exc) or progress.stop.is_set():
+    except WorkerDiedError as exc:
+        if progress.stop.is_set():
             raise
         logger.warning("a job worker died (exit code %s): its work runs once more", exc.details["exit_code"])
         return in_pool(services, progress, work, arguments)

@@ -40,6 +40,7 @@ from causalplan.service.errors import (
     PlanningTimeoutError,
     QueueFullError,
     WorkerCrashedError,
+    WorkerDiedError,
     error_class,
 )
 from causalplan.service.pool import worker
@@ -335,7 +336,7 @@ class PlannerPool:
             ) from None
         except ProcessExpired as exc:
             remove_stale_folders()
-            raise WorkerCrashedError(
+            raise WorkerDiedError(
                 "The planner worker running this request stopped unexpectedly (killed, out of memory, "
                 "or crashed). It has been replaced; sending the request again should work.",
                 details={"exit_code": exc.exitcode},

@@ -146,24 +146,29 @@ class WindowCounter:
         replicas counting at once never admit more than the limit.
         """
         client = _client_key(client)
-        now = self._clock()
-        window = math.floor(now / self.window_seconds)
-        ends_at = (window + 1) * self.window_seconds
-        key = and_(
-            WindowCountRecord.scope == self.scope,
-            WindowCountRecord.client == client,
-            WindowCountRecord.window == window,
-        )
-        with Session(self.engine) as session, storage_errors(session):
-            increment = session.execute(
-                update(WindowCountRecord)
-                .where(key, WindowCountRecord.count < self.per_window)
-                .values(count=WindowCountRecord.count + 1)
+        while True:  # another replica may count this client between two of our statements: count again
+            now = self._clock()
+            window = math.floor(now / self.window_seconds)
+            ends_at = (window + 1) * self.window_seconds
+            key = and_(
+                WindowCountRecord.scope == self.scope,
+                WindowCountRecord.client == client,
+                WindowCountRecord.window == window,
             )
-            counted = cast(CursorResult[Any], increment).rowcount
-            if not counted:
+            with Session(self.engine) as session, storage_errors(session):
+                increment = session.execute(
+                    update(WindowCountRecord)
+                    .where(key, WindowCountRecord.count < self.per_window)
+                    .values(count=WindowCountRecord.count + 1)
+                )
+                if cast(CursorResult[Any], increment).rowcount:
+                    session.commit()
+                    return None
                 existing = session.scalar(select(WindowCountRecord.count).where(key))
-                if existing is None:
+                if existing is not None and existing >= self.per_window:
+                    session.commit()
+                    return existing, max(1, math.ceil(ends_at - now))
+                if existing is None:  # this client's first event in the window
                     session.execute(delete(WindowCountRecord).where(WindowCountRecord.ends_at <= now))
                     try:
                         with session.begin_nested():
@@ -174,15 +179,10 @@ class WindowCounter:
                             )
                     except IntegrityError:  # another replica counted this client's first event just now
                         session.commit()
-                        return self.admit(client)
-                    counted = 1
-                elif existing < self.per_window:  # counted by another replica between our update and this read
+                        continue
                     session.commit()
-                    return self.admit(client)
-            session.commit()
-            if counted:
-                return None
-            return existing or self.per_window, max(1, math.ceil(ends_at - now))
+                    return None
+                session.commit()  # under the limit: counted by another replica between our update and read
 
 
 MINUTE_SECONDS = 60.0

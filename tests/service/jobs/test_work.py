@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from causalplan.service.errors import WorkerCrashedError
-from causalplan.service.jobs.work import Progress, in_pool_retried, worker_died
+from causalplan.service.errors import WorkerCrashedError, WorkerDiedError
+from causalplan.service.jobs.work import Progress, in_pool_retried
 from causalplan.service.work.registry import Pool, Work
 from tests.service.fixtures import running_client, services_of, settings_for, sqlite_url
 from tests.service.pool.jobs_for_tests import DieOnce, die_once
@@ -25,8 +25,8 @@ def test_work_whose_worker_dies_runs_once_more_then_fails(tmp_path: Path) -> Non
         assert marker.exists()  # the first worker died; its replacement did the work
         with pytest.raises(WorkerCrashedError) as twice:
             in_pool_retried(services, progress, DIE_ONCE, DieOnce("", "never"))
-        assert worker_died(twice.value)
+        assert isinstance(twice.value, WorkerDiedError)
         services.job_pool.close()
         with pytest.raises(WorkerCrashedError) as closed:  # a closed pool is no dead worker: not run again
             in_pool_retried(services, progress, DIE_ONCE, DieOnce(str(marker), "never"))
-        assert not worker_died(closed.value)
+        assert not isinstance(closed.value, WorkerDiedError)

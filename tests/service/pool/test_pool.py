@@ -181,6 +181,7 @@ def test_a_full_queue_with_a_waiting_line(tmp_path: Path, monkeypatch: pytest.Mo
         waiting = post_in_background(client, {"model": with_unique_effect(DESK_LAMP)})
         # The waiting line is the fair share's, in front of the pool (service/fair_share.py).
         wait_until(lambda: pool.fair_share.stats()["waiting"] == 1)
+        assert pool.stats().waiting == 1  # what /health shows of the interactive pool
         assert error_of(client.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}), 429)
         for thread, responses in (running, waiting):
             thread.join()
@@ -376,27 +377,31 @@ def test_starting_a_pool_removes_folders_left_by_a_killed_server() -> None:
         live.rmdir()
 
 
-def test_a_server_killed_with_sigkill_leaves_folders_the_next_start_removes(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    # A temp root of its own: a pool started meanwhile by another test would sweep the shared one.
-    monkeypatch.setenv("TMPDIR", str(tmp_path))
-    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
-    script = (
-        "import time; from causalplan.service.pool.pool import PlannerPool\n"
-        "pool = PlannerPool(1, 0, 4096, 5.0); pool.start(); print(pool.worker_pids()[0], flush=True); time.sleep(600)"
+def test_a_server_killed_with_sigkill_leaves_folders_the_next_start_removes(tmp_path: Path) -> None:
+    # Both servers are processes of their own with a temp root of their own: a sweep in this
+    # process (any pool's start, close or killed worker, from another test's thread) never
+    # sees the folder, and no process-wide ``tempfile.tempdir`` is patched under other threads.
+    environment = {**os.environ, "TMPDIR": str(tmp_path)}
+    start = "from causalplan.service.pool.pool import PlannerPool; pool = PlannerPool(1, 0, 4096, 5.0); pool.start()"
+    server = subprocess.Popen(
+        [sys.executable, "-c", f"import time; {start}; print(pool.worker_pids()[0], flush=True); time.sleep(600)"],
+        stdout=subprocess.PIPE,
+        text=True,
+        env=environment,
     )
-    server = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
     assert server.stdout is not None
     worker_pid = int(server.stdout.readline())
-    folder = _temp_folder_of(worker_pid)
+    [folder] = tmp_path.glob(f"{FOLDER_PREFIX}*-{worker_pid}-*")
     server.kill()
     server.wait()
     os.kill(worker_pid, signal.SIGKILL)  # its worker would notice the closed socket only when it next reads
     wait_until(lambda: not is_running(worker_pid))
     assert folder.is_dir()  # nobody was left to remove it
-    with bare_pool(1):
-        assert not folder.exists()
+    next_start = f"import pathlib; {start}; print(pathlib.Path({str(folder)!r}).exists(), flush=True); pool.close()"
+    after = subprocess.run(
+        [sys.executable, "-c", next_start], capture_output=True, text=True, env=environment, check=True
+    )
+    assert after.stdout.split() == ["False"]
 
 
 def _parent_of(pid: int) -> int:
