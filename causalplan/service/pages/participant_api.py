@@ -112,13 +112,6 @@ def _save_rules(journey: ParticipantJourney, text: str, revision: int | None, pr
     return True
 
 
-def _typed_model(journey: ParticipantJourney, text: str) -> ParticipantModel:
-    """Return the draft model with the rules as typed (the saved functions, these rules)."""
-    rules, _ = rules_from_text(text)
-    draft = journey.draft_model()
-    return ParticipantModel(draft.goal, draft.functions, tuple(rules))
-
-
 @router.post("/check", response_model=CheckOut)
 def check_rules(
     body: CheckIn, journey: JourneyDep, session: SessionDep, catalog: CatalogDep, settings: SettingsDep
@@ -132,7 +125,7 @@ def check_rules(
         rules, _ = rules_from_text(body.rules)
         model = practice_model(tuple(rules), catalog)
     else:
-        model = _typed_model(journey, body.rules)
+        model = journey.draft_model(body.rules)
     check = check_model(model, catalog, settings)
     key = revisions.TUTORIAL_RULES if body.practice else revisions.STEP2_RULES
     return CheckOut.model_validate(
@@ -158,7 +151,7 @@ def show_plan(
     """Save the rule box, then plan the rules as typed on each training object: the steps in words, and the picture."""
     journey.require_open(Stage.STEP2)
     store.change_participant(session, journey.participant, lambda: _save_rules(journey, body.rules, body.revision))
-    model = _typed_model(journey, body.rules)
+    model = journey.draft_model(body.rules)
     check = check_model(model, catalog, settings)
     if not check.is_valid:
         raise invalid_model_error(check)
