@@ -12,14 +12,6 @@
     status.classList.toggle("problem", Boolean(isProblem));
   }
 
-  function debounce(action, milliseconds) {
-    let timer = null;
-    return function () {
-      clearTimeout(timer);
-      timer = setTimeout(action, milliseconds);
-    };
-  }
-
   async function postJson(url, body) {
     const response = await fetch(url, {
       method: "POST",
