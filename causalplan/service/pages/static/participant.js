@@ -849,7 +849,7 @@
     big.alt = image.alt;
     big.src = image.currentSrc || image.src;
     // Full size, but at least as wide as the dialog: a small drawing is enlarged, a large one scrolls.
-    big.style.width = Math.max(image.naturalWidth || 0, 0) ? image.naturalWidth * 1.5 + "px" : "";
+    big.style.width = image.naturalWidth ? image.naturalWidth * 1.5 + "px" : "";
     graphDialog.showModal();
   }
 
