@@ -890,7 +890,7 @@
         const progress = response.ok ? await response.json() : null;
         if (!progress || !progress.finished) throw new Error("not confirmed");
         Object.keys(sessionStorage).forEach(function (name) {
-          if (name.indexOf("causalplan:" + code + ":") === 0) sessionStorage.removeItem(name);
+          if (name.indexOf(outboxName("")) === 0) sessionStorage.removeItem(name); // every draft's entry
         });
         leave();
       } catch (error) {
