@@ -36,6 +36,7 @@ from playwright.sync_api import Browser
 
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.main import create_app
+from causalplan.service.pages.robot_films import robot_run_key
 from causalplan.service.work.robot import steps_of
 from causalplan.settings import Settings
 from causalplan.sim import RenderMode, simulate_plan
@@ -95,7 +96,7 @@ def click(browser: Browser, base: str, code: str, case: Case, reading: float, ap
     page.wait_for_timeout(reading * 1000)  # the participant reads the plan
     fits = plan_fits(base, code, case)
     services = app.state.services
-    ready = services.caches.robot_runs.has(f"{services.catalog_key}:{case.training}:{','.join(fits)}")
+    ready = services.caches.robot_runs.has(robot_run_key(services, case.training, fits))
     first_frame = page.evaluate(CLICK_TO_FIRST_FRAME)
     context.close()
     return float(first_frame), ready

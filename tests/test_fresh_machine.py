@@ -14,7 +14,7 @@ import psycopg
 import pytest
 
 from tests.service.fixtures import throwaway_postgres
-from tests.service.pages.test_browser import CHROMIUM_VARIABLE, chromium_executable
+from tests.service.pages.browsing import CHROMIUM_VARIABLE, chromium_executable
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCKER = ROOT / "docker"

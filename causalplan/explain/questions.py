@@ -162,7 +162,8 @@ def parse_question(text: str, obj: AssemblyObject, steps: tuple[PlanStep, ...]) 
     try:
         return _read_question(text, obj, steps)
     except QuestionError as exc:
-        exc.details.setdefault("suggestions", suggested_questions(obj, steps, text[:MAX_QUESTION_LENGTH]))
+        if "suggestions" not in exc.details:  # an unreadable question's refusal has found them already
+            exc.details["suggestions"] = suggested_questions(obj, steps, text[:MAX_QUESTION_LENGTH])
         raise
 
 

@@ -213,8 +213,8 @@ class Journey:
         work["rules"] = text
         self._save(work)
 
-    def draft_model(self) -> ParticipantModel:
-        """Return the model as it stands in the step-1 and step-2 boxes."""
+    def draft_model(self, rules_text: str | None = None) -> ParticipantModel:
+        """Return the model as it stands in the step-1 boxes and ``rules_text`` (default: the step-2 box)."""
         functions = {
             obj.id: {
                 part: labels
@@ -223,7 +223,7 @@ class Journey:
             }
             for obj in self.training
         }
-        rules, _ = rules_from_text(self.rules_text())
+        rules, _ = rules_from_text(self.rules_text() if rules_text is None else rules_text)
         return ParticipantModel(self.goal, functions, tuple(rules))
 
     def submitted_model(self) -> ParticipantModel | None:

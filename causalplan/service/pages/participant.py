@@ -153,8 +153,7 @@ async def finish_tutorial(
         journey.require_open(Stage.TUTORIAL)
         if journey.accept_revision(revisions.TUTORIAL_ANSWERS, revision):
             journey.save_tutorial(answers=answers)
-        if journey.accept_revision(revisions.TUTORIAL_RULES, revision):
-            journey.save_tutorial(rules=rules_text)
+        revisions.save_rules(journey, rules_text, revision, practice=True)
         excluded = comprehension_try(journey, answers, not wrong_answers(answers))
         if excluded is not None:
             arrivals.exclude(session, journey.participant, excluded.reason, excluded.detail)
@@ -293,13 +292,7 @@ async def finish_step2(
     form = await read_form(request)
     text = form.text("rules", "", max_length=MAX_RULES_TEXT)
     revision = form_revision(form)
-
-    def save() -> None:
-        journey.require_open(Stage.STEP2)
-        if journey.accept_revision(revisions.STEP2_RULES, revision):
-            journey.save_rules(text)
-
-    store.change_participant(session, journey.participant, save)
+    store.change_participant(session, journey.participant, lambda: revisions.save_rules(journey, text, revision))
     model = journey.draft_model()
     check = check_model(model, catalog, settings)
     if not check.is_valid:

@@ -97,42 +97,20 @@ def save_draft(draft: DraftIn, journey: JourneyDep, session: SessionDep) -> Save
     return SavedOut(saved=True, saved_at=saved_at, revision=journey.draft_revision(_draft_key(draft)), applied=applied)
 
 
-def _save_rules(journey: ParticipantJourney, text: str, revision: int | None, practice: bool = False) -> bool:
-    """Save the rule box (the tutorial's when ``practice``) unless newer rules are stored; return whether saved."""
-    if practice:
-        journey.require_open(Stage.TUTORIAL)
-        if not journey.accept_revision(revisions.TUTORIAL_RULES, revision):
-            return False
-        journey.save_tutorial(rules=text)
-        return True
-    journey.require_open(Stage.STEP2)
-    if not journey.accept_revision(revisions.STEP2_RULES, revision):
-        return False
-    journey.save_rules(text)
-    return True
-
-
-def _typed_model(journey: ParticipantJourney, text: str) -> ParticipantModel:
-    """Return the draft model with the rules as typed (the saved functions, these rules)."""
-    rules, _ = rules_from_text(text)
-    draft = journey.draft_model()
-    return ParticipantModel(draft.goal, draft.functions, tuple(rules))
-
-
 @router.post("/check", response_model=CheckOut)
 def check_rules(
     body: CheckIn, journey: JourneyDep, session: SessionDep, catalog: CatalogDep, settings: SettingsDep
 ) -> CheckOut:
     """Save the rule box and check the rules as typed, as `causalplan check` does; say where its graph is."""
     applied = store.change_participant(
-        session, journey.participant, lambda: _save_rules(journey, body.rules, body.revision, body.practice)
+        session, journey.participant, lambda: revisions.save_rules(journey, body.rules, body.revision, body.practice)
     )
     model: ParticipantModel
     if body.practice:
         rules, _ = rules_from_text(body.rules)
         model = practice_model(tuple(rules), catalog)
     else:
-        model = _typed_model(journey, body.rules)
+        model = journey.draft_model(body.rules)
     check = check_model(model, catalog, settings)
     key = revisions.TUTORIAL_RULES if body.practice else revisions.STEP2_RULES
     return CheckOut.model_validate(
@@ -157,8 +135,10 @@ def show_plan(
 ) -> PlansOut:
     """Save the rule box, then plan the rules as typed on each training object: the steps in words, and the picture."""
     journey.require_open(Stage.STEP2)
-    store.change_participant(session, journey.participant, lambda: _save_rules(journey, body.rules, body.revision))
-    model = _typed_model(journey, body.rules)
+    store.change_participant(
+        session, journey.participant, lambda: revisions.save_rules(journey, body.rules, body.revision)
+    )
+    model = journey.draft_model(body.rules)
     check = check_model(model, catalog, settings)
     if not check.is_valid:
         raise invalid_model_error(check)

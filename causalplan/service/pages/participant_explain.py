@@ -21,7 +21,7 @@ from causalplan.service.pages.journeys import JourneyDep
 from causalplan.service.pages.participation import invalid_model_error
 from causalplan.service.work.planning import ExplanationArguments
 from causalplan.service.work.registry import EXPLANATION
-from causalplan.studies.steps import ParticipantModel, Stage, check_model, model_on, rules_from_text
+from causalplan.studies.steps import Stage, check_model, model_on
 
 router = APIRouter(prefix="/p/{code}", include_in_schema=False)
 
@@ -62,9 +62,7 @@ def explain(
         raise NotFoundError(f"'{body.object}' is not one of your objects.")
     if (body.why is None) == (body.why_not is None):
         raise InvalidRequestError("Ask one question: 'why' (a step number) or 'why_not'.")
-    draft = journey.draft_model()
-    if body.rules is not None:  # the plan on screen, which the rule box may have moved on from
-        draft = ParticipantModel(draft.goal, draft.functions, tuple(rules_from_text(body.rules)[0]))
+    draft = journey.draft_model(body.rules)  # the plan on screen, which the rule box may have moved on from
     check = check_model(draft, catalog, settings)
     if not check.is_valid:
         raise invalid_model_error(check)

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from causalplan.service.errors import InvalidFormError
 from causalplan.service.pages.forms import Form
+from causalplan.service.storage.experiments import ParticipantJourney
+from causalplan.studies.steps import Stage
 
 TUTORIAL_ANSWERS = "tutorial:answers"
 TUTORIAL_RULES = "tutorial:rules"
@@ -38,3 +40,18 @@ def form_revision(form: Form) -> int | None:
             f"The form's 'revision' must be a whole number from 0 to {MAX_REVISION}.", details={"field": "revision"}
         )
     return int(text)
+
+
+def save_rules(journey: ParticipantJourney, text: str, revision: int | None, practice: bool = False) -> bool:
+    """Save the rule box (the tutorial's when ``practice``) unless newer rules are stored; return whether saved."""
+    if practice:
+        journey.require_open(Stage.TUTORIAL)
+        if not journey.accept_revision(TUTORIAL_RULES, revision):
+            return False
+        journey.save_tutorial(rules=text)
+        return True
+    journey.require_open(Stage.STEP2)
+    if not journey.accept_revision(STEP2_RULES, revision):
+        return False
+    journey.save_rules(text)
+    return True

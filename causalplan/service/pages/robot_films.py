@@ -104,6 +104,11 @@ def _training_object(body: FilmIn, journey: ParticipantJourney) -> AssemblyObjec
     return obj
 
 
+def robot_run_key(services: Services, object_id: str, fits: Sequence[str]) -> str:
+    """Return the key of the robot's run of ``fits`` on an object in ``caches.robot_runs``."""
+    return f"{services.catalog_key}:{object_id}:{','.join(fits)}"
+
+
 def robot_run_document(obj: AssemblyObject, fits: Sequence[str], services: Services) -> bytes:
     """Return the robot's run of ``fits`` on ``obj`` for a page's 3D player (JSON), run in a planner worker.
 
@@ -111,7 +116,7 @@ def robot_run_document(obj: AssemblyObject, fits: Sequence[str], services: Servi
     (whether it carried out the plan), as the worker encoded it. Kept by object and fits
     (``caches.robot_runs``); a request for a run under way waits for that run, never starts another.
     """
-    key = f"{services.catalog_key}:{obj.id}:{','.join(fits)}"
+    key = robot_run_key(services, obj.id, fits)
 
     def run() -> dict[str, bytes]:
         return {key: services.work.run(ROBOT_PLAYBACK, PlaybackArguments(obj.id, tuple(fits)))}

@@ -1,116 +1,37 @@
 """The participant and research pages in a real browser: Playwright drives the OS's Chromium headless.
 
-Chromium is the one thing the tests take from the OS: README command 2 installs Debian's
-``chromium`` when it is missing; ``CAUSALPLAN_TEST_CHROMIUM`` names another binary.
-
 Against a real uvicorn server on a free loopback port (``live_server``). Each step's page is
-saved as a screenshot under ``out/screenshots/`` (git ignores ``out/``) to look at.
+saved as a screenshot under ``out/screenshots/`` (git ignores ``out/``) to look at; the browser
+and the steps other browser tests share are in ``browsing``.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import re
-import shutil
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
-from playwright.sync_api import Browser, Page, Playwright, ViewportSize, expect, sync_playwright
+from playwright.sync_api import Browser, Page, expect
 
 from tests.service.fixtures import AUTH, RESEARCH_TOKEN, serving, settings_for, sqlite_url
-from tests.service.pages.flows import LAMP_RULES, TUTORIAL_ANSWERS, TUTORIAL_RULES, experiment, links
+from tests.service.pages.browsing import (
+    LAPTOP,
+    PLAYER,
+    complete_by_http,
+    lamp_plan_shown,
+    new_link,
+    prolific_link,
+    public_study,
+    saved,
+    shoot,
+)
+from tests.service.pages.flows import LAMP_RULES, TUTORIAL_RULES
 
 pytestmark = pytest.mark.slow  # a real Chromium drives the pages
-
-ROOT = Path(__file__).resolve().parents[3]
-SCREENSHOTS = ROOT / "out" / "screenshots"
-CHROMIUM_VARIABLE = "CAUSALPLAN_TEST_CHROMIUM"
-CHROMIUM_NAMES = ("chromium", "chromium-browser")
-"""Debian's name for the binary, and Ubuntu's."""
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-]
-LAPTOP: ViewportSize = {"width": 1366, "height": 900}
-ASSERTION_TIMEOUT_MS = 20_000
-"""How long an ``expect`` waits for the page (Playwright's 5 s default flaked with the suite on two shared cores)."""
-
-expect.set_options(timeout=ASSERTION_TIMEOUT_MS)  # every browser test module imports this one
-
-
-def chromium_executable() -> str:
-    """Return the Chromium binary to drive: the variable's, else the first of ``CHROMIUM_NAMES`` on PATH.
-
-    Playwright's own browser download is never used (it cannot be fetched here); without a
-    Chromium the tests fail saying how to get one, rather than at a path that is not there.
-    """
-    named = os.environ.get(CHROMIUM_VARIABLE)
-    if named:
-        return named
-    for name in CHROMIUM_NAMES:
-        found = shutil.which(name)
-        if found:
-            return found
-    pytest.fail(
-        f"No Chromium on PATH (looked for {', '.join(CHROMIUM_NAMES)}): README command 2 installs Debian's "
-        f"'chromium' when it is missing (apt-get install chromium), or set {CHROMIUM_VARIABLE} to a binary."
-    )
-
-
-@pytest.fixture(scope="module")
-def playwright() -> Iterator[Playwright]:
-    with sync_playwright() as running:
-        yield running
-
-
-@pytest.fixture(scope="module")
-def browser(playwright: Playwright) -> Iterator[Browser]:
-    launched = playwright.chromium.launch(executable_path=chromium_executable(), args=CHROMIUM_ARGS)
-    yield launched
-    launched.close()
-
-
-@pytest.fixture
-def page(browser: Browser) -> Iterator[Page]:
-    context = browser.new_context(viewport=LAPTOP, accept_downloads=True)
-    opened = context.new_page()
-    errors: list[str] = []
-    opened.on("pageerror", lambda error: errors.append(str(error)))
-    yield opened
-    context.close()
-    assert not errors, f"script errors on the page: {errors}"
-
-
-def shoot(page: Page, name: str) -> None:
-    """Save a screenshot of the whole page as an artifact."""
-    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
-    page.screenshot(path=SCREENSHOTS / f"{name}.png", full_page=True)
-    # A full-page shot stretches the viewport for a moment. Chromium may then scroll back to the
-    # focused field when it loses focus, which can be between the press and the release of the
-    # next click, so the click misses its button: restore the viewport and let go of the focus now.
-    page.set_viewport_size(LAPTOP)
-    page.evaluate("document.activeElement && document.activeElement.blur()")
-
-
-def new_link(base: str, tutorial: bool = True) -> str:
-    """Define a one-condition experiment (desk lamp, then flashlight) through the API; return a participant link."""
-    with httpx.Client(base_url=base, timeout=30) as client:
-        (participant,) = links(client, experiment(client, tutorial=tutorial)["id"])
-        url: str = participant["url"]
-        return url
-
-
-def saved(page: Page) -> None:
-    """Wait until the page says the latest change is saved."""
-    expect(page.locator("#save-status")).to_contain_text("Saved at", timeout=15_000)
 
 
 def test_a_participant_does_the_tutorial_and_the_three_steps_and_sees_the_verdict(live_server: str, page: Page) -> None:
@@ -239,29 +160,6 @@ def test_a_reload_mid_step_keeps_the_work(live_server: str, page: Page) -> None:
     shoot(page, "reload-keeps-work")
 
 
-def complete_by_http(link: str) -> None:
-    """Take a participant through every step by posting the forms (no browser): desk lamp, then flashlight."""
-    with httpx.Client(timeout=60, follow_redirects=True) as client:
-        page = client.get(link)
-        base = link.rsplit("/p/", 1)[0]
-        code = link.rsplit("/", 1)[1]
-        if page.url.path.endswith("/tutorial"):
-            client.post(f"{base}/p/{code}/tutorial", data={**TUTORIAL_ANSWERS, "rules": TUTORIAL_RULES})
-        client.post(
-            f"{base}/p/{code}/step1/1",
-            data={"part:base_with_cables": "provide electricity", "part:light_bulb": "turn electricity into light"},
-        )
-        client.post(
-            f"{base}/p/{code}/step2", data={"rules": "provide electricity AND turn electricity into light CAUSES light"}
-        )
-        verdict = client.post(
-            f"{base}/p/{code}/step3/1",
-            data={"chosen:batteries": "provide electricity", "added:head": "shine"},
-        )
-        assert "Your model does not work for the flashlight." in verdict.text, verdict.text
-        assert "you have finished" in client.post(f"{base}/p/{code}/step3/1/next").text
-
-
 def test_the_researcher_defines_an_experiment_and_the_export_contains_the_trial(live_server: str, page: Page) -> None:
     page.goto(f"{live_server}/research")
     expect(page).to_have_url(re.compile(r"/research/login"))
@@ -323,23 +221,10 @@ def test_the_researcher_defines_an_experiment_and_the_export_contains_the_trial(
 # -- the public study link, as a Prolific participant meets it ---------------------------------------
 
 
-def public_study(base: str, **recruiting: Any) -> str:
-    """Define a desk-lamp-to-flashlight experiment with a tutorial and recruiting settings; return its id."""
-    with httpx.Client(base_url=base, timeout=30) as client:
-        experiment_id: str = experiment(client, tutorial=True)["id"]
-        response = client.put(f"/v1/experiments/{experiment_id}/recruitment", json=recruiting, headers=AUTH)
-        assert response.status_code == 200, response.text
-        return experiment_id
-
-
 def recruitment_of(base: str, experiment_id: str) -> dict[str, Any]:
     with httpx.Client(base_url=base, timeout=30) as client:
         found: dict[str, Any] = client.get(f"/v1/experiments/{experiment_id}/recruitment", headers=AUTH).json()
         return found
-
-
-def prolific_link(base: str, experiment_id: str, pid: str) -> str:
-    return f"{base}/s/{experiment_id}?PROLIFIC_PID={pid}&STUDY_ID=study1&SESSION_ID=session-{pid}"
 
 
 def test_a_prolific_participant_consents_passes_the_check_and_lands_on_the_completion_url(
@@ -455,26 +340,6 @@ def filming_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     url = sqlite_url(tmp_path_factory.mktemp("db"))
     with serving(settings_for(url, robot_video_width=160, robot_video_height=120)) as base:
         yield base
-
-
-def lamp_plan_shown(page: Page, base: str) -> str:
-    """Reach step 2 with the desk lamp's rules and show the robot's plan; return the participant's code."""
-    page.goto(new_link(base, tutorial=False))
-    page.get_by_label("Functions of the base with cables (one per line)").fill("provide electricity")
-    bulb = page.get_by_label("Functions of the light bulb (one per line)")
-    bulb.fill("turn electricity into light\nclose the circuit")
-    saved(page)
-    page.get_by_role("button", name="Save and continue").click()
-    expect(page).to_have_url(re.compile(r"/step2$"))
-    page.get_by_label("Your rules, one per line").fill(LAMP_RULES)
-    expect(page.locator("#problems")).to_have_class(re.compile(r"\bok\b"))
-    page.get_by_role("button", name="Show the robot's plan").click()
-    code = re.search(r"/p/([^/]+)/step2$", page.url)
-    assert code is not None
-    return code.group(1)
-
-
-PLAYER = "document.querySelector('.robot-player').player"
 
 
 @pytest.mark.slow

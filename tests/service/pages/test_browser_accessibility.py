@@ -12,18 +12,16 @@ from typing import Any
 import pytest
 from playwright.sync_api import Browser, Page, expect
 
-from tests.service.fixtures import RESEARCH_TOKEN, live_server  # noqa: F401 - the fixture
-from tests.service.pages.flows import LAMP_RULES, TUTORIAL_RULES
-from tests.service.pages.test_browser import (  # noqa: F401 - fixtures
+from tests.service.fixtures import RESEARCH_TOKEN
+from tests.service.pages.browsing import (
     LAPTOP,
-    browser,
-    complete_by_http,
     new_link,
-    playwright,
+    opened_page,
     prolific_link,
     public_study,
     saved,
 )
+from tests.service.pages.flows import LAMP_RULES, TUTORIAL_RULES
 
 pytestmark = pytest.mark.slow  # a real Chromium drives the pages
 
@@ -31,15 +29,10 @@ AXE = Path(__file__).resolve().parents[2] / "vendor" / "axe-core" / "axe.min.js"
 
 
 @pytest.fixture
-def checked(browser: Browser) -> Iterator[Page]:  # noqa: F811
+def checked(browser: Browser) -> Iterator[Page]:
     """A page whose content security policy lets the injected axe run (the pages' own scripts are unchanged)."""
-    context = browser.new_context(viewport=LAPTOP, bypass_csp=True)
-    opened = context.new_page()
-    errors: list[str] = []
-    opened.on("pageerror", lambda error: errors.append(str(error)))
-    yield opened
-    context.close()
-    assert not errors, f"script errors on the page: {errors}"
+    with opened_page(browser, viewport=LAPTOP, bypass_csp=True) as opened:
+        yield opened
 
 
 def violations(page: Page) -> list[dict[str, Any]]:
@@ -53,7 +46,7 @@ def violations(page: Page) -> list[dict[str, Any]]:
     return found
 
 
-def test_axe_finds_no_violation_on_any_page(live_server: str, checked: Page) -> None:  # noqa: F811
+def test_axe_finds_no_violation_on_any_page(live_server: str, checked: Page) -> None:
     page = checked
     found: dict[str, list[dict[str, Any]]] = {}
 

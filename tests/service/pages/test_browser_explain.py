@@ -5,11 +5,11 @@ from __future__ import annotations
 import pytest
 from playwright.sync_api import Page, expect
 
-from tests.service.pages.test_browser import browser, lamp_plan_shown, page, playwright, shoot  # noqa: F401 - fixtures
+from tests.service.pages.browsing import lamp_plan_shown, shoot
 
 
 @pytest.mark.slow
-def test_why_and_why_not_beside_the_robots_plan(live_server: str, page: Page) -> None:  # noqa: F811
+def test_why_and_why_not_beside_the_robots_plan(live_server: str, page: Page) -> None:
     lamp_plan_shown(page, live_server)
     plan = page.locator("#plan-body")
     # The first plan of a new server also starts its planner worker: give it time on a busy machine.

@@ -15,25 +15,17 @@ from pathlib import Path
 
 import httpx
 import pytest
-from playwright.sync_api import Browser, Page, expect, sync_playwright
+from playwright.sync_api import Browser, Page, expect
 
 from causalplan.objects.catalog import load_catalog
+from tests.service.pages.browsing import LAPTOP
 from tests.service.pages.flows import experiment, links
-from tests.service.pages.test_browser import CHROMIUM_ARGS, LAPTOP, chromium_executable
 
 DOCS = Path(__file__).resolve().parents[3] / "docs" / "objects"
 NEW_OBJECTS = ("headlamp", "solar_lantern", "oil_lamp", "gas_lantern")
 CATALOG = load_catalog()
 
 pytestmark = pytest.mark.slow
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Browser]:
-    with sync_playwright() as running:
-        launched = running.chromium.launch(executable_path=chromium_executable(), args=CHROMIUM_ARGS)
-        yield launched
-        launched.close()
 
 
 @pytest.fixture

@@ -8,26 +8,19 @@ from collections.abc import Iterator
 import pytest
 from playwright.sync_api import Browser, Page, ViewportSize, expect
 
-from tests.service.fixtures import live_server  # noqa: F401 - the fixture
+from tests.service.pages.browsing import PLAYER, SCREENSHOTS, new_link, opened_page, saved
 from tests.service.pages.flows import LAMP_RULES
-from tests.service.pages.test_browser import SCREENSHOTS, browser, new_link, playwright, saved  # noqa: F401 - fixtures
 
 pytestmark = pytest.mark.slow  # a real Chromium drives the pages
 
 PHONE: ViewportSize = {"width": 390, "height": 844}
-PLAYER = "document.querySelector('.robot-player').player"
 
 
 @pytest.fixture
-def phone(browser: Browser) -> Iterator[Page]:  # noqa: F811
+def phone(browser: Browser) -> Iterator[Page]:
     """A page in a phone-sized, touch-screen browser."""
-    context = browser.new_context(viewport=PHONE, is_mobile=True, has_touch=True, device_scale_factor=2)
-    opened = context.new_page()
-    errors: list[str] = []
-    opened.on("pageerror", lambda error: errors.append(str(error)))
-    yield opened
-    context.close()
-    assert not errors, f"script errors on the page: {errors}"
+    with opened_page(browser, viewport=PHONE, is_mobile=True, has_touch=True, device_scale_factor=2) as opened:
+        yield opened
 
 
 def fits_the_screen(page: Page, name: str, full_page: bool = True) -> None:
@@ -57,7 +50,7 @@ def touch_drag(page: Page, x: float, y: float, dx: float) -> None:
     session.detach()
 
 
-def test_every_step_fits_a_phone_and_the_player_turns_by_touch(live_server: str, phone: Page) -> None:  # noqa: F811
+def test_every_step_fits_a_phone_and_the_player_turns_by_touch(live_server: str, phone: Page) -> None:
     page = phone
     page.goto(new_link(live_server))
     expect(page).to_have_url(re.compile(r"/tutorial$"))

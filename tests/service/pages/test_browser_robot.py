@@ -11,12 +11,10 @@ from playwright.sync_api import Page, expect
 
 from tests.conftest import builtin_catalog
 from tests.service.fixtures import AUTH, RESEARCH_TOKEN, serving, settings_for, sqlite_url
+from tests.service.pages.browsing import PLAYER, lamp_plan_shown, shoot
 from tests.service.pages.flows import FLASHLIGHT_CHOICES, complete, experiment, links
-from tests.service.pages.test_browser import browser, lamp_plan_shown, page, playwright, shoot  # noqa: F401 - fixtures
 
 pytestmark = pytest.mark.slow  # a real Chromium plays the robot's run
-
-PLAYER = "document.querySelector('.robot-player').player"
 
 
 @pytest.fixture(scope="module")
@@ -26,7 +24,7 @@ def robot_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         yield base
 
 
-def test_the_paused_player_draws_a_frame_only_when_something_changes(robot_server: str, page: Page) -> None:  # noqa: F811
+def test_the_paused_player_draws_a_frame_only_when_something_changes(robot_server: str, page: Page) -> None:
     lamp_plan_shown(page, robot_server)
     page.get_by_role("button", name="Watch the robot").click()
     expect(page.locator(".robot-player canvas")).to_have_count(1, timeout=60_000)
@@ -56,7 +54,7 @@ def finished_participant(base: str) -> str:
         return experiment_id
 
 
-def test_the_researcher_watches_the_robot_carry_out_a_trials_plan(robot_server: str, page: Page) -> None:  # noqa: F811
+def test_the_researcher_watches_the_robot_carry_out_a_trials_plan(robot_server: str, page: Page) -> None:
     experiment_id = finished_participant(robot_server)
     page.goto(f"{robot_server}/research/login")
     page.get_by_label("Research token").fill(RESEARCH_TOKEN)

@@ -11,17 +11,8 @@ import re
 import pytest
 from playwright.sync_api import BrowserContext, Page, Route, expect
 
-from tests.service.fixtures import live_server  # noqa: F401 - the fixture
+from tests.service.pages.browsing import complete_by_http, new_link, prolific_link, public_study
 from tests.service.pages.flows import LAMP_RULES, TUTORIAL_RULES
-from tests.service.pages.test_browser import (  # noqa: F401 - fixtures
-    browser,
-    complete_by_http,
-    new_link,
-    page,
-    playwright,
-    prolific_link,
-    public_study,
-)
 
 pytestmark = pytest.mark.slow  # a real Chromium drives the pages
 
@@ -47,7 +38,7 @@ def in_new_tab(context: BrowserContext, url: str) -> Page:
     return tab
 
 
-def test_text_typed_just_before_a_reload_back_or_forward_is_kept(live_server: str, page: Page) -> None:  # noqa: F811
+def test_text_typed_just_before_a_reload_back_or_forward_is_kept(live_server: str, page: Page) -> None:
     page.goto(new_link(live_server))
     expect(page).to_have_url(re.compile(r"/tutorial$"))
     practice = page.get_by_label("Rules for the wind-up toy car, one per line")
@@ -119,7 +110,7 @@ def test_text_typed_just_before_a_reload_back_or_forward_is_kept(live_server: st
     tab.close()
 
 
-def test_the_end_page_goes_back_to_prolific_only_once_the_server_confirms(live_server: str, page: Page) -> None:  # noqa: F811
+def test_the_end_page_goes_back_to_prolific_only_once_the_server_confirms(live_server: str, page: Page) -> None:
     experiment_id = public_study(live_server, completion_code="CPLT42")
     page.goto(prolific_link(live_server, experiment_id, "pid-waits-for-the-save"))
     page.get_by_role("button", name="I agree to take part").click()

@@ -7,26 +7,15 @@ import re
 import pytest
 from playwright.sync_api import Page, expect
 
-from tests.service.fixtures import live_server  # noqa: F401 - the fixture
+from tests.service.pages.browsing import at_step2, shoot
 from tests.service.pages.flows import LAMP_RULES
-from tests.service.pages.test_browser import browser, new_link, page, playwright, saved, shoot  # noqa: F401 - fixtures
 
 pytestmark = pytest.mark.slow  # a real Chromium drives the pages
 
 STATUS = "#model-status"
 
 
-def at_step2(page: Page, base: str) -> None:  # noqa: F811
-    page.goto(new_link(base, tutorial=False))
-    page.get_by_label("Functions of the base with cables (one per line)").fill("provide electricity")
-    bulb = page.get_by_label("Functions of the light bulb (one per line)")
-    bulb.fill("turn electricity into light\nclose the circuit")
-    saved(page)
-    page.get_by_role("button", name="Save and continue").click()
-    expect(page).to_have_url(re.compile(r"/step2$"))
-
-
-def test_step_two_says_one_thing_and_never_shows_a_stale_plan(live_server: str, page: Page) -> None:  # noqa: F811
+def test_step_two_says_one_thing_and_never_shows_a_stale_plan(live_server: str, page: Page) -> None:
     at_step2(page, live_server)
     # Nothing typed yet: no problem and no note, one neutral status.
     expect(page.locator("#problems li")).to_have_count(0)

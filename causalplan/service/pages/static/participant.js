@@ -12,14 +12,6 @@
     status.classList.toggle("problem", Boolean(isProblem));
   }
 
-  function debounce(action, milliseconds) {
-    let timer = null;
-    return function () {
-      clearTimeout(timer);
-      timer = setTimeout(action, milliseconds);
-    };
-  }
-
   async function postJson(url, body) {
     const response = await fetch(url, {
       method: "POST",
@@ -857,7 +849,7 @@
     big.alt = image.alt;
     big.src = image.currentSrc || image.src;
     // Full size, but at least as wide as the dialog: a small drawing is enlarged, a large one scrolls.
-    big.style.width = Math.max(image.naturalWidth || 0, 0) ? image.naturalWidth * 1.5 + "px" : "";
+    big.style.width = image.naturalWidth ? image.naturalWidth * 1.5 + "px" : "";
     graphDialog.showModal();
   }
 
@@ -898,7 +890,7 @@
         const progress = response.ok ? await response.json() : null;
         if (!progress || !progress.finished) throw new Error("not confirmed");
         Object.keys(sessionStorage).forEach(function (name) {
-          if (name.indexOf("causalplan:" + code + ":") === 0) sessionStorage.removeItem(name);
+          if (name.indexOf(outboxName("")) === 0) sessionStorage.removeItem(name); // every draft's entry
         });
         leave();
       } catch (error) {
