@@ -24,8 +24,8 @@ from typing import Any
 from causalplan.causal.diagnostics import Diagnostic
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import CausalModel, read_model
-from causalplan.causal.validation import ObjectSummary, validate_model
 from causalplan.errors import UnknownObjectError
+from causalplan.inputs import merged_model_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
 
 OBJECT_SEPARATOR = "_and_"
@@ -112,18 +112,15 @@ def read_trained_model(document: object, training: Sequence[str], catalog: Catal
         },
         "rules": document.get("rules"),
     }
-    model, problems = read_model(merged, SourceMap())
-    if model is None:
-        return TrainedModel(order, problem=_first_error(problems))
-    summary = ObjectSummary(
-        str(merged["object"]),
-        tuple(f"{obj.id}.{part}" if len(order) > 1 else part for obj in objects for part in obj.part_ids),
-        objects[0].goal,
-        " and ".join(obj.name for obj in objects),
+    loaded = (
+        merged_model_from_data(merged, order, catalog)
+        if len(order) > 1
+        else model_from_data(merged, SourceMap(), catalog)
     )
-    report = validate_model(model, {summary.id: summary}, problems)
-    if not report.is_valid:
-        return TrainedModel(order, problem=_first_error(report.errors))
+    if loaded.model is None:
+        return TrainedModel(order, problem=_first_error(loaded.report.diagnostics))
+    if not loaded.report.is_valid:
+        return TrainedModel(order, problem=_first_error(loaded.report.errors))
     on_objects = {}
     for object_id in order:
         on_object, _ = read_model(_document(grouped, document, object_id), SourceMap())
