@@ -17,11 +17,11 @@ functions as its own, lower when it belongs to the other category. A mapping's s
 lowest pair's (a transfer rests on every function it maps). Below ``THRESHOLD`` a mapping is
 implausible. The threshold separates, on the paper's objects, "close the circuit" on the match
 (0.31), "turn electricity into light" on the candle's wick (0.31) and "provide electricity" on
-a combustion object's parts (0.39) from every mapping the paper's participants gave in its own
-categories (0.47 and over, e.g. "supply power" on the batteries, "make light" on the wick);
-``tests/consensus/test_plausibility.py`` holds these examples. The part half of the alignment's
-similarity is left out: the label sits on the part the participant chose, so it would say
-nothing.
+a combustion object's parts (0.39) from the own-category mappings of
+``tests/consensus/test_plausibility.py`` (0.47 and over, e.g. "supply power" on the batteries,
+"make light" on the wick), which holds all these examples: a handful, not a study's mappings.
+The part half of the alignment's similarity is left out: the label sits on the part the
+participant chose, so it would say nothing.
 """
 
 from __future__ import annotations
