@@ -70,22 +70,22 @@ class MappingPlausibility:
         self.catalog = catalog
         self.threshold = threshold
         self._functions = {obj.id: part_functions(obj) for obj in catalog.objects.values()}
-
-    def _category_functions(self, category: str, same: bool) -> set[str]:
-        return {
-            label
-            for obj in self.catalog.objects.values()
-            if (obj.category == category) == same
-            for labels in self._functions[obj.id].values()
-            for label in labels
+        same: dict[str, set[str]] = {}
+        for obj in catalog.objects.values():
+            same.setdefault(obj.category, set()).update(*self._functions[obj.id].values())
+        # Per category, worked out once rather than for every scored pair.
+        self._same_category = same
+        self._other_category = {
+            category: {label for other, labels in same.items() if other != category for label in labels}
+            for category in same
         }
 
     def pair(self, test_object: str, part: str, label: str) -> PairScore:
         """Return the score of ``label`` given to ``part`` of ``test_object``."""
         category = self.catalog.get(test_object).category
         own = self._functions.get(test_object, {}).get(part, set())
-        same_label, same = _nearest(label, own | self._category_functions(category, same=True))
-        other_label, other = _nearest(label, self._category_functions(category, same=False))
+        same_label, same = _nearest(label, own | self._same_category[category])
+        other_label, other = _nearest(label, self._other_category[category])
         score = same / (same + other) if same + other > 0 else 0.5
         return PairScore(part, label, round(score, 4), same_label, other_label)
 
