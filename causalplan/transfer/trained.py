@@ -73,14 +73,9 @@ def _grouped(
     return grouped, None
 
 
-def _document(grouped: Mapping[str, Any], document: Mapping[str, Any], object_id: str) -> dict[str, Any]:
-    """Return the model file of one training object: its labels and all the rules."""
-    return {
-        "object": object_id,
-        "goal": document.get("goal", "light"),
-        "functions": grouped[object_id],
-        "rules": document.get("rules"),
-    }
+def _document(grouped: Mapping[str, Any], merged: Mapping[str, Any], object_id: str) -> dict[str, Any]:
+    """Return the model file of one training object: its labels, and the merged model's goal and rules."""
+    return {"object": object_id, "goal": merged["goal"], "functions": grouped[object_id], "rules": merged["rules"]}
 
 
 def _first_error(report_errors: Sequence[Diagnostic]) -> str:
@@ -123,7 +118,7 @@ def read_trained_model(document: object, training: Sequence[str], catalog: Catal
         return TrainedModel(order, problem=_first_error(loaded.report.errors))
     on_objects = {}
     for object_id in order:
-        on_object, _ = read_model(_document(grouped, document, object_id), SourceMap())
+        on_object, _ = read_model(_document(grouped, merged, object_id), SourceMap())
         if on_object is None:  # pragma: no cover - a valid merged model always splits into readable ones
             return TrainedModel(order, problem=f"its model cannot be read on the {object_id}")
         on_objects[object_id] = on_object
