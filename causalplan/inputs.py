@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from causalplan.causal.diagnostics import Report
 from causalplan.causal.documents import SourceMap, parse_text, read_document
 from causalplan.causal.model import CausalModel, Labelling, read_labelling, read_model
-from causalplan.causal.validation import validate_mapping, validate_model
+from causalplan.causal.validation import ObjectSummary, validate_mapping, validate_model
 from causalplan.objects.catalog import Catalog
 
 
@@ -42,6 +44,21 @@ def model_from_data(data: object, source: SourceMap, catalog: Catalog) -> Loaded
     if model is None:
         return LoadedModel(None, Report(tuple(problems)))
     return LoadedModel(model, validate_model(model, catalog.summaries(), problems))
+
+
+def merged_model_from_data(data: Mapping[str, Any], object_ids: Sequence[str], catalog: Catalog) -> LoadedModel:
+    """Read and validate a model of several objects in one document (parts named ``object.part``), against them all."""
+    model, problems = read_model(dict(data), SourceMap())
+    if model is None:
+        return LoadedModel(None, Report(tuple(problems)))
+    objects = [catalog.get(object_id) for object_id in object_ids]
+    summary = ObjectSummary(
+        str(data["object"]),
+        tuple(f"{obj.id}.{part}" for obj in objects for part in obj.part_ids),
+        objects[0].goal,
+        " and ".join(obj.name for obj in objects),
+    )
+    return LoadedModel(model, validate_model(model, {summary.id: summary}, problems))
 
 
 def mapping_from_data(data: object, source: SourceMap, catalog: Catalog) -> LoadedMapping:

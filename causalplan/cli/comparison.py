@@ -248,7 +248,7 @@ def batch(
         judge = robot_judged
     started = time.perf_counter()
     trials = list(read_trials(trials_file)) if on_cluster is None else []
-    if on_cluster is None and len(trials) == 1 and trials[0].id == "file" and trials[0].problem is not None:
+    if trials and trials[0].is_whole_file:
         fail("unreadable_trials", f"{trials_file}: {trials[0].problem}")
     if on_cluster is None and not trials:
         fail("no_trials", f"{trials_file} holds no trials. {TRIALS_FORMAT}")

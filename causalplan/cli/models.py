@@ -67,7 +67,7 @@ def check(file: Path, kind: str, as_json: bool, catalog: tuple[Path, ...]) -> No
         print_report(report)
         verdict = mark(report.is_valid, "valid", "invalid")
         say(f"{file}: {kind} is {verdict} ({len(report.errors)} error(s), {len(report.warnings)} warning(s))")
-        if kind == "model" and looks_like_a_mapping(file):
+        if kind == "model" and not report.is_valid and looks_like_a_mapping(file):
             say(f"If {file} is a step-3 mapping, check it as one: causalplan check --kind mapping {file}")
     exit_with(EXIT_OK if report.is_valid else EXIT_INVALID)
 

@@ -11,28 +11,11 @@ import json
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from causalplan.causal.diagnostics import Report
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import read_model
-from causalplan.causal.validation import ObjectSummary, validate_model
-from causalplan.inputs import LoadedModel, mapping_from_data
+from causalplan.inputs import LoadedModel, mapping_from_data, merged_model_from_data
 from causalplan.objects.catalog import Catalog
 from causalplan.transfer.verdict import TransferVerdict, transfer_verdict
-
-
-def load_two_object_model(document: Mapping[str, Any], training: Sequence[str], catalog: Catalog) -> LoadedModel:
-    """Return a model of two training objects (parts named ``object.part``), validated against both."""
-    model, problems = read_model(dict(document), SourceMap())
-    if model is None:
-        return LoadedModel(None, Report(tuple(problems)))
-    objects = [catalog.get(object_id) for object_id in training]
-    summary = ObjectSummary(
-        str(document["object"]),
-        tuple(f"{obj.id}.{part}" for obj in objects for part in obj.part_ids),
-        objects[0].goal,
-        " and ".join(obj.name for obj in objects),
-    )
-    return LoadedModel(model, validate_model(model, {summary.id: summary}, problems))
 
 
 def _on_first_object(document: Mapping[str, Any], first: str) -> dict[str, Any]:
@@ -44,7 +27,7 @@ def _on_first_object(document: Mapping[str, Any], first: str) -> dict[str, Any]:
 
 
 def _judge(line: Mapping[str, Any], catalog: Catalog, simulate: bool) -> TransferVerdict:
-    checked = load_two_object_model(line["model"], line["training"], catalog)
+    checked = merged_model_from_data(line["model"], line["training"], catalog)
     model, _ = read_model(_on_first_object(line["model"], line["training"][0]), SourceMap())
     loaded_model = LoadedModel(model if checked.is_valid else None, checked.report)
     loaded_mapping = mapping_from_data(line["mapping"], SourceMap(), catalog)

@@ -17,11 +17,11 @@ functions as its own, lower when it belongs to the other category. A mapping's s
 lowest pair's (a transfer rests on every function it maps). Below ``THRESHOLD`` a mapping is
 implausible. The threshold separates, on the paper's objects, "close the circuit" on the match
 (0.31), "turn electricity into light" on the candle's wick (0.31) and "provide electricity" on
-a combustion object's parts (0.39) from every mapping the paper's participants gave in its own
-categories (0.47 and over, e.g. "supply power" on the batteries, "make light" on the wick);
-``tests/consensus/test_plausibility.py`` holds these examples. The part half of the alignment's
-similarity is left out: the label sits on the part the participant chose, so it would say
-nothing.
+a combustion object's parts (0.39) from the own-category mappings of
+``tests/consensus/test_plausibility.py`` (0.47 and over, e.g. "supply power" on the batteries,
+"make light" on the wick), which holds all these examples: a handful, not a study's mappings.
+The part half of the alignment's similarity is left out: the label sits on the part the
+participant chose, so it would say nothing.
 """
 
 from __future__ import annotations
@@ -70,22 +70,22 @@ class MappingPlausibility:
         self.catalog = catalog
         self.threshold = threshold
         self._functions = {obj.id: part_functions(obj) for obj in catalog.objects.values()}
-
-    def _category_functions(self, category: str, same: bool) -> set[str]:
-        return {
-            label
-            for obj in self.catalog.objects.values()
-            if (obj.category == category) == same
-            for labels in self._functions[obj.id].values()
-            for label in labels
+        same: dict[str, set[str]] = {}
+        for obj in catalog.objects.values():
+            same.setdefault(obj.category, set()).update(*self._functions[obj.id].values())
+        # Per category, worked out once rather than for every scored pair.
+        self._same_category = same
+        self._other_category = {
+            category: {label for other, labels in same.items() if other != category for label in labels}
+            for category in same
         }
 
     def pair(self, test_object: str, part: str, label: str) -> PairScore:
         """Return the score of ``label`` given to ``part`` of ``test_object``."""
         category = self.catalog.get(test_object).category
         own = self._functions.get(test_object, {}).get(part, set())
-        same_label, same = _nearest(label, own | self._category_functions(category, same=True))
-        other_label, other = _nearest(label, self._category_functions(category, same=False))
+        same_label, same = _nearest(label, own | self._same_category[category])
+        other_label, other = _nearest(label, self._other_category[category])
         score = same / (same + other) if same + other > 0 else 0.5
         return PairScore(part, label, round(score, 4), same_label, other_label)
 

@@ -251,4 +251,4 @@ def analyse_export(export: Mapping[str, Any], catalog: Catalog, scorer: MappingS
     analysis = analyse(study, catalog)
     if scorer is None:
         return analysis
-    return replace(analysis, sensitivity=sensitivity(export, study, catalog, scorer))
+    return replace(analysis, sensitivity=sensitivity(study, catalog, scorer))

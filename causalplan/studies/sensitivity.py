@@ -82,34 +82,24 @@ class Sensitivity:
         )
 
 
-def _mappings(export: Mapping[str, Any]) -> dict[str, Mapping[str, Any]]:
-    """Return each trial's mapping by the id ``trials.trial_rows`` gives it."""
-    found: dict[str, Mapping[str, Any]] = {}
-    trials = export.get("trials")
-    for index, item in enumerate(trials if isinstance(trials, list) else []):
-        if isinstance(item, dict) and isinstance(item.get("mapping"), dict):
-            found[str(item.get("trial_id") or f"trial-{index}")] = item["mapping"]
-    return found
-
-
 def _is_analysed_transfer(row: TrialRow) -> bool:
     return not row.excluded and row.outcome == 1
 
 
-def sensitivity(export: Mapping[str, Any], study: Study, catalog: Catalog, scorer: MappingScorer) -> Sensitivity:
+def sensitivity(study: Study, catalog: Catalog, scorer: MappingScorer) -> Sensitivity:
     """Return the study's rates without the analysed transfers whose mapping ``scorer`` finds implausible."""
-    mappings = _mappings(export)
     implausible = []
     scored = 0
     for row in study.rows:
-        mapping = mappings.get(row.trial_id)
-        if not _is_analysed_transfer(row) or mapping is None:
+        if not _is_analysed_transfer(row) or row.mapping is None:
             continue
         scored += 1
-        score = scorer(row.test_object, mapping)
+        score = scorer(row.test_object, row.mapping)
         if score < scorer.threshold:
             implausible.append(
-                ImplausibleTransfer(row.trial_id, row.participant_id, row.condition, row.test_object, score, mapping)
+                ImplausibleTransfer(
+                    row.trial_id, row.participant_id, row.condition, row.test_object, score, row.mapping
+                )
             )
     dropped = {item.trial_id for item in implausible}
     kept = replace(study, rows=tuple(row for row in study.rows if row.trial_id not in dropped))

@@ -45,6 +45,7 @@ class TrialRow:
     decided_by: str
     reason_codes: tuple[str, ...]
     model: Mapping[str, Any] | None
+    mapping: Mapping[str, Any] | None
     excluded: bool
     exclusion_reason: str | None
 
@@ -129,7 +130,7 @@ def trial_rows(export: Mapping[str, Any], catalog: Catalog) -> list[TrialRow]:
                 f"{where}: {exc.message} (add its folder with --catalog).", details={"at": where}
             ) from exc
         participant = str(_field(item, "participant_id", str, where))
-        model = item.get("model")
+        model, mapping = item.get("model"), item.get("mapping")
         rows.append(
             TrialRow(
                 trial_id=str(item.get("trial_id") or f"trial-{index}"),
@@ -145,6 +146,7 @@ def trial_rows(export: Mapping[str, Any], catalog: Catalog) -> list[TrialRow]:
                 decided_by=str(item.get("decided_by") or ""),
                 reason_codes=_reason_codes(item.get("reasons", []), where),
                 model=model if isinstance(model, dict) else None,
+                mapping=mapping if isinstance(mapping, dict) else None,
                 excluded=participant in excluded,
                 exclusion_reason=excluded.get(participant),
             )

@@ -52,6 +52,8 @@ class Trial:
     line: int | None
     problem: str | None = None
     """Why the entry could not be read, naming where; then there is no model or mapping to judge."""
+    is_whole_file: bool = False
+    """Whether this stands for the whole batch file, which could not be read (so it holds no trials)."""
 
 
 @dataclass(frozen=True)
@@ -115,6 +117,11 @@ def _unreadable_trial(trial_id: str, line: int | None, problem: str) -> Trial:
     return Trial(trial_id, None, None, line, problem)
 
 
+def _unreadable_file(line: int | None, problem: str) -> Trial:
+    """Return the one trial of a batch file that cannot be read as a whole."""
+    return Trial("file", None, None, line, problem, is_whole_file=True)
+
+
 def read_trials(path: Path) -> Iterator[Trial]:
     """Yield the trials of a batch file; an entry that cannot be read is a trial with a ``problem``."""
     if path.suffix.lower() == ".jsonl":
@@ -122,13 +129,10 @@ def read_trials(path: Path) -> Iterator[Trial]:
         return
     data, _source, problems = read_document(path)
     if problems:
-        yield _unreadable_trial(
-            "file", problems[0].location.line, f"The batch file could not be read. {problems[0].message}"
-        )
+        yield _unreadable_file(problems[0].location.line, f"The batch file could not be read. {problems[0].message}")
         return
     if not isinstance(data, list):
-        yield _unreadable_trial(
-            "file",
+        yield _unreadable_file(
             1,
             "The batch file could not be read: it is not a list of trials "
             "(a JSON Lines file, one trial per line, is named *.jsonl).",
@@ -144,7 +148,7 @@ def _read_json_lines(path: Path) -> Iterator[Trial]:
     try:
         handle = path.open("rb")
     except OSError as exc:
-        yield _unreadable_trial("file", None, f"The batch file could not be read: {exc.strerror}.")
+        yield _unreadable_file(None, f"The batch file could not be read: {exc.strerror}.")
         return
     with handle:
         yield from trials_of_lines(enumerate(handle, start=1))

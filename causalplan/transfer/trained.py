@@ -24,8 +24,8 @@ from typing import Any
 from causalplan.causal.diagnostics import Diagnostic
 from causalplan.causal.documents import SourceMap
 from causalplan.causal.model import CausalModel, read_model
-from causalplan.causal.validation import ObjectSummary, validate_model
 from causalplan.errors import UnknownObjectError
+from causalplan.inputs import merged_model_from_data, model_from_data
 from causalplan.objects.catalog import Catalog
 
 OBJECT_SEPARATOR = "_and_"
@@ -73,14 +73,9 @@ def _grouped(
     return grouped, None
 
 
-def _document(grouped: Mapping[str, Any], document: Mapping[str, Any], object_id: str) -> dict[str, Any]:
-    """Return the model file of one training object: its labels and all the rules."""
-    return {
-        "object": object_id,
-        "goal": document.get("goal", "light"),
-        "functions": grouped[object_id],
-        "rules": document.get("rules"),
-    }
+def _document(grouped: Mapping[str, Any], merged: Mapping[str, Any], object_id: str) -> dict[str, Any]:
+    """Return the model file of one training object: its labels, and the merged model's goal and rules."""
+    return {"object": object_id, "goal": merged["goal"], "functions": grouped[object_id], "rules": merged["rules"]}
 
 
 def _first_error(report_errors: Sequence[Diagnostic]) -> str:
@@ -112,21 +107,18 @@ def read_trained_model(document: object, training: Sequence[str], catalog: Catal
         },
         "rules": document.get("rules"),
     }
-    model, problems = read_model(merged, SourceMap())
-    if model is None:
-        return TrainedModel(order, problem=_first_error(problems))
-    summary = ObjectSummary(
-        str(merged["object"]),
-        tuple(f"{obj.id}.{part}" if len(order) > 1 else part for obj in objects for part in obj.part_ids),
-        objects[0].goal,
-        " and ".join(obj.name for obj in objects),
+    loaded = (
+        merged_model_from_data(merged, order, catalog)
+        if len(order) > 1
+        else model_from_data(merged, SourceMap(), catalog)
     )
-    report = validate_model(model, {summary.id: summary}, problems)
-    if not report.is_valid:
-        return TrainedModel(order, problem=_first_error(report.errors))
+    if loaded.model is None:
+        return TrainedModel(order, problem=_first_error(loaded.report.diagnostics))
+    if not loaded.report.is_valid:
+        return TrainedModel(order, problem=_first_error(loaded.report.errors))
     on_objects = {}
     for object_id in order:
-        on_object, _ = read_model(_document(grouped, document, object_id), SourceMap())
+        on_object, _ = read_model(_document(grouped, merged, object_id), SourceMap())
         if on_object is None:  # pragma: no cover - a valid merged model always splits into readable ones
             return TrainedModel(order, problem=f"its model cannot be read on the {object_id}")
         on_objects[object_id] = on_object

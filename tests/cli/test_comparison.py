@@ -42,3 +42,11 @@ def test_a_line_that_cannot_be_read_is_an_invalid_trial_and_the_batch_goes_on(tm
 def test_batch_help_gives_its_exit_codes() -> None:
     said = " ".join(run("batch", "--help").output.split())
     assert "Exit 0 when the verdicts are written, whatever they are; 2 for invalid input." in said
+
+
+def test_an_entry_whose_id_is_file_is_a_trial_not_the_whole_file(tmp_path: Path) -> None:
+    trials = write(tmp_path, "trials.json", '[{"id": "file", "model": {}}]\n')
+    out = tmp_path / "out"
+    result = run("batch", trials, "--out", out, "--no-simulate")
+    assert result.exit_code == 0, result.stderr
+    assert "invalid" in result.stdout and (out / "verdicts.json").exists()

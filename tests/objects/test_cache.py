@@ -9,8 +9,9 @@ import pytest
 from causalplan.objects import cache
 from causalplan.objects.catalog import parse_object
 from causalplan.objects.model import AssemblyObject
+from tests.conftest import EXAMPLES
 
-LAMP = (Path(__file__).resolve().parents[2] / "examples/catalog/bedside_lamp.yaml").read_text()
+LAMP = (EXAMPLES / "catalog/bedside_lamp.yaml").read_text()
 
 
 @pytest.fixture

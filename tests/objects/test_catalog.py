@@ -9,6 +9,7 @@ import yaml
 
 from causalplan.errors import CatalogError, UnknownObjectError
 from causalplan.objects.catalog import Catalog, load_catalog
+from tests.conftest import EXAMPLES
 
 DESIGN_PARTS = {
     "desk_lamp": {"shade", "light_bulb", "base_with_cables"},
@@ -41,7 +42,7 @@ def test_unknown_object_suggests_a_close_id(catalog: Catalog) -> None:
 
 
 def _write_object(folder: Path, **changes: object) -> Path:
-    base = yaml.safe_load((Path(__file__).parents[2] / "examples/catalog/bedside_lamp.yaml").read_text())
+    base = yaml.safe_load((EXAMPLES / "catalog/bedside_lamp.yaml").read_text())
     base.update(changes)
     path = folder / "object.yaml"
     path.write_text(yaml.safe_dump(base))
@@ -103,7 +104,7 @@ def test_a_bad_user_object_gets_a_clear_error(tmp_path: Path, changes: dict[str,
 
 
 def test_connectors_with_different_specs_do_not_fit(tmp_path: Path) -> None:
-    base = yaml.safe_load((Path(__file__).parents[2] / "examples/catalog/bedside_lamp.yaml").read_text())
+    base = yaml.safe_load((EXAMPLES / "catalog/bedside_lamp.yaml").read_text())
     base["parts"][1]["connectors"][0]["spec"] = "E27"
     (tmp_path / "lamp.yaml").write_text(yaml.safe_dump(base))
     with pytest.raises(CatalogError, match="does not fit"):

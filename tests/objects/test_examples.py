@@ -12,8 +12,8 @@ from causalplan.cli import app
 from causalplan.objects.catalog import load_catalog
 from causalplan.service.api.schemas.experiments import ExperimentIn
 from causalplan.studies.far_generalization import template_conditions
+from tests.conftest import EXAMPLES
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 OBJECTS = EXAMPLES / "objects"
 WITH_COVER = OBJECTS / "headlamp_with_cover.yaml"
 runner = CliRunner(env={"FORCE_COLOR": None, "NO_COLOR": "1", "COLUMNS": "200"})

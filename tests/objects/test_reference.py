@@ -12,6 +12,7 @@ from causalplan.cli import app
 from causalplan.objects.catalog import load_catalog
 from causalplan.objects.model import Requirement
 from causalplan.objects.reference import reference_functions, reference_mapping, reference_model
+from tests.conftest import ROOT
 
 CATALOG = load_catalog()
 OBJECTS = sorted(CATALOG.objects)
@@ -61,7 +62,7 @@ def test_a_requirement_without_an_expert_label_is_worded_without_rule_keywords()
 
 
 def test_a_function_label_with_a_rule_keyword_is_refused(tmp_path: Path) -> None:
-    text = (Path(__file__).parents[2] / "causalplan/objects/data/candle.yaml").read_text(encoding="utf-8")
+    text = (ROOT / "causalplan/objects/data/candle.yaml").read_text(encoding="utf-8")
     (tmp_path / "candle2.yaml").write_text(
         text.replace("id: candle\n", "id: candle2\n").replace("function: light the wick", "function: light AND burn"),
         encoding="utf-8",

@@ -19,8 +19,8 @@ from causalplan.studies.misconceptions import misconceptions
 from causalplan.studies.statistics import wilson
 from causalplan.studies.trials import ExportError, read_study, trial_rows
 from causalplan.transfer.verdict import transfer_verdict
+from tests.conftest import ROOT
 
-ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "examples" / "paper"
 USER_CATALOG = ROOT / "examples" / "catalog"
 

@@ -24,8 +24,9 @@ from causalplan.transfer.cluster import (
     trials_in,
     write_batch_on_cluster,
 )
+from tests.conftest import EXAMPLES
 
-TRIALS = Path(__file__).resolve().parents[2] / "examples" / "batch" / "trials.jsonl"
+TRIALS = EXAMPLES / "batch" / "trials.jsonl"
 OPTIONS = JudgeOptions(simulate=False)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from causalplan.objects.catalog import Catalog
+from causalplan.objects.reference import reference_model
 from causalplan.transfer.trained import read_trained_model
 
 RULES = [
@@ -60,3 +61,10 @@ def test_what_cannot_be_read_is_said_in_words(catalog: Catalog) -> None:
     uncaused = stored({"desk_lamp": LAMP, "candle": CANDLE}) | {"rules": ["current AND start the process CAUSES light"]}
     invalid = read_trained_model(uncaused, ["desk_lamp", "candle"], catalog).problem
     assert invalid is not None and invalid.startswith("its model is invalid: ")
+
+
+def test_a_model_without_a_goal_is_tried_with_its_objects_goal_as_it_was_checked(catalog: Catalog) -> None:
+    document = dict(reference_model(catalog.get("toy_car")))
+    del document["goal"]
+    trained = read_trained_model(document, ["toy_car"], catalog)
+    assert trained.problem is None and trained.tried is not None and trained.tried.goal == "motion"
