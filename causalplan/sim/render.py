@@ -16,7 +16,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from causalplan.objects.model import Vector
+from causalplan.sim.geometry import Solid
 from causalplan.sim.outcomes import Picture
+from causalplan.sim.poses import Pose
 from causalplan.sim.scene import Scene
 
 if TYPE_CHECKING:
@@ -136,6 +138,15 @@ def draw(scene: Scene, camera: Camera, lit_parts: Iterable[str], caption: str) -
         for body in lights:
             scene.remove(body)
     return Picture(camera.width, camera.height, _with_caption(pixels, caption))
+
+
+def part_alone(part_id: str, solid: Solid, size: tuple[int, int]) -> Picture:
+    """Return a picture of one part alone, centred on the table and standing on it."""
+    with Scene({part_id: solid}) as scene:
+        pose = Pose((-(solid.lower[0] + solid.upper[0]) / 2, -(solid.lower[1] + solid.upper[1]) / 2, -solid.lower[2]))
+        scene.add_part(part_id, pose, dynamic=False)
+        camera = Camera.around(scene, pose.apply(solid.lower), pose.apply(solid.upper), size=size)
+        return draw(scene, camera, (), "")
 
 
 def animation(pictures: Sequence[Picture], seconds_per_frame: float = 1.0) -> bytes:

@@ -36,6 +36,7 @@ from typing import Any
 
 from causalplan import caches
 from causalplan.errors import CausalPlanError
+from causalplan.objects.catalog import Catalog
 from causalplan.planners import fd, processes
 from causalplan.service.errors import PlannerOutOfMemoryError
 from causalplan.service.pool.catalog import worker_catalog
@@ -90,17 +91,29 @@ SIMULATOR_MODULES = (
     "causalplan.transfer.robot_verdict",
 )
 """What a robot's run imports: PyBullet, OMPL, TOPP-RA, SciPy and the robot's own modules."""
+WARM_PICTURE_SIZE = (32, 24)
+"""The warm-up picture's size: any size starts the renderer."""
 
 
-def warm_simulator() -> None:
-    """Import the simulator and the robot's libraries now, as a worker starts (``warm_up``).
+def warm_simulator(catalog: Catalog | None) -> None:
+    """Import the simulator and the robot's libraries now, as a worker starts (``warm_up``), and draw once.
 
-    A worker's first "Watch the robot" then pays for its run only, not for seconds of imports.
-    A simulator that cannot load says so in the answers that need it, as before.
+    A worker's first "Watch the robot" then pays for its run only, not for seconds of imports,
+    and its first picture (often a drawing made ahead, which a participant's plan may wait
+    behind) not for PyBullet's, numpy's and Pillow's start: a small picture of the catalog's
+    first part starts them. A simulator that cannot load says so in the answers that need it.
     """
     for module in SIMULATOR_MODULES:
         with contextlib.suppress(ImportError):
             importlib.import_module(module)
+    if catalog is None or not catalog.objects:
+        return
+    from causalplan.sim.geometry import solids
+    from causalplan.sim.render import part_alone
+
+    part_id, solid = next(iter(solids(catalog.objects[min(catalog.objects)]).items()))
+    with contextlib.suppress(CausalPlanError):  # no simulator: the pictures that need it say so
+        part_alone(part_id, solid, WARM_PICTURE_SIZE)
 
 
 def warm_up() -> None:
@@ -115,9 +128,10 @@ def warm_up() -> None:
     with contextlib.suppress(Exception):  # a translator that cannot run says so in the answers (and /health)
         importlib.import_module("fast_downward.translate.main")
     fd.prestart(fd.CONFIGS["fd"])  # the default search, waiting for its first task
+    catalog = None
     with contextlib.suppress(CausalPlanError):
-        worker_catalog(())
-    warm_simulator()  # so a worker's first robot run for the 3D player starts at once
+        catalog = worker_catalog(())
+    warm_simulator(catalog)  # so a worker's first robot run or picture starts at once
 
 
 def initialize(

@@ -31,22 +31,10 @@ class AssemblyPictureArguments:
 def part_pictures(arguments: PartPicturesArguments, catalog: Catalog) -> dict[str, bytes]:
     """Return a PNG of each part of an object, alone on the table, by part id."""
     from causalplan.sim.geometry import solids
-    from causalplan.sim.poses import Pose
-    from causalplan.sim.render import Camera, draw
-    from causalplan.sim.scene import Scene
+    from causalplan.sim.render import part_alone
 
     obj = catalog.get(arguments.object_id)
-    pictures: dict[str, bytes] = {}
-    for part_id, solid in solids(obj).items():
-        with Scene({part_id: solid}) as scene:
-            # Centred on the table, standing on it.
-            pose = Pose(
-                (-(solid.lower[0] + solid.upper[0]) / 2, -(solid.lower[1] + solid.upper[1]) / 2, -solid.lower[2])
-            )
-            scene.add_part(part_id, pose, dynamic=False)
-            camera = Camera.around(scene, pose.apply(solid.lower), pose.apply(solid.upper), size=PART_PICTURE_SIZE)
-            pictures[part_id] = draw(scene, camera, (), "").png()
-    return pictures
+    return {part_id: part_alone(part_id, solid, PART_PICTURE_SIZE).png() for part_id, solid in solids(obj).items()}
 
 
 def assembly_picture(arguments: AssemblyPictureArguments, catalog: Catalog) -> bytes:
