@@ -10,7 +10,6 @@ write ``task.sas`` into the solve's folder.
 
 from __future__ import annotations
 
-import contextlib
 import io
 import resource
 import signal
@@ -75,21 +74,32 @@ def _translate_here(folder: Path, time_limit: float, memory_mb: int) -> Finished
     if time_limit <= 0:
         return Finished(None, "", 0.0)
     captured = io.StringIO()
+    translating = True
 
     def on_alarm(signum: int, frame: object) -> None:
         # Armed again before raising: an exception raised inside a garbage-collector callback or
         # under a broad `except` in the translator is lost, and it would run past its deadline.
-        signal.setitimer(signal.ITIMER_REAL, ALARM_REPEAT_SECONDS)
-        raise _TranslatorTimeout
+        # Once the translator has stopped it raises nothing: an alarm due meanwhile must not
+        # break the clean-up below (the limits and stderr would stay the translator's).
+        if translating:
+            signal.setitimer(signal.ITIMER_REAL, ALARM_REPEAT_SECONDS)
+            raise _TranslatorTimeout
 
     previous_handler = signal.signal(signal.SIGALRM, on_alarm)
     soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    returncode: int | None
+    returncode: int | None = None
     try:
         resource.setrlimit(resource.RLIMIT_AS, (processes.memory_limit(memory_mb), hard))
         signal.setitimer(signal.ITIMER_REAL, time_limit)
-        with contextlib.redirect_stdout(captured), contextlib.redirect_stderr(captured):
+        stdout, stderr = sys.stdout, sys.stderr
+        sys.stdout = sys.stderr = captured
+        try:
             returncode = _run_main(folder)
+        finally:
+            # No call before this line: Python runs signal handlers at calls, so none can raise
+            # between the translator's end (or its exception) and here.
+            translating = False
+            sys.stdout, sys.stderr = stdout, stderr
     except _TranslatorTimeout:
         returncode = None
     except Exception:  # noqa: BLE001 - anything else is the translator's critical error, with its traceback

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import resource
+import signal
 import subprocess
 import sys
 import time
@@ -306,6 +308,27 @@ def test_a_lost_translator_timeout_is_raised_again(monkeypatch: pytest.MonkeyPat
     finished = fd_translate.translate("", "", tmp_path, 0.05, 2048)
     assert lost == [True]
     assert finished.returncode is None
+
+
+def test_an_alarm_due_during_the_clean_up_leaves_the_process_as_it_was(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """On a busy machine the repeated alarm can come due while the translation ends: it must not
+    escape, nor leave the process with the translator's memory limit, alarm or stderr."""
+
+    def translator_past_its_deadline(folder: Path) -> int:
+        while True:
+            pass
+
+    monkeypatch.setattr(fd_translate, "_run_main", translator_past_its_deadline)
+    monkeypatch.setattr(fd_translate, "ALARM_REPEAT_SECONDS", 0.00001)  # due again at once, as under load
+    before = (resource.getrlimit(resource.RLIMIT_AS), signal.getsignal(signal.SIGALRM), sys.stdout, sys.stderr)
+    for _ in range(100):
+        assert fd_translate.translate("", "", tmp_path, 0.001, 2048).returncode is None
+        assert (resource.getrlimit(resource.RLIMIT_AS), signal.getsignal(signal.SIGALRM), sys.stdout, sys.stderr) == (
+            before
+        )
+    assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
 
 
 def example_tasks(catalog: Catalog) -> dict[str, PlanningTask]:
