@@ -52,7 +52,7 @@ def broken_parts(obj: AssemblyObject) -> list[BrokenPart]:
     ]
 
 
-def _json_for_script(value: object) -> markupsafe.Markup:
+def json_for_script(value: object) -> markupsafe.Markup:
     """Return ``value`` as JSON safe inside a ``<script type="application/json">`` block."""
     text = render_json(value).decode("utf-8").replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
     return markupsafe.Markup(text)
@@ -67,5 +67,5 @@ def troubleshooting_page(request: Request, _: ResearchPageDep, catalog: CatalogD
         "research_troubleshooting.html",
         objects=[(obj, broken_parts(obj)) for obj in objects],
         strategies=STRATEGIES,
-        models=_json_for_script({obj.id: reference_model(obj) for obj in objects}),
+        models=json_for_script({obj.id: reference_model(obj) for obj in objects}),
     )
