@@ -134,6 +134,7 @@ class TroubleshootingRobotOut(_StrategiesTable):
     robot: RobotEpisodeOut
     model_id: uuid.UUID
     playback: PlaybackFileOut | None = Field(
+        default=None,
         description="Where the 3D player's document of the robot's run is (`EpisodePlaybackOut`); "
-        "null when the robot stopped before it moved."
+        "null when the robot stopped before it moved (absent from a job run before the service served it).",
     )
