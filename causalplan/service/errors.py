@@ -73,6 +73,12 @@ class FilmNotFoundError(NotFoundError):
     code = "video_not_found"
 
 
+class PlaybackNotFoundError(NotFoundError):
+    """The job has no 3D player's document: not a troubleshooting job, or it ended without one."""
+
+    code = "playback_not_found"
+
+
 class ModelNotFoundError(NotFoundError):
     """No stored model has this id."""
 
@@ -131,6 +137,13 @@ class JobNotFoundError(NotFoundError):
     """No job has this id (or its result has expired)."""
 
     code = "job_not_found"
+
+
+class JobNotFinishedError(ServiceError):
+    """The job is queued or running: what it makes is not there yet (ask again once it has succeeded)."""
+
+    code = "job_not_finished"
+    status_code = 409
 
 
 class JobFinishedError(ServiceError):

@@ -44,7 +44,8 @@ def csv_bytes(columns: Sequence[str], rows: Sequence[dict[str, Any]]) -> bytes:
 
 
 def film_response(data: bytes, content_type: str) -> Response:
-    """Return a stored film of the robot: private to the asker's browser for an hour, never sniffed as another type."""
+    """Return a file a job stored (a film, a 3D player's document): private to the asker's browser for an hour,
+    never sniffed as another type."""
     return Response(
         data,
         media_type=content_type,

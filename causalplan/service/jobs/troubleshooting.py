@@ -5,6 +5,8 @@
 solved by the interactive work (``TROUBLESHOOTING``, kept in the answer cache), so a bad
 fault, object or mapping is refused at once (422/404) and nothing is queued; the runner then
 has the robot carry out the episode in a worker of the jobs' pool (``QUEUED_TROUBLESHOOTING``).
+The 3D player's document of the run (``sim.robot_episode_playback``) is stored with the job as
+its file, and served at ``playback_url`` (``GET /v1/jobs/{id}/playback``) until the job expires.
 ``troubleshooting_inputs`` reads a request's model and mapping the same way for the route.
 """
 
@@ -16,9 +18,12 @@ from typing import TYPE_CHECKING, Any
 
 from causalplan.service.errors import InvalidRequestError
 from causalplan.service.jobs.requests import TroubleshootingRequest
-from causalplan.service.jobs.work import Progress, in_pool
+from causalplan.service.jobs.work import JobFile, Outcome, Progress, in_pool
 from causalplan.service.work.registry import QUEUED_TROUBLESHOOTING, TROUBLESHOOTING
 from causalplan.service.work.troubleshooting import TroubleshootingArguments
+
+PLAYBACK_TYPE = "application/json"
+"""The media type of a troubleshooting job's file: the 3D player's document."""
 
 if TYPE_CHECKING:
     from causalplan.service.api.schemas.jobs import TroubleshootingJobIn
@@ -58,6 +63,11 @@ def troubleshooting_inputs(
     return TroubleshootingInputs(submission, arguments, [warning.as_dict() for warning in warnings])
 
 
+def playback_url(job_id: object) -> str:
+    """Return where the API serves the 3D player's document of troubleshooting job ``job_id``."""
+    return f"/v1/jobs/{job_id}/playback"
+
+
 def prepare_troubleshooting(body: TroubleshootingJobIn, services: Services) -> TroubleshootingRequest:
     from causalplan.service.storage.crud import ClientIds
 
@@ -76,7 +86,8 @@ def prepare_troubleshooting(body: TroubleshootingJobIn, services: Services) -> T
     )
 
 
-def run_troubleshooting_job(request: TroubleshootingRequest, services: Services, progress: Progress) -> dict[str, Any]:
+def run_troubleshooting_job(request: TroubleshootingRequest, services: Services, progress: Progress) -> Outcome:
+    """Have the robot carry out the episode: ``TroubleshootingRobotOut``, with the player's document as the file."""
     from causalplan.service.api.schemas.troubleshooting import TroubleshootingIn
     from causalplan.service.storage.crud import ClientIds
 
@@ -93,4 +104,10 @@ def run_troubleshooting_job(request: TroubleshootingRequest, services: Services,
     progress(0, 1)
     data = in_pool(services, progress, QUEUED_TROUBLESHOOTING, inputs.arguments)
     progress(1, 1)
-    return {**data, "model_id": str(uuid.UUID(request.model_id))}
+    document = data.pop("playback", None)
+    result = {**data, "model_id": str(uuid.UUID(request.model_id))}
+    if not isinstance(document, bytes):
+        return Outcome({**result, "playback": None})
+    # The URL is the route's to say (``playback_url``, filled in when the job is read).
+    described = {"url": None, "content_type": PLAYBACK_TYPE, "bytes": len(document)}
+    return Outcome({**result, "playback": described}, JobFile(document, PLAYBACK_TYPE))

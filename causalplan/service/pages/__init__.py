@@ -36,6 +36,7 @@ def routers() -> list[APIRouter]:
         participant_explain,
         research,
         research_robot,
+        research_troubleshooting,
         robot_films,
         study_link,
         upkeep,
@@ -52,5 +53,6 @@ def routers() -> list[APIRouter]:
         participant_explain.router,
         robot_films.router,
         research_robot.router,
+        research_troubleshooting.router,
         research.router,
     ]

@@ -4,17 +4,24 @@
 (``troubleshoot.task``), within a bound on the solver's states, and with a fault runs that
 episode; with ``robot`` the Franka Panda then carries out the episode in physics, action by
 action (``sim.robot_episode``), which takes seconds to minutes: that is a job's work, on the
-jobs' pool. Typed arguments and the worker's catalog in, plain JSON values out, as
-``planning``'s functions.
+jobs' pool, and its answer carries the 3D player's document of the run (``playback``, JSON
+bytes). Typed arguments and the worker's catalog in, plain JSON values out, as ``planning``'s
+functions.
 """
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from causalplan.causal.model import CausalModel, Labelling
 from causalplan.objects.catalog import Catalog
+
+if TYPE_CHECKING:
+    from causalplan.objects.model import AssemblyObject
+    from causalplan.sim.robot_episode import EpisodeInPhysics
+    from causalplan.troubleshoot.episode import Episode
 
 MAX_SERVICE_STATES = 500_000
 """The (belief, assembly) states one request may solve: the catalog's objects need at most a few thousand
@@ -55,7 +62,21 @@ def troubleshoot(arguments: TroubleshootingArguments, catalog: Catalog) -> dict[
     if arguments.robot and fault is not None:
         from causalplan.sim.robot_episode import robot_episode
 
-        run = robot_episode(task.obj, task.episode(arguments.strategy, fault))
+        episode = task.episode(arguments.strategy, fault)
+        run = robot_episode(task.obj, episode, tracks=True)
         answer["robot"] = run.as_dict()
         answer["status"] = "repaired" if run.produces_goal else "not_repaired_in_physics"
+        answer["playback"] = _playback(task.obj, run, episode)
     return answer
+
+
+def _playback(obj: AssemblyObject, run: EpisodeInPhysics, episode: Episode) -> bytes | None:
+    """Return the 3D player's document of the robot's run as JSON (None: the robot never moved).
+
+    Encoded here, as ``robot.playback`` does: the job stores the bytes as they are.
+    """
+    from causalplan.sim.robot_episode_playback import episode_playback
+
+    if run.commands is None or not run.commands.points or not run.tracks:
+        return None  # it stopped at its first motion: there is nothing to play
+    return json.dumps(episode_playback(obj, run, episode), separators=(",", ":")).encode()

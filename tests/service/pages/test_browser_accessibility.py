@@ -1,6 +1,7 @@
 """axe-core finds no violation on any page: every participant step (with the plan, its answers and a
-stale plan), the end, consent, a refusal, and the research pages. Offline: axe is vendored under
-``tests/vendor/axe-core`` and injected into each page (the pages' CSP is bypassed for it alone)."""
+stale plan), the end, consent, a refusal, and the research pages (with a robot's repair in the 3D
+player). Offline: axe is vendored under ``tests/vendor/axe-core`` and injected into each page (the
+pages' CSP is bypassed for it alone)."""
 
 from __future__ import annotations
 
@@ -136,5 +137,12 @@ def test_axe_finds_no_violation_on_any_page(live_server: str, checked: Page) -> 
     page.get_by_role("button", name="Save the recruiting settings").click()
     expect(page.locator("#recruitment-saved")).to_be_visible()
     audit("research: an experiment, settings saved")
+    page.get_by_role("link", name="Robot repairs").click()
+    audit("research: robot repairs")
+    page.get_by_label("The broken part").select_option("desk_lamp/light_bulb")
+    page.get_by_label("Whose policy the robot follows").select_option("oracle")
+    page.get_by_role("button", name="Watch the robot repair it").click()
+    expect(page.get_by_role("list", name="The robot's actions").locator("li")).to_have_count(7, timeout=120_000)
+    audit("research: the robot's repair in the 3D player")
 
     assert {name: items for name, items in found.items() if items} == {}

@@ -1,4 +1,7 @@
-"""/v1/jobs: post long work (trials, a simulation, a consensus, a film, fits), follow it, fetch its result, cancel it.
+"""/v1/jobs: post long work (trials, a simulation, a consensus, a film, fits, a repair), follow it, fetch its result.
+
+A video job's film is served at ``/v1/jobs/{id}/video``, a troubleshooting job's 3D player
+document at ``/v1/jobs/{id}/playback``; a job is cancelled with DELETE.
 
 Any replica answers for any job: jobs live in the database, and whichever replica's runner
 took a job does its work (see ``service.jobs``). Every job is its poster's (``service.owners``):
@@ -22,16 +25,19 @@ from causalplan.service.api.schemas.common import (
     error_responses,
 )
 from causalplan.service.api.schemas.jobs import JOB_EXAMPLES, JobBody, JobIn, JobOut
+from causalplan.service.api.schemas.playback import EpisodePlaybackOut
 from causalplan.service.deps import Services, ServicesDep
 from causalplan.service.documents import StrictJSONRoute
-from causalplan.service.errors import FilmNotFoundError
+from causalplan.service.errors import FilmNotFoundError, JobNotFinishedError, PlaybackNotFoundError
 from causalplan.service.jobs.kinds import KINDS
+from causalplan.service.jobs.troubleshooting import PLAYBACK_TYPE, playback_url
 from causalplan.service.jobs.video import video_url
 from causalplan.service.owners import JobOwner, JobOwnerDep, admit_job, job_limits
 from causalplan.service.responses import film_response
 from causalplan.service.storage import jobs as store
-from causalplan.service.storage.jobs import JobKind
+from causalplan.service.storage.jobs import UNFINISHED, JobKind
 from causalplan.service.storage.records import JobRecord
+from causalplan.service.work.robot import CONTENT_TYPES
 
 _RESPONSES = {**JOB_CLIENT_RESPONSES, **error_responses(503)}
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], responses=_RESPONSES, route_class=StrictJSONRoute)
@@ -41,6 +47,11 @@ _LINKS = {
     "ReadJob": {"operationId": "read_job", "parameters": _JOB_ID, "description": "Follow the job (its `url`)."},
     "CancelJob": {"operationId": "cancel_job", "parameters": _JOB_ID, "description": "Cancel it."},
     "ReadJobVideo": {"operationId": "read_job_video", "parameters": _JOB_ID, "description": "A video job's film."},
+    "ReadJobPlayback": {
+        "operationId": "read_job_playback",
+        "parameters": _JOB_ID,
+        "description": "A troubleshooting job's 3D player document.",
+    },
 }
 """OpenAPI links from a posted job to what can be done with it (clients and stateful tests follow them)."""
 CANCEL_WAIT_SECONDS = 5.0
@@ -56,10 +67,12 @@ def job_url(job_id: uuid.UUID) -> str:
 
 
 def job_result(record: JobRecord) -> dict[str, Any] | None:
-    """Return the job's stored result, with the URL of the film it made (where this API serves it)."""
+    """Return the job's stored result, with the URL of the film or player's document it made (served here)."""
     result = record.result
     if result is not None and record.file_type is not None and isinstance(result.get("video"), dict):
         result = {**result, "video": {**result["video"], "url": video_url(record.id)}}
+    if result is not None and record.file_type is not None and isinstance(result.get("playback"), dict):
+        result = {**result, "playback": {**result["playback"], "url": playback_url(record.id)}}
     return result
 
 
@@ -186,10 +199,50 @@ async def read_job_video(job_id: uuid.UUID, services: ServicesDep, owner: JobOwn
     """Return the film of a finished `video` job, from whichever replica is asked, until the job expires."""
     seen_by = owner.visible_owner
     found = await anyio.to_thread.run_sync(partial(store.get_job_file, services.engine, job_id, owner=seen_by))
-    if found is None:
+    if found is None or found[1] not in CONTENT_TYPES.values():  # a troubleshooting job's file is no film
         record = await anyio.to_thread.run_sync(partial(store.get_job, services.engine, job_id, owner=seen_by))
         raise FilmNotFoundError(
             f"Job {job_id} ({record.kind}, {record.status}) has no film: only a video job that has succeeded has one.",
             details={"job_id": str(job_id), "kind": record.kind, "status": record.status},
         )
     return film_response(*found)
+
+
+@router.get(
+    "/{job_id}/playback",
+    summary="The 3D player's document of a troubleshooting job's robot run",
+    response_model=None,  # the stored document is handed back as it is; its shape is declared below
+    responses={
+        200: {"model": EpisodePlaybackOut, "description": "The robot's run of the episode, for the 3D player."},
+        404: {
+            "model": ErrorOut,
+            "description": "No such job (or another client's; `job_not_found`), or it has no player's document: "
+            "not a troubleshooting job, or it failed, was cancelled or stopped before the robot moved "
+            "(`playback_not_found`).",
+        },
+        409: {"model": ErrorOut, "description": "The job is queued or running (`job_not_finished`): ask again."},
+    },
+)
+async def read_job_playback(job_id: uuid.UUID, services: ServicesDep, owner: JobOwnerDep) -> Response:
+    """Return the 3D player's document (`causalplan-playback/2`) of a troubleshooting job that has succeeded.
+
+    The robot's motor commands, every body's track (a spare as `PART:spare`) and each action of
+    the episode with when it plays and what it observed (`EpisodePlaybackOut`); what the research
+    page's player plays. From whichever replica is asked, until the job expires.
+    """
+    seen_by = owner.visible_owner
+    found = await anyio.to_thread.run_sync(partial(store.get_job_file, services.engine, job_id, owner=seen_by))
+    if found is not None and found[1] == PLAYBACK_TYPE:
+        return film_response(*found)
+    record = await anyio.to_thread.run_sync(partial(store.get_job, services.engine, job_id, owner=seen_by))
+    details: dict[str, object] = {"job_id": str(job_id), "kind": record.kind, "status": record.status}
+    if record.kind == JobKind.TROUBLESHOOTING and record.status in UNFINISHED:
+        raise JobNotFinishedError(
+            f"Job {job_id} is {record.status}: the robot's run can be played once the job has succeeded.",
+            details=details,
+        )
+    raise PlaybackNotFoundError(
+        f"Job {job_id} ({record.kind}, {record.status}) has no 3D player's document: only a troubleshooting job "
+        "whose robot moved has one.",
+        details=details,
+    )

@@ -174,7 +174,8 @@ class JobOut(OutputModel):
         description="When succeeded: batch {trials, verdicts, results}; simulation as POST /v1/simulations; "
         "consensus as `causalplan consensus`'s report.json; video as POST /v1/simulations with robot, its "
         "`video.url` where the film is; fit_estimation as `causalplan estimate-fits --json`, with `overlay`; "
-        "troubleshooting as `causalplan troubleshoot --robot --json` (`TroubleshootingRobotOut`)."
+        "troubleshooting as `causalplan troubleshoot --robot --json` (`TroubleshootingRobotOut`), its "
+        "`playback.url` where the 3D player's document is."
     )
     error: ErrorDetailOut | None = Field(description="When failed: why, in the one error shape.")
 

@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from causalplan.service.api.schemas.common import DiagnosticOut, InputModel, MappingDocument, ModelDocument, OutputModel
+from causalplan.service.api.schemas.playback import PlaybackFileOut
 from causalplan.service.api.schemas.simulations import RequirementCheckOut
 
 
@@ -132,3 +133,8 @@ class TroubleshootingRobotOut(_StrategiesTable):
     episode: EpisodeOut
     robot: RobotEpisodeOut
     model_id: uuid.UUID
+    playback: PlaybackFileOut | None = Field(
+        default=None,
+        description="Where the 3D player's document of the robot's run is (`EpisodePlaybackOut`); "
+        "null when the robot stopped before it moved (absent from a job run before the service served it).",
+    )

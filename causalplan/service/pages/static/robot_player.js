@@ -2,7 +2,9 @@
 //
 // The page gets one JSON document (POST /p/<code>/films/playback, `sim.robot.playback`): the motor
 // commands by column (times from the start, joint positions, the gripper's width) and, per part, its
-// shapes from the catalog and its pose over time. The Panda is pybullet_data's URDF with its light
+// shapes from the catalog and its pose over time. A troubleshooting episode's document (GET
+// /v1/jobs/{id}/playback, `sim.robot_episode_playback`) adds `actions`: the player lists them under
+// its controls and marks the one playing, with what it observed once it has been reached. The Panda is pybullet_data's URDF with its light
 // (collision) meshes, posed by urdf-loader; the parts are drawn from their shapes. Frames are in the
 // simulator's world: metres, z up, quaternions x, y, z, w.
 import * as THREE from "three";
@@ -80,6 +82,45 @@ function fraction(times, k, t) {
   return span > 0 ? Math.min(1, Math.max(0, (t - times[k]) / span)) : 0;
 }
 
+// The list of an episode's actions: `mark(t)` marks those done and the one playing at time `t`, and
+// shows what each observed once it is reached; it returns the number of the action playing.
+function actionList(run) {
+  const names = {};
+  run.parts.forEach(function (part) { names[part.id] = part.name; });
+  const list = document.createElement("ol");
+  list.className = "player-actions";
+  list.setAttribute("aria-label", "The robot's actions");
+  const items = run.actions.map(function (action) {
+    const item = document.createElement("li");
+    const what = document.createElement("span");
+    what.textContent = action.action + (action.part ? " " + (names[action.part] || action.part) : "");
+    const seen = document.createElement("span");
+    seen.className = "player-observed";
+    const failed = action.passed ? "" : " (the robot could not: " + (action.message || "it stopped") + ")";
+    seen.textContent = (action.observed ? ": " + action.observed : "") + failed;
+    item.append(what, seen);
+    list.append(item);
+    return item;
+  });
+  let shown = null;
+  function mark(t) {
+    // The action playing is the last that has started: one without motion (inspect, replace) starts
+    // where the one before it ended, so it counts as done once the next one moves.
+    let current = 0;
+    run.actions.forEach(function (action, k) { if (action.start <= t) current = k; });
+    if (current === shown) return run.actions[current].number;
+    shown = current;
+    items.forEach(function (item, k) {
+      item.classList.toggle("done", k < current);
+      item.classList.toggle("playing", k === current);
+      item.querySelector(".player-observed").hidden = k > current;
+      if (k === current) item.setAttribute("aria-current", "step"); else item.removeAttribute("aria-current");
+    });
+    return run.actions[current].number;
+  }
+  return { list: list, mark: mark };
+}
+
 // Build the player in `container` for the run `run`; it starts playing once the Panda is loaded.
 export async function createPlayer(container, run) {
   const pointTimes = run.trajectory.times;
@@ -124,7 +165,8 @@ export async function createPlayer(container, run) {
   fit();
   renderer.domElement.className = "robot-canvas";
   renderer.domElement.setAttribute("role", "img");
-  renderer.domElement.setAttribute("aria-label", "The robot assembling the " + run.name + " in 3D (drag to turn the view)");
+  const doing = run.actions ? "repairing" : "assembling";
+  renderer.domElement.setAttribute("aria-label", "The robot " + doing + " the " + run.name + " in 3D (drag to turn the view)");
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.target.set(-0.25, 0, 0.3);
   controls.update();
@@ -149,11 +191,14 @@ export async function createPlayer(container, run) {
   [1, 2, 4].forEach(function (times) { speed.add(new Option(times + "×", String(times))); });
   bar.append(button, timeline, clock, speed);
   container.append(renderer.domElement, bar);
+  const steps = run.actions && run.actions.length ? actionList(run) : null;
+  if (steps) container.append(steps.list);
 
   let time = 0;
   let playing = false;
   let frames = 0;
   let last = null;
+  let action = null; // the number of the episode's action playing (a troubleshooting run's)
   const posed = {};
 
   function pose(t) {
@@ -182,6 +227,7 @@ export async function createPlayer(container, run) {
     button.textContent = playing ? "Pause" : time >= seconds ? "Play again" : "Play";
     timeline.value = String(time);
     clock.textContent = time.toFixed(1) + " / " + seconds.toFixed(1) + " s";
+    if (steps) action = steps.mark(time);
   }
 
   // Frames are drawn while the run plays, and once after each change while it rests (a paused
@@ -257,9 +303,13 @@ export async function createPlayer(container, run) {
   }
 
   const player = {
-    // What is shown: the time, whether it plays, frames drawn, and every part's pose [x, y, z, qx, qy, qz, qw].
+    // What is shown: the time, whether it plays, frames drawn, every part's pose [x, y, z, qx, qy, qz, qw],
+    // and the number of the episode's action playing (null for an assembly).
     state: function () {
-      return { time: time, seconds: seconds, playing: playing, frames: frames, parts: posed, view: camera.position.toArray() };
+      return {
+        time: time, seconds: seconds, playing: playing, frames: frames, parts: posed,
+        view: camera.position.toArray(), action: action,
+      };
     },
     seek: function (t) { time = Math.max(0, Math.min(seconds, t)); playing = false; redraw(); },
     play: play,
