@@ -97,12 +97,16 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
         # xdist 3.8 breaks when a worker crashes (a segfault): the run ends in an INTERNALERROR
         # that names no test (pytest-xdist #1362, #1323, open). Mended here as their fixes do.
         def remove_node(self, node: Any) -> str | None:
-            """Forget the dead worker's collection; queue again only its work not done, less the crashed test."""
-            self.registered_collections.pop(node, None)  # its replacement registers its own
+            """Forget a dead worker's collection; queue again only its work not done, less the crashed test.
+
+            A worker that finished its work keeps its collection: the run is complete only while
+            every worker's is registered.
+            """
             workload = self.assigned_work.pop(node)
             pending = {scope: unit for scope, unit in workload.items() if not all(unit.values())}
             if not pending:
                 return None
+            self.registered_collections.pop(node, None)  # it crashed: its replacement registers its own
             crashed = next(nodeid for unit in pending.values() for nodeid, done in unit.items() if not done)
             pending[self._split_scope(crashed)][crashed] = True  # reported as crashed, not run again
             self.workqueue.update({scope: unit for scope, unit in pending.items() if not all(unit.values())})

@@ -15,7 +15,14 @@ PROJECT_FOLDERS = {"benchmarks"}
 """Folders of the repository beside the package whose code has tests of its own (``tests/benchmarks/``)."""
 
 # What the top-level test files check that is not one module: the project as a whole.
-PROJECT_WIDE = {"test_architecture.py", "test_imports.py", "test_docker.py", "test_fresh_machine.py", "test_layout.py"}
+PROJECT_WIDE = {
+    "test_architecture.py",
+    "test_imports.py",
+    "test_docker.py",
+    "test_fresh_machine.py",
+    "test_layout.py",
+    "test_scheduler.py",
+}
 
 
 def test_every_test_folder_is_a_package_folder() -> None:
