@@ -47,13 +47,19 @@ from causalplan.sim.layout import ROBOT_ROW_GAP, layout
 from causalplan.sim.mechanism import evaluate
 from causalplan.sim.motions import ENGAGEMENT, MOTIONS, approach_path, approach_start
 from causalplan.sim.movers import PartsMoveThemselves
-from causalplan.sim.outcomes import RequirementCheck, RobotFailure, StepStatus
+from causalplan.sim.outcomes import Failure, RequirementCheck, RobotFailure, StepStatus
 from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.poses import Pose, difference
 from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
 from causalplan.sim.robot.mover import PandaMovesThem
 from causalplan.sim.robot.robot import LIFT, LINE_STEP, Robot, line_poses
-from causalplan.sim.robot.steps import PUSH_DEPTH, screw_spacing, spaced_distances, step_motions
+from causalplan.sim.robot.steps import (
+    PUSH_DEPTH,
+    SCREW_START_POSES,
+    screw_spacing,
+    spaced_distances,
+    step_motions,
+)
 from causalplan.sim.robot.tracks import PartTrack
 from causalplan.sim.robot.trajectory import Trajectory
 from causalplan.sim.scene import Scene
@@ -68,8 +74,6 @@ ALONG_STEP = 0.0001
 """Metres between the distances tried when finding where a part sits along its approach."""
 ALONG_METRES_PER_RADIAN = 0.01
 """How a turn counts against a shift when matching a part's pose to its approach (1 cm a radian)."""
-SCREW_START_POSES = 9
-"""Poses of a screw's way out (10 degrees each) that choose the arm pose it is grasped with."""
 
 
 @dataclass(frozen=True)
@@ -160,6 +164,8 @@ class _Episode:
     """Each body's id for the player: the part it started as, or its spare's id."""
     swaps: list[tuple[str, int]] = field(default_factory=list)
     """Each part swapped for its spare, and the number of planned segments before the swap."""
+    in_the_way: dict[str, list[str]] = field(default_factory=dict)
+    """The parts the hand had to lift off to take each part off (they are lifted off to put it on, too)."""
 
     @property
     def scene(self) -> Scene:
@@ -206,8 +212,54 @@ def _collide_again(scene: Scene, a: str, b: str) -> None:
             pb.setCollisionFilterPair(body_a, body_b, link_a, link_b, 1, physicsClientId=client)
 
 
-def _detach(state: _Episode, part: str) -> RobotFailure | None:
-    """Take ``part`` off the object as its assembly step put it on, backwards, and set it down at its table place."""
+def _detach(state: _Episode, number: int, part: str) -> tuple[str, str] | None:
+    """Take ``part`` off the object and set it down; return the failure code and message, if any.
+
+    A part the hand cannot reach for one beside it that could come off now (the gas lantern's
+    knob beside its globe) is reached as one would: that part is lifted off first and put back after.
+    """
+    aside: list[str] = []
+    failed = _take_off(state, number, part, aside)
+    if failed is not None:
+        return failed
+    if aside:
+        state.in_the_way[part] = aside
+    return _put_back(state, number, aside)
+
+
+def _code(failure: RobotFailure | None) -> tuple[str, str] | None:
+    """Return a robot failure's code and message (None for none)."""
+    return None if failure is None else (failure.failure.value, failure.check.detail)
+
+
+def _in_the_way(state: _Episode, part: str, failure: RobotFailure, aside: list[str]) -> str | None:
+    """Return the assembled part the hand met reaching ``part``, if it can come off now (nothing stands on it)."""
+    other = failure.obstacle
+    run = state.run
+    if failure.failure is not Failure.NO_COLLISION_FREE_PATH or other is None or other in aside:
+        return None
+    if other == part or other == state.obj.base or other not in run.assembled:
+        return None
+    standing_on = any(joint.fixed == other for joint in run.joints if not joint.touch_only)
+    return None if standing_on else other
+
+
+def _put_back(state: _Episode, number: int, aside: list[str]) -> tuple[str, str] | None:
+    """Put the parts lifted off out of the hand's way back on the object, the last lifted first."""
+    for part in reversed(aside):
+        fit = state.fits[part]
+        failed = _step_failure(state, number, StepRequest(fit.primitive, part, fit.fixed_part, fit.id))
+        if failed is not None:
+            return failed
+    return None
+
+
+def _take_off(state: _Episode, number: int, part: str, aside: list[str]) -> tuple[str, str] | None:
+    """Take ``part`` off the object as its assembly step put it on, backwards, and set it down at its table place.
+
+    A part in the hand's way is taken off first (and added to ``aside``). Returns the failure
+    code and message, if any.
+    """
     obj, scene, run, robot = state.obj, state.scene, state.run, state.robot
     fit = state.fits[part]
     joint = next(joint for joint in run.joints if joint.moving == part and not joint.touch_only)
@@ -232,8 +284,15 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
     way_out = [path(d) for d in first]
     # An arm pose from which the gripper can also take the part out along its axis.
     failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
+    while failure is not None and (blocking := _in_the_way(state, part, failure, aside)) is not None:
+        # The fetch failed before moving: lift the part in the way off, and try again.
+        failed = _detach(state, number, blocking)
+        if failed is not None:
+            return failed
+        aside.append(blocking)
+        failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
     if failure is not None:
-        return failure
+        return _code(failure)
     _unweld(scene, joint.fixed, part)
     scene.set_dynamic(part, False)
     run.joints.remove(joint)
@@ -248,9 +307,9 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
             "approach", [path(d) for d in spaced_distances(thread, start, LINE_STEP)], what, joint.fixed
         )
     if failure is not None:
-        return failure
+        return _code(failure)
     _collide_again(scene, joint.fixed, part)
-    return _set_down(state, part, run.homes[part])
+    return _code(_set_down(state, part, run.homes[part]))
 
 
 def _set_down(state: _Episode, part: str, home: Pose) -> RobotFailure | None:
@@ -288,6 +347,21 @@ def _replace_base(state: _Episode, part: str) -> None:
     state.run.homes[part] = here
 
 
+def _attach(state: _Episode, number: int, part: str) -> tuple[str, str] | None:
+    """Put ``part`` on the object, lifting off first what was in the hand's way to take it off (and back after)."""
+    run = state.run
+    aside: list[str] = []
+    for other in state.in_the_way.get(part, []):
+        if other in run.assembled and not any(joint.fixed == other for joint in run.joints if not joint.touch_only):
+            failed = _detach(state, number, other)
+            if failed is not None:
+                return failed
+            aside.append(other)
+    fit = state.fits[part]
+    failed = _step_failure(state, number, StepRequest(fit.primitive, part, fit.fixed_part, fit.id))
+    return failed if failed is not None else _put_back(state, number, aside)
+
+
 def _step_failure(state: _Episode, number: int, request: StepRequest) -> tuple[str, str] | None:
     """Make one assembly step (attach or light) by the robot; return its failure code and message, if any."""
     report = execute_step(state.run, number, request)
@@ -310,9 +384,9 @@ def _test(state: _Episode, number: int, lights: list[Fit]) -> tuple[str, str] | 
             if (light.fixed_part, light.fixed_connector) in state.fits[part].blocks
         ]
         for part in covering:
-            failure = _detach(state, part)
-            if failure is not None:
-                return failure.failure.value, failure.check.detail
+            failed = _detach(state, number, part)
+            if failed is not None:
+                return failed
         request = StepRequest(light.primitive, light.moving_part, light.fixed_part, light.id)
         failed = _step_failure(state, number, request)
         if failed is not None:
@@ -424,11 +498,9 @@ def robot_episode(
             failed: tuple[str, str] | None = None
             observed = None
             if step.kind == DETACH and step.part is not None:
-                failure = _detach(state, step.part)
-                failed = (failure.failure.value, failure.check.detail) if failure is not None else None
+                failed = _detach(state, number, step.part)
             elif step.kind == ATTACH and step.part is not None:
-                fit = fits[step.part]
-                failed = _step_failure(state, number, StepRequest(fit.primitive, step.part, fit.fixed_part, fit.id))
+                failed = _attach(state, number, step.part)
             elif step.kind == REPLACE and step.part is not None:
                 (_replace_base if step.part == obj.base else _swap)(state, step.part)
                 replaced = replaced or step.part == episode.fault
