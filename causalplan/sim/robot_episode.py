@@ -8,7 +8,9 @@ on the table, and the robot then does each action of the episode in the same sce
   on the object, the weld to its mate is undone, the part goes back along its connector axis
   (a screw turns out its thread, regrasping as it goes in), and is carried to its place on
   the table and set down (``robot.fetch``, ``robot.screw``/``robot.follow``, ``robot.carry``,
-  ``robot.release``: the motions, IK and OMPL paths the assembly uses).
+  ``robot.release``: the motions, IK and OMPL paths the assembly uses). When the hand cannot
+  reach the part for a neighbour that could come off now, the neighbour is lifted off first
+  and put back after (and again when the part is put back on).
 - ``replace PART``: the spare on the table becomes the part: the next ``attach`` (or the
   ``test``'s lighting, for a match or lighter) fetches it from the table; the broken one stays
   where it was set aside.
@@ -28,8 +30,7 @@ replacing the *base* (the spare base is put at the origin in place of the broken
 carried by the robot); playing the episode's commands through the Panda's joint motors
 (``simulate --robot`` does that for an assembly; here the run is kinematic, the arm posed at
 its commands); and the object's assembly before the episode (it is handed to the robot
-built). Where the robot cannot carry out a catalog episode today (a grasp beside a
-neighbouring part) is listed in docs/troubleshooting.md.
+built).
 """
 
 from __future__ import annotations
@@ -60,95 +61,18 @@ from causalplan.sim.robot.steps import (
     spaced_distances,
     step_motions,
 )
-from causalplan.sim.robot.tracks import PartTrack
-from causalplan.sim.robot.trajectory import Trajectory
+from causalplan.sim.robot_episode_report import ActionInPhysics, EpisodeInPhysics
 from causalplan.sim.scene import Scene
+from causalplan.sim.spares import SPARE, spare_homes
 from causalplan.sim.troubleshooting import first_build_order, rebuild_steps
 from causalplan.troubleshoot.assembly import ATTACH, DETACH
 from causalplan.troubleshoot.episode import GOAL, NO_GOAL, Episode
 from causalplan.troubleshoot.solver import INSPECT, REPLACE, TEST
 
-SPARE = ":spare"
-"""The suffix of a spare's id in the scene and the player's document (``light_bulb:spare``)."""
 ALONG_STEP = 0.0001
 """Metres between the distances tried when finding where a part sits along its approach."""
 ALONG_METRES_PER_RADIAN = 0.01
 """How a turn counts against a shift when matching a part's pose to its approach (1 cm a radian)."""
-
-
-@dataclass(frozen=True)
-class ActionInPhysics:
-    """What the robot did for one action of the episode, and what physics showed."""
-
-    number: int
-    kind: str
-    part: str | None
-    motions: tuple[str, ...]
-    """The robot's motions (transit, grasp, carry, approach, screw, push, ignite, release, retreat)."""
-    observed: str | None = None
-    """For a test: ``goal`` or ``no goal`` in physics (the mechanism, and the broken part replaced)."""
-    failure: str | None = None
-    message: str = ""
-
-    @property
-    def passed(self) -> bool:
-        return self.failure is None
-
-    def as_dict(self) -> dict[str, object]:
-        return {
-            "number": self.number,
-            "action": self.kind,
-            "part": self.part,
-            "robot": list(self.motions),
-            "observed": self.observed,
-            "passed": self.passed,
-            "failure": self.failure,
-            "message": self.message,
-        }
-
-
-@dataclass(frozen=True)
-class EpisodeInPhysics:
-    """The robot's run of an episode: each action, the last test's mechanism, its motor commands and tracks."""
-
-    object_id: str
-    actions: tuple[ActionInPhysics, ...]
-    requirements: tuple[RequirementCheck, ...]
-    """The true mechanism at the last test the robot made."""
-    broken_part_replaced: bool
-    commands: Trajectory | None
-    tracks: dict[str, PartTrack]
-    placed: dict[str, Pose]
-    """Where every body (spares by their ``:spare`` id) is at the end."""
-    timing: dict[str, float] = field(default_factory=dict)
-
-    @property
-    def carried_out(self) -> bool:
-        return all(action.passed for action in self.actions)
-
-    @property
-    def mechanism_works(self) -> bool:
-        return bool(self.requirements) and all(requirement.met for requirement in self.requirements)
-
-    @property
-    def produces_goal(self) -> bool:
-        """Return whether the robot carried out every action and its last test showed the goal in physics."""
-        return self.carried_out and self.mechanism_works and self.broken_part_replaced
-
-    @property
-    def failed(self) -> ActionInPhysics | None:
-        return next((action for action in self.actions if not action.passed), None)
-
-    def as_dict(self) -> dict[str, object]:
-        return {
-            "produces_goal": self.produces_goal,
-            "carried_out": self.carried_out,
-            "broken_part_replaced": self.broken_part_replaced,
-            "actions": [action.as_dict() for action in self.actions],
-            "mechanism": [check.as_dict() for check in self.requirements],
-            "seconds": round(self.commands.seconds, 3) if self.commands is not None else 0.0,
-            "timing": {name: round(seconds, 3) for name, seconds in self.timing.items()},
-        }
 
 
 @dataclass
@@ -412,44 +336,6 @@ def _rename_spares(state: _Episode) -> None:
                 segment.held = (part + SPARE, segment.held[1])
 
 
-SPARE_ROW_GAP = 0.08
-"""Metres between the spares' row and the row of parts before it: room for the hand, and within reach."""
-SPARE_ROW_X = -0.1
-"""Where (metres along the robot's x axis) the spares' rows are centred: a little nearer the robot than the object."""
-
-
-def _spare_homes(
-    obj: AssemblyObject, parts: dict[str, Solid], homes: dict[str, Pose], spares: list[str]
-) -> dict[str, Pose]:
-    """Return where each spare waits: in a row of spares beyond its part's row on the table.
-
-    The object's own parts keep the places ``layout`` gives them (which ``simulate --robot``
-    uses), so the spares do not push them out of the arm's reach.
-    """
-    outer = {1.0: 0.0, -1.0: 0.0}
-    for part, pose in homes.items():
-        solid = parts[part]
-        outer[1.0] = max(outer[1.0], pose.position[1] + solid.upper[1])
-        outer[-1.0] = max(outer[-1.0], -(pose.position[1] + solid.lower[1]))
-    rows: dict[float, list[str]] = {1.0: [], -1.0: []}
-    for part in spares:
-        rows[-1.0 if part != obj.base and homes[part].position[1] < 0 else 1.0].append(part)
-    placed: dict[str, Pose] = {}
-    for side, row in rows.items():
-        widths = [parts[part].upper[0] - parts[part].lower[0] for part in row]
-        left = SPARE_ROW_X - (sum(widths) + ROBOT_ROW_GAP * (len(row) - 1)) / 2
-        for part, width in zip(row, widths, strict=True):
-            solid = parts[part]
-            y = (
-                outer[side] + SPARE_ROW_GAP - solid.lower[1]
-                if side > 0
-                else -outer[side] - SPARE_ROW_GAP - solid.upper[1]
-            )
-            placed[part + SPARE] = Pose((left - solid.lower[0], y, -solid.lower[2]))
-            left += width + ROBOT_ROW_GAP
-    return placed
-
-
 def robot_episode(
     obj: AssemblyObject,
     episode: Episode,
@@ -469,7 +355,7 @@ def robot_episode(
     spares = sorted({step.part for step in episode.steps if step.kind == REPLACE and step.part is not None})
     parts: dict[str, Solid] = dict(solids(obj))  # a copy: solids() is cached
     homes, _design = layout(obj, parts, tuple(build), ROBOT_ROW_GAP)
-    homes.update(_spare_homes(obj, parts, homes, spares))
+    homes.update(spare_homes(obj, parts, homes, spares))
     parts.update({part + SPARE: parts[part] for part in spares})
     actions: list[ActionInPhysics] = []
     requirements: tuple[RequirementCheck, ...] = ()

@@ -10,7 +10,8 @@ from __future__ import annotations
 from causalplan.objects.model import AssemblyObject
 from causalplan.sim.geometry import Solid, solids
 from causalplan.sim.robot.playback import player_document
-from causalplan.sim.robot_episode import SPARE, EpisodeInPhysics
+from causalplan.sim.robot_episode_report import EpisodeInPhysics
+from causalplan.sim.spares import SPARE
 
 
 def episode_playback(obj: AssemblyObject, result: EpisodeInPhysics) -> dict[str, object]:

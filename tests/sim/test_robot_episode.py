@@ -12,8 +12,9 @@ from click.testing import CliRunner
 from causalplan.cli import app
 from causalplan.objects.catalog import Catalog
 from causalplan.sim.robot.checker import violations
-from causalplan.sim.robot_episode import SPARE, robot_episode
+from causalplan.sim.robot_episode import robot_episode
 from causalplan.sim.robot_episode_playback import episode_playback
+from causalplan.sim.spares import SPARE
 from causalplan.troubleshoot.episode import Episode, Step
 from causalplan.troubleshoot.task import troubleshooting_task
 from tests.sim.fixtures import SHADE_BEFORE_BULB, SPARE_SHADE_ONLY
