@@ -25,17 +25,17 @@ on the table, and the robot then does each action of the episode in the same sce
 
 All motions become one set of motor commands within the Panda's datasheet limits times the
 safety factor (TOPP-RA, ``sim.robot.timing``), which ``check-trajectory`` accepts, and every
-part's track for the 3D player (``sim.robot_episode_playback``). What is not simulated:
-replacing the *base* (the spare base is put at the origin in place of the broken one, not
-carried by the robot); playing the episode's commands through the Panda's joint motors
-(``simulate --robot`` does that for an assembly; here the run is kinematic, the arm posed at
-its commands); and the object's assembly before the episode (it is handed to the robot
-built).
+part's track for the 3D player (``sim.robot_episode_playback``). A broken base the gripper
+can hold is carried off and its spare carried to where it stood. What is not simulated:
+replacing a *base the gripper cannot hold* (wider than it opens, with no grasp in the
+catalog: its spare is put where the broken one stood, not carried); playing the episode's
+commands through the Panda's joint motors (``simulate --robot`` does that for an assembly;
+here the run is kinematic, the arm posed at its commands); and the object's assembly before
+the episode (it is handed to the robot built).
 """
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -50,7 +50,8 @@ from causalplan.sim.motions import ENGAGEMENT, MOTIONS, approach_path, approach_
 from causalplan.sim.movers import PartsMoveThemselves
 from causalplan.sim.outcomes import Failure, RequirementCheck, RobotFailure, StepStatus
 from causalplan.sim.plan_steps import StepRequest
-from causalplan.sim.poses import Pose, difference
+from causalplan.sim.poses import Pose
+from causalplan.sim.robot.grasps import grasp_of
 from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
 from causalplan.sim.robot.mover import PandaMovesThem
 from causalplan.sim.robot.robot import LIFT, LINE_STEP, Robot, line_poses
@@ -63,16 +64,12 @@ from causalplan.sim.robot.steps import (
 )
 from causalplan.sim.robot_episode_report import ActionInPhysics, EpisodeInPhysics
 from causalplan.sim.scene import Scene
-from causalplan.sim.spares import SPARE, spare_homes
+from causalplan.sim.spares import ASIDE, SPARE, spare_homes
+from causalplan.sim.taking_off import along, collide_again, unweld
 from causalplan.sim.troubleshooting import first_build_order, rebuild_steps
 from causalplan.troubleshoot.assembly import ATTACH, DETACH
 from causalplan.troubleshoot.episode import GOAL, NO_GOAL, Episode
 from causalplan.troubleshoot.solver import INSPECT, REPLACE, TEST
-
-ALONG_STEP = 0.0001
-"""Metres between the distances tried when finding where a part sits along its approach."""
-ALONG_METRES_PER_RADIAN = 0.01
-"""How a turn counts against a shift when matching a part's pose to its approach (1 cm a radian)."""
 
 
 @dataclass
@@ -86,6 +83,8 @@ class _Episode:
     """Each attached part's fit (the one the object was built with)."""
     bodies: dict[int, str]
     """Each body's id for the player: the part it started as, or its spare's id."""
+    base_aside: Pose | None
+    """The free place on the table where the broken base is set down, when the episode replaces the base."""
     swaps: list[tuple[str, int]] = field(default_factory=list)
     """Each part swapped for its spare, and the number of planned segments before the swap."""
     in_the_way: dict[str, list[str]] = field(default_factory=dict)
@@ -98,42 +97,6 @@ class _Episode:
     @property
     def robot(self) -> Robot:
         return self.mover.robot
-
-
-def _along(path: Callable[[float], Pose], pose: Pose, start: float) -> float:
-    """Return how far (metres) along its approach ``path`` a part at ``pose`` sits from its seat.
-
-    A part can stop short of its seat (within the fit's tolerance); a screw stopped 1 mm
-    short is turned some 50 degrees back from the seat's angle, so its way out starts there.
-    """
-    count = max(1, math.ceil(start / ALONG_STEP))
-    distances = [start * k / count for k in range(count + 1)]
-    return min(distances, key=lambda d: _mismatch(path(d), pose))
-
-
-def _mismatch(a: Pose, b: Pose) -> float:
-    metres, radians = difference(a, b)
-    return metres + radians * ALONG_METRES_PER_RADIAN
-
-
-def _unweld(scene: Scene, fixed: str, moving: str) -> None:
-    """Undo the weld between two parts (if any) and let them collide again."""
-    pb, client = scene.pb, scene.client
-    pair = {scene.bodies[fixed], scene.bodies[moving]}
-    for index in range(pb.getNumConstraints(physicsClientId=client)):
-        constraint = pb.getConstraintUniqueId(index, physicsClientId=client)
-        info = pb.getConstraintInfo(constraint, physicsClientId=client)
-        if {info[0], info[2]} == pair:
-            pb.removeConstraint(constraint, physicsClientId=client)
-            break
-
-
-def _collide_again(scene: Scene, a: str, b: str) -> None:
-    pb, client = scene.pb, scene.client
-    body_a, body_b = scene.bodies[a], scene.bodies[b]
-    for link_a in range(-1, pb.getNumJoints(body_a, physicsClientId=client)):
-        for link_b in range(-1, pb.getNumJoints(body_b, physicsClientId=client)):
-            pb.setCollisionFilterPair(body_a, body_b, link_a, link_b, 1, physicsClientId=client)
 
 
 def _detach(state: _Episode, number: int, part: str) -> tuple[str, str] | None:
@@ -195,7 +158,7 @@ def _take_off(state: _Episode, number: int, part: str, aside: list[str]) -> tupl
     path = approach_path(fixed_pose, moving_frame, fixed_frame, motion)
     others = run.assembled - {part}
     start = approach_start(scene.bounds([part]), scene.bounds(others), fixed_pose.turn(fixed_frame.axis))
-    here = _along(path, scene.pose(part), start)
+    here = along(path, scene.pose(part), start)
     if motion.turns > 0:
         thread = max(here, min(start, ENGAGEMENT))
         out = spaced_distances(here, thread, screw_spacing(motion))
@@ -217,7 +180,7 @@ def _take_off(state: _Episode, number: int, part: str, aside: list[str]) -> tupl
         failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
     if failure is not None:
         return _code(failure)
-    _unweld(scene, joint.fixed, part)
+    unweld(scene, joint.fixed, part)
     scene.set_dynamic(part, False)
     run.joints.remove(joint)
     run.assembled.discard(part)
@@ -232,7 +195,7 @@ def _take_off(state: _Episode, number: int, part: str, aside: list[str]) -> tupl
         )
     if failure is not None:
         return _code(failure)
-    _collide_again(scene, joint.fixed, part)
+    collide_again(scene, joint.fixed, part)
     return _code(_set_down(state, part, run.homes[part]))
 
 
@@ -259,16 +222,41 @@ def _swap(state: _Episode, part: str) -> None:
     run.homes[part], run.homes[spare] = run.homes[spare], run.homes[part]
 
 
-def _replace_base(state: _Episode, part: str) -> None:
-    """Put the spare base where the broken one stands, and the broken one on the table (not by the robot)."""
-    scene = state.scene
-    here, table = scene.pose(part), state.run.homes[part + SPARE]
+def _replace_base(state: _Episode, part: str) -> tuple[str, str] | None:
+    """Carry the broken base (everything is off it) to a free place and the spare to where it stood.
+
+    A base the gripper cannot hold (wider than it opens, and no grasp in the catalog: no free
+    place was kept for it) is swapped without the robot: the spare is put where the broken
+    one stood, the broken one where the spare waited.
+    """
+    scene, run = state.scene, state.run
+    here, aside = scene.pose(part), state.base_aside
+    if aside is None:
+        table = run.homes[part + SPARE]
+        _swap(state, part)
+        scene.place(part + SPARE, table)
+        scene.set_dynamic(part + SPARE, False)
+        scene.place(part, here)
+        scene.set_dynamic(part, True)
+        run.homes[part] = here
+        return None
+    failed = _carry_base(state, part, aside)
+    if failed is not None:
+        return failed
     _swap(state, part)
-    scene.place(part + SPARE, table)
-    scene.set_dynamic(part + SPARE, False)
-    scene.place(part, here)
-    scene.set_dynamic(part, True)
-    state.run.homes[part] = here
+    failed = _carry_base(state, part, here)
+    scene.set_dynamic(part, True)  # the object's base again: it stands on the table in physics
+    run.homes[part], run.homes[part + SPARE] = here, aside
+    return failed
+
+
+def _carry_base(state: _Episode, part: str, to: Pose) -> tuple[str, str] | None:
+    """Pick the base up where it stands, carry it to ``to`` on the table and set it down there."""
+    state.scene.set_dynamic(part, False)
+    failure = state.robot.fetch(part, state.obj.part(part))
+    if failure is None:
+        failure = _set_down(state, part, to)
+    return _code(failure)
 
 
 def _attach(state: _Episode, number: int, part: str) -> tuple[str, str] | None:
@@ -355,7 +343,11 @@ def robot_episode(
     spares = sorted({step.part for step in episode.steps if step.kind == REPLACE and step.part is not None})
     parts: dict[str, Solid] = dict(solids(obj))  # a copy: solids() is cached
     homes, _design = layout(obj, parts, tuple(build), ROBOT_ROW_GAP)
-    homes.update(spare_homes(obj, parts, homes, spares))
+    # The robot carries a base it can hold; one wider than the gripper opens is swapped without it.
+    carried = obj.base in spares and not isinstance(grasp_of(obj.part(obj.base), parts[obj.base]), str)
+    places = spare_homes(obj, parts, homes, spares, carried)
+    aside = places.pop(obj.base + ASIDE, None)
+    homes.update(places)
     parts.update({part + SPARE: parts[part] for part in spares})
     actions: list[ActionInPhysics] = []
     requirements: tuple[RequirementCheck, ...] = ()
@@ -376,7 +368,7 @@ def robot_episode(
         fits = {request.moving: obj.fit(request.fit) for request in build if request.fit is not None}
         mover = PandaMovesThem(scene, None, safety_factor, tracks)
         run.mover = mover
-        state = _Episode(obj, run, mover, fits, {body: part for part, body in scene.bodies.items()})
+        state = _Episode(obj, run, mover, fits, {body: part for part, body in scene.bodies.items()}, aside)
         timing = {"build": time.perf_counter() - clock}
         clock = time.perf_counter()
         for number, step in enumerate(episode.steps, start=1):
@@ -388,7 +380,10 @@ def robot_episode(
             elif step.kind == ATTACH and step.part is not None:
                 failed = _attach(state, number, step.part)
             elif step.kind == REPLACE and step.part is not None:
-                (_replace_base if step.part == obj.base else _swap)(state, step.part)
+                if step.part == obj.base:
+                    failed = _replace_base(state, step.part)
+                else:
+                    _swap(state, step.part)
                 replaced = replaced or step.part == episode.fault
             elif step.kind == TEST:
                 failed = _test(state, number, lights)

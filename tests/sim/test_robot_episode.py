@@ -146,6 +146,22 @@ def test_the_hand_lifts_off_the_globe_to_reach_the_valve_knob_and_puts_it_back(c
     assert math.dist(run.placed["glass_globe"].position, run.placed["burner"].position) < 0.05  # on the burner
 
 
+def test_the_panda_carries_the_broken_base_aside_and_the_spare_base_to_where_it_stood(catalog: Catalog) -> None:
+    flashlight = catalog.get("flashlight")
+    episode = troubleshooting_task(flashlight).episode("oracle", "case")
+    run = robot_episode(flashlight, episode, tracks=True)
+    assert run.produces_goal, run.as_dict()
+    number = next(action.number for action in run.actions if action.kind == "replace" and action.part == "case")
+    motions = run.actions[number - 1].motions
+    assert motions == ("transit", "grasp", "carry", "release", "retreat") * 2  # the broken case off, the spare on
+    assert run.commands is not None and violations(run.commands) == []
+    document = episode_playback(flashlight, run)
+    parts = {part["id"]: part for part in document["parts"]}  # type: ignore[attr-defined]
+    broken, spare = parts["case"]["track"]["poses"], parts["case" + SPARE]["track"]["poses"]
+    assert _distance(spare[-1], broken[0]) < 0.003  # the spare stands where the broken case stood
+    assert _distance(broken[-1], broken[0]) > 0.2  # and the broken one was carried to the table
+
+
 @pytest.mark.slow
 def test_the_cli_has_the_panda_carry_out_the_episode_and_check_trajectory_passes_it(tmp_path: Path) -> None:
     out = tmp_path / "repair.json"
