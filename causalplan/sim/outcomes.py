@@ -72,10 +72,15 @@ class Check:
 
 @dataclass(frozen=True)
 class RobotFailure:
-    """Why the robot could not do a motion: the failure code and the check that says so."""
+    """Why the robot could not do a motion: the failure code and the check that says so.
+
+    ``obstacle``: when no arm pose can go on along a line without touching something, the
+    body (a part's id, or the table) that the best of them touched.
+    """
 
     failure: Failure
     check: Check
+    obstacle: str | None = None
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,9 @@ on the table, and the robot then does each action of the episode in the same sce
   on the object, the weld to its mate is undone, the part goes back along its connector axis
   (a screw turns out its thread, regrasping as it goes in), and is carried to its place on
   the table and set down (``robot.fetch``, ``robot.screw``/``robot.follow``, ``robot.carry``,
-  ``robot.release``: the motions, IK and OMPL paths the assembly uses).
+  ``robot.release``: the motions, IK and OMPL paths the assembly uses). When the hand cannot
+  reach the part for a neighbour that could come off now, the neighbour is lifted off first
+  and put back after (and again when the part is put back on).
 - ``replace PART``: the spare on the table becomes the part: the next ``attach`` (or the
   ``test``'s lighting, for a match or lighter) fetches it from the table; the broken one stays
   where it was set aside.
@@ -23,18 +25,17 @@ on the table, and the robot then does each action of the episode in the same sce
 
 All motions become one set of motor commands within the Panda's datasheet limits times the
 safety factor (TOPP-RA, ``sim.robot.timing``), which ``check-trajectory`` accepts, and every
-part's track for the 3D player (``sim.robot_episode_playback``). What is not simulated:
-replacing the *base* (the spare base is put at the origin in place of the broken one, not
-carried by the robot); playing the episode's commands through the Panda's joint motors
-(``simulate --robot`` does that for an assembly; here the run is kinematic, the arm posed at
-its commands); and the object's assembly before the episode (it is handed to the robot
-built). Where the robot cannot carry out a catalog episode today (a grasp beside a
-neighbouring part) is listed in docs/troubleshooting.md.
+part's track for the 3D player (``sim.robot_episode_playback``). A broken base the gripper
+can hold is carried off and its spare carried to where it stood. What is not simulated:
+replacing a *base the gripper cannot hold* (wider than it opens, with no grasp in the
+catalog: its spare is put where the broken one stood, not carried); playing the episode's
+commands through the Panda's joint motors (``simulate --robot`` does that for an assembly;
+here the run is kinematic, the arm posed at its commands); and the object's assembly before
+the episode (it is handed to the robot built).
 """
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -47,104 +48,28 @@ from causalplan.sim.layout import ROBOT_ROW_GAP, layout
 from causalplan.sim.mechanism import evaluate
 from causalplan.sim.motions import ENGAGEMENT, MOTIONS, approach_path, approach_start
 from causalplan.sim.movers import PartsMoveThemselves
-from causalplan.sim.outcomes import RequirementCheck, RobotFailure, StepStatus
+from causalplan.sim.outcomes import Failure, RequirementCheck, RobotFailure, StepStatus
 from causalplan.sim.plan_steps import StepRequest
-from causalplan.sim.poses import Pose, difference
+from causalplan.sim.poses import Pose
+from causalplan.sim.robot.grasps import grasp_of
 from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
 from causalplan.sim.robot.mover import PandaMovesThem
 from causalplan.sim.robot.robot import LIFT, LINE_STEP, Robot, line_poses
-from causalplan.sim.robot.steps import PUSH_DEPTH, screw_spacing, spaced_distances, step_motions
-from causalplan.sim.robot.tracks import PartTrack
-from causalplan.sim.robot.trajectory import Trajectory
+from causalplan.sim.robot.steps import (
+    PUSH_DEPTH,
+    SCREW_START_POSES,
+    screw_spacing,
+    spaced_distances,
+    step_motions,
+)
+from causalplan.sim.robot_episode_report import ActionInPhysics, EpisodeInPhysics
 from causalplan.sim.scene import Scene
+from causalplan.sim.spares import ASIDE, SPARE, spare_homes
+from causalplan.sim.taking_off import along, collide_again, unweld
 from causalplan.sim.troubleshooting import first_build_order, rebuild_steps
 from causalplan.troubleshoot.assembly import ATTACH, DETACH
 from causalplan.troubleshoot.episode import GOAL, NO_GOAL, Episode
 from causalplan.troubleshoot.solver import INSPECT, REPLACE, TEST
-
-SPARE = ":spare"
-"""The suffix of a spare's id in the scene and the player's document (``light_bulb:spare``)."""
-ALONG_STEP = 0.0001
-"""Metres between the distances tried when finding where a part sits along its approach."""
-ALONG_METRES_PER_RADIAN = 0.01
-"""How a turn counts against a shift when matching a part's pose to its approach (1 cm a radian)."""
-SCREW_START_POSES = 9
-"""Poses of a screw's way out (10 degrees each) that choose the arm pose it is grasped with."""
-
-
-@dataclass(frozen=True)
-class ActionInPhysics:
-    """What the robot did for one action of the episode, and what physics showed."""
-
-    number: int
-    kind: str
-    part: str | None
-    motions: tuple[str, ...]
-    """The robot's motions (transit, grasp, carry, approach, screw, push, ignite, release, retreat)."""
-    observed: str | None = None
-    """For a test: ``goal`` or ``no goal`` in physics (the mechanism, and the broken part replaced)."""
-    failure: str | None = None
-    message: str = ""
-
-    @property
-    def passed(self) -> bool:
-        return self.failure is None
-
-    def as_dict(self) -> dict[str, object]:
-        return {
-            "number": self.number,
-            "action": self.kind,
-            "part": self.part,
-            "robot": list(self.motions),
-            "observed": self.observed,
-            "passed": self.passed,
-            "failure": self.failure,
-            "message": self.message,
-        }
-
-
-@dataclass(frozen=True)
-class EpisodeInPhysics:
-    """The robot's run of an episode: each action, the last test's mechanism, its motor commands and tracks."""
-
-    object_id: str
-    actions: tuple[ActionInPhysics, ...]
-    requirements: tuple[RequirementCheck, ...]
-    """The true mechanism at the last test the robot made."""
-    broken_part_replaced: bool
-    commands: Trajectory | None
-    tracks: dict[str, PartTrack]
-    placed: dict[str, Pose]
-    """Where every body (spares by their ``:spare`` id) is at the end."""
-    timing: dict[str, float] = field(default_factory=dict)
-
-    @property
-    def carried_out(self) -> bool:
-        return all(action.passed for action in self.actions)
-
-    @property
-    def mechanism_works(self) -> bool:
-        return bool(self.requirements) and all(requirement.met for requirement in self.requirements)
-
-    @property
-    def produces_goal(self) -> bool:
-        """Return whether the robot carried out every action and its last test showed the goal in physics."""
-        return self.carried_out and self.mechanism_works and self.broken_part_replaced
-
-    @property
-    def failed(self) -> ActionInPhysics | None:
-        return next((action for action in self.actions if not action.passed), None)
-
-    def as_dict(self) -> dict[str, object]:
-        return {
-            "produces_goal": self.produces_goal,
-            "carried_out": self.carried_out,
-            "broken_part_replaced": self.broken_part_replaced,
-            "actions": [action.as_dict() for action in self.actions],
-            "mechanism": [check.as_dict() for check in self.requirements],
-            "seconds": round(self.commands.seconds, 3) if self.commands is not None else 0.0,
-            "timing": {name: round(seconds, 3) for name, seconds in self.timing.items()},
-        }
 
 
 @dataclass
@@ -158,8 +83,12 @@ class _Episode:
     """Each attached part's fit (the one the object was built with)."""
     bodies: dict[int, str]
     """Each body's id for the player: the part it started as, or its spare's id."""
+    base_aside: Pose | None
+    """The free place on the table where the broken base is set down, when the episode replaces the base."""
     swaps: list[tuple[str, int]] = field(default_factory=list)
     """Each part swapped for its spare, and the number of planned segments before the swap."""
+    in_the_way: dict[str, list[str]] = field(default_factory=dict)
+    """The parts the hand had to lift off to take each part off (they are lifted off to put it on, too)."""
 
     @property
     def scene(self) -> Scene:
@@ -170,44 +99,54 @@ class _Episode:
         return self.mover.robot
 
 
-def _along(path: Callable[[float], Pose], pose: Pose, start: float) -> float:
-    """Return how far (metres) along its approach ``path`` a part at ``pose`` sits from its seat.
+def _detach(state: _Episode, number: int, part: str) -> tuple[str, str] | None:
+    """Take ``part`` off the object and set it down; return the failure code and message, if any.
 
-    A part can stop short of its seat (within the fit's tolerance); a screw stopped 1 mm
-    short is turned some 50 degrees back from the seat's angle, so its way out starts there.
+    A part the hand cannot reach for one beside it that could come off now (the gas lantern's
+    knob beside its globe) is reached as one would: that part is lifted off first and put back after.
     """
-    count = max(1, math.ceil(start / ALONG_STEP))
-    distances = [start * k / count for k in range(count + 1)]
-    return min(distances, key=lambda d: _mismatch(path(d), pose))
+    aside: list[str] = []
+    failed = _take_off(state, number, part, aside)
+    if failed is not None:
+        return failed
+    if aside:
+        state.in_the_way[part] = aside
+    return _put_back(state, number, aside)
 
 
-def _mismatch(a: Pose, b: Pose) -> float:
-    metres, radians = difference(a, b)
-    return metres + radians * ALONG_METRES_PER_RADIAN
+def _code(failure: RobotFailure | None) -> tuple[str, str] | None:
+    """Return a robot failure's code and message (None for none)."""
+    return None if failure is None else (failure.failure.value, failure.check.detail)
 
 
-def _unweld(scene: Scene, fixed: str, moving: str) -> None:
-    """Undo the weld between two parts (if any) and let them collide again."""
-    pb, client = scene.pb, scene.client
-    pair = {scene.bodies[fixed], scene.bodies[moving]}
-    for index in range(pb.getNumConstraints(physicsClientId=client)):
-        constraint = pb.getConstraintUniqueId(index, physicsClientId=client)
-        info = pb.getConstraintInfo(constraint, physicsClientId=client)
-        if {info[0], info[2]} == pair:
-            pb.removeConstraint(constraint, physicsClientId=client)
-            break
+def _in_the_way(state: _Episode, part: str, failure: RobotFailure, aside: list[str]) -> str | None:
+    """Return the assembled part the hand met reaching ``part``, if it can come off now (nothing stands on it)."""
+    other = failure.obstacle
+    run = state.run
+    if failure.failure is not Failure.NO_COLLISION_FREE_PATH or other is None or other in aside:
+        return None
+    if other == part or other == state.obj.base or other not in run.assembled:
+        return None
+    standing_on = any(joint.fixed == other for joint in run.joints if not joint.touch_only)
+    return None if standing_on else other
 
 
-def _collide_again(scene: Scene, a: str, b: str) -> None:
-    pb, client = scene.pb, scene.client
-    body_a, body_b = scene.bodies[a], scene.bodies[b]
-    for link_a in range(-1, pb.getNumJoints(body_a, physicsClientId=client)):
-        for link_b in range(-1, pb.getNumJoints(body_b, physicsClientId=client)):
-            pb.setCollisionFilterPair(body_a, body_b, link_a, link_b, 1, physicsClientId=client)
+def _put_back(state: _Episode, number: int, aside: list[str]) -> tuple[str, str] | None:
+    """Put the parts lifted off out of the hand's way back on the object, the last lifted first."""
+    for part in reversed(aside):
+        fit = state.fits[part]
+        failed = _step_failure(state, number, StepRequest(fit.primitive, part, fit.fixed_part, fit.id))
+        if failed is not None:
+            return failed
+    return None
 
 
-def _detach(state: _Episode, part: str) -> RobotFailure | None:
-    """Take ``part`` off the object as its assembly step put it on, backwards, and set it down at its table place."""
+def _take_off(state: _Episode, number: int, part: str, aside: list[str]) -> tuple[str, str] | None:
+    """Take ``part`` off the object as its assembly step put it on, backwards, and set it down at its table place.
+
+    A part in the hand's way is taken off first (and added to ``aside``). Returns the failure
+    code and message, if any.
+    """
     obj, scene, run, robot = state.obj, state.scene, state.run, state.robot
     fit = state.fits[part]
     joint = next(joint for joint in run.joints if joint.moving == part and not joint.touch_only)
@@ -219,7 +158,7 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
     path = approach_path(fixed_pose, moving_frame, fixed_frame, motion)
     others = run.assembled - {part}
     start = approach_start(scene.bounds([part]), scene.bounds(others), fixed_pose.turn(fixed_frame.axis))
-    here = _along(path, scene.pose(part), start)
+    here = along(path, scene.pose(part), start)
     if motion.turns > 0:
         thread = max(here, min(start, ENGAGEMENT))
         out = spaced_distances(here, thread, screw_spacing(motion))
@@ -232,9 +171,16 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
     way_out = [path(d) for d in first]
     # An arm pose from which the gripper can also take the part out along its axis.
     failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
+    while failure is not None and (blocking := _in_the_way(state, part, failure, aside)) is not None:
+        # The fetch failed before moving: lift the part in the way off, and try again.
+        failed = _detach(state, number, blocking)
+        if failed is not None:
+            return failed
+        aside.append(blocking)
+        failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
     if failure is not None:
-        return failure
-    _unweld(scene, joint.fixed, part)
+        return _code(failure)
+    unweld(scene, joint.fixed, part)
     scene.set_dynamic(part, False)
     run.joints.remove(joint)
     run.assembled.discard(part)
@@ -248,9 +194,9 @@ def _detach(state: _Episode, part: str) -> RobotFailure | None:
             "approach", [path(d) for d in spaced_distances(thread, start, LINE_STEP)], what, joint.fixed
         )
     if failure is not None:
-        return failure
-    _collide_again(scene, joint.fixed, part)
-    return _set_down(state, part, run.homes[part])
+        return _code(failure)
+    collide_again(scene, joint.fixed, part)
+    return _code(_set_down(state, part, run.homes[part]))
 
 
 def _set_down(state: _Episode, part: str, home: Pose) -> RobotFailure | None:
@@ -276,16 +222,56 @@ def _swap(state: _Episode, part: str) -> None:
     run.homes[part], run.homes[spare] = run.homes[spare], run.homes[part]
 
 
-def _replace_base(state: _Episode, part: str) -> None:
-    """Put the spare base where the broken one stands, and the broken one on the table (not by the robot)."""
-    scene = state.scene
-    here, table = scene.pose(part), state.run.homes[part + SPARE]
+def _replace_base(state: _Episode, part: str) -> tuple[str, str] | None:
+    """Carry the broken base (everything is off it) to a free place and the spare to where it stood.
+
+    A base the gripper cannot hold (wider than it opens, and no grasp in the catalog: no free
+    place was kept for it) is swapped without the robot: the spare is put where the broken
+    one stood, the broken one where the spare waited.
+    """
+    scene, run = state.scene, state.run
+    here, aside = scene.pose(part), state.base_aside
+    if aside is None:
+        table = run.homes[part + SPARE]
+        _swap(state, part)
+        scene.place(part + SPARE, table)
+        scene.set_dynamic(part + SPARE, False)
+        scene.place(part, here)
+        scene.set_dynamic(part, True)
+        run.homes[part] = here
+        return None
+    failed = _carry_base(state, part, aside)
+    if failed is not None:
+        return failed
     _swap(state, part)
-    scene.place(part + SPARE, table)
-    scene.set_dynamic(part + SPARE, False)
-    scene.place(part, here)
-    scene.set_dynamic(part, True)
-    state.run.homes[part] = here
+    failed = _carry_base(state, part, here)
+    scene.set_dynamic(part, True)  # the object's base again: it stands on the table in physics
+    run.homes[part], run.homes[part + SPARE] = here, aside
+    return failed
+
+
+def _carry_base(state: _Episode, part: str, to: Pose) -> tuple[str, str] | None:
+    """Pick the base up where it stands, carry it to ``to`` on the table and set it down there."""
+    state.scene.set_dynamic(part, False)
+    failure = state.robot.fetch(part, state.obj.part(part))
+    if failure is None:
+        failure = _set_down(state, part, to)
+    return _code(failure)
+
+
+def _attach(state: _Episode, number: int, part: str) -> tuple[str, str] | None:
+    """Put ``part`` on the object, lifting off first what was in the hand's way to take it off (and back after)."""
+    run = state.run
+    aside: list[str] = []
+    for other in state.in_the_way.get(part, []):
+        if other in run.assembled and not any(joint.fixed == other for joint in run.joints if not joint.touch_only):
+            failed = _detach(state, number, other)
+            if failed is not None:
+                return failed
+            aside.append(other)
+    fit = state.fits[part]
+    failed = _step_failure(state, number, StepRequest(fit.primitive, part, fit.fixed_part, fit.id))
+    return failed if failed is not None else _put_back(state, number, aside)
 
 
 def _step_failure(state: _Episode, number: int, request: StepRequest) -> tuple[str, str] | None:
@@ -310,9 +296,9 @@ def _test(state: _Episode, number: int, lights: list[Fit]) -> tuple[str, str] | 
             if (light.fixed_part, light.fixed_connector) in state.fits[part].blocks
         ]
         for part in covering:
-            failure = _detach(state, part)
-            if failure is not None:
-                return failure.failure.value, failure.check.detail
+            failed = _detach(state, number, part)
+            if failed is not None:
+                return failed
         request = StepRequest(light.primitive, light.moving_part, light.fixed_part, light.id)
         failed = _step_failure(state, number, request)
         if failed is not None:
@@ -338,44 +324,6 @@ def _rename_spares(state: _Episode) -> None:
                 segment.held = (part + SPARE, segment.held[1])
 
 
-SPARE_ROW_GAP = 0.08
-"""Metres between the spares' row and the row of parts before it: room for the hand, and within reach."""
-SPARE_ROW_X = -0.1
-"""Where (metres along the robot's x axis) the spares' rows are centred: a little nearer the robot than the object."""
-
-
-def _spare_homes(
-    obj: AssemblyObject, parts: dict[str, Solid], homes: dict[str, Pose], spares: list[str]
-) -> dict[str, Pose]:
-    """Return where each spare waits: in a row of spares beyond its part's row on the table.
-
-    The object's own parts keep the places ``layout`` gives them (which ``simulate --robot``
-    uses), so the spares do not push them out of the arm's reach.
-    """
-    outer = {1.0: 0.0, -1.0: 0.0}
-    for part, pose in homes.items():
-        solid = parts[part]
-        outer[1.0] = max(outer[1.0], pose.position[1] + solid.upper[1])
-        outer[-1.0] = max(outer[-1.0], -(pose.position[1] + solid.lower[1]))
-    rows: dict[float, list[str]] = {1.0: [], -1.0: []}
-    for part in spares:
-        rows[-1.0 if part != obj.base and homes[part].position[1] < 0 else 1.0].append(part)
-    placed: dict[str, Pose] = {}
-    for side, row in rows.items():
-        widths = [parts[part].upper[0] - parts[part].lower[0] for part in row]
-        left = SPARE_ROW_X - (sum(widths) + ROBOT_ROW_GAP * (len(row) - 1)) / 2
-        for part, width in zip(row, widths, strict=True):
-            solid = parts[part]
-            y = (
-                outer[side] + SPARE_ROW_GAP - solid.lower[1]
-                if side > 0
-                else -outer[side] - SPARE_ROW_GAP - solid.upper[1]
-            )
-            placed[part + SPARE] = Pose((left - solid.lower[0], y, -solid.lower[2]))
-            left += width + ROBOT_ROW_GAP
-    return placed
-
-
 def robot_episode(
     obj: AssemblyObject,
     episode: Episode,
@@ -395,7 +343,11 @@ def robot_episode(
     spares = sorted({step.part for step in episode.steps if step.kind == REPLACE and step.part is not None})
     parts: dict[str, Solid] = dict(solids(obj))  # a copy: solids() is cached
     homes, _design = layout(obj, parts, tuple(build), ROBOT_ROW_GAP)
-    homes.update(_spare_homes(obj, parts, homes, spares))
+    # The robot carries a base it can hold; one wider than the gripper opens is swapped without it.
+    carried = obj.base in spares and not isinstance(grasp_of(obj.part(obj.base), parts[obj.base]), str)
+    places = spare_homes(obj, parts, homes, spares, carried)
+    aside = places.pop(obj.base + ASIDE, None)
+    homes.update(places)
     parts.update({part + SPARE: parts[part] for part in spares})
     actions: list[ActionInPhysics] = []
     requirements: tuple[RequirementCheck, ...] = ()
@@ -416,7 +368,7 @@ def robot_episode(
         fits = {request.moving: obj.fit(request.fit) for request in build if request.fit is not None}
         mover = PandaMovesThem(scene, None, safety_factor, tracks)
         run.mover = mover
-        state = _Episode(obj, run, mover, fits, {body: part for part, body in scene.bodies.items()})
+        state = _Episode(obj, run, mover, fits, {body: part for part, body in scene.bodies.items()}, aside)
         timing = {"build": time.perf_counter() - clock}
         clock = time.perf_counter()
         for number, step in enumerate(episode.steps, start=1):
@@ -424,13 +376,14 @@ def robot_episode(
             failed: tuple[str, str] | None = None
             observed = None
             if step.kind == DETACH and step.part is not None:
-                failure = _detach(state, step.part)
-                failed = (failure.failure.value, failure.check.detail) if failure is not None else None
+                failed = _detach(state, number, step.part)
             elif step.kind == ATTACH and step.part is not None:
-                fit = fits[step.part]
-                failed = _step_failure(state, number, StepRequest(fit.primitive, step.part, fit.fixed_part, fit.id))
+                failed = _attach(state, number, step.part)
             elif step.kind == REPLACE and step.part is not None:
-                (_replace_base if step.part == obj.base else _swap)(state, step.part)
+                if step.part == obj.base:
+                    failed = _replace_base(state, step.part)
+                else:
+                    _swap(state, step.part)
                 replaced = replaced or step.part == episode.fault
             elif step.kind == TEST:
                 failed = _test(state, number, lights)

@@ -18,7 +18,8 @@ from causalplan.objects.model import AssemblyObject
 from causalplan.sim.geometry import Solid, solids
 from causalplan.sim.robot.playback import DIGITS, player_document
 from causalplan.sim.robot.trajectory import Trajectory
-from causalplan.sim.robot_episode import SPARE, EpisodeInPhysics
+from causalplan.sim.robot_episode_report import EpisodeInPhysics
+from causalplan.sim.spares import SPARE
 from causalplan.troubleshoot.episode import Episode
 from causalplan.troubleshoot.solver import TEST
 

@@ -20,7 +20,7 @@ from causalplan.objects.catalog import Catalog
 
 if TYPE_CHECKING:
     from causalplan.objects.model import AssemblyObject
-    from causalplan.sim.robot_episode import EpisodeInPhysics
+    from causalplan.sim.robot_episode_report import EpisodeInPhysics
     from causalplan.troubleshoot.episode import Episode
 
 MAX_SERVICE_STATES = 500_000

@@ -39,6 +39,10 @@ BASE_POSITION: Vector = (-0.55, 0.0, 0.0)
 IK_POSITION_TOLERANCE = 0.0005
 IK_ANGLE_TOLERANCE = math.radians(0.5)
 IK_ROUNDS = 40
+NEAR_LIMIT = 0.1
+"""Radians from a joint's limit within which the IK's second try holds that joint nearly still."""
+STIFF_DAMPING = 100.0
+"""The IK's damping of a joint at its limit on the second try (PyBullet's default is 0.1)."""
 
 Configuration = tuple[float, ...]
 """The seven arm joint angles, in radians."""
@@ -105,28 +109,54 @@ class Panda:
         )
         return Pose(tuple(state[4]), tuple(state[5]))
 
-    def solve(self, target: Pose, seed: Sequence[float]) -> Configuration | None:
+    def solve(self, target: Pose, seed: Sequence[float], hold: Sequence[int] = ()) -> Configuration | None:
         """Return joint angles that put the grasp target at ``target``, starting from ``seed``; None when none.
+
+        ``hold``: the joints (indices) that, when the first answer leaves the limits, are held
+        nearly still on a second try if they are near a limit (backing away needs no joint at
+        its limit; a screw's turn should go to the wrist rather than drift the shoulder there).
 
         PyBullet's damped least squares runs from the current joints, so it is run in rounds
         from its own last answer until the pose is met within a fraction of a millimetre. The
         arm is left at ``seed`` either way.
         """
-        pb, client = self.scene.pb, self.scene.client
         started = time.perf_counter()
-        ranges = [high - low for low, high in zip(self.lower, self.upper, strict=True)]
+        answer = self._solve(target, seed)
+        if hold and (answer is None or not self.within_limits(answer)):
+            # PyBullet's IK lets a joint at its limit drift past it: try again with it held.
+            answer = self._solve(target, seed, hold)
+        self.ik_seconds += time.perf_counter() - started
+        if answer is None or not self.within_limits(answer):
+            return None
+        return answer
+
+    def _solve(self, target: Pose, seed: Sequence[float], hold: Sequence[int] = ()) -> Configuration | None:
+        """Return IK's answer for ``target`` from ``seed`` if it converges (``hold``: those near a limit damped)."""
+        pb, client = self.scene.pb, self.scene.client
         self.set(seed)
+        limits: dict[str, object]
+        if hold:
+            near = [
+                joint in hold and min(angle - low, high - angle) < NEAR_LIMIT
+                for joint, (angle, low, high) in enumerate(zip(seed, self.lower, self.upper, strict=True))
+            ]
+            if not any(near):
+                return None
+            damping = [STIFF_DAMPING if is_near else 0.1 for is_near in near] + [0.1] * len(FINGER_JOINTS)
+            limits = {"jointDamping": damping}
+        else:
+            ranges = [high - low for low, high in zip(self.lower, self.upper, strict=True)]
+            limits = {"lowerLimits": list(self.lower), "upperLimits": list(self.upper), "jointRanges": ranges}
         answer: Configuration | None = None
         for _ in range(IK_ROUNDS):
+            rest = {} if hold else {"restPoses": list(self.configuration)}
             angles = pb.calculateInverseKinematics(
                 self.body,
                 GRASP_LINK,
                 target.position,
                 target.orientation,
-                lowerLimits=list(self.lower),
-                upperLimits=list(self.upper),
-                jointRanges=ranges,
-                restPoses=list(self.configuration),
+                **limits,
+                **rest,
                 maxNumIterations=100,
                 residualThreshold=1e-6,
                 physicsClientId=client,
@@ -137,9 +167,6 @@ class Panda:
                 answer = self.configuration
                 break
         self.set(seed)
-        self.ik_seconds += time.perf_counter() - started
-        if answer is None or not self.within_limits(answer):
-            return None
         return answer
 
     def deepest_contact(

@@ -24,7 +24,7 @@ from causalplan.sim.outcomes import Check, Failure, RobotFailure
 from causalplan.sim.poses import Pose, about_axis, scale
 from causalplan.sim.robot.grasps import FINGER_REACH, finger_gap, grasp_of
 from causalplan.sim.robot.motion_planning import plan_path
-from causalplan.sim.robot.panda import FINGER_JOINTS, FINGER_OPEN, HOME, Configuration, Contact, Panda
+from causalplan.sim.robot.panda import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME, Configuration, Contact, Panda
 from causalplan.sim.robot.trajectory import Gripper, Segment, Waypoints
 from causalplan.sim.scene import GROUND, Scene
 
@@ -47,6 +47,8 @@ IK_SEEDS: tuple[Configuration, ...] = (
     (0.0, 0.2, 0.0, -1.8, 0.0, 2.0, 0.785),
     (0.8, -0.3, 0.0, -2.2, 0.0, 1.9, 0.8),
 )
+SHOULDER_AND_ELBOW = ARM_JOINTS[:6]
+"""The arm's joints but the wrist's turn (joint 7)."""
 RANDOM_SEEDS = 12
 """Further starting configurations for the IK (drawn once, from a fixed seed) when the first ones fail."""
 
@@ -182,12 +184,15 @@ class Robot:
         what: str,
         then: Sequence[Pose] = (),
         allowed: frozenset[str] = frozenset(),
+        fingers_then: Sequence[float | None] = (),
     ) -> RobotFailure | None:
         """Move along a collision-free joint path (OMPL) to a configuration reaching ``target``.
 
         Of the arm poses that reach it, the first from which the gripper can then follow the
         poses ``then`` (a straight line) by IK without touching anything but ``allowed`` is
         taken; when the line can be followed only by touching something, there is no path.
+        ``fingers_then`` gives each pose of ``then`` its finger opening (metres each; None or
+        missing: as they are now), so a line after the grasp is checked with the fingers closed.
         """
         start = self.panda.configuration
         if not self._is_clear(start):
@@ -209,7 +214,7 @@ class Robot:
             return self._unreachable(what)
         goal, touched = (clear[0] if clear else None), None
         for candidate in clear:
-            outcome = self._can_follow(candidate, then, allowed)
+            outcome = self._can_follow(candidate, then, allowed, fingers_then)
             if outcome is True:
                 goal, touched = candidate, None
                 break
@@ -222,7 +227,7 @@ class Robot:
                 f"no arm pose {what} lets the gripper go on along the connector axis without the "
                 f"{touched.robot_part} touching the {self.called(touched.other)} ({touched.depth * 1000:.1f} mm deep)"
             )
-            return RobotFailure(Failure.NO_COLLISION_FREE_PATH, Check("robot", False, detail))
+            return RobotFailure(Failure.NO_COLLISION_FREE_PATH, Check("robot", False, detail), touched.other)
         if goal is None:
             detail = f"every arm pose that puts the gripper {what} touches the {self._contact_at(reaching[0])}"
             return RobotFailure(Failure.NO_COLLISION_FREE_PATH, Check("robot", False, detail))
@@ -238,17 +243,24 @@ class Robot:
         return None
 
     def _can_follow(
-        self, configuration: Configuration, targets: Sequence[Pose], allowed: frozenset[str]
+        self,
+        configuration: Configuration,
+        targets: Sequence[Pose],
+        allowed: frozenset[str],
+        fingers: Sequence[float | None] = (),
     ) -> bool | Contact:
-        """Return whether IK follows ``targets`` from ``configuration`` without a jump (or what the arm touches)."""
-        saved = self.panda.configuration
+        """Return whether IK follows ``targets`` from ``configuration`` without a jump (or what the arm touches).
+
+        ``fingers``: each target's finger opening (metres each; None or missing: as they are).
+        """
+        saved, saved_fingers = self.panda.configuration, self.panda.fingers
         try:
-            for target in targets:
+            for index, target in enumerate(targets):
                 solution = self.panda.solve(target, configuration)
                 if solution is None or max(abs(a - b) for a, b in zip(solution, configuration, strict=True)) > 0.5:
                     return False
                 configuration = solution
-                self.panda.set(configuration)
+                self.panda.set(configuration, fingers[index] if index < len(fingers) else None)
                 self._place_held()
                 touch = self._contact(allowed)
                 if touch is not None and touch.robot_part.startswith(HELD):
@@ -257,7 +269,7 @@ class Robot:
                     return touch
             return True
         finally:
-            self.panda.set(saved)
+            self.panda.set(saved, saved_fingers)
             self._place_held()
 
     def _random_seeds(self) -> list[Configuration]:
@@ -281,16 +293,17 @@ class Robot:
         what: str,
         allowed: frozenset[str] = frozenset(),
         with_held: bool = True,
+        hold: Sequence[int] = (),
     ) -> tuple[RobotFailure | None, int]:
         """Follow gripper poses one by one by IK (a straight line); return the failure, if any, and the poses reached.
 
         ``with_held``: whether the held part's touches count too (not along the connector axis,
-        where the simulator's own path check judges the part).
+        where the simulator's own path check judges the part). ``hold``: see ``Panda.solve``.
         """
         positions: list[Configuration] = []
         configuration = self.panda.configuration
         for target in targets:
-            solution = self.panda.solve(target, configuration)
+            solution = self.panda.solve(target, configuration, hold)
             if solution is None or max(abs(a - b) for a, b in zip(solution, configuration, strict=True)) > 0.5:
                 self._command(kind, gripper, positions)
                 return self._unreachable(what), len(positions)
@@ -322,8 +335,12 @@ class Robot:
         backed = grasp.translated(scale(grasp.turn((0.0, 0.0, 1.0)), -PREGRASP))
         self.ignored = {part_id}
         try:
-            way = [*line_poses(backed, grasp), *(pose * grasp_pose for pose in then)] if then else []
-            failure = self._go("transit", "open", backed, f"above the {name}", way, allowed)
+            # The arm pose above the part must also go straight down to the grasp (fingers open)
+            # and take the part out along ``then`` (fingers closed on it).
+            way_in = line_poses(backed, grasp)
+            way = [*way_in, *(pose * grasp_pose for pose in then)]
+            fingers = [*([None] * len(way_in)), *([width / 2] * len(then))]
+            failure = self._go("transit", "open", backed, f"above the {name}", way, allowed, fingers)
             if failure is None:
                 failure, _ = self._line("transit", "open", line_poses(backed, grasp), f"at the {name}'s grasp")
         finally:
@@ -375,7 +392,8 @@ class Robot:
         while index < len(part_poses):
             assert self.held is not None
             targets = [pose * self.held.grasp for pose in part_poses[index:]]
-            failure, done = self._line("screw", "closed", targets, what, frozenset({mate}), with_held=False)
+            # The turn goes to the wrist (which regrasps when it runs out), not to a shoulder at its limit.
+            failure, done = self._line("screw", "closed", targets, what, frozenset({mate}), False, SHOULDER_AND_ELBOW)
             index += done
             if failure is None:
                 return None
@@ -427,7 +445,8 @@ class Robot:
         self.ignored = {held.part}
         try:
             allowed = frozenset({mate}) if mate else frozenset()
-            return self._line("retreat", "open", line_poses(here, backed), "backing away", allowed)[0]
+            # Backing away needs no joint at its limit (a wrist left there by a screw stays there).
+            return self._line("retreat", "open", line_poses(here, backed), "backing away", allowed, True, ARM_JOINTS)[0]
         finally:
             self.ignored = set()
 

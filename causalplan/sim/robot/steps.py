@@ -21,6 +21,8 @@ from causalplan.sim.robot.trajectory import Waypoints
 
 PUSH_DEPTH = 0.005
 """Metres of the approach, at its end, that are the push home (insert, clip, place) or the touch (ignite)."""
+SCREW_START_POSES = 9
+"""Poses of a screw's turn (10 degrees each) that choose the arm pose it is brought or grasped with."""
 
 
 def bring(
@@ -31,6 +33,11 @@ def bring(
     if failure is None:
         end = min(start, ENGAGEMENT) if motion.turns > 0 else 0.0
         line = [path(d) for d in spaced_distances(start, end, LINE_STEP)]
+        if motion.turns > 0:
+            # The arm pose must also turn the screw's first quarter: one that starts the turn
+            # with a joint at its limit cannot go on (the wrist alone regrasps).
+            turn = spaced_distances(end, 0.0, screw_spacing(motion))[:SCREW_START_POSES]
+            line += [path(d) for d in turn]
         failure = robot.carry(path(start), f"at the approach of the {part.name}", line, mate)
     return failure
 

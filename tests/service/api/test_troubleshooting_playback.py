@@ -7,10 +7,8 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
-from causalplan.objects.reference import reference_model
 from causalplan.service.api.schemas.playback import EpisodePlaybackOut
 from causalplan.service.main import create_app
-from tests.conftest import builtin_catalog
 from tests.service.fixtures import (
     AUTH,
     DESK_LAMP,
@@ -64,21 +62,6 @@ def test_a_finished_repair_serves_the_player_s_document_with_each_action(client:
     for action, robot in zip(document.actions[:-1], result["robot"]["actions"][:-1], strict=True):
         assert (action.end > action.start) == bool(robot["robot"]), action  # looking, taking a spare: no motion
     assert document.actions[-1].end > document.actions[-1].start  # the arm's way back to rest, after the test
-
-
-@pytest.mark.slow
-def test_a_run_that_stops_short_plays_up_to_the_action_the_robot_could_not_do(client: TestClient) -> None:
-    # A known failure (docs/troubleshooting.md): a finger touches the wind-up motor at the wheels' grasp.
-    car = builtin_catalog().get("toy_car")
-    body = {**REPAIR, "model": reference_model(car), "fault": "wind_up_motor"}
-    job = finished(client, queued(client, **body)["url"], 300.0)
-    assert job["status"] == "succeeded" and job["result"]["status"] == "not_repaired_in_physics", job
-    document = EpisodePlaybackOut.model_validate(client.get(job["result"]["playback"]["url"]).json())
-    inspect, detach = document.actions
-    assert (inspect.action, inspect.observed, inspect.passed) == ("inspect", "works", True)
-    assert (detach.action, detach.part, detach.passed) == ("detach", "wheels", False)
-    assert "touched the wind-up motor" in detach.message
-    assert detach.end == pytest.approx(document.seconds)  # the run's commands stop with it
 
 
 def test_the_playback_is_typed_in_the_openapi_document() -> None:
