@@ -27,6 +27,8 @@ from causalplan.planners.processes import Finished
 DOMAIN_FILE, PROBLEM_FILE, SAS_FILE = "domain.pddl", "problem.pddl", "task.sas"
 ALARM_REPEAT_SECONDS = 0.05
 """After the deadline, the in-process translator is interrupted again this often until it stops."""
+MIN_TIMER_SECONDS = 0.001
+"""An earlier timer that came due during a translation goes off this soon after it."""
 
 
 def translator_available() -> bool:
@@ -68,37 +70,49 @@ def _run_main(folder: Path) -> int:
     return ExitCode.SUCCESS
 
 
+WAITING, TRANSLATING, DONE = "waiting", "translating", "done"
+"""The in-process translation's stages, as its alarm handler sees them."""
+
+
 def _translate_here(folder: Path, time_limit: float, memory_mb: int) -> Finished:
-    """Translate in this process (main thread only), stopped by an alarm, bounded by ``RLIMIT_AS``."""
+    """Translate in this process (main thread only), stopped by an alarm, bounded by ``RLIMIT_AS``.
+
+    A timer the process had set (pytest-timeout's, say) is set again afterwards with what was
+    left of it.
+    """
     started = time.perf_counter()
     if time_limit <= 0:
         return Finished(None, "", 0.0)
     captured = io.StringIO()
-    translating = True
+    stage = WAITING
 
     def on_alarm(signum: int, frame: object) -> None:
         # Armed again before raising: an exception raised inside a garbage-collector callback or
         # under a broad `except` in the translator is lost, and it would run past its deadline.
-        # Once the translator has stopped it raises nothing: an alarm due meanwhile must not
-        # break the clean-up below (the limits and stderr would stay the translator's).
-        if translating:
-            signal.setitimer(signal.ITIMER_REAL, ALARM_REPEAT_SECONDS)
+        # Before the translator starts it only re-arms (the deadline must still reach it); once
+        # it has stopped it does nothing: an alarm due then must not break the clean-up below.
+        if stage == DONE:
+            return
+        signal.setitimer(signal.ITIMER_REAL, ALARM_REPEAT_SECONDS)
+        if stage == TRANSLATING:
             raise _TranslatorTimeout
 
     previous_handler = signal.signal(signal.SIGALRM, on_alarm)
     soft, hard = resource.getrlimit(resource.RLIMIT_AS)
     returncode: int | None = None
+    earlier_timer = (0.0, 0.0)
     try:
         resource.setrlimit(resource.RLIMIT_AS, (processes.memory_limit(memory_mb), hard))
-        signal.setitimer(signal.ITIMER_REAL, time_limit)
+        earlier_timer = signal.setitimer(signal.ITIMER_REAL, time_limit)
         stdout, stderr = sys.stdout, sys.stderr
         sys.stdout = sys.stderr = captured
         try:
+            stage = TRANSLATING
             returncode = _run_main(folder)
         finally:
             # No call before this line: Python runs signal handlers at calls, so none can raise
             # between the translator's end (or its exception) and here.
-            translating = False
+            stage = DONE
             sys.stdout, sys.stderr = stdout, stderr
     except _TranslatorTimeout:
         returncode = None
@@ -106,7 +120,11 @@ def _translate_here(folder: Path, time_limit: float, memory_mb: int) -> Finished
         captured.write(traceback.format_exc())
         returncode = ExitCode.TRANSLATE_CRITICAL_ERROR
     finally:
+        stage = DONE  # first, before any call: from here on the handler does nothing
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous_handler)
         resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
-    return Finished(returncode, captured.getvalue(), time.perf_counter() - started)
+        seconds = time.perf_counter() - started
+        if earlier_timer[0] > 0:
+            signal.setitimer(signal.ITIMER_REAL, max(earlier_timer[0] - seconds, MIN_TIMER_SECONDS), earlier_timer[1])
+    return Finished(returncode, captured.getvalue(), seconds)
