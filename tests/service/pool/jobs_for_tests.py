@@ -9,22 +9,31 @@ from typing import Any
 
 from causalplan.service.work.batches import TrialsArguments
 
-SLOW_JOB_SECONDS = 2.0
-
-
 STARTED_MARK = "slow-job-started"
 """The file a slow job leaves in its worker's temp folder when it begins (tests wait for it)."""
 
 
-def sleep_then_plan(*args: Any) -> dict[str, object]:
-    """Leave STARTED_MARK in the worker's temp folder, sleep ``SLOW_JOB_SECONDS``, then plan (a slow solve)."""
+RELEASE_VARIABLE = "CAUSALPLAN_TEST_RELEASE_FILE"
+"""The environment variable naming the file whose creation lets ``plan_when_released`` go on."""
+RELEASE_SECONDS = 120.0
+"""A bound on the wait for the release file, so a test that fails before releasing leaves no worker stuck."""
+
+
+def plan_when_released(*args: Any) -> dict[str, object]:
+    """Leave STARTED_MARK in the worker's temp folder, then plan once the file named by ``RELEASE_VARIABLE`` exists.
+
+    A solve that lasts as long as the test needs it to, however slow the machine is.
+    """
     import tempfile
     from pathlib import Path
 
     from causalplan.service.work.planning import plan
 
     (Path(tempfile.gettempdir()) / STARTED_MARK).touch()
-    time.sleep(SLOW_JOB_SECONDS)
+    release = Path(os.environ[RELEASE_VARIABLE])
+    deadline = time.monotonic() + RELEASE_SECONDS
+    while not release.exists() and time.monotonic() < deadline:
+        time.sleep(0.01)
     return plan(*args)
 
 

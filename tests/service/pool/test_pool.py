@@ -42,11 +42,12 @@ from tests.service.fixtures import (
     with_unique_effect,
 )
 from tests.service.pool.jobs_for_tests import (
+    RELEASE_VARIABLE,
     STARTED_MARK,
     allocate_too_much,
     crash_with_exception,
+    plan_when_released,
     sleep_forever,
-    sleep_then_plan,
     start_a_session_then_hang,
     temp_folders,
     timed_sleep,
@@ -54,13 +55,21 @@ from tests.service.pool.jobs_for_tests import (
 
 
 @pytest.fixture(scope="module")
-def one_worker(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
+def release(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The file whose creation lets ``plan_when_released`` solve (a test removes it first)."""
+    return tmp_path_factory.mktemp("release") / "release"
+
+
+@pytest.fixture(scope="module")
+def one_worker(tmp_path_factory: pytest.TempPathFactory, release: Path) -> Iterator[TestClient]:
     """An app with one planner worker and no queue: a second solve at once is refused."""
     settings = settings_for(
         sqlite_url(tmp_path_factory.mktemp("db")), planning_workers=1, queue_size=0, solve_grace_seconds=1.0
     )
-    with running_client(settings) as client:
-        yield client
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv(RELEASE_VARIABLE, str(release))  # before the app starts: its workers take its environment
+        with running_client(settings) as client:
+            yield client
 
 
 def post_in_background(client: TestClient, body: dict[str, Any]) -> tuple[threading.Thread, list[httpx.Response]]:
@@ -72,11 +81,14 @@ def post_in_background(client: TestClient, body: dict[str, Any]) -> tuple[thread
 
 
 @pytest.mark.slow
-def test_a_full_queue_is_429_with_retry_after(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_full_queue_is_429_with_retry_after(
+    one_worker: TestClient, release: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     pool = services_of(one_worker).pool
     answered = {"model": with_unique_effect(DESK_LAMP)}
     assert one_worker.post("/v1/plans", json=answered).status_code == 200
-    monkeypatch.setattr(PLAN, "function", sleep_then_plan)
+    release.unlink(missing_ok=True)
+    monkeypatch.setattr(PLAN, "function", plan_when_released)  # the worker stays busy until released
     thread, responses = post_in_background(one_worker, {"model": with_unique_effect(DESK_LAMP)})
     wait_until(lambda: pool.stats().busy == 1)
     refused = one_worker.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)})
@@ -88,13 +100,17 @@ def test_a_full_queue_is_429_with_retry_after(one_worker: TestClient, monkeypatc
     repeated = one_worker.post("/v1/plans", json=answered)
     assert repeated.status_code == 200 and repeated.json()["cached"] is True
     assert pool.stats().busy == 1  # still the first request's solve
+    release.touch()
     thread.join()
     assert responses[0].status_code == 200 and responses[0].json()["status"] == "solved"
 
 
-def test_a_killed_worker_fails_only_its_request(one_worker: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_killed_worker_fails_only_its_request(
+    one_worker: TestClient, release: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     pool = services_of(one_worker).pool
-    monkeypatch.setattr(PLAN, "function", sleep_then_plan)
+    release.unlink(missing_ok=True)  # never released: the worker is killed while it waits
+    monkeypatch.setattr(PLAN, "function", plan_when_released)
     [pid] = pool.worker_pids()
     (_temp_folder_of(pid) / STARTED_MARK).unlink(missing_ok=True)  # left by an earlier slow job of this worker
     thread, responses = post_in_background(one_worker, {"model": with_unique_effect(DESK_LAMP)})
@@ -173,9 +189,11 @@ def test_a_missing_planner_binary_is_reported_and_planning_still_answers(
 @pytest.mark.slow
 def test_a_full_queue_with_a_waiting_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     settings = settings_for(f"sqlite:///{tmp_path}/db.sqlite3", planning_workers=1, queue_size=1)
+    release = tmp_path / "release"
+    monkeypatch.setenv(RELEASE_VARIABLE, str(release))  # before the app starts: its workers take its environment
     with running_client(settings) as client:
         pool = services_of(client).pool
-        monkeypatch.setattr(PLAN, "function", sleep_then_plan)
+        monkeypatch.setattr(PLAN, "function", plan_when_released)  # the worker stays busy until released
         running = post_in_background(client, {"model": with_unique_effect(DESK_LAMP)})
         wait_until(lambda: pool.stats().busy == 1)
         waiting = post_in_background(client, {"model": with_unique_effect(DESK_LAMP)})
@@ -183,6 +201,7 @@ def test_a_full_queue_with_a_waiting_line(tmp_path: Path, monkeypatch: pytest.Mo
         wait_until(lambda: pool.fair_share.stats()["waiting"] == 1)
         assert pool.stats().waiting == 1  # what /health shows of the interactive pool
         assert error_of(client.post("/v1/plans", json={"model": with_unique_effect(DESK_LAMP)}), 429)
+        release.touch()
         for thread, responses in (running, waiting):
             thread.join()
             assert responses[0].status_code == 200
