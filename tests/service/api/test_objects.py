@@ -78,6 +78,7 @@ def test_the_openapi_document_describes_every_route_and_error(client: TestClient
         "/v1/jobs",
         "/v1/jobs/{job_id}",
         "/v1/jobs/{job_id}/video",
+        "/v1/jobs/{job_id}/playback",
         "/v1/objects",
         "/v1/objects/{object_id}",
         "/v1/trials",
