@@ -118,9 +118,21 @@ class EpisodeEffects:
                 self._events.append(_Timed(event, timed[event.at], timed[event.at]))
         self._regrasps = {timed[k] for k in _planned_regrasps(planned)}
         self._spare = spare_suffix
+        # What each grasp takes, by the part held after it. A spare swapped in is the part by then
+        # in the scene, though the planned segments call it by its ``:spare`` id (the player's).
+        self._intended: dict[int, str] = {}
+        for k, segment in enumerate(planned):
+            if segment.kind != "grasp" or segment.gripper != "closed":
+                continue
+            after = next((later.held for later in planned[k + 1 :] if later.held is not None), None)
+            if after is not None:
+                self._intended[timed[k]] = after[0].removesuffix(spare_suffix)
 
     def regrasps(self, segments: Sequence[TimedSegment]) -> set[int]:
         return self._regrasps
+
+    def intended(self, index: int) -> str | None:
+        return self._intended.get(index)
 
     def entering(self, driver: Driver, index: int) -> None:
         scene = driver.scene

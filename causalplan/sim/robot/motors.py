@@ -124,6 +124,10 @@ class Effects(Protocol):
         """Change the world before segment ``index`` starts (``len(segments)``: after the last one)."""
         ...
 
+    def intended(self, index: int) -> str | None:
+        """Return the part the grasp of segment ``index`` takes (None: whichever both fingers touch)."""
+        ...
+
     def grasped(self, driver: Driver, part: str, index: int) -> None:
         """Change the world as the fingers take hold of ``part`` in segment ``index``."""
         ...
@@ -192,10 +196,11 @@ class Driver:
             physicsClientId=client,
         )
 
-    def _touched(self) -> str | None:
-        """Return the part both fingers touch, if any."""
+    def _touched(self, intended: str | None) -> str | None:
+        """Return the part both fingers touch, if any (only ``intended``, when given: a part inside another)."""
         pb, client = self.scene.pb, self.scene.client
-        for part, body in self.scene.bodies.items():
+        bodies = self.scene.bodies if intended is None else {intended: self.scene.bodies[intended]}
+        for part, body in bodies.items():
             if all(
                 pb.getClosestPoints(self.panda.body, body, TOUCH, linkIndexA=finger, physicsClientId=client)
                 for finger in FINGER_JOINTS
@@ -289,7 +294,7 @@ class Driver:
             step = segment.step if segment else 0
             closed = segment is not None and segment.gripper == "closed"
             if closed and self.held is None and segment is not None and segment.kind == "grasp":
-                touched = self._touched()
+                touched = self._touched(self.effects.intended(index))
                 if touched is not None:
                     self._grasp(touched, step, index)
                 elif now >= ends[index] - TIME_STEP:
@@ -354,6 +359,9 @@ class AssemblyEffects:
 
     def entering(self, driver: Driver, index: int) -> None:
         return None
+
+    def intended(self, index: int) -> str | None:
+        return None  # one part per step, fetched from the table: the fingers touch only it
 
     def grasped(self, driver: Driver, part: str, index: int) -> None:
         return None
