@@ -64,6 +64,12 @@ STRATEGY_WORDS = {
     help="With --fault: the Franka Panda carries out the episode in physics, action by action (detach, set "
     "aside, take the spare, attach, light), within its datasheet's limits.",
 )
+@click.option(
+    "--motors",
+    is_flag=True,
+    help="With --robot: also play the motor commands through the Panda's joint motors in physics (as "
+    "`simulate --robot --motors`), and report the tracking error, slip and whether it still gives the goal.",
+)
 @click.option("--trajectory", type=FILE, help="With --robot: write the Panda's motor commands (check-trajectory).")
 @json_option
 @catalog_option
@@ -76,6 +82,7 @@ def troubleshoot(
     strategy: str,
     physics: bool,
     robot: bool,
+    motors: bool,
     trajectory: Path | None,
     as_json: bool,
     catalog: tuple[Path, ...],
@@ -92,8 +99,8 @@ def troubleshoot(
         causalplan troubleshoot examples/paper/desk_lamp.yaml -m examples/paper/flashlight_mapping.yaml --all-faults
 
     Exit codes: 0 done, 1 no goal in physics (--physics: the rebuilt object; --robot: the
-    Panda could not carry out the episode, or its last test gave no goal), 2 invalid input,
-    3 too large to solve exactly.
+    Panda could not carry out the episode, or its last test gave no goal, or with --motors
+    driven by its motors it did not), 2 invalid input, 3 too large to solve exactly.
     """
     from causalplan.errors import CausalPlanError
     from causalplan.troubleshoot.errors import TooLargeError
@@ -105,6 +112,8 @@ def troubleshoot(
         fail("missing_option", "--physics and --robot go with --fault PART: they rebuild that episode's object.")
     if trajectory is not None and not robot:
         fail("missing_option", "--trajectory needs --robot (the robot's motor commands are what it writes).")
+    if motors and not robot:
+        fail("missing_option", "--motors needs --robot (it plays the robot's motor commands through its motors).")
     known = catalog_from(catalog)
     causal_model = load_valid_model(model, known, as_json)
     labelling = load_valid_mapping(mapping, known, as_json) if mapping else None
@@ -113,7 +122,7 @@ def troubleshoot(
         task = troubleshooting_task(known.get(chosen), causal_model, labelling)
         if fault is not None:
             if robot:
-                _robot_episode(task, fault, strategy, trajectory, as_json)
+                _robot_episode(task, fault, strategy, trajectory, motors, as_json)
             else:
                 _episode(task, fault, strategy, physics, as_json)
         else:
@@ -179,13 +188,13 @@ def _episode(task: TroubleshootingTask, fault: str, strategy: str, in_physics: b
 
 
 def _robot_episode(
-    task: TroubleshootingTask, fault: str, strategy: str, trajectory: Path | None, as_json: bool
+    task: TroubleshootingTask, fault: str, strategy: str, trajectory: Path | None, motors: bool, as_json: bool
 ) -> None:
     from causalplan.sim.robot_episode import robot_episode
     from causalplan.troubleshoot.answer import episode_answer
 
     obj = task.obj
-    run = robot_episode(obj, task.episode(strategy, fault))
+    run = robot_episode(obj, task.episode(strategy, fault), motors=motors)
     if trajectory is not None and run.commands is not None:
         with writing(trajectory):
             trajectory.write_text(json.dumps(run.commands.as_dict()), encoding="utf-8")
@@ -205,10 +214,19 @@ def _robot_episode(
         motions = ", ".join(action.motions) or "no motion"
         said = f"{action.number:>3}. the Panda: {motions}" + (f" ({action.observed})" if action.observed else "")
         say(said if action.passed else click.style(f"{said}: {action.failure}: {action.message}", fg="red"))
+    driven = run.motors
+    if driven is not None:
+        tracked = f"tracking within {driven.joint_error:.4f} rad, {driven.gripper_error_mm:.1f} mm at the gripper"
+        failure = driven.failure
+        outcome = "" if failure is None else f"; {failure.value} at action {driven.step}: {driven.message}"
+        goal = f"gives {obj.goal}" if driven.produces_goal else f"no {obj.goal}"
+        say(f"Driven by its motors: {goal}, {tracked}{outcome}.")
     if works:
         say(f"In physics, the Panda repaired the {obj.name}: it gives {obj.goal} ({run.as_dict()['seconds']} s).")
     else:
         why = "the broken part was never replaced" if run.carried_out else "the robot could not carry it out"
+        if run.carried_out and run.broken_part_replaced and run.mechanism_works:
+            why = "driven by its motors, the robot did not repair it"
         say(click.style(f"In physics, no {obj.goal}: {why}.", fg="red"))
     exit_with(EXIT_OK if works else EXIT_NO_PLAN)
 

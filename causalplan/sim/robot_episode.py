@@ -28,31 +28,29 @@ safety factor (TOPP-RA, ``sim.robot.timing``), which ``check-trajectory`` accept
 part's track for the 3D player (``sim.robot_episode_playback``). A broken base the gripper
 can hold is carried off and its spare carried to where it stood. What is not simulated:
 replacing a *base the gripper cannot hold* (wider than it opens, with no grasp in the
-catalog: its spare is put where the broken one stood, not carried); playing the episode's
-commands through the Panda's joint motors (``simulate --robot`` does that for an assembly;
-here the run is kinematic, the arm posed at its commands); and the object's assembly before
-the episode (it is handed to the robot built).
+catalog: its spare is put where the broken one stood, not carried), and the object's
+assembly before the episode (it is handed to the robot built). The run itself is kinematic
+(the arm posed at its commands); with ``motors`` the commands are then played through the
+Panda's joint motors in a fresh scene (``sim.robot_episode_motors``), as ``simulate --robot``
+does for an assembly, the world changing around the arm as this run recorded it (``Event``).
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 from causalplan.objects.model import AssemblyObject, Fit
 from causalplan.sim import checks
 from causalplan.sim.executor import SimulationRun, execute_step, settle
-from causalplan.sim.geometry import Solid, solids
-from causalplan.sim.layout import ROBOT_ROW_GAP, layout
 from causalplan.sim.mechanism import evaluate
 from causalplan.sim.motions import ENGAGEMENT, MOTIONS, approach_path, approach_start
-from causalplan.sim.movers import PartsMoveThemselves
 from causalplan.sim.outcomes import Failure, RequirementCheck, RobotFailure, StepStatus
 from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.poses import Pose
-from causalplan.sim.robot.grasps import grasp_of
 from causalplan.sim.robot.limits import DEFAULT_SAFETY_FACTOR
+from causalplan.sim.robot.motors import MotorRun
 from causalplan.sim.robot.mover import PandaMovesThem
 from causalplan.sim.robot.robot import LIFT, LINE_STEP, Robot, line_poses
 from causalplan.sim.robot.steps import (
@@ -62,11 +60,21 @@ from causalplan.sim.robot.steps import (
     spaced_distances,
     step_motions,
 )
+from causalplan.sim.robot_episode_motors import (
+    Event,
+    Join,
+    LightsOut,
+    Place,
+    Swap,
+    Unweld,
+    drive_episode_with_motors,
+    swap_spare,
+)
 from causalplan.sim.robot_episode_report import ActionInPhysics, EpisodeInPhysics
+from causalplan.sim.robot_episode_scene import built_object, episode_stage
 from causalplan.sim.scene import Scene
-from causalplan.sim.spares import ASIDE, SPARE, spare_homes
+from causalplan.sim.spares import SPARE
 from causalplan.sim.taking_off import along, collide_again, unweld
-from causalplan.sim.troubleshooting import first_build_order, rebuild_steps
 from causalplan.troubleshoot.assembly import ATTACH, DETACH
 from causalplan.troubleshoot.episode import GOAL, NO_GOAL, Episode
 from causalplan.troubleshoot.solver import INSPECT, REPLACE, TEST
@@ -89,6 +97,8 @@ class _Episode:
     """Each part swapped for its spare, and the number of planned segments before the swap."""
     in_the_way: dict[str, list[str]] = field(default_factory=dict)
     """The parts the hand had to lift off to take each part off (they are lifted off to put it on, too)."""
+    events: list[Event] = field(default_factory=list)
+    """What the run changed in the world, at the planned segment where it did (the motors' run replays them)."""
 
     @property
     def scene(self) -> Scene:
@@ -97,6 +107,11 @@ class _Episode:
     @property
     def robot(self) -> Robot:
         return self.mover.robot
+
+    @property
+    def planned(self) -> int:
+        """Return how many segments the robot has planned so far."""
+        return len(self.robot.waypoints.segments)
 
 
 def _detach(state: _Episode, number: int, part: str) -> tuple[str, str] | None:
@@ -170,6 +185,7 @@ def _take_off(state: _Episode, number: int, part: str, aside: list[str]) -> tupl
     first = out[:SCREW_START_POSES] if motion.turns > 0 else [*out, *spaced_distances(thread, start, LINE_STEP)]
     way_out = [path(d) for d in first]
     # An arm pose from which the gripper can also take the part out along its axis.
+    fetched = state.planned
     failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
     while failure is not None and (blocking := _in_the_way(state, part, failure, aside)) is not None:
         # The fetch failed before moving: lift the part in the way off, and try again.
@@ -177,9 +193,11 @@ def _take_off(state: _Episode, number: int, part: str, aside: list[str]) -> tupl
         if failed is not None:
             return failed
         aside.append(blocking)
+        fetched = state.planned
         failure = robot.fetch(part, obj.part(part), way_out, frozenset({joint.fixed}))
     if failure is not None:
         return _code(failure)
+    state.events.append(Unweld(part, joint.fixed, fetched, state.planned))
     unweld(scene, joint.fixed, part)
     scene.set_dynamic(part, False)
     run.joints.remove(joint)
@@ -216,9 +234,9 @@ def _swap(state: _Episode, part: str) -> None:
     """Make the spare on the table the part (the broken one stays where it lies, as the spare's id)."""
     scene, run = state.scene, state.run
     spare = part + SPARE
-    state.swaps.append((part, len(state.robot.waypoints.segments)))
-    scene.bodies[part], scene.bodies[spare] = scene.bodies[spare], scene.bodies[part]
-    scene.names[scene.bodies[part]], scene.names[scene.bodies[spare]] = part, spare
+    state.swaps.append((part, state.planned))
+    state.events.append(Swap(part, state.planned))
+    swap_spare(scene, part, spare)
     run.homes[part], run.homes[spare] = run.homes[spare], run.homes[part]
 
 
@@ -234,10 +252,10 @@ def _replace_base(state: _Episode, part: str) -> tuple[str, str] | None:
     if aside is None:
         table = run.homes[part + SPARE]
         _swap(state, part)
-        scene.place(part + SPARE, table)
-        scene.set_dynamic(part + SPARE, False)
-        scene.place(part, here)
-        scene.set_dynamic(part, True)
+        for placed, pose, dynamic in ((part + SPARE, table, False), (part, here, True)):
+            state.events.append(Place(placed, pose, dynamic, state.planned))
+            scene.place(placed, pose)
+            scene.set_dynamic(placed, dynamic)
         run.homes[part] = here
         return None
     failed = _carry_base(state, part, aside)
@@ -276,8 +294,13 @@ def _attach(state: _Episode, number: int, part: str) -> tuple[str, str] | None:
 
 def _step_failure(state: _Episode, number: int, request: StepRequest) -> tuple[str, str] | None:
     """Make one assembly step (attach or light) by the robot; return its failure code and message, if any."""
+    first, joints = state.planned, list(state.run.joints)
     report = execute_step(state.run, number, request)
     if report.status is StepStatus.PASSED:
+        motion = MOTIONS[request.action]
+        for joint in state.run.joints:
+            if joint not in joints:  # the joint this step made: made again where the motors let go of the part
+                state.events.append(Join(request.moving, joint, motion.fastens, first, state.planned))
         return None
     code = report.failure.value if report.failure is not None else "failed"
     return code, report.message
@@ -286,6 +309,7 @@ def _step_failure(state: _Episode, number: int, request: StepRequest) -> tuple[s
 def _test(state: _Episode, number: int, lights: list[Fit]) -> tuple[str, str] | None:
     """Light what the object lights (lifting off what covers it, and putting it back), then let it settle."""
     run = state.run
+    state.events.append(LightsOut(state.planned))
     run.joints[:] = [joint for joint in run.joints if not joint.touch_only]  # a failed test's flame is out
     for light in lights:
         if light.fixed_part not in run.assembled:
@@ -330,45 +354,29 @@ def robot_episode(
     safety_factor: float = DEFAULT_SAFETY_FACTOR,
     tracks: bool = False,
     on_action: Callable[[int, int], None] | None = None,
+    motors: bool = False,
 ) -> EpisodeInPhysics:
     """Have the Panda carry out ``episode`` on ``obj`` in physics, action by action, and judge its last test.
 
     ``tracks`` keeps every body's pose over the motor commands (``sim.robot_episode_playback``);
-    ``on_action(done, total)`` hears of each action done. Raises LimitViolationError when no
-    motor commands keep within the limits, SimulatorUnavailableError when PyBullet cannot start.
+    ``on_action(done, total)`` hears of each action done; ``motors`` then plays the commands
+    through the Panda's joint motors in a fresh scene (``motors`` in the answer). Raises
+    LimitViolationError when no motor commands keep within the limits,
+    SimulatorUnavailableError when PyBullet cannot start.
     """
     clock = time.perf_counter()
-    build = [step for step in rebuild_steps(obj, first_build_order(obj)) if not MOTIONS[step.action].touches_only]
     lights = [fit for fit in obj.fits if MOTIONS[fit.primitive].touches_only]
-    spares = sorted({step.part for step in episode.steps if step.kind == REPLACE and step.part is not None})
-    parts: dict[str, Solid] = dict(solids(obj))  # a copy: solids() is cached
-    homes, _design = layout(obj, parts, tuple(build), ROBOT_ROW_GAP)
-    # The robot carries a base it can hold; one wider than the gripper opens is swapped without it.
-    carried = obj.base in spares and not isinstance(grasp_of(obj.part(obj.base), parts[obj.base]), str)
-    places = spare_homes(obj, parts, homes, spares, carried)
-    aside = places.pop(obj.base + ASIDE, None)
-    homes.update(places)
-    parts.update({part + SPARE: parts[part] for part in spares})
+    stage = episode_stage(obj, episode)
     actions: list[ActionInPhysics] = []
     requirements: tuple[RequirementCheck, ...] = ()
     replaced = broken_replaced = False
-    with Scene(parts, drawn=False) as scene:
-        for part, pose in homes.items():
-            scene.add_part(part, pose, dynamic=part == obj.base)
-        run = SimulationRun(obj, scene, homes, {obj.base}, PartsMoveThemselves(scene))
-        for number, request in enumerate(build, start=1):
-            report = execute_step(run, number, request)
-            if report.status is not StepStatus.PASSED:
-                raise RuntimeError(f"the {obj.name} cannot be built in physics: {report.message}")
-        settle(run, checks.FINAL_SETTLE_SECONDS)
-        # The object was handed over built: its joints come before every action of the episode
-        # (the mechanism checks that a light comes after what it must follow by step number).
-        run.joints[:] = [replace(joint, step=0) for joint in run.joints]
-        run.attached_at = dict.fromkeys(run.attached_at, 0)
-        fits = {request.moving: obj.fit(request.fit) for request in build if request.fit is not None}
+    with built_object(obj, stage) as run:
+        scene = run.scene
+        fits = {request.moving: obj.fit(request.fit) for request in stage.build if request.fit is not None}
         mover = PandaMovesThem(scene, None, safety_factor, tracks)
         run.mover = mover
-        state = _Episode(obj, run, mover, fits, {body: part for part, body in scene.bodies.items()}, aside)
+        bodies = {body: part for part, body in scene.bodies.items()}
+        state = _Episode(obj, run, mover, fits, bodies, stage.base_aside)
         timing = {"build": time.perf_counter() - clock}
         clock = time.perf_counter()
         for number, step in enumerate(episode.steps, start=1):
@@ -407,6 +415,21 @@ def robot_episode(
         carried_out = all(action.passed for action in actions)
         timing.update(mover.finish(len(episode.steps), carried_out))
         placed = {state.bodies[body]: scene.pose(part) for part, body in scene.bodies.items()}
-        return EpisodeInPhysics(
-            obj.id, tuple(actions), requirements, broken_replaced, mover.commands, dict(mover.tracks), placed, timing
-        )
+    motor_run: MotorRun | None = None
+    if motors and carried_out and mover.commands is not None and mover.commands.points:
+        clock = time.perf_counter()
+        planned = mover.robot.waypoints.segments
+        replaced_last = broken_replaced
+        motor_run = drive_episode_with_motors(obj, stage, planned, mover.commands, state.events, SPARE, replaced_last)
+        timing["motors"] = time.perf_counter() - clock
+    return EpisodeInPhysics(
+        obj.id,
+        tuple(actions),
+        requirements,
+        broken_replaced,
+        mover.commands,
+        dict(mover.tracks),
+        placed,
+        timing,
+        motor_run,
+    )

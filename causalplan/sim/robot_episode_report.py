@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 from causalplan.sim.outcomes import RequirementCheck
 from causalplan.sim.poses import Pose
+from causalplan.sim.robot.motors import MotorRun
 from causalplan.sim.robot.tracks import PartTrack
 from causalplan.sim.robot.trajectory import Trajectory
 
@@ -55,6 +56,8 @@ class EpisodeInPhysics:
     placed: dict[str, Pose]
     """Where every body (spares by their ``:spare`` id) is at the end."""
     timing: dict[str, float] = field(default_factory=dict)
+    motors: MotorRun | None = None
+    """The commands played through the Panda's joint motors in a fresh scene (``robot_episode(..., motors=True)``)."""
 
     @property
     def carried_out(self) -> bool:
@@ -66,8 +69,12 @@ class EpisodeInPhysics:
 
     @property
     def produces_goal(self) -> bool:
-        """Return whether the robot carried out every action and its last test showed the goal in physics."""
-        return self.carried_out and self.mechanism_works and self.broken_part_replaced
+        """Return whether the robot carried out every action and its last test showed the goal in physics.
+
+        Driven by its motors too, when it was: the motors' run must also give the goal.
+        """
+        by_motors = self.motors is None or self.motors.produces_goal
+        return self.carried_out and self.mechanism_works and self.broken_part_replaced and by_motors
 
     @property
     def failed(self) -> ActionInPhysics | None:
@@ -82,4 +89,5 @@ class EpisodeInPhysics:
             "mechanism": [check.as_dict() for check in self.requirements],
             "seconds": round(self.commands.seconds, 3) if self.commands is not None else 0.0,
             "timing": {name: round(seconds, 3) for name, seconds in self.timing.items()},
+            "motors": self.motors.as_dict() if self.motors is not None else None,
         }

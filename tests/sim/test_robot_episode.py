@@ -12,6 +12,7 @@ from click.testing import CliRunner
 from causalplan.cli import app
 from causalplan.objects.catalog import Catalog
 from causalplan.sim.robot.checker import violations
+from causalplan.sim.robot.motors import SLIP_TOLERANCE_MM, TRACKING_TOLERANCE_MM, TRACKING_TOLERANCE_RAD
 from causalplan.sim.robot_episode import robot_episode
 from causalplan.sim.robot_episode_playback import episode_playback
 from causalplan.sim.spares import SPARE
@@ -60,6 +61,29 @@ def test_the_panda_unscrews_the_bulb_sets_it_aside_and_screws_in_the_spare(catal
     assert _distance(broken[0], broken[-1]) > 0.05  # taken off the lamp and set down on the table
     assert _distance(spare[0], spare[-1]) > 0.05  # fetched from the table and screwed in
     assert _distance(spare[-1], broken[0]) < 0.003  # where the broken bulb sat
+
+
+def test_driven_by_its_motors_the_panda_replaces_the_bulb_and_the_lamp_lights(catalog: Catalog) -> None:
+    lamp = catalog.get("desk_lamp")
+    run = robot_episode(lamp, troubleshooting_task(lamp).episode("oracle", "light_bulb"), motors=True)
+    driven = run.motors
+    assert driven is not None and driven.failure is None, run.as_dict()
+    assert driven.produces_goal and run.produces_goal
+    assert [requirement.met for requirement in driven.requirements] == [True]  # the spare bulb, screwed in
+    assert driven.joint_error <= TRACKING_TOLERANCE_RAD and driven.gripper_error_mm <= TRACKING_TOLERANCE_MM
+    # The shade off and on, the broken bulb out, the spare in: each held without slipping.
+    assert set(driven.slip_mm) == {"shade", "light_bulb"}
+    assert all(slip <= SLIP_TOLERANCE_MM for slip in driven.slip_mm.values())
+    assert run.as_dict()["motors"] == driven.as_dict()
+
+
+def test_driven_by_its_motors_a_broken_part_never_replaced_still_gives_no_goal(catalog: Catalog) -> None:
+    lamp = catalog.get("desk_lamp")
+    run = robot_episode(lamp, SPARE_SHADE_ONLY, motors=True)
+    driven = run.motors
+    assert driven is not None and driven.failure is None, run.as_dict()
+    assert all(requirement.met for requirement in driven.requirements)  # the lamp is whole, the bulb broken
+    assert not driven.produces_goal and not run.produces_goal
 
 
 def test_each_test_in_physics_shows_what_the_episode_observed(catalog: Catalog) -> None:
@@ -160,6 +184,24 @@ def test_the_panda_carries_the_broken_base_aside_and_the_spare_base_to_where_it_
     broken, spare = parts["case"]["track"]["poses"], parts["case" + SPARE]["track"]["poses"]
     assert _distance(spare[-1], broken[0]) < 0.003  # the spare stands where the broken case stood
     assert _distance(broken[-1], broken[0]) > 0.2  # and the broken one was carried to the table
+
+
+def test_the_cli_s_motors_need_the_robot() -> None:
+    result = CliRunner().invoke(app, ["troubleshoot", str(LAMP), "--fault", "light_bulb", "--motors"])
+    assert result.exit_code == 2 and "--motors needs --robot" in result.output
+
+
+@pytest.mark.slow
+def test_the_cli_drives_the_panda_s_episode_by_its_motors() -> None:
+    args = ["troubleshoot", str(LAMP), "--fault", "light_bulb", "--strategy", "oracle", "--robot", "--motors"]
+    result = CliRunner().invoke(app, [*args, "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output)
+    motors = data["robot"]["motors"]
+    assert data["status"] == "repaired" and motors["produces_goal"] and motors["failure"] is None
+    assert motors["tracking"]["max_joint_error_rad"] <= motors["tracking"]["tolerance_rad"]
+    said = CliRunner().invoke(app, args)
+    assert said.exit_code == 0 and "Driven by its motors: gives light" in said.output, said.output
 
 
 @pytest.mark.slow

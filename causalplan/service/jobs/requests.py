@@ -103,6 +103,8 @@ class TroubleshootingRequest(JobRequest):
     object: str | None
     fault: str
     strategy: str
+    motors: bool = False
+    """The robot's run is driven by its motors too; jobs stored before that ran without them."""
 
 
 class FitEstimationRequest(_Counted):

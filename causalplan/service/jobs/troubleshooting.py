@@ -58,7 +58,9 @@ def troubleshooting_inputs(
         raise problem
     assert submission.model is not None
     labelling = mapping.mapping if mapping is not None else None
-    arguments = TroubleshootingArguments(submission.model, labelling, body.object, body.fault, body.strategy, robot)
+    arguments = TroubleshootingArguments(
+        submission.model, labelling, body.object, body.fault, body.strategy, robot, robot and body.motors
+    )
     warnings = [*submission.report.warnings, *(mapping.report.warnings if mapping is not None else [])]
     return TroubleshootingInputs(submission, arguments, [warning.as_dict() for warning in warnings])
 
@@ -83,6 +85,7 @@ def prepare_troubleshooting(body: TroubleshootingJobIn, services: Services) -> T
         object=body.object,
         fault=body.fault,
         strategy=body.strategy,
+        motors=body.motors,
     )
 
 
@@ -98,6 +101,8 @@ def run_troubleshooting_job(request: TroubleshootingRequest, services: Services,
             "object": request.object,
             "fault": request.fault,
             "strategy": request.strategy,
+            "robot": True,
+            "motors": request.motors,
         }
     )
     inputs = troubleshooting_inputs(body, services, ClientIds(), robot=True)

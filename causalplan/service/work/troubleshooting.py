@@ -39,6 +39,8 @@ class TroubleshootingArguments:
     strategy: str
     robot: bool = False
     """With ``fault``: the Panda carries out the episode in physics (``robot`` in the answer)."""
+    motors: bool = False
+    """With ``robot``: its motor commands are also played through its joint motors (``robot.motors``)."""
     max_states: int = MAX_SERVICE_STATES
 
 
@@ -63,7 +65,7 @@ def troubleshoot(arguments: TroubleshootingArguments, catalog: Catalog) -> dict[
         from causalplan.sim.robot_episode import robot_episode
 
         episode = task.episode(arguments.strategy, fault)
-        run = robot_episode(task.obj, episode, tracks=True)
+        run = robot_episode(task.obj, episode, tracks=True, motors=arguments.motors)
         answer["robot"] = run.as_dict()
         answer["status"] = "repaired" if run.produces_goal else "not_repaired_in_physics"
         answer["playback"] = _playback(task.obj, run, episode)

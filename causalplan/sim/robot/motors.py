@@ -16,6 +16,11 @@ The run reports the tracking error (the largest joint error, and the largest dis
 between the gripper and where the commands put it), how far each held part slipped in the
 gripper, the first failure (``limit_violation``, ``tracking_error``, ``grasp_slipped``)
 and whether the object, settled, produces its goal.
+
+What the world does around the arm (a part joined to its mate when the gripper lets go of it,
+a weld undone when a part is taken off, a spare swapped in between two motions) is the
+``Effects``': ``AssemblyEffects`` for an assembly plan here, ``sim.robot_episode_motors`` for a
+troubleshooting episode; the ``Driver`` and its measures are shared.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from __future__ import annotations
 import bisect
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from causalplan.objects.model import AssemblyObject
 from causalplan.sim import checks
@@ -33,7 +39,7 @@ from causalplan.sim.outcomes import Failure, RequirementCheck
 from causalplan.sim.plan_steps import StepRequest
 from causalplan.sim.poses import Pose, distance
 from causalplan.sim.robot.panda import ARM_JOINTS, FINGER_JOINTS, Panda
-from causalplan.sim.robot.trajectory import Point, Trajectory
+from causalplan.sim.robot.trajectory import Point, TimedSegment, Trajectory
 from causalplan.sim.scene import TIME_STEP, Scene
 
 TRACKING_TOLERANCE_RAD = 0.05
@@ -107,18 +113,42 @@ class _Held:
     relative: Pose  # the part's centre of mass in the hand's frame, when grasped
 
 
-@dataclass
-class _Driver:
-    """One motor-driven run as it goes."""
+class Effects(Protocol):
+    """What the world does around the arm as the commands play (indices are the trajectory's segments)."""
 
-    obj: AssemblyObject
+    def regrasps(self, segments: Sequence[TimedSegment]) -> set[int]:
+        """Return the segments that open the gripper on a part it takes again (it stays there, unjoined)."""
+        ...
+
+    def entering(self, driver: Driver, index: int) -> None:
+        """Change the world before segment ``index`` starts (``len(segments)``: after the last one)."""
+        ...
+
+    def intended(self, index: int) -> str | None:
+        """Return the part the grasp of segment ``index`` takes (None: whichever both fingers touch)."""
+        ...
+
+    def grasped(self, driver: Driver, part: str, index: int) -> None:
+        """Change the world as the fingers take hold of ``part`` in segment ``index``."""
+        ...
+
+    def released(self, driver: Driver, part: str, step: int, index: int) -> None:
+        """Change the world as the gripper lets go of ``part`` (held since step ``step``) in segment ``index``."""
+        ...
+
+
+@dataclass
+class Driver:
+    """One motor-driven run as it goes: the arm, the part it holds, the joints made and the errors measured."""
+
     scene: Scene
     trajectory: Trajectory
-    requests: tuple[StepRequest, ...]
+    effects: Effects
+    joints: list[Joint] = field(default_factory=list)
+    """The object's joints (the mechanism's), as the run makes and undoes them."""
     panda: Panda = field(init=False)
     ghost: Panda = field(init=False)
     held: _Held | None = None
-    joints: list[Joint] = field(default_factory=list)
     slip: dict[str, float] = field(default_factory=dict)
     joint_error: float = 0.0
     joint: str = ""
@@ -166,10 +196,11 @@ class _Driver:
             physicsClientId=client,
         )
 
-    def _touched(self) -> str | None:
-        """Return the part both fingers touch, if any."""
+    def _touched(self, intended: str | None) -> str | None:
+        """Return the part both fingers touch, if any (only ``intended``, when given: a part inside another)."""
         pb, client = self.scene.pb, self.scene.client
-        for part, body in self.scene.bodies.items():
+        bodies = self.scene.bodies if intended is None else {intended: self.scene.bodies[intended]}
+        for part, body in bodies.items():
             if all(
                 pb.getClosestPoints(self.panda.body, body, TOUCH, linkIndexA=finger, physicsClientId=client)
                 for finger in FINGER_JOINTS
@@ -184,8 +215,9 @@ class _Driver:
             if other != body:
                 pb.setCollisionFilterPair(body, other, -1, -1, int(on), physicsClientId=client)
 
-    def _grasp(self, part: str, step: int) -> None:
+    def _grasp(self, part: str, step: int, index: int) -> None:
         pb, client = self.scene.pb, self.scene.client
+        self.effects.grasped(self, part, index)
         self.scene.set_dynamic(part, True)
         self._collide(part, False)
         relative = self._hand().inverse() * self.scene.body_pose(self.scene.bodies[part])
@@ -205,8 +237,8 @@ class _Driver:
             name = self.scene.solids[held.part].name
             self._fail(Failure.GRASP_SLIPPED, step, f"the {name} slipped {slip:.1f} mm in the gripper")
 
-    def _release(self, regrasp: bool) -> None:
-        """Let go of the held part; for a ``regrasp`` (the step takes it again) it stays where it is, unjoined."""
+    def _release(self, index: int, regrasp: bool) -> None:
+        """Let go of the held part; for a ``regrasp`` (the gripper takes it again) it stays where it is, unjoined."""
         assert self.held is not None
         held, self.held = self.held, None
         self._slipped(held, held.step)
@@ -218,23 +250,8 @@ class _Driver:
                 self.scene.bodies[held.part], [0, 0, 0], [0, 0, 0], physicsClientId=self.scene.client
             )
             return
-        # The step that held it, not the first to move it: a match may light one wick, then another.
-        request = self.requests[held.step - 1] if 0 < held.step <= len(self.requests) else None
         self._collide(held.part, True)
-        if request is None or request.moving != held.part:
-            return
-        motion = MOTIONS[request.action]
-        pair = step_connectors(self.obj, request, self.joints)
-        if pair is None:
-            return
-        fit = catalog_fit(self.obj, request, pair)
-        joint = Joint(held.step, fit, request.moving, pair[0].id, request.fixed, pair[1].id, motion.touches_only)
-        if motion.touches_only:
-            self.joints.append(joint)  # the flame touched the wick on its way: lit
-            return
-        if motion.fastens:
-            self.scene.weld(request.fixed, request.moving)
-        self.joints.append(joint)
+        self.effects.released(self, held.part, held.step, index)
 
     def _measure(self, point: Point, step: int, count: int) -> None:
         pb, client, limits = self.scene.pb, self.scene.client, self.trajectory.limits
@@ -257,19 +274,19 @@ class _Driver:
                 self._fail(Failure.TRACKING_ERROR, step, f"the gripper {error:.1f} mm from its command")
 
     def run(self) -> None:
+        """Play every command through the motors, one simulation step each, until the end or the first failure."""
         points, segments = self.trajectory.points, self.trajectory.segments
         times = [point.time for point in points]
         ends = [points[segment.last].time for segment in segments]
-        regrasps = {  # segments that open the gripper on a part the same step takes again
-            k
-            for k, segment in enumerate(segments)
-            if any(later.step == segment.step and later.kind == "grasp" for later in segments[k + 1 :])
-        }
-        count = 0
+        regrasps = self.effects.regrasps(segments)
+        count, entered = 0, -1
         while (count + 1) * TIME_STEP <= points[-1].time + TIME_STEP and self.failure is None:
             count += 1
             now = count * TIME_STEP  # the command for the end of this simulation step, and what it is measured on
             index = min(len(segments) - 1, bisect.bisect_left(ends, now)) if segments else 0
+            for later in range(entered + 1, index + 1):
+                self.effects.entering(self, later)
+            entered = max(entered, index)
             segment = segments[index] if segments else None
             point = _at(points, times, now)
             self._command(point)
@@ -277,16 +294,36 @@ class _Driver:
             step = segment.step if segment else 0
             closed = segment is not None and segment.gripper == "closed"
             if closed and self.held is None and segment is not None and segment.kind == "grasp":
-                touched = self._touched()
+                touched = self._touched(self.effects.intended(index))
                 if touched is not None:
-                    self._grasp(touched, step)
+                    self._grasp(touched, step, index)
                 elif now >= ends[index] - TIME_STEP:
                     self._fail(Failure.GRASP_SLIPPED, step, "the fingers closed and hold nothing")
             elif not closed and self.held is not None:
-                self._release(regrasp=index in regrasps)
+                self._release(index, regrasp=index in regrasps)
             self._measure(point, step, count)
         if self.held is not None and self.failure is None:
-            self._release(regrasp=False)
+            self._release(len(segments), regrasp=False)
+        if self.failure is None:
+            for later in range(entered + 1, len(segments) + 1):
+                self.effects.entering(self, later)
+
+    def report(self, requirements: tuple[RequirementCheck, ...], goal: bool = True) -> MotorRun:
+        """Return the run's report: the goal produced when the motors did not fail, ``goal`` and the mechanism works."""
+        failure, step, message = self.failure or (None, None, "")
+        works = failure is None and goal and all(requirement.met for requirement in requirements)
+        return MotorRun(
+            self.trajectory.seconds,
+            self.joint_error,
+            self.joint,
+            self.gripper_error,
+            self.slip,
+            requirements,
+            works,
+            failure,
+            step,
+            message,
+        )
 
 
 def _at(points: Sequence[Point], times: list[float], now: float) -> Point:
@@ -305,23 +342,53 @@ def _at(points: Sequence[Point], times: list[float], now: float) -> Point:
     return Point(now, mix(before.positions, nxt.positions), mix(before.velocities, nxt.velocities), (0.0,) * 7, width)
 
 
+@dataclass(frozen=True)
+class AssemblyEffects:
+    """An assembly plan's world: each step's part, let go at its seat, is joined to its mate."""
+
+    obj: AssemblyObject
+    requests: tuple[StepRequest, ...]
+
+    def regrasps(self, segments: Sequence[TimedSegment]) -> set[int]:
+        # One part per step: a segment that opens the gripper before the same step grasps again.
+        return {
+            k
+            for k, segment in enumerate(segments)
+            if any(later.step == segment.step and later.kind == "grasp" for later in segments[k + 1 :])
+        }
+
+    def entering(self, driver: Driver, index: int) -> None:
+        return None
+
+    def intended(self, index: int) -> str | None:
+        return None  # one part per step, fetched from the table: the fingers touch only it
+
+    def grasped(self, driver: Driver, part: str, index: int) -> None:
+        return None
+
+    def released(self, driver: Driver, part: str, step: int, index: int) -> None:
+        # The step that held it, not the first to move it: a match may light one wick, then another.
+        request = self.requests[step - 1] if 0 < step <= len(self.requests) else None
+        if request is None or request.moving != part:
+            return
+        motion = MOTIONS[request.action]
+        pair = step_connectors(self.obj, request, driver.joints)
+        if pair is None:
+            return
+        fit = catalog_fit(self.obj, request, pair)
+        joint = Joint(step, fit, request.moving, pair[0].id, request.fixed, pair[1].id, motion.touches_only)
+        if motion.touches_only:
+            driver.joints.append(joint)  # the flame touched the wick on its way: lit
+            return
+        if motion.fastens:
+            driver.scene.weld(request.fixed, request.moving)
+        driver.joints.append(joint)
+
+
 def drive_with_motors(obj: AssemblyObject, requests: tuple[StepRequest, ...], trajectory: Trajectory) -> MotorRun:
     """Return how the motors carried out ``trajectory`` (the plan ``requests`` on ``obj``) in a fresh scene."""
     with laid_out_scene(obj, requests, ROBOT_ROW_GAP) as (scene, _, _):
-        driver = _Driver(obj, scene, trajectory, requests)
+        driver = Driver(scene, trajectory, AssemblyEffects(obj, requests))
         driver.run()
         scene.settle(checks.FINAL_SETTLE_SECONDS)
-        requirements = evaluate(obj, scene, driver.joints)
-    failure, step, message = driver.failure or (None, None, "")
-    return MotorRun(
-        trajectory.seconds,
-        driver.joint_error,
-        driver.joint,
-        driver.gripper_error,
-        driver.slip,
-        requirements,
-        failure is None and all(requirement.met for requirement in requirements),
-        failure,
-        step,
-        message,
-    )
+        return driver.report(evaluate(obj, scene, driver.joints))

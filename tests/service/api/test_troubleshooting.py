@@ -60,6 +60,7 @@ def test_the_failed_model_needs_more_actions_than_the_good_one(client: TestClien
         ({"object": "flashlight"}, 422, "mapping_does_not_fit"),
         ({"object": "no_such_object"}, 404, "unknown_object"),
         ({"strategy": "guess"}, 422, "invalid_request"),
+        ({"fault": "light_bulb", "motors": True}, 422, "invalid_request"),  # the motors drive the robot's run
     ],
 )
 def test_bad_input_is_an_error_with_a_code(client: TestClient, extra: dict[str, Any], status: int, code: str) -> None:
@@ -115,7 +116,9 @@ def test_the_robot_s_run_is_typed_in_the_openapi_document() -> None:
     assert queued == {"$ref": "#/components/schemas/JobOut"}
     schemas = document["components"]["schemas"]
     assert {"TroubleshootingRobotOut", "RobotEpisodeOut", "RobotActionOut", "TroubleshootingJobIn"} <= set(schemas)
-    assert "robot" in schemas["TroubleshootingIn"]["properties"]
+    assert {"robot", "motors"} <= set(schemas["TroubleshootingIn"]["properties"])
+    motors = schemas["RobotEpisodeOut"]["properties"]["motors"]
+    assert {"$ref": "#/components/schemas/MotorRunOut"} in motors["anyOf"]
 
 
 @pytest.mark.slow
@@ -130,3 +133,15 @@ def test_the_robot_carries_out_the_episode_as_a_job(client: TestClient) -> None:
     assert result["status"] == "repaired" and result["robot"]["produces_goal"]
     assert [a["action"] for a in result["robot"]["actions"]] == [s["action"] for s in result["episode"]["steps"]]
     TroubleshootingRobotOut.model_validate(result)
+
+
+@pytest.mark.slow
+def test_driven_by_its_motors_the_robot_carries_out_the_episode_as_a_job(client: TestClient) -> None:
+    response = post(client, model=DESK_LAMP, fault="light_bulb", strategy="oracle", robot=True, motors=True)
+    assert response.status_code == 202, response.text
+    done = finished(client, response.json()["url"], 300.0)
+    assert done["status"] == "succeeded", done
+    result = done["result"]
+    motors = result["robot"]["motors"]
+    assert result["status"] == "repaired" and motors["produces_goal"] and motors["failure"] is None
+    assert TroubleshootingRobotOut.model_validate(result).model_dump(mode="json")["robot"]["motors"] == motors

@@ -5,11 +5,11 @@ from __future__ import annotations
 import uuid
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, StrictBool, model_validator
 
 from causalplan.service.api.schemas.common import DiagnosticOut, InputModel, MappingDocument, ModelDocument, OutputModel
 from causalplan.service.api.schemas.playback import PlaybackFileOut
-from causalplan.service.api.schemas.simulations import RequirementCheckOut
+from causalplan.service.api.schemas.simulations import MotorRunOut, RequirementCheckOut
 
 
 class TroubleshootingIn(InputModel):
@@ -35,6 +35,12 @@ class TroubleshootingIn(InputModel):
         description="With `fault`: the Franka Panda carries out the episode in physics, action by action; "
         "a job (answered 202), whose result is `TroubleshootingRobotOut`.",
     )
+    motors: StrictBool = Field(
+        default=False,
+        description="With `robot`: also play the motor commands through the Panda's joint motors in physics, "
+        "as `causalplan troubleshoot --robot --motors` does; the result's robot.motors gives the tracking error, "
+        "slip and the mechanism, and the episode counts as repaired only if the motors' run gives the goal too.",
+    )
 
     @model_validator(mode="after")
     def _one_model(self) -> TroubleshootingIn:
@@ -42,6 +48,8 @@ class TroubleshootingIn(InputModel):
             raise ValueError("give exactly one of 'model' (the model inline) and 'model_id' (a stored model)")
         if self.robot and self.fault is None:
             raise ValueError("'robot' carries out one episode: name the broken part ('fault')")
+        if self.motors and not self.robot:
+            raise ValueError("'motors' needs 'robot': true (it plays the robot's motor commands through its motors)")
         return self
 
 
@@ -124,6 +132,11 @@ class RobotEpisodeOut(OutputModel):
     mechanism: list[RequirementCheckOut] = Field(description="The true mechanism at the robot's last test.")
     seconds: float = Field(description="How long the motor commands take.")
     timing: dict[str, float]
+    motors: MotorRunOut | None = Field(
+        default=None,
+        description="With `motors`: the commands driven through the Panda's joint motors in a fresh scene "
+        "(tracking error, slip in the gripper, the first failure, the mechanism); null without it.",
+    )
 
 
 class TroubleshootingRobotOut(_StrategiesTable):
