@@ -76,7 +76,15 @@
     }
   }
 
+  // Once the page is being left (a reload, a link, Back), an answer that arrives must not clear
+  // the outbox: the next page may already have been made from what the server had before that
+  // save, and only the outbox can then put the text back. Typing again means the participant
+  // stayed (a cancelled leave).
+  let leaving = false;
+  window.addEventListener("beforeunload", function () { leaving = true; });
+
   function clearOutbox(key, revision) {
+    if (leaving) return;
     const entry = readOutbox(key);
     if (entry && entry.revision <= revision) sessionStorage.removeItem(outboxName(key));
   }
@@ -98,6 +106,7 @@
     let retry = 1000;
 
     draft.changed = function () {
+      leaving = false;
       draft.revision = Math.max(Date.now(), draft.revision + 1);
       writeOutbox(draft.key, { revision: draft.revision, snapshot: options.snapshot() });
       stampForms();
