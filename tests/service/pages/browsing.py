@@ -22,7 +22,7 @@ import httpx
 import pytest
 from playwright.sync_api import Browser, Page, ViewportSize, expect
 
-from tests.service.fixtures import AUTH
+from tests.service.fixtures import AUTH, RESEARCH_TOKEN
 from tests.service.pages.flows import LAMP_RULES, TUTORIAL_ANSWERS, TUTORIAL_RULES, experiment, links
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -101,6 +101,14 @@ def saved(page: Page) -> None:
 
 
 PLAYER = "document.querySelector('.robot-player').player"
+
+
+def signed_in(page: Page, base: str) -> None:
+    """Sign in to the research pages with the research token; the page is the experiments' list."""
+    page.goto(f"{base}/research/login")
+    page.get_by_label("Research token").fill(RESEARCH_TOKEN)
+    page.get_by_role("button", name="Sign in").click()
+    expect(page.locator("h1")).to_have_text("Experiments")
 
 
 def at_step2(page: Page, base: str) -> None:

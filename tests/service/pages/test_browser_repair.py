@@ -8,8 +8,8 @@ import httpx
 import pytest
 from playwright.sync_api import Page, expect
 
-from tests.service.fixtures import AUTH, RESEARCH_TOKEN, serving, settings_for, sqlite_url
-from tests.service.pages.browsing import shoot
+from tests.service.fixtures import AUTH, serving, settings_for, sqlite_url
+from tests.service.pages.browsing import shoot, signed_in
 
 pytestmark = pytest.mark.slow  # the robot carries out an episode, and a real Chromium plays it
 
@@ -21,13 +21,6 @@ def repair_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     url = sqlite_url(tmp_path_factory.mktemp("db"))
     with serving(settings_for(url)) as base:
         yield base
-
-
-def signed_in(page: Page, base: str) -> None:
-    page.goto(f"{base}/research/login")
-    page.get_by_label("Research token").fill(RESEARCH_TOKEN)
-    page.get_by_role("button", name="Sign in").click()
-    expect(page.locator("h1")).to_have_text("Experiments")
 
 
 def test_the_researcher_watches_the_robot_repair_the_desk_lamp(repair_server: str, page: Page) -> None:

@@ -10,8 +10,8 @@ import pytest
 from playwright.sync_api import Page, expect
 
 from tests.conftest import builtin_catalog
-from tests.service.fixtures import AUTH, RESEARCH_TOKEN, serving, settings_for, sqlite_url
-from tests.service.pages.browsing import PLAYER, lamp_plan_shown, shoot
+from tests.service.fixtures import AUTH, serving, settings_for, sqlite_url
+from tests.service.pages.browsing import PLAYER, lamp_plan_shown, shoot, signed_in
 from tests.service.pages.flows import FLASHLIGHT_CHOICES, complete, experiment, links
 
 pytestmark = pytest.mark.slow  # a real Chromium plays the robot's run
@@ -56,9 +56,7 @@ def finished_participant(base: str) -> str:
 
 def test_the_researcher_watches_the_robot_carry_out_a_trials_plan(robot_server: str, page: Page) -> None:
     experiment_id = finished_participant(robot_server)
-    page.goto(f"{robot_server}/research/login")
-    page.get_by_label("Research token").fill(RESEARCH_TOKEN)
-    page.get_by_role("button", name="Sign in").click()
+    signed_in(page, robot_server)
     page.goto(f"{robot_server}/research/experiments/{experiment_id}#trials")
     trial = page.locator("#trials details.trial")
     trial.locator("summary").click()
